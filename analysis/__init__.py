@@ -1,0 +1,37 @@
+"""Analyses of systems with hysteresis: Lyapunov spectra, dimensions, bifurcations, ensembles,
+Preisach-plane identification, figures and the ``hyst`` command line.
+
+Public names are imported lazily so that ``import analysis`` stays cheap and a command line
+subcommand only loads what it uses.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_LAZY = {
+    "lyapunov_spectrum": "analysis.lyapunov",
+    "LyapunovResult": "analysis.lyapunov",
+    "kaplan_yorke_dimension": "analysis.dimensions",
+    "box_counting_dimension": "analysis.dimensions",
+    "BoxCountingResult": "analysis.dimensions",
+    "self_averaging_parameter": "analysis.statistics",
+    "identify_preisach": "analysis.identification",
+    "bifurcation_diagram": "analysis.bifurcation",
+    "ResultStore": "analysis.store",
+    "run_tasks": "analysis.execution",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'analysis' has no attribute {name!r}")
+    return getattr(importlib.import_module(module), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

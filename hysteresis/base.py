@@ -1,0 +1,164 @@
+"""The operator contract shared by every hysteresis operator.
+
+A hysteresis operator is a rate-independent map from an input history ``u(t)`` to an output
+``y(t)``. Every operator in this package is a small immutable object holding its parameters; the
+memory lives in a separate immutable *state* object, so
+
+    outputs, state = operator.apply(inputs, state)
+
+never mutates anything and the memory never grows with the length of the input.
+
+Two families exist, and the forced-oscillator integrator treats them differently:
+
+* **Piecewise-constant** operators (``Relay``, discrete ``PreisachModel``, ``SpinDimerEnsemble``):
+  the output is constant between switching inputs. :meth:`PiecewiseConstantHysteron.switching`
+  reports, for a state, the next input below and above the current one at which the output
+  jumps, and the size of the jumps. Between switches the coupled oscillator is linear with a
+  constant force ``C*M``; at a switch the oscillator applies the saltation matrix with entry
+  ``C*ΔM/v*`` (paper eq. ``salt_matrix``).
+* **Continuous** operators (``PlayOperator``, ``GeneralizedPlay``, continuous ``PreisachModel``,
+  ``PrandtlIshlinskii``): for a fixed direction of input motion the output follows a smooth
+  monotone branch between breakpoints. :meth:`ContinuousHysteron.branch` reports the branch value,
+  slope and the next breakpoint; :meth:`ContinuousHysteron.linearize` gives the derivative of
+  the output with respect to the input and to the memory variables, and how each memory variable
+  moves with the input (frozen inside the play, slaved ``δw = δu`` at a wall).
+
+Conventions (see DESIGN.md): a relay with thresholds ``alpha >= beta`` outputs +1 once the input
+has reached ``u >= alpha`` and -1 once it has fallen to ``u < beta``. ``initial_state(u0)`` is the
+state reached by rising monotonically from negative saturation to ``u0``.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "Hysteron",
+    "PiecewiseConstantHysteron",
+    "ContinuousHysteron",
+    "Switching",
+    "Branch",
+    "Linearization",
+]
+
+
+@dataclass(frozen=True)
+class Switching:
+    """Where a piecewise-constant operator switches next, seen from its current state.
+
+    Attributes
+    ----------
+    lower:
+        The output jumps as soon as the input falls strictly below ``lower`` (``-inf`` if it
+        never does).
+    upper:
+        The output jumps as soon as the input reaches ``upper`` (``+inf`` if it never does).
+    jump_down:
+        Output change when the input crosses ``lower`` (<= 0 for a Preisach-type operator); it
+        includes every unit whose threshold equals ``lower`` exactly.
+    jump_up:
+        Output change when the input reaches ``upper`` (>= 0).
+    """
+
+    lower: float
+    upper: float
+    jump_down: float
+    jump_up: float
+
+
+@dataclass(frozen=True)
+class Branch:
+    """The smooth branch a continuous operator follows for a given direction of input motion.
+
+    Attributes
+    ----------
+    value:
+        Output at the current input.
+    slope:
+        ``dy/du`` on the branch in the requested direction (0 inside a play).
+    breakpoint:
+        The input at which the branch changes in that direction (a play wall, a wiped-out
+        extremum), ``±inf`` if none.
+    """
+
+    value: float
+    slope: float
+    breakpoint: float
+
+
+@dataclass(frozen=True)
+class Linearization:
+    """First-order behaviour of a continuous operator on its current branch.
+
+    With memory variables ``m`` (for the play: ``m = (w,)``) and output ``y = g(u, m)``:
+
+    ``δy = d_output_d_input * δu + d_output_d_memory @ δm``, and while the input moves on this
+    branch ``δm_i`` is frozen (``slaved[i] == False``) or follows the input, ``δm_i = δu``
+    (``slaved[i] == True``). When the input leaves a frozen branch onto a wall (paper's
+    ``V_out``), the memory perturbation is reset, ``δm_i := δu`` for every ``i`` in
+    ``reset_on_leave``; entering the play is smooth (``V_in = I``).
+    """
+
+    d_output_d_input: float
+    d_output_d_memory: np.ndarray
+    slaved: np.ndarray
+    reset_on_leave: np.ndarray
+
+
+class Hysteron(ABC):
+    """Abstract rate-independent hysteresis operator.
+
+    Subclasses are immutable parameter holders. Their state objects are immutable too.
+    """
+
+    #: True for operators whose output is constant between switching inputs.
+    piecewise_constant: bool = False
+
+    @abstractmethod
+    def initial_state(self, u0: float) -> Any:
+        """State after rising monotonically from negative saturation to ``u0``."""
+
+    @abstractmethod
+    def apply(self, inputs: Any, state: Any = None) -> tuple[np.ndarray, Any]:
+        """Drive the operator with ``inputs`` (1-D, length >= 1) starting from ``state``.
+
+        ``state=None`` means ``initial_state(inputs[0])``. Returns the outputs (same length as
+        ``inputs``) and the final state. Nothing is mutated.
+        """
+
+    @abstractmethod
+    def output(self, state: Any) -> float:
+        """Output of the operator in ``state``."""
+
+    @property
+    def output_range(self) -> tuple[float, float]:
+        """Saturation values (negative, positive) of the output."""
+        return (-1.0, 1.0)
+
+
+class PiecewiseConstantHysteron(Hysteron):
+    """Operator whose output is constant between switching inputs (relay-type)."""
+
+    piecewise_constant = True
+
+    @abstractmethod
+    def switching(self, state: Any) -> Switching:
+        """Next switching inputs below/above the state's current input and the jumps there."""
+
+
+class ContinuousHysteron(Hysteron):
+    """Operator with continuous, piecewise-smooth branches (play-type)."""
+
+    piecewise_constant = False
+
+    @abstractmethod
+    def branch(self, state: Any, direction: int) -> Branch:
+        """Branch followed when the input moves in ``direction`` (+1 rising, -1 falling)."""
+
+    @abstractmethod
+    def linearize(self, state: Any, direction: int) -> Linearization:
+        """Derivatives on the branch followed in ``direction`` (+1 rising, -1 falling)."""

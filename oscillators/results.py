@@ -1,0 +1,77 @@
+"""Result containers shared by every integrator of the forced oscillator.
+
+They are plain frozen dataclasses of numpy arrays so that analyses never depend on which
+integrator (event-driven relay kernel, play-limit flow, generic Python loop) produced them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["OscillatorState", "Trajectory", "PoincareSection", "TangentResult"]
+
+
+@dataclass(frozen=True)
+class OscillatorState:
+    """Full state of the coupled system: oscillator (q, v, φ) plus the operator's state."""
+
+    q: float
+    v: float
+    phi: float
+    operator_state: Any
+    t: float = 0.0
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Samples on a time grid plus the exact list of output switches.
+
+    ``switches`` is a structured array with fields ``time``, ``q``, ``v``, ``jump`` (ΔM) —
+    empty for continuous operators, whose wall hits/reversals are in ``events`` (fields
+    ``time``, ``q``, ``v``, ``kind``: +1 leaving the play onto a wall, -1 entering the play).
+    ``w`` is the play position for play-type operators, else ``None``.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    phi: np.ndarray
+    M: np.ndarray
+    switches: np.ndarray
+    final: OscillatorState
+    w: np.ndarray | None = None
+    events: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class PoincareSection:
+    """Stroboscopic section at φ = 0 mod 2π: one point per forcing period."""
+
+    q: np.ndarray
+    v: np.ndarray
+    M: np.ndarray
+    final: OscillatorState
+    w: np.ndarray | None = None
+    n_switches: int = 0
+
+
+@dataclass(frozen=True)
+class TangentResult:
+    """Raw output of a tangent-flow (Benettin/QR) run.
+
+    ``exponents`` are per direction of the tangent space used (see ``labels``), in descending
+    order; ``history`` holds the running estimates (rows: checkpoints, columns: exponents) at
+    times ``history_t``.
+    """
+
+    exponents: np.ndarray
+    labels: tuple[str, ...]
+    history_t: np.ndarray
+    history: np.ndarray
+    n_switches: int
+    t_end: float
+    final: OscillatorState
+    extra: dict = field(default_factory=dict)
