@@ -1,0 +1,198 @@
+"""Run sizes and the output context shared by the figure builders of ``hyst paper``."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["RunSize", "SIZES", "Claim", "FigureSpec", "PaperContext"]
+
+
+@dataclass(frozen=True)
+class RunSize:
+    """Every knob that sets how long the reproduction runs.
+
+    ``full`` is the paper's scale; ``quick`` fits in about ten minutes on two cores; ``smoke``
+    only checks that every figure and claim is produced.
+    """
+
+    name: str
+    # fig:bif_0 (N = 2, b = (1, -1)): couplings stepped downward
+    bif0_couplings: int = 200
+    bif0_c_range: tuple[float, float] = (0.5, 10.0)
+    bif0_periods: int = 60
+    bif0_transient: int = 200
+    bif0_lyapunov_t: float = 2000.0
+    # fig:bif (N = 20 000 vs the erf-play limit)
+    bif_spins: int = 20000
+    bif_couplings: int = 60
+    bif_c_range: tuple[float, float] = (1.5, 4.5)
+    bif_periods: int = 60
+    bif_transient: int = 100
+    bif_lyapunov_t: float = 2000.0
+    # attractors and single-system Lyapunov runs
+    attractor_periods: int = 2000
+    dky_t_end: float = 2.0e4
+    dky_transient: float = 1.0e3
+    # fig:mboa: initial conditions per panel
+    mboa_points: int = 40
+    # disorder ensembles (fig:dim, fig:sap, fig:mag, fig:mag_his)
+    ensemble_spins: tuple[int, ...] = (100, 500, 1000, 5000, 10000, 15000, 20000)
+    ensemble_realizations: int = 500
+    ensemble_t_end: float = 2.0e4
+    ensemble_transient: float = 1.0e3
+    # iid-input reference
+    iid_spins: tuple[int, ...] = (100, 300, 1000, 3000, 10000, 20000)
+    iid_realizations: int = 500
+    iid_steps: int = 10000
+    # fig:preis_dens
+    identification_spins: int = 20000
+    identification_step: float = 0.1
+    extra: dict = field(default_factory=dict)
+
+
+_FULL = RunSize(name="full")
+_QUICK = replace(
+    _FULL,
+    name="quick",
+    bif0_couplings=120,
+    bif0_periods=40,
+    bif0_transient=100,
+    bif0_lyapunov_t=500.0,
+    bif_spins=20000,
+    bif_couplings=16,
+    bif_periods=40,
+    bif_transient=60,
+    bif_lyapunov_t=300.0,
+    attractor_periods=400,
+    dky_t_end=4.0e3,
+    dky_transient=300.0,
+    mboa_points=8,
+    ensemble_spins=(100, 1000, 5000),
+    ensemble_realizations=12,
+    ensemble_t_end=1.0e3,
+    ensemble_transient=200.0,
+    iid_spins=(100, 300, 1000, 3000, 10000),
+    iid_realizations=100,
+    iid_steps=2000,
+    identification_spins=20000,
+    identification_step=0.1,
+)
+_SMOKE = replace(
+    _QUICK,
+    name="smoke",
+    bif0_couplings=6,
+    bif0_periods=10,
+    bif0_transient=10,
+    bif0_lyapunov_t=50.0,
+    bif_spins=400,
+    bif_couplings=3,
+    bif_periods=8,
+    bif_transient=5,
+    bif_lyapunov_t=40.0,
+    attractor_periods=30,
+    dky_t_end=200.0,
+    dky_transient=20.0,
+    mboa_points=2,
+    ensemble_spins=(20, 60),
+    ensemble_realizations=3,
+    ensemble_t_end=100.0,
+    ensemble_transient=10.0,
+    iid_spins=(20, 60, 200),
+    iid_realizations=20,
+    iid_steps=200,
+    identification_spins=400,
+    identification_step=0.25,
+)
+
+SIZES: dict[str, RunSize] = {s.name: s for s in (_SMOKE, _QUICK, _FULL)}
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One quantitative statement of the paper next to what this run measured."""
+
+    claim: str
+    paper: str
+    measured: str
+    run: str
+    verdict: str  # "agree" | "disagree"
+    figure: str = ""
+
+    def __post_init__(self) -> None:
+        if self.verdict not in ("agree", "disagree"):
+            raise ValueError(f"verdict must be 'agree' or 'disagree', got {self.verdict!r}")
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One figure (or table) of the paper: its LaTeX label and the function that builds it."""
+
+    label: str
+    title: str
+    build: Callable[[PaperContext], list[Claim]]
+
+
+def verdict(ok: bool) -> str:
+    return "agree" if ok else "disagree"
+
+
+class PaperContext:
+    """Where figures, data and the results store of one ``hyst paper`` run go."""
+
+    def __init__(
+        self,
+        out: str | Path,
+        size: RunSize,
+        store: str | Path | None = None,
+        workers: int | None = None,
+        scheduler: str | None = None,
+        progress: bool = True,
+        seed: int = 0,
+    ) -> None:
+        self.out = Path(out)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.size = size
+        self.store_path = Path(store) if store is not None else self.out / "results.sqlite"
+        self.workers = workers
+        self.scheduler = scheduler
+        self.progress = progress
+        self.seed = seed
+        self.files: list[Path] = []
+
+    def save_figure(self, fig: Any, label: str, data: dict[str, Any]) -> list[Path]:
+        """Write ``label``.png, .pdf and the data behind it as .npz (``fig:x`` -> ``fig_x``)."""
+        import matplotlib.pyplot as plt
+
+        stem = label.replace(":", "_").replace("=", "").replace("/", "_")
+        paths = [self.out / f"{stem}.png", self.out / f"{stem}.pdf", self.out / f"{stem}.npz"]
+        fig.savefig(paths[0], dpi=130, bbox_inches="tight")
+        fig.savefig(paths[1], bbox_inches="tight")
+        plt.close(fig)
+        arrays = {k: np.asarray(v) for k, v in data.items()}
+        np.savez_compressed(paths[2], **arrays)
+        self.files.extend(paths)
+        return paths
+
+    def write_json(self, name: str, payload: Any) -> Path:
+        path = self.out / name
+        path.write_text(json.dumps(payload, indent=2, default=_json_default))
+        return path
+
+    def describe(self) -> dict[str, Any]:
+        return asdict(self.size)
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj)!r}")

@@ -1,0 +1,115 @@
+"""Run the figure builders in order and write the report."""
+
+from __future__ import annotations
+
+import json
+import time
+import traceback
+from collections.abc import Sequence
+from dataclasses import asdict
+from pathlib import Path
+
+from analysis.paper.context import SIZES, Claim, FigureSpec, PaperContext
+
+__all__ = ["FigureSpec", "FIGURES", "run_paper", "write_report"]
+
+
+def _figures() -> list[FigureSpec]:
+    from analysis.paper import figures_dynamics as dyn
+    from analysis.paper import figures_ensembles as ens
+    from analysis.paper import figures_operators as ops
+
+    return [*ops.FIGURES, *dyn.FIGURES, *ens.FIGURES]
+
+
+class _LazyFigures(Sequence):
+    def __getitem__(self, i):  # type: ignore[override]
+        return _figures()[i]
+
+    def __len__(self) -> int:
+        return len(_figures())
+
+
+FIGURES: Sequence[FigureSpec] = _LazyFigures()
+
+
+def run_paper(
+    out: str | Path,
+    size: str = "quick",
+    store: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    only: Sequence[str] | None = None,
+    progress: bool = True,
+) -> dict:
+    """Build every figure (or those whose label is in ``only``) and write the report.
+
+    Returns the report dictionary ``{"claims": [...], "figures": [...], "size": ...}``. A figure
+    whose builder raises is recorded with its traceback in ``errors`` and the others still run.
+    """
+    if size not in SIZES:
+        raise ValueError(f"size must be one of {sorted(SIZES)}, got {size!r}")
+    ctx = PaperContext(
+        out, SIZES[size], store=store, workers=workers, scheduler=scheduler, progress=progress
+    )
+    claims: list[Claim] = []
+    figures: list[dict] = []
+    errors: list[dict] = []
+    for spec in _figures():
+        if only and spec.label not in only:
+            continue
+        start = time.perf_counter()
+        if progress:
+            print(f"[hyst paper] {spec.label}: {spec.title} ...", flush=True)
+        try:
+            new = spec.build(ctx)
+        except Exception as exc:  # keep going: one failing figure must not hide the others
+            errors.append(
+                {"figure": spec.label, "error": repr(exc), "traceback": traceback.format_exc()}
+            )
+            if progress:
+                print(f"[hyst paper] {spec.label} FAILED: {exc!r}", flush=True)
+            continue
+        for c in new:
+            claims.append(c if c.figure else Claim(**{**asdict(c), "figure": spec.label}))
+        seconds = time.perf_counter() - start
+        figures.append({"label": spec.label, "title": spec.title, "seconds": round(seconds, 2)})
+        if progress:
+            print(f"[hyst paper] {spec.label} done in {seconds:.1f} s", flush=True)
+    report = {
+        "size": ctx.describe(),
+        "claims": [asdict(c) for c in claims],
+        "figures": figures,
+        "errors": errors,
+    }
+    write_report(ctx, report)
+    return report
+
+
+def write_report(ctx: PaperContext, report: dict) -> None:
+    ctx.write_json("report.json", report)
+    lines = [
+        "# Reproduction report",
+        "",
+        f"Run size: `{report['size']['name']}` (all knobs at the end of this file).",
+        "",
+        "| figure | claim | paper | measured | run | verdict |",
+        "|---|---|---|---|---|---|",
+    ]
+    for c in report["claims"]:
+        cells = [c["figure"], c["claim"], c["paper"], c["measured"], c["run"], c["verdict"]]
+        lines.append("| " + " | ".join(str(x).replace("|", "\\|") for x in cells) + " |")
+    n_agree = sum(c["verdict"] == "agree" for c in report["claims"])
+    lines += ["", f"{n_agree} of {len(report['claims'])} claims agree.", ""]
+    if report["errors"]:
+        lines += ["## Figures that failed", ""]
+        for e in report["errors"]:
+            lines += [f"- `{e['figure']}`: {e['error']}"]
+        lines.append("")
+    lines += ["## Figures", ""]
+    for f in report["figures"]:
+        stem = f["label"].replace(":", "_").replace("=", "").replace("/", "_")
+        picture = f": ![{f['label']}]({stem}.png)" if (ctx.out / f"{stem}.png").exists() else ""
+        lines.append(f"- `{f['label']}` — {f['title']} ({f['seconds']} s){picture}")
+    lines += ["", "## Run size", "", "```json", json.dumps(report["size"], indent=2), "```", ""]
+    (ctx.out / "report.md").write_text("\n".join(lines))
