@@ -17,9 +17,10 @@ __all__ = ["FigureSpec", "FIGURES", "run_paper", "write_report"]
 def _figures() -> list[FigureSpec]:
     from analysis.paper import figures_dynamics as dyn
     from analysis.paper import figures_ensembles as ens
+    from analysis.paper import figures_identification as ident
     from analysis.paper import figures_operators as ops
 
-    return [*ops.FIGURES, *dyn.FIGURES, *ens.FIGURES]
+    return [*ops.FIGURES, *ident.FIGURES, *dyn.FIGURES, *ens.FIGURES]
 
 
 class _LazyFigures(Sequence):
