@@ -8,12 +8,35 @@ from hysteresis.base import (
     PiecewiseConstantHysteron,
     Switching,
 )
+from hysteresis.play import GeneralizedPlay, PlayOperator, PlayState
+from hysteresis.prandtl_ishlinskii import PIState, PrandtlIshlinskii
+from hysteresis.preisach import (
+    ContinuousPreisachModel,
+    DiscretePreisachModel,
+    PreisachModel,
+    PreisachState,
+)
+from hysteresis.relay import Relay, RelayState
+from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
 
 __all__ = [
     "Branch",
     "ContinuousHysteron",
+    "ContinuousPreisachModel",
+    "DimerThresholds",
+    "DiscretePreisachModel",
+    "GeneralizedPlay",
     "Hysteron",
     "Linearization",
+    "PIState",
     "PiecewiseConstantHysteron",
+    "PlayOperator",
+    "PlayState",
+    "PrandtlIshlinskii",
+    "PreisachModel",
+    "PreisachState",
+    "Relay",
+    "RelayState",
+    "SpinDimerEnsemble",
     "Switching",
 ]

@@ -1,0 +1,316 @@
+"""The play (backlash) operator and the generalized play.
+
+Play, paper eq. (real_play): a wagon of length ``p`` (``width``) centred at ``w`` is pushed by a
+finger at the input ``u``::
+
+    w = max(u - p/2, min(u + p/2, w_prev))
+
+The output of :class:`PlayOperator` is the wagon position ``w``. The finger touches the right wall
+when ``u = w + p/2`` (rising input drags the wagon) and the left wall when ``u = w - p/2``;
+strictly between the walls the wagon stays where it is.
+
+Generalized play (paper eq. play): the output is ``f(w)`` for a strictly increasing shape ``f``;
+the paper's thermodynamic limit of the spin-dimer ensemble is ``f(w) = erf(w / (sqrt(2) R))``.
+Because ``f`` is increasing, the output is ``max(f_+(u), min(f_-(u), y_prev))`` with the
+envelopes ``f_+(u) = f(u - p/2)`` (lower, followed on a rising input: :meth:`ascending`) and
+``f_-(u) = f(u + p/2)`` (upper, followed on a falling input: :meth:`descending`). Note the paper's
+subscripts: its ``f_-`` is the *upper* (descending) envelope and ``f_+`` the *lower* (ascending).
+
+Both operators share the state :class:`PlayState` (the memory is the wagon position ``w``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from scipy.special import erf
+
+from hysteresis._validation import (
+    as_input_sequence,
+    direction_sign,
+    finite_scalar,
+    nonnegative_scalar,
+    positive_scalar,
+)
+from hysteresis.base import Branch, ContinuousHysteron, Linearization
+
+__all__ = ["PlayState", "PlayOperator", "GeneralizedPlay", "play_positions"]
+
+_EPS = np.finfo(np.float64).eps
+
+
+@dataclass(frozen=True)
+class PlayState:
+    """Memory of a play: wagon position ``w`` and the input ``u`` it last saw
+    (``|u - w| <= width/2``)."""
+
+    position: float
+    input: float
+
+
+@njit(cache=True)
+def _play_kernel(inputs, half_width, position):  # pragma: no cover - compiled
+    """Wagon positions for a sequence of inputs.
+
+    Plain-Python reading::
+
+        w = position
+        for k, u in enumerate(inputs):
+            w = max(u - half_width, min(u + half_width, w))
+            out[k] = w
+    """
+    out = np.empty_like(inputs)
+    w = position
+    for k in range(inputs.size):
+        lo = inputs[k] - half_width
+        hi = inputs[k] + half_width
+        if w < lo:
+            w = lo
+        elif w > hi:
+            w = hi
+        out[k] = w
+    return out
+
+
+def play_positions(inputs: np.ndarray, width: float, position: float) -> np.ndarray:
+    """Wagon positions of a play of ``width`` started at ``position`` (no validation)."""
+    return _play_kernel(np.ascontiguousarray(inputs, dtype=np.float64), 0.5 * width, position)
+
+
+def _wall_tolerance(position: float, input: float, half_width: float) -> float:
+    # apply() sets w = u - p/2 exactly, but u - w then equals p/2 only up to rounding; a few ulps
+    # of the magnitudes involved decide "on the wall".
+    return 8.0 * _EPS * max(abs(position), abs(input), half_width, 1.0)
+
+
+def _touches_wall(position: float, input: float, half_width: float, direction: int) -> bool:
+    """True if the finger touches the wall it pushes when the input moves in ``direction``."""
+    gap = direction * (input - position)  # distance from the centre towards the pushed wall
+    return gap >= half_width - _wall_tolerance(position, input, half_width)
+
+
+class _PlayBase(ContinuousHysteron):
+    """Shared machinery of the play and the generalized play (memory: wagon position)."""
+
+    def __init__(self, width: float) -> None:
+        self._width = nonnegative_scalar(width, "width")
+
+    @property
+    def width(self) -> float:
+        """Wagon length p (full width of the loop), >= 0."""
+        return self._width
+
+    @property
+    def half_width(self) -> float:
+        """p/2."""
+        return 0.5 * self._width
+
+    # -- output function of the wagon position (identity for the play) ----------------------
+    def _f(self, w):
+        raise NotImplementedError
+
+    def _df(self, w):
+        raise NotImplementedError
+
+    # -- states ---------------------------------------------------------------------------
+    def initial_state(self, u0: float) -> PlayState:
+        """Rising from −∞ to ``u0`` leaves the wagon at ``w0 = u0 - p/2`` (right wall)."""
+        u0 = finite_scalar(u0, "u0")
+        return PlayState(u0 - self.half_width, u0)
+
+    def state(self, position: float, input: float) -> PlayState:
+        """An explicit state; requires ``|input - position| <= width/2``."""
+        position = finite_scalar(position, "position")
+        input = finite_scalar(input, "input")
+        half = self.half_width
+        if abs(input - position) > half + _wall_tolerance(position, input, half):
+            raise ValueError(
+                f"position must satisfy |input - position| <= width/2 = {half} "
+                f"(got position={position}, input={input})"
+            )
+        return PlayState(position, input)
+
+    def positions(self, inputs, state: PlayState | None = None) -> tuple[np.ndarray, PlayState]:
+        """Wagon positions ``w`` for the inputs (the play output) and the final state."""
+        u = as_input_sequence(inputs)
+        if state is None:
+            state = self.initial_state(u[0])
+        w = play_positions(u, self._width, float(state.position))
+        return w, PlayState(float(w[-1]), float(u[-1]))
+
+    def apply(self, inputs, state: PlayState | None = None) -> tuple[np.ndarray, PlayState]:
+        w, final = self.positions(inputs, state)
+        return np.asarray(self._f(w), dtype=np.float64), final
+
+    def output(self, state: PlayState) -> float:
+        return float(self._f(float(state.position)))
+
+    # -- branch and linearization -----------------------------------------------------------
+    def on_wall(self, state: PlayState, direction: int) -> bool:
+        """True if moving the input in ``direction`` drags the wagon (finger on that wall)."""
+        direction = direction_sign(direction)
+        return _touches_wall(float(state.position), float(state.input), self.half_width, direction)
+
+    def branch(self, state: PlayState, direction: int) -> Branch:
+        """Inside: constant output, breakpoint at the wall ``w ± p/2`` ahead. On the wall moving
+        outward: output ``f(u ∓ p/2)``, slope ``f'(w)``, no breakpoint (``±inf``)."""
+        direction = direction_sign(direction)
+        w = float(state.position)
+        value = float(self._f(w))
+        if self.on_wall(state, direction):
+            return Branch(value=value, slope=float(self._df(w)), breakpoint=direction * np.inf)
+        return Branch(value=value, slope=0.0, breakpoint=w + direction * self.half_width)
+
+    def linearize(self, state: PlayState, direction: int) -> Linearization:
+        """Memory ``m = (w,)``, output ``y = f(w)`` (no explicit input dependence, so
+        ``d_output_d_input = 0``; the total slope on a wall is
+        ``d_output_d_memory @ slaved = f'(w)``).
+
+        Inside: ``w`` frozen; when the input reaches the wall ahead the perturbation of ``w``
+        is reset to the input's, ``δw := δu`` (paper ``V_out``), hence ``reset_on_leave = [0]``.
+        On the wall moving outward: ``δw = δu`` (slaved), nothing to leave, ``reset_on_leave``
+        empty.
+        """
+        direction = direction_sign(direction)
+        w = float(state.position)
+        dm = np.array([float(self._df(w))])
+        if self.on_wall(state, direction):
+            slaved = np.array([True])
+            reset = np.zeros(0, dtype=np.int64)
+        else:
+            slaved = np.array([False])
+            reset = np.array([0], dtype=np.int64)
+        return Linearization(
+            d_output_d_input=0.0, d_output_d_memory=dm, slaved=slaved, reset_on_leave=reset
+        )
+
+
+class PlayOperator(_PlayBase):
+    """Play (backlash) operator of width ``p``; output is the wagon position ``w``.
+
+    ``w = max(u - p/2, min(u + p/2, w_prev))`` (paper eq. real_play). ``width = 0`` is the
+    identity.
+    """
+
+    def _f(self, w):
+        return w
+
+    def _df(self, w):
+        return np.ones_like(np.asarray(w, dtype=np.float64))[()]
+
+    @property
+    def output_range(self) -> tuple[float, float]:
+        return (-np.inf, np.inf)
+
+    def __repr__(self) -> str:
+        return f"PlayOperator(width={self._width!r})"
+
+
+def _erf_shape(spread: float) -> tuple[Callable, Callable]:
+    scale = math.sqrt(2.0) * spread
+    norm = math.sqrt(2.0 / math.pi) / spread
+
+    def shape(w):
+        return erf(np.asarray(w, dtype=np.float64) / scale)[()]
+
+    def shape_derivative(w):
+        w = np.asarray(w, dtype=np.float64)
+        return (norm * np.exp(-0.5 * (w / spread) ** 2))[()]
+
+    return shape, shape_derivative
+
+
+class GeneralizedPlay(_PlayBase):
+    """Generalized play: output ``shape(w)`` with ``w`` the wagon position of a play of ``width``.
+
+    Parameters
+    ----------
+    width:
+        Wagon length p >= 0.
+    shape:
+        Strictly increasing, vectorised callable ``f`` (numpy array in, array out).
+    shape_derivative:
+        Its derivative ``f'`` (vectorised).
+    name:
+        Optional label.
+
+    Attributes
+    ----------
+    shape_kind:
+        ``"erf"`` for :meth:`erf` (then ``spread`` = R is set) or ``"custom"``, so that compiled
+        integrators can specialise on the paper's case.
+    """
+
+    def __init__(
+        self,
+        width: float,
+        shape: Callable,
+        shape_derivative: Callable,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(width)
+        if not callable(shape):
+            raise ValueError("shape must be a callable, strictly increasing function of w")
+        if not callable(shape_derivative):
+            raise ValueError("shape_derivative must be a callable (derivative of shape)")
+        self._shape = shape
+        self._shape_derivative = shape_derivative
+        self.name = name
+        self.shape_kind = "custom"
+        self.spread: float | None = None
+
+    @classmethod
+    def erf(cls, width: float, spread: float) -> GeneralizedPlay:
+        """The paper's thermodynamic limit ``M = erf(w / (sqrt(2) R))``, spread = R > 0.
+
+        It is the Preisach model with density ``N(s; 0, R²) δ(r - p/2)`` in rotated
+        coordinates (paper eqs. pdens_sr, prob_mag).
+        """
+        spread = positive_scalar(spread, "spread")
+        shape, derivative = _erf_shape(spread)
+        op = cls(width, shape, derivative, name=f"erf(w/(sqrt(2)*{spread}))")
+        op.shape_kind = "erf"
+        op.spread = spread
+        return op
+
+    @property
+    def shape(self) -> Callable:
+        """Output shape f(w)."""
+        return self._shape
+
+    @property
+    def shape_derivative(self) -> Callable:
+        """f'(w)."""
+        return self._shape_derivative
+
+    def _f(self, w):
+        return self._shape(w)
+
+    def _df(self, w):
+        return self._shape_derivative(w)
+
+    def ascending(self, u) -> np.ndarray:
+        """Lower envelope followed on a rising input, ``f(u - p/2)`` (the paper's ``f_+``)."""
+        return self._shape(np.asarray(u, dtype=np.float64) - self.half_width)
+
+    def descending(self, u) -> np.ndarray:
+        """Upper envelope followed on a falling input, ``f(u + p/2)`` (the paper's ``f_-``)."""
+        return self._shape(np.asarray(u, dtype=np.float64) + self.half_width)
+
+    @property
+    def output_range(self) -> tuple[float, float]:
+        if self.shape_kind == "erf":
+            return (-1.0, 1.0)
+        with np.errstate(all="ignore"):
+            lo = float(self._shape(np.array(-np.inf)))
+            hi = float(self._shape(np.array(np.inf)))
+        return (lo if not math.isnan(lo) else -np.inf, hi if not math.isnan(hi) else np.inf)
+
+    def __repr__(self) -> str:
+        if self.shape_kind == "erf":
+            return f"GeneralizedPlay.erf(width={self._width!r}, spread={self.spread!r})"
+        return f"GeneralizedPlay(width={self._width!r}, shape={self.name or self._shape!r})"

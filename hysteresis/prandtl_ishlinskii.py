@@ -1,0 +1,252 @@
+"""Prandtl–Ishlinskii operator: a weighted superposition of plays, and its exact inverse.
+
+``y = Σ_i a_i · F_{p_i}[u]`` where ``F_p`` is the play of width ``p`` (:class:`PlayOperator`) and
+``a_i`` the weights. A linear term ``a_0 · u`` is the play of width 0 (the identity), so there is
+no separate parameter for it: include ``0.0`` among the widths.
+
+Inverse (Krasnosel'skii & Pokrovskii, *Systems with Hysteresis*, 1989; Brokate & Sprekels,
+*Hysteresis and Phase Transitions*, 1996, §2.3; Kuhnen, IEEE Trans. Autom. Control 48 (2003) 1227,
+"Modeling, identification and compensation of complex hysteretic nonlinearities").
+With half-widths (thresholds) ``0 = r_0 < r_1 < ... < r_n`` (``r_i = p_i/2``) and partial sums
+``A_i = a_0 + ... + a_i``, the initial loading curve ``φ(r) = Σ_i a_i (r - r_i)_+`` is strictly
+increasing iff every ``A_i > 0``. The inverse is again a Prandtl–Ishlinskii operator with
+
+    r'_i = φ(r_i) = Σ_{j<=i} a_j (r_i - r_j),
+    a'_0 = 1/a_0,   a'_i = -a_i / (A_i A_{i-1})  (i >= 1),
+
+(its loading curve is φ⁻¹). With consistent memories the plays of the inverse, driven by
+``y``, are ``z_i = A_i w_i + Σ_{j>i} a_j w_j`` (``w_j`` the forward plays): by summation by parts
+``y - z_i = Σ_{k<i} A_k (w_k - w_{k+1})`` and ``|w_k - w_{k+1}| <= r_{k+1} - r_k`` (semigroup
+property of nested plays), so ``|y - z_i| <= r'_i`` with equality exactly when the input
+touches the wall of play ``i``, and then ``dz_i = dy``. Hence ``u = Σ a'_i z_i``;
+:meth:`PrandtlIshlinskii.inverse_state` builds the ``z_i`` from a forward state. The default
+initial states (rising from −∞) of an operator and its inverse are consistent automatically:
+``initial_state(u0)`` of the forward operator maps to ``inverse().initial_state(y0)`` with
+``y0`` its output.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from hysteresis._validation import as_input_sequence, direction_sign, finite_array, finite_scalar
+from hysteresis.base import Branch, ContinuousHysteron, Linearization
+from hysteresis.play import _touches_wall, _wall_tolerance
+
+__all__ = ["PrandtlIshlinskii", "PIState"]
+
+
+@dataclass(frozen=True)
+class PIState:
+    """Memory of a Prandtl–Ishlinskii operator: the wagon positions of all its plays (in the
+    order of increasing width, read-only array) and the last input."""
+
+    positions: np.ndarray
+    input: float
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=np.float64)
+    a.setflags(write=False)
+    return a
+
+
+@njit(cache=True)
+def _pi_kernel(inputs, half_widths, weights, positions):  # pragma: no cover - compiled
+    """Outputs and final wagon positions.
+
+    Plain-Python reading::
+
+        w = positions.copy()
+        for k, u in enumerate(inputs):
+            w = max(u - r, min(u + r, w))        # every play, elementwise
+            out[k] = sum(weights * w)
+    """
+    w = positions.copy()
+    out = np.empty_like(inputs)
+    for k in range(inputs.size):
+        u = inputs[k]
+        y = 0.0
+        for i in range(w.size):
+            lo = u - half_widths[i]
+            hi = u + half_widths[i]
+            if w[i] < lo:
+                w[i] = lo
+            elif w[i] > hi:
+                w[i] = hi
+            y += weights[i] * w[i]
+        out[k] = y
+    return out, w
+
+
+class PrandtlIshlinskii(ContinuousHysteron):
+    """``y = Σ_i weights_i · play_{widths_i}(u)``.
+
+    Parameters
+    ----------
+    widths:
+        Distinct play widths p_i >= 0 (sorted internally, weights follow). Width 0 is the
+        linear term.
+    weights:
+        Finite weights a_i (same length).
+    """
+
+    def __init__(self, widths, weights) -> None:
+        widths = finite_array(widths, "widths", ndim=1)
+        weights = finite_array(weights, "weights", ndim=1)
+        if widths.shape != weights.shape:
+            raise ValueError(
+                f"weights must have the same length as widths ({widths.size}), got {weights.size}"
+            )
+        if np.any(widths < 0):
+            raise ValueError("widths must be >= 0")
+        order = np.argsort(widths, kind="stable")
+        widths, weights = widths[order], weights[order]
+        if np.any(np.diff(widths) == 0):
+            raise ValueError("widths must be distinct")
+        self._widths = _readonly(widths)
+        self._weights = _readonly(weights)
+        self._half = _readonly(0.5 * widths)
+
+    @property
+    def widths(self) -> np.ndarray:
+        """Play widths p_i, increasing."""
+        return self._widths
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Weights a_i (in the order of ``widths``)."""
+        return self._weights
+
+    @property
+    def half_widths(self) -> np.ndarray:
+        """Thresholds r_i = p_i/2."""
+        return self._half
+
+    @property
+    def output_range(self) -> tuple[float, float]:
+        return (-np.inf, np.inf)
+
+    def __repr__(self) -> str:
+        return (
+            f"PrandtlIshlinskii(widths={self._widths.tolist()}, weights={self._weights.tolist()})"
+        )
+
+    def loading_curve(self, r) -> np.ndarray:
+        """Initial loading curve ``φ(r) = Σ a_i (r - r_i)_+``.
+
+        After a reversal that all plays followed, moving the input by ``2r`` changes the output
+        by ``2 φ(r)`` (Masing rule); the inverse operator has the loading curve ``φ⁻¹``."""
+        r = np.asarray(r, dtype=np.float64)
+        return np.sum(self._weights * np.maximum(r[..., None] - self._half, 0.0), axis=-1)
+
+    # -- states ---------------------------------------------------------------------------
+    def initial_state(self, u0: float) -> PIState:
+        """Rising from −∞: every wagon on its right wall, ``w_i = u0 - p_i/2``."""
+        u0 = finite_scalar(u0, "u0")
+        return PIState(_readonly(u0 - self._half), u0)
+
+    def state(self, positions, input: float) -> PIState:
+        """Explicit state; requires ``|input - positions_i| <= widths_i/2`` for every play."""
+        positions = finite_array(positions, "positions", ndim=1)
+        input = finite_scalar(input, "input")
+        if positions.shape != self._widths.shape:
+            raise ValueError(f"positions must have length {self._widths.size}")
+        for w, r in zip(positions, self._half, strict=True):
+            if abs(input - w) > r + _wall_tolerance(w, input, r):
+                raise ValueError(
+                    "positions must satisfy |input - positions_i| <= widths_i/2 "
+                    f"(position {w} with half-width {r} at input {input})"
+                )
+        return PIState(_readonly(positions), input)
+
+    def apply(self, inputs, state: PIState | None = None) -> tuple[np.ndarray, PIState]:
+        u = as_input_sequence(inputs)
+        if state is None:
+            state = self.initial_state(u[0])
+        out, w = _pi_kernel(u, self._half, self._weights, np.array(state.positions, dtype=float))
+        return out, PIState(_readonly(w), float(u[-1]))
+
+    def output(self, state: PIState) -> float:
+        return float(np.dot(self._weights, state.positions))
+
+    # -- inverse --------------------------------------------------------------------------
+    def _check_invertible(self) -> np.ndarray:
+        if self._widths[0] != 0.0 or self._weights[0] <= 0.0:
+            raise ValueError(
+                "weights: the inverse needs a linear term, a width-0 play with weight > 0 "
+                f"(got smallest width {self._widths[0]} with weight {self._weights[0]})"
+            )
+        partial = np.cumsum(self._weights)
+        if np.any(partial <= 0.0):
+            raise ValueError(
+                "weights: every partial sum a_0 + ... + a_i must be > 0 for the inverse "
+                f"(got {partial.tolist()})"
+            )
+        return partial
+
+    def inverse(self) -> PrandtlIshlinskii:
+        """The exact inverse Prandtl–Ishlinskii operator (see the module docstring)."""
+        partial = self._check_invertible()
+        r, a = self._half, self._weights
+        # r'_i = Σ_{j<=i} a_j (r_i - r_j) = A_i r_i - Σ_{j<=i} a_j r_j
+        r_inv = partial * r - np.cumsum(a * r)
+        a_inv = np.empty_like(a)
+        a_inv[0] = 1.0 / a[0]
+        a_inv[1:] = -a[1:] / (partial[1:] * partial[:-1])
+        return PrandtlIshlinskii(2.0 * r_inv, a_inv)
+
+    def inverse_state(self, state: PIState) -> PIState:
+        """State of :meth:`inverse` consistent with ``state`` of this operator:
+        ``z_i = A_i w_i + Σ_{j>i} a_j w_j`` at input ``y = output(state)``."""
+        partial = self._check_invertible()
+        w = np.asarray(state.positions, dtype=np.float64)
+        aw = self._weights * w
+        tail = np.cumsum(aw[::-1])[::-1] - aw  # Σ_{j>i} a_j w_j
+        return PIState(_readonly(partial * w + tail), self.output(state))
+
+    # -- branch and linearization -----------------------------------------------------------
+    def _walls(self, state: PIState, direction: int) -> np.ndarray:
+        u = float(state.input)
+        return np.array(
+            [
+                _touches_wall(float(w), u, float(r), direction)
+                for w, r in zip(state.positions, self._half, strict=True)
+            ]
+        )
+
+    def _breakpoint(self, state: PIState, direction: int, walls: np.ndarray):
+        inside = ~walls
+        if not np.any(inside):
+            return direction * np.inf, np.zeros(0, dtype=np.int64)
+        ahead = np.asarray(state.positions)[inside] + direction * self._half[inside]
+        bp = float(np.min(ahead) if direction > 0 else np.max(ahead))
+        idx = np.flatnonzero(inside)
+        tol = 8.0 * np.finfo(float).eps * max(abs(bp), 1.0)
+        return bp, idx[np.abs(ahead - bp) <= tol].astype(np.int64)
+
+    def branch(self, state: PIState, direction: int) -> Branch:
+        """Slope = sum of the weights of the plays dragged in ``direction``; breakpoint = the
+        nearest wall ahead of a play that is still inside (``±inf`` if all are dragged)."""
+        direction = direction_sign(direction)
+        walls = self._walls(state, direction)
+        bp, _ = self._breakpoint(state, direction, walls)
+        return Branch(
+            value=self.output(state), slope=float(np.sum(self._weights[walls])), breakpoint=bp
+        )
+
+    def linearize(self, state: PIState, direction: int) -> Linearization:
+        """Memory = all wagon positions; ``y = Σ a_i w_i`` (``d_output_d_input = 0``); dragged
+        plays are slaved; at the breakpoint the plays whose wall it is get ``δw_i := δu``."""
+        direction = direction_sign(direction)
+        walls = self._walls(state, direction)
+        _, reset = self._breakpoint(state, direction, walls)
+        return Linearization(
+            d_output_d_input=0.0,
+            d_output_d_memory=np.array(self._weights),
+            slaved=walls,
+            reset_on_leave=reset,
+        )
