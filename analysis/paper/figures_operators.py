@@ -35,7 +35,7 @@ def fig_elem_hys(ctx: PaperContext) -> list[Claim]:
         "border (2J = b1-b2)": (2.5, -1.5),
         "two reversible flips (2J < b1-b2)": (3.0, -3.0),
     }
-    u = _sweep(-6.0, 6.0)
+    u = _sweep(-6.0, 6.0, 1201)  # step 0.01: every threshold of the cases lies on the grid
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.2), sharey=True)
     data: dict[str, np.ndarray] = {"input": u}
     claims = []
@@ -63,12 +63,12 @@ def fig_elem_hys(ctx: PaperContext) -> list[Claim]:
     first = up[np.argmax(m_up > -1.0)]
     second = up[np.argmax(m_up > 0.0)]
     step = up[1] - up[0]
-    ok = abs(first - (J - b1)) <= step and abs(second - (-J - b2)) <= step
+    ok = abs(first - (J - b1)) < 1e-9 and abs(second - (-J - b2)) < 1e-9
     claims.append(
         Claim(
             claim="Table I, 2J < b1-b2: first spin flips at q = J-b1, second at q = -J-b2",
             paper=f"{J - b1:g}, {-J - b2:g}",
-            measured=f"{first:.3f}, {second:.3f} (input grid {step:.3f})",
+            measured=f"{first:.6f}, {second:.6f} (input grid step {step:.3f}, thresholds on it)",
             run="brute-force single-spin-flip dynamics, J=2, b=(3,-3)",
             verdict=verdict(ok),
         )
