@@ -1,0 +1,658 @@
+"""Compiled kernels of the play-limit flow (see :mod:`oscillators.play_flow` for the physics).
+
+System (paper eqs. eom_smooth_4, limit_W_0, limit_W_1, salt_matrix_limit)::
+
+    q'' + 2ζ q' + q = cos(φ0 + Ω t) + C f(w),     w = play output of q (width p = 2 hp)
+
+Everything lives in flat float64 arrays so that numba compiles one specialisation:
+
+``par`` (see :func:`make_parameters` in play_flow)::
+
+    0 ζ   1 Ω   2 C   3 hp = p/2   4 shape kind (0 identity, 1 erf)   5 R (spread)
+    6 φ0  7 h_out (RK8 step outside)  8 h_in (scan step inside)
+    9 A  10 B  (periodic particular solution q_p = A cos φ + B sin φ)
+    11 ω_d = sqrt(1 - ζ²)   12 P = sqrt(A² + B²)   13 1/(√2 R)   14 sqrt(2/π)/R
+
+``st`` = [t, q, v, w, mode] with mode 0 inside the play (|q - w| < hp, w frozen), +1 on the
+right wall moving right (w = q - hp, v > 0), -1 on the left wall moving left (w = q + hp, v < 0).
+
+``T`` (4, k): tangent vectors as columns, rows (δq, δv, δφ, δw); k = 0 switches the tangent
+flow off. ``logs`` (k,): accumulated log R_ii of the QR steps. ``diag``: [exits, entries,
+max relative residual of the collapsed column, collapses] counted while accumulating.
+``flags`` = [accumulate, qr_mode]: qr_mode 1 re-orthonormalises at every exit and records the
+rank collapse as log R_kk = -inf; qr_mode 0 applies V_out as a plain matrix (fundamental matrix);
+qr_mode 2 omits V_out (a diagnostic showing that the saltation is needed).
+``ev`` (cap, 5): events [t, q, v, kind, w] (kind +1 leaving the play, -1 entering), ``cnt[0]``
+counts all events (also those beyond ``cap``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+# Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step.
+_N_STAGES = 12
+RK_A = np.ascontiguousarray(_dop.A[:_N_STAGES, :_N_STAGES], dtype=np.float64)
+RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
+RK_C = np.ascontiguousarray(_dop.C[:_N_STAGES], dtype=np.float64)
+
+# Width of the interval on which a possible wall hit inside the play is resolved exactly
+# (there the input velocity has at most one zero and the Hermite error bound is ~1e-14).
+_RESOLVE = 1e-3
+
+
+# --------------------------------------------------------------------------------------------
+# shape of the generalized play
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def shape(par, w):
+    """f(w): identity (play) or erf(w / (√2 R)) (paper eq. prob_mag)."""
+    if par[4] == 1.0:
+        return math.erf(w * par[13])
+    return w
+
+
+@njit(cache=True)
+def shape_slope(par, w):
+    """f'(w)."""
+    if par[4] == 1.0:
+        z = w / par[5]
+        return par[14] * math.exp(-0.5 * z * z)
+    return 1.0
+
+
+# --------------------------------------------------------------------------------------------
+# events, QR
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _record(ev, cnt, t, q, v, kind, w):
+    i = cnt[0]
+    if i < ev.shape[0]:
+        ev[i, 0] = t
+        ev[i, 1] = q
+        ev[i, 2] = v
+        ev[i, 3] = kind
+        ev[i, 4] = w
+    cnt[0] = i + 1
+
+
+@njit(cache=True)
+def qr_step(T, logs, accumulate):
+    """Modified Gram–Schmidt (twice, for orthogonality at round-off) on the columns of T;
+    adds log R_ii to ``logs`` if ``accumulate``."""
+    n, k = T.shape
+    for j in range(k):
+        norm0 = 0.0
+        for r in range(n):
+            norm0 += T[r, j] * T[r, j]
+        for _ in range(2):
+            for i in range(j):
+                d = 0.0
+                for r in range(n):
+                    d += T[r, i] * T[r, j]
+                for r in range(n):
+                    T[r, j] -= d * T[r, i]
+        norm = 0.0
+        for r in range(n):
+            norm += T[r, j] * T[r, j]
+        norm = math.sqrt(norm)
+        if accumulate:
+            logs[j] += math.log(norm) if norm > 0.0 else -np.inf
+        if norm > 0.0:
+            for r in range(n):
+                T[r, j] /= norm
+
+
+@njit(cache=True)
+def leave_play(T, logs, diag, accumulate, qr_mode):
+    """Saltation at the instant the input hits a wall (paper's V_out: δw := δq).
+
+    With ``qr_mode`` the image V_out·T is re-orthonormalised at once. V_out has rank k - 1
+    (its kernel is the pure-δw direction), so the component of the last column orthogonal to
+    the first k - 1 is *exactly* zero: log R_kk = -inf is set structurally instead of taking
+    the log of a round-off residual (whose size, ~1e-17, would only measure rounding). The
+    residual actually found is kept in ``diag[2]`` as a check, and the last column is replaced
+    by the unit normal (e_q - e_w)/√2 of the image {δw = δq}, so the frame stays orthonormal.
+    """
+    k = T.shape[1]
+    if k == 0 or qr_mode == 2:  # 2: diagnostic run without the saltation
+        return
+    for j in range(k):
+        T[3, j] = T[0, j]
+    if qr_mode == 0:
+        return
+    n = T.shape[0]
+    # norm of the last column before projection (scale of the residual check)
+    last_norm = 0.0
+    for r in range(n):
+        last_norm += T[r, k - 1] * T[r, k - 1]
+    last_norm = math.sqrt(last_norm)
+    sub = T[:, : k - 1]
+    qr_step(sub, logs, accumulate)
+    # residual of the last column against the orthonormalised image
+    for _ in range(2):
+        for i in range(k - 1):
+            d = 0.0
+            for r in range(n):
+                d += T[r, i] * T[r, k - 1]
+            for r in range(n):
+                T[r, k - 1] -= d * T[r, i]
+    res = 0.0
+    for r in range(n):
+        res += T[r, k - 1] * T[r, k - 1]
+    res = math.sqrt(res)
+    if last_norm > 0.0 and res / last_norm > diag[2]:
+        diag[2] = res / last_norm
+    for r in range(n):
+        T[r, k - 1] = 0.0
+    T[0, k - 1] = 1.0 / math.sqrt(2.0)
+    T[3, k - 1] = -1.0 / math.sqrt(2.0)
+    if accumulate:
+        logs[k - 1] = -np.inf
+        diag[3] += 1.0
+
+
+# --------------------------------------------------------------------------------------------
+# inside the play: linear oscillator with constant force C f(w), exact solution
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tau):
+    """q, v, a at elapsed time tau of the analytic inside solution."""
+    zeta = par[0]
+    om = par[1]
+    wd = par[11]
+    A = par[9]
+    B = par[10]
+    ph = phi_s + om * tau
+    cp = math.cos(ph)
+    sp = math.sin(ph)
+    e = math.exp(-zeta * tau)
+    cw = math.cos(wd * tau)
+    sw = math.sin(wd * tau)
+    q = F + A * cp + B * sp + e * (c1 * cw + c2 * sw)
+    v = om * (-A * sp + B * cp) + e * (u0d * cw - d2 * sw)
+    a = -2.0 * zeta * v - q + cp + F
+    return q, v, a
+
+
+@njit(cache=True)
+def _hermite_extrema(ql, vl, qr, vr, h):
+    """Max and min over [0, h] of the cubic Hermite interpolant of (q, v) at both ends."""
+    c2 = 3.0 * (qr - ql) - h * (2.0 * vl + vr)
+    c3 = 2.0 * (ql - qr) + h * (vl + vr)
+    hi = max(ql, qr)
+    lo = min(ql, qr)
+    # H'(s) = h vl + 2 c2 s + 3 c3 s^2, s in (0, 1)
+    a = 3.0 * c3
+    b = 2.0 * c2
+    c = h * vl
+    roots = np.empty(2)
+    nr = 0
+    if abs(a) < 1e-300:
+        if abs(b) > 0.0:
+            roots[0] = -c / b
+            nr = 1
+    else:
+        disc = b * b - 4.0 * a * c
+        if disc >= 0.0:
+            sq = math.sqrt(disc)
+            qq = -0.5 * (b + math.copysign(sq, b))
+            if qq != 0.0:
+                roots[0] = qq / a
+                roots[1] = c / qq
+                nr = 2
+            else:
+                roots[0] = 0.0
+                nr = 1
+    for i in range(nr):
+        s = roots[i]
+        if 0.0 < s < 1.0:
+            val = ql + h * vl * s + c2 * s * s + c3 * s * s * s
+            hi = max(hi, val)
+            lo = min(lo, val)
+    return hi, lo
+
+
+@njit(cache=True)
+def _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, ta, tb, va):
+    """Zero of v on [ta, tb] (sign change assumed), safeguarded Newton with v' = a."""
+    lo = ta
+    hi = tb
+    t = 0.5 * (ta + tb)
+    for _ in range(100):
+        q, v, a = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, t)
+        if (v > 0.0) == (va > 0.0):
+            lo = t
+        else:
+            hi = t
+        tn = t - v / a if a != 0.0 else 0.5 * (lo + hi)
+        if not (lo < tn < hi):
+            tn = 0.5 * (lo + hi)
+        if abs(tn - t) <= 1e-16 * max(1.0, abs(t)) or hi - lo <= 1e-16 * max(1.0, abs(t)):
+            t = tn
+            break
+        t = tn
+    return t
+
+
+@njit(cache=True)
+def _wall_root(par, phi_s, F, c1, c2, u0d, d2, ta, tb, wall):
+    """Root of q(t) = wall on [ta, tb] with q - wall changing sign, safeguarded Newton."""
+    qa, _, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, ta)
+    ga = qa - wall
+    lo = ta
+    hi = tb
+    t = tb
+    qb, vb, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tb)
+    # secant start
+    gb = qb - wall
+    if gb != ga:
+        t = ta - ga * (tb - ta) / (gb - ga)
+    if not (lo <= t <= hi):
+        t = 0.5 * (lo + hi)
+    for _ in range(100):
+        q, v, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, t)
+        g = q - wall
+        if g == 0.0:
+            break
+        if (g > 0.0) == (ga > 0.0):
+            lo = t
+        else:
+            hi = t
+        tn = t - g / v if v != 0.0 else 0.5 * (lo + hi)
+        if not (lo <= tn <= hi):
+            tn = 0.5 * (lo + hi)
+        if abs(tn - t) <= 4e-16 * max(1.0, abs(t)):
+            t = tn
+            break
+        t = tn
+    return t
+
+
+@njit(cache=True)
+def _resolve(par, phi_s, F, c1, c2, u0d, d2, lo, qlo, vlo, hi, qhi, vhi, up, dn):
+    """Exact decision on a short interval [lo, hi] (length <= _RESOLVE) whose left end lies
+    inside the play: time of the first wall hit in (lo, hi] and its wall (+1 right, -1 left),
+    or (-1.0, 0) if the input stays inside. On such an interval v has at most one zero, so q
+    is monotone or has a single extremum, found by Newton on v."""
+    t_up = -1.0
+    t_dn = -1.0
+    if qhi >= up:
+        t_up = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, hi, up)
+    elif vlo > 0.0 and vhi < 0.0:
+        tm = _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, lo, hi, vlo)
+        qm, _, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tm)
+        if qm > up:
+            t_up = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, tm, up)
+    if qhi <= dn:
+        t_dn = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, hi, dn)
+    elif vlo < 0.0 and vhi > 0.0:
+        tm = _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, lo, hi, vlo)
+        qm, _, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tm)
+        if qm < dn:
+            t_dn = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, tm, dn)
+    if t_up >= 0.0 and (t_dn < 0.0 or t_up <= t_dn):
+        return t_up, 1
+    if t_dn >= 0.0:
+        return t_dn, -1
+    return -1.0, 0
+
+
+@njit(cache=True)
+def _hit_possible(ql, vl, qr, vr, h, up, dn, M4):
+    """Can q reach a wall on this interval? Cubic Hermite interpolant plus the rigorous error
+    bound max|q''''| h^4 / 384."""
+    if qr >= up or qr <= dn:
+        return True
+    hi, lo = _hermite_extrema(ql, vl, qr, vr, h)
+    margin = M4 * h * h * h * h / 384.0
+    return hi + margin >= up or lo - margin <= dn
+
+
+@njit(cache=True)
+def _inside_tangent(par, T, w, phi_s, tau):
+    """Propagate tangent columns over an inside segment of length tau (paper's W0, exact):
+
+    δx(τ) = Φ(τ) δx0 + (I - Φ(τ)) e1 · C f'(w) δw + (x_p'(φ(τ)) - Φ(τ) x_p'(φ_s)) δφ,
+    δφ, δw frozen, with Φ the propagator of the damped oscillator and x_p' = ∂x_p/∂φ.
+    """
+    zeta = par[0]
+    om = par[1]
+    wd = par[11]
+    A = par[9]
+    B = par[10]
+    e = math.exp(-zeta * tau)
+    cw = math.cos(wd * tau)
+    sw = math.sin(wd * tau)
+    p11 = e * (cw + zeta / wd * sw)
+    p12 = e * sw / wd
+    p21 = -e * sw / wd
+    p22 = e * (cw - zeta / wd * sw)
+    c0 = math.cos(phi_s)
+    s0 = math.sin(phi_s)
+    c1 = math.cos(phi_s + om * tau)
+    s1 = math.sin(phi_s + om * tau)
+    dq0 = -A * s0 + B * c0
+    dv0 = om * (-A * c0 - B * s0)
+    dq1 = -A * s1 + B * c1
+    dv1 = om * (-A * c1 - B * s1)
+    gq = dq1 - (p11 * dq0 + p12 * dv0)
+    gv = dv1 - (p21 * dq0 + p22 * dv0)
+    kappa = par[2] * shape_slope(par, w)
+    for j in range(T.shape[1]):
+        dq = T[0, j]
+        dv = T[1, j]
+        dph = T[2, j]
+        dw = T[3, j]
+        T[0, j] = p11 * dq + p12 * dv + (1.0 - p11) * kappa * dw + gq * dph
+        T[1, j] = p21 * dq + p22 * dv - p21 * kappa * dw + gv * dph
+
+
+@njit(cache=True)
+def _inside(par, st, t_target, T, logs, diag, ev, cnt, flags):
+    """Advance inside the play until t_target or the first wall hit (then switch to the wall).
+
+    Plain reading: with F = C f(w) the motion is q(τ) = F + q_p(φ(τ)) + damped free motion.
+    Scan [0, τ_end] in steps h_in; on each step decide with the Hermite bound whether q can
+    reach a wall; if so bisect (left half first) down to intervals of length 1e-3, where the
+    first hit is found exactly (Newton on q - wall, extremum by Newton on v). Nothing is missed
+    except tangential touches of depth below ~1e-14.
+    """
+    zeta = par[0]
+    om = par[1]
+    hp = par[3]
+    t0 = st[0]
+    q0 = st[1]
+    v0 = st[2]
+    w = st[3]
+    F = par[2] * shape(par, w)
+    phi_s = par[6] + om * t0
+    A = par[9]
+    B = par[10]
+    wd = par[11]
+    cp = math.cos(phi_s)
+    sp = math.sin(phi_s)
+    u0 = q0 - F - (A * cp + B * sp)
+    u0d = v0 - om * (-A * sp + B * cp)
+    c1 = u0
+    c2 = (u0d + zeta * u0) / wd
+    d2 = (u0 + zeta * u0d) / wd
+    # every derivative of the free motion is bounded by its amplitude (|eigenvalue| = 1)
+    M4 = math.sqrt(c1 * c1 + c2 * c2) + par[12] * om * om * om * om
+    up = w + hp
+    dn = w - hp
+    tau_end = t_target - t0
+    h_in = par[8]
+    ta = 0.0
+    qa = q0
+    va = v0
+    hit_t = -1.0
+    hit_side = 0
+    while ta < tau_end:
+        tb = min(ta + h_in, tau_end)
+        qb, vb, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tb)
+        lo, qlo, vlo = ta, qa, va
+        hi, qhi, vhi = tb, qb, vb
+        while True:
+            if not _hit_possible(qlo, vlo, qhi, vhi, hi - lo, up, dn, M4):
+                cleared = True
+            elif hi - lo <= _RESOLVE:
+                tr, side = _resolve(
+                    par, phi_s, F, c1, c2, u0d, d2, lo, qlo, vlo, hi, qhi, vhi, up, dn
+                )
+                if side != 0:
+                    _, vr, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tr)
+                    if vr * side > 0.0:
+                        hit_t = tr
+                        hit_side = side
+                        break
+                cleared = True  # no hit, or a tangential touch with zero normal velocity
+            else:
+                mid = 0.5 * (lo + hi)
+                qm, vm, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, mid)
+                if _hit_possible(qlo, vlo, qm, vm, mid - lo, up, dn, M4):
+                    hi, qhi, vhi = mid, qm, vm
+                else:
+                    lo, qlo, vlo = mid, qm, vm
+                cleared = False
+            if cleared:
+                if hi >= tb:
+                    break
+                lo, qlo, vlo = hi, qhi, vhi
+                hi, qhi, vhi = tb, qb, vb
+        if hit_side != 0:
+            break
+        ta, qa, va = tb, qb, vb
+    if hit_side != 0:
+        _, v_hit, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, hit_t)
+        if T.shape[1] > 0:
+            _inside_tangent(par, T, w, phi_s, hit_t)
+        st[0] = t0 + hit_t if hit_t < tau_end else t_target
+        st[1] = w + hit_side * hp  # exactly on the wall
+        st[2] = v_hit
+        st[4] = float(hit_side)
+        accumulate = flags[0] != 0
+        if accumulate:
+            diag[0] += 1.0
+        _record(ev, cnt, st[0], st[1], st[2], 1.0, w)
+        leave_play(T, logs, diag, accumulate, flags[1])
+        return
+    qe, ve, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tau_end)
+    if T.shape[1] > 0:
+        _inside_tangent(par, T, w, phi_s, tau_end)
+    st[0] = t_target
+    st[1] = qe
+    st[2] = ve
+
+
+# --------------------------------------------------------------------------------------------
+# on a wall: smooth nonlinear ODE, fixed-step 8th-order Runge–Kutta (with the tangent flow W1)
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _rhs(par, side, t, y, dy, k):
+    """Right-hand side of (q, v) and of the k tangent columns (paper's W1) on wall ``side``."""
+    zeta = par[0]
+    q = y[0]
+    v = y[1]
+    ph = par[6] + par[1] * t
+    w = q - side * par[3]
+    dy[0] = v
+    dy[1] = -2.0 * zeta * v - q + math.cos(ph) + par[2] * shape(par, w)
+    if k > 0:
+        kappa = par[2] * shape_slope(par, w)
+        sph = math.sin(ph)
+        for j in range(k):
+            b = 2 + 4 * j
+            dq = y[b]
+            dv = y[b + 1]
+            dph = y[b + 2]
+            dw = y[b + 3]
+            dy[b] = dv
+            dy[b + 1] = -dq - 2.0 * zeta * dv - sph * dph + kappa * dw
+            dy[b + 2] = 0.0
+            dy[b + 3] = dv
+
+
+@njit(cache=True)
+def _rk8(par, side, t, y, h, out, K, tmp, k):
+    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``."""
+    n = y.shape[0]
+    for i in range(_N_STAGES):
+        for r in range(n):
+            acc = 0.0
+            for j in range(i):
+                acc += RK_A[i, j] * K[j, r]
+            tmp[r] = y[r] + h * acc
+        _rhs(par, side, t + RK_C[i] * h, tmp, K[i], k)
+    for r in range(n):
+        acc = 0.0
+        for i in range(_N_STAGES):
+            acc += RK_B[i] * K[i, r]
+        out[r] = y[r] + h * acc
+
+
+@njit(cache=True)
+def _outside(par, st, t_target, T, logs, diag, ev, cnt, flags, work):
+    """Advance on a wall until t_target or the reversal v = 0 where the input re-enters.
+
+    Plain reading: RK8 steps of length h_out; a step whose end has the velocity reversed
+    contains the reversal; it is located by Newton on v(τ) where each iterate re-steps RK8
+    from the step start over τ (so the located state has full RK8 accuracy). A velocity dip
+    to zero and back inside one step is caught with the cubic Hermite interpolant of v.
+    """
+    side = st[4]
+    hp = par[3]
+    k = T.shape[1]
+    n = 2 + 4 * k
+    y = work[0, :n]
+    y1 = work[1, :n]
+    dy = work[2, :n]
+    tmp = work[3, :n]
+    K = work[4 : 4 + _N_STAGES, :n]
+    y[0] = st[1]
+    y[1] = st[2]
+    for j in range(k):
+        for r in range(4):
+            y[2 + 4 * j + r] = T[r, j]
+    t = st[0]
+    h_out = par[7]
+    reversal = False
+    while t < t_target:
+        last = t_target - t <= h_out
+        h = t_target - t if last else h_out
+        _rk8(par, side, t, y, h, y1, K, tmp, k)
+        va = y[1]
+        vb = y1[1]
+        if side * vb <= 0.0:
+            reversal = True
+            lo = 0.0
+            hi = h
+        else:
+            # a dip of v to zero and back within the step: cubic Hermite of v (a = v')
+            aa = K[0, 1]
+            _rhs(par, side, t + h, y1[:2], dy[:2], 0)
+            ab = dy[1]
+            vmax, vmin = _hermite_extrema(side * va, side * aa, side * vb, side * ab, h)
+            if vmin < 0.0:
+                # locate the minimum of the true velocity (sign of a) and test v there
+                lo_s = 0.0
+                hi_s = h
+                for _ in range(60):
+                    m = 0.5 * (lo_s + hi_s)
+                    _rk8(par, side, t, y[:2], m, tmp[:2], K[:, :2], dy[:2], 0)
+                    _rhs(par, side, t + m, tmp[:2], dy[:2], 0)
+                    if side * dy[1] < 0.0:
+                        lo_s = m
+                    else:
+                        hi_s = m
+                m = 0.5 * (lo_s + hi_s)
+                _rk8(par, side, t, y[:2], m, tmp[:2], K[:, :2], dy[:2], 0)
+                if side * tmp[1] < 0.0:
+                    reversal = True
+                    lo = 0.0
+                    hi = m
+                    vb = tmp[1]
+                else:
+                    _rk8(par, side, t, y, h, y1, K, tmp, k)
+        if reversal:
+            # Newton on v(tau) inside the bracket, each iterate one RK8 step from the step start
+            den = side * va - side * vb
+            tau = lo + (hi - lo) * (side * va) / den if den > 0.0 else 0.5 * (lo + hi)
+            if not (lo < tau <= hi):
+                tau = 0.5 * (lo + hi)
+            for _ in range(60):
+                _rk8(par, side, t, y[:2], tau, y1[:2], K[:, :2], tmp[:2], 0)
+                _rhs(par, side, t + tau, y1[:2], dy[:2], 0)
+                vt = y1[1]
+                at = dy[1]
+                if side * vt > 0.0:
+                    lo = tau
+                else:
+                    hi = tau
+                tn = tau - vt / at if at != 0.0 else 0.5 * (lo + hi)
+                if not (lo <= tn <= hi):
+                    tn = 0.5 * (lo + hi)
+                if abs(tn - tau) <= 1e-16 * max(1.0, t) or hi - lo <= 1e-16 * max(1.0, t):
+                    tau = tn
+                    break
+                tau = tn
+            _rk8(par, side, t, y, tau, y1, K, tmp, k)
+            for r in range(n):
+                y[r] = y1[r]
+            t = t + tau
+            break
+        for r in range(n):
+            y[r] = y1[r]
+        t = t_target if last else t + h
+    q = y[0]
+    st[1] = q
+    st[3] = q - side * hp
+    for j in range(k):
+        for r in range(4):
+            T[r, j] = y[2 + 4 * j + r]
+    if reversal:
+        st[0] = t
+        st[2] = 0.0  # the reversal: v = 0 exactly
+        st[4] = 0.0
+        accumulate = flags[0] != 0
+        if accumulate:
+            diag[1] += 1.0
+        _record(ev, cnt, t, q, 0.0, -1.0, st[3])
+        # V_in = I. A play of zero width is left at once through the opposite wall.
+        if hp == 0.0:
+            _rhs(par, side, t, y, dy, 0)
+            st[4] = 1.0 if dy[1] > 0.0 else -1.0
+            if accumulate:
+                diag[0] += 1.0
+            _record(ev, cnt, t, q, 0.0, 1.0, st[3])
+            leave_play(T, logs, diag, accumulate, flags[1])
+    else:
+        st[0] = t_target
+        st[2] = y[1]
+
+
+# --------------------------------------------------------------------------------------------
+# drivers
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def advance(par, st, t_target, T, logs, diag, ev, cnt, flags, work):
+    """Advance the full state (and tangent columns) to exactly ``t_target``."""
+    guard = 0
+    while st[0] < t_target:
+        if st[4] == 0.0:
+            _inside(par, st, t_target, T, logs, diag, ev, cnt, flags)
+        else:
+            _outside(par, st, t_target, T, logs, diag, ev, cnt, flags, work)
+        guard += 1
+        if guard > 100_000_000:
+            raise RuntimeError("play flow: no progress (too many events)")
+
+
+def make_work(k: int) -> np.ndarray:
+    """Scratch space for :func:`advance` with k tangent columns."""
+    return np.zeros((4 + _N_STAGES, 2 + 4 * k))
+
+
+@njit(cache=True)
+def sample_kernel(par, st, times, out, T, logs, diag, ev, cnt, flags, work):
+    """Advance through ``times`` (increasing), storing q, v, w at each into ``out`` rows."""
+    for i in range(times.shape[0]):
+        advance(par, st, times[i], T, logs, diag, ev, cnt, flags, work)
+        out[i, 0] = st[1]
+        out[i, 1] = st[2]
+        out[i, 2] = st[3]
+
+
+@njit(cache=True)
+def tangent_kernel(par, st, t_stop, renorm_dt, T, logs, diag, ev, cnt, flags, work):
+    """Advance to ``t_stop`` re-orthonormalising every ``renorm_dt`` (Benettin/QR)."""
+    while st[0] < t_stop:
+        t_next = min(st[0] + renorm_dt, t_stop)
+        if t_stop - t_next < 1e-9 * renorm_dt:
+            t_next = t_stop
+        advance(par, st, t_next, T, logs, diag, ev, cnt, flags, work)
+        qr_step(T, logs, flags[0] != 0)
