@@ -1,6 +1,6 @@
 """Identify the Preisach density of the erf play and of spin dimers (paper fig:preis_dens).
 
-    python examples/identify_density.py --out out/ [--spins 20000 --seed 0 --step 0.1]
+    python examples/identify_density.py [--out out/examples] [--smoke] [--spins 20000 --step 0.1]
 
 Drives both operators through first-order reversal curves (rise from negative saturation to α,
 fall to β), prints the exact cell-mass statistics against the paper's density
@@ -31,11 +31,14 @@ from hysteresis import GeneralizedPlay, SpinDimerEnsemble  # noqa: E402
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="out", help="output directory")
+    parser.add_argument("--out", default="out/examples", help="output directory")
+    parser.add_argument("--smoke", action="store_true", help="tiny sizes (for tests)")
     parser.add_argument("--spins", type=int, default=20000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--step", type=float, default=0.1)
     args = parser.parse_args()
+    if args.smoke:
+        args.spins, args.step = 400, 0.25
     width, spread, coupling = 2.0, 1.0, 2.0
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -46,7 +49,7 @@ def main() -> None:
     saturation = max(5 * spread + width / 2, float(np.max(np.abs([th.alpha, th.beta]))))
 
     limit = identify_preisach(play, args.step, saturation)
-    finite = identify_preisach(dimers, args.step, saturation, progress=True)
+    finite = identify_preisach(dimers, args.step, saturation, progress=not args.smoke)
     for name, ident, centres in (("erf play", limit, None), ("dimers", finite, th.centre)):
         cmp = compare_with_ridge(ident, width, spread, centres=centres)
         print(f"{name:9s}", {k: f"{v:.3g}" for k, v in cmp.as_dict().items() if v is not None})

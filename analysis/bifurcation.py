@@ -1,0 +1,227 @@
+"""Bifurcation diagrams of forced oscillators with hysteresis (paper fig:bif_0, fig:bif).
+
+For each value of a parameter (the coupling C, or Ω, ζ) the Poincaré section at φ = 0 is
+recorded after a transient, and optionally the largest Lyapunov exponent. With continuation
+(the paper's procedure) the final state of one value — (q, v) at φ = 0 and the operator's
+memory — is the initial state of the next, so the parameter is swept along an attractor in the
+order the values are given (the paper steps C downward).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "BifurcationDiagram",
+    "bifurcation_diagram",
+    "distinct_points",
+    "orbit_period",
+]
+
+
+def distinct_points(q: np.ndarray, v: np.ndarray | None = None, tolerance: float = 1e-6) -> int:
+    """Number of distinct points of a Poincaré section (a periodic orbit of period P has P).
+
+    Two points are the same when they differ by at most ``tolerance`` in every coordinate
+    (``q`` alone, or ``q`` and ``v``). Points are grouped greedily in order of ``q``: a new
+    group starts where a point is farther than ``tolerance`` from every group opened so far
+    within ``tolerance`` in q. A chaotic or quasi-periodic section gives as many groups as
+    points (up to near coincidences).
+    """
+    qa = np.asarray(q, dtype=float).ravel()
+    pts = qa[:, None] if v is None else np.column_stack([qa, np.asarray(v, dtype=float).ravel()])
+    if pts.shape[0] == 0:
+        return 0
+    if not tolerance >= 0:
+        raise ValueError(f"tolerance must be >= 0, got {tolerance}")
+    order = np.argsort(pts[:, 0], kind="stable")
+    pts = pts[order]
+    reps: list[np.ndarray] = []
+    start = 0  # index into reps of the first group still within tolerance in q
+    for p in pts:
+        while start < len(reps) and p[0] - reps[start][0] > tolerance:
+            start += 1
+        if not any(np.all(np.abs(p - r) <= tolerance) for r in reps[start:]):
+            reps.append(p)
+    return len(reps)
+
+
+def orbit_period(
+    q: np.ndarray,
+    v: np.ndarray | None = None,
+    tolerance: float = 1e-6,
+    max_period: int | None = None,
+) -> int:
+    """Smallest P with ``|x_{i+P} − x_i| <= tolerance`` for every i (x = q or (q, v)); 0 if no
+    P up to ``max_period`` (default: half the number of points) fits — chaos or a longer period.
+    """
+    qa = np.asarray(q, dtype=float).ravel()
+    pts = qa[:, None] if v is None else np.column_stack([qa, np.asarray(v, dtype=float).ravel()])
+    n = pts.shape[0]
+    if max_period is None:
+        max_period = n // 2
+    for p in range(1, min(max_period, n - 1) + 1):
+        if np.all(np.abs(pts[p:] - pts[:-p]) <= tolerance):
+            return p
+    return 0
+
+
+@dataclass(frozen=True)
+class BifurcationDiagram:
+    """Poincaré points and largest Lyapunov exponent per parameter value.
+
+    Attributes
+    ----------
+    parameter:
+        Name of the swept parameter (``"coupling"``, ``"frequency"``, ``"damping_ratio"``).
+    values:
+        Parameter values in sweep order, shape (n_values,).
+    q, v:
+        Poincaré section q(φ = 0), v(φ = 0): shape (n_values, n_periods).
+    M:
+        Output of the operator at the section points, same shape.
+    max_exponent:
+        λ_max per value (nan where not computed).
+    exponents:
+        Full spectra per value, shape (n_values, k) (nan where not computed).
+    final_states:
+        State at the end of each value's section (what continuation passes on).
+    """
+
+    parameter: str
+    values: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    M: np.ndarray
+    max_exponent: np.ndarray
+    exponents: np.ndarray
+    final_states: tuple
+
+    def period_counts(self, tolerance: float = 1e-6, use_velocity: bool = True) -> np.ndarray:
+        """:func:`distinct_points` of each value's section."""
+        return np.array(
+            [
+                distinct_points(self.q[i], self.v[i] if use_velocity else None, tolerance)
+                for i in range(self.values.size)
+            ]
+        )
+
+    def periods(self, tolerance: float = 1e-6) -> np.ndarray:
+        """:func:`orbit_period` of each value's section (0: none found)."""
+        return np.array(
+            [orbit_period(self.q[i], self.v[i], tolerance) for i in range(self.values.size)]
+        )
+
+    def save(self, path: str | Path) -> Path:
+        """Write the arrays to an ``.npz`` file (no states)."""
+        path = Path(path)
+        np.savez_compressed(
+            path,
+            parameter=np.array(self.parameter),
+            values=self.values,
+            q=self.q,
+            v=self.v,
+            M=self.M,
+            max_exponent=self.max_exponent,
+            exponents=self.exponents,
+        )
+        return path
+
+
+def bifurcation_diagram(
+    make_system: Callable[[float], Any],
+    parameter_values: Sequence[float] | np.ndarray,
+    n_periods: int,
+    transient_periods: int,
+    continuation: bool = True,
+    lyapunov: bool = True,
+    lyapunov_t_end: float = 1000.0,
+    q0: float = -1.0,
+    v0: float = 0.1,
+    operator_state: Any = None,
+    parameter: str = "coupling",
+    progress: bool = True,
+) -> BifurcationDiagram:
+    """Sweep a parameter in the given order and record the Poincaré section at each value.
+
+    Parameters
+    ----------
+    make_system:
+        ``value -> ForcedOscillator``, e.g. ``lambda c: ForcedOscillator(dimers, c)``. Every
+        system must share the operator (continuation passes the operator state on).
+    parameter_values:
+        Values in sweep order (the paper: C stepped downward).
+    n_periods, transient_periods:
+        Section points recorded per value, after this many forcing periods.
+    continuation:
+        Start each value from the previous value's final state (q, v at φ = 0 and operator
+        memory); otherwise every value starts from ``(q0, v0, operator_state)``.
+    lyapunov:
+        Also compute the spectrum over ``lyapunov_t_end`` time units, started on the attractor
+        (from the end of the section); ``max_exponent`` is its largest exponent.
+    q0, v0, operator_state:
+        Initial condition of the first value (and of all values without continuation).
+    """
+    from tqdm.auto import tqdm
+
+    from analysis.lyapunov import lyapunov_spectrum
+
+    values = np.asarray(parameter_values, dtype=float).ravel()
+    if values.size == 0:
+        raise ValueError("parameter_values must not be empty")
+    n_periods = int(n_periods)
+    if n_periods < 1:
+        raise ValueError(f"n_periods must be >= 1, got {n_periods}")
+    if int(transient_periods) < 0:
+        raise ValueError(f"transient_periods must be >= 0, got {transient_periods}")
+    if lyapunov and not lyapunov_t_end > 0:
+        raise ValueError(f"lyapunov_t_end must be > 0, got {lyapunov_t_end}")
+    qs = np.empty((values.size, n_periods))
+    vs = np.empty_like(qs)
+    ms = np.empty_like(qs)
+    lam_max = np.full(values.size, np.nan)
+    spectra: list[np.ndarray | None] = []
+    finals = []
+    state_q, state_v, state_op = float(q0), float(v0), operator_state
+    for i, value in enumerate(tqdm(values, desc=f"bifurcation {parameter}", disable=not progress)):
+        system = make_system(float(value))
+        sec = system.poincare_section(n_periods, int(transient_periods), state_q, state_v, state_op)
+        qs[i], vs[i], ms[i] = sec.q, sec.v, sec.M
+        finals.append(sec.final)
+        if lyapunov:
+            ly = lyapunov_spectrum(
+                system,
+                float(lyapunov_t_end),
+                0.0,
+                sec.final.q,
+                sec.final.v,
+                sec.final.operator_state,
+                progress=False,
+            )
+            lam_max[i] = ly.max_exponent
+            spectra.append(np.asarray(ly.exponents, dtype=float))
+        else:
+            spectra.append(None)
+        if continuation:
+            # the section ends at φ = 0 mod 2π, so (q, v, memory) is a valid start at φ = 0
+            state_q, state_v, state_op = sec.final.q, sec.final.v, sec.final.operator_state
+    width = max((s.size for s in spectra if s is not None), default=0)
+    exps = np.full((values.size, width), np.nan)
+    for i, s in enumerate(spectra):
+        if s is not None:
+            exps[i, : s.size] = s
+    return BifurcationDiagram(
+        parameter=parameter,
+        values=values,
+        q=qs,
+        v=vs,
+        M=ms,
+        max_exponent=lam_max,
+        exponents=exps,
+        final_states=tuple(finals),
+    )

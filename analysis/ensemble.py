@@ -1,0 +1,333 @@
+"""Disorder ensembles of the dimer-coupled oscillator (paper fig:dim, fig:sap, fig:mag,
+fig:mag_his).
+
+One task is one disorder realization ``SpinDimerEnsemble.random(N, p, R, J, seed)`` at one
+coupling C: its Lyapunov spectrum in the Poincaré section (q, v) and ``D_KY``, the box-counting
+dimension ``D_BC`` of the section points (q, v) (the superposition of all sheets, as the paper),
+and the time-averaged magnetization ``M_T``. Tasks run through :func:`~analysis.execution.
+run_tasks` (process pool or Dask cluster, SQLite store, resume); :func:`aggregate_ensemble`
+reduces them per (N, C) to means, ``SAP[D]``, ``VAR[M]``, the regular count (``D_KY = 0``) and
+the empirical PDFs.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from analysis.execution import run_tasks, spawn_seeds
+from analysis.statistics import magnetization_variance, self_averaging_parameter
+from analysis.store import ResultStore
+
+__all__ = [
+    "EXPERIMENT",
+    "ensemble_task",
+    "ensemble_tasks",
+    "run_ensemble",
+    "aggregate_ensemble",
+    "EnsemblePoint",
+    "realization_seeds",
+    "section_and_magnetization",
+]
+
+EXPERIMENT = "ensemble-dimers"
+#: paper Table I: loop width p, centre spread R, spin coupling J
+PAPER_WIDTH, PAPER_SPREAD, PAPER_SPIN_COUPLING = 2.0, 1.0, 2.0
+
+
+def realization_seeds(base_seed: int, spins: int, realizations: int) -> list[int]:
+    """Disorder seeds of the realizations at N spins: ``spawn_seeds`` from a base derived from
+    ``(base_seed, N)``. Different N get independent disorder; different couplings C at the same
+    N share it (the same realizations are followed across C)."""
+    base = int(np.random.SeedSequence([int(base_seed), int(spins)]).generate_state(1, np.uint64)[0])
+    return spawn_seeds(base >> 1, realizations)
+
+
+def section_and_magnetization(
+    system: Any,
+    t_end: float,
+    transient: float,
+    q0: float = -1.0,
+    v0: float = 0.1,
+    chunk_periods: int = 50,
+) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Poincaré section (q, v) at φ = 0 and the exact time average of M over the same window.
+
+    The window runs over whole forcing periods ``[P0·T, P1·T]`` with ``P0 = ceil(transient/T)``
+    and ``P1 = floor(t_end/T)``. ``M`` is piecewise constant, so its average is exact from the
+    switches: over a chunk of length Δ starting with output ``M0``,
+    ``∫M dt = M0·Δ + Σ_j ΔM_j·(Δ − t_j)``. The trajectory is integrated in chunks of
+    ``chunk_periods`` periods so memory stays bounded (N = 20 000 spins switch ~10⁴ times per
+    period). Returns ``(q, v, M_T, window_length)``.
+    """
+    period = float(system.period)
+    p0 = int(math.ceil(transient / period - 1e-12))
+    p1 = int(math.floor(t_end / period + 1e-12))
+    if p1 - p0 < 1:
+        raise ValueError(
+            f"t_end={t_end} - transient={transient} must cover at least one forcing period"
+        )
+    start = system.poincare_section(1, p0, q0, v0)
+    q, v, opstate = start.final.q, start.final.v, start.final.operator_state
+    qs: list[np.ndarray] = []
+    vs: list[np.ndarray] = []
+    integral = 0.0
+    remaining = p1 - p0
+    while remaining > 0:
+        n = min(chunk_periods, remaining)
+        length = n * period
+        traj = system.trajectory(length, q, v, opstate, sample_dt=period)
+        # samples at 0, T, ..., nT: the section points are all but the last (next chunk's first)
+        qs.append(np.asarray(traj.q[:n]))
+        vs.append(np.asarray(traj.v[:n]))
+        sw = traj.switches
+        integral += float(traj.M[0]) * length
+        if sw.size:
+            integral += float(np.sum(sw["jump"] * (length - sw["time"])))
+        f = traj.final
+        q, v, opstate = f.q, f.v, f.operator_state
+        remaining -= n
+    window = (p1 - p0) * period
+    return np.concatenate(qs), np.concatenate(vs), integral / window, window
+
+
+def _section_dimension(
+    q: np.ndarray, v: np.ndarray, max_fill: float, min_boxes: float
+) -> tuple[float, float, int]:
+    """(D_BC, its stderr, period): 0 for a periodic section, nan if no scaling region."""
+    from analysis.bifurcation import orbit_period
+    from analysis.dimensions import box_counting_dimension
+
+    scale = max(float(np.ptp(q)), float(np.ptp(v)), 1.0)
+    period = orbit_period(q, v, tolerance=1e-7 * scale)
+    if period > 0:
+        return 0.0, 0.0, period
+    try:
+        res = box_counting_dimension(
+            np.column_stack([q, v]), max_fill=max_fill, min_boxes=min_boxes
+        )
+    except ValueError:
+        return float("nan"), float("nan"), 0
+    return float(res.dimension), float(res.stderr), 0
+
+
+def ensemble_task(
+    spins: int,
+    coupling: float,
+    seed: int,
+    t_end: float,
+    transient: float,
+    width: float = PAPER_WIDTH,
+    spread: float = PAPER_SPREAD,
+    spin_coupling: float = PAPER_SPIN_COUPLING,
+    damping_ratio: float = 0.05,
+    frequency: float = 1.0,
+    q0: float = -1.0,
+    v0: float = 0.1,
+    box_max_fill: float = 0.1,
+    box_min_boxes: float = 8.0,
+    keep_section: bool = False,
+) -> dict:
+    """One disorder realization at one coupling: λ's, D_KY, D_BC and M_T.
+
+    ``spins`` = N, ``coupling`` = C, ``seed`` the disorder seed of
+    ``SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed)``. The Lyapunov spectrum
+    (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the section
+    and ``M_T`` use the whole forcing periods in that window (see
+    :func:`section_and_magnetization`). ``D_BC`` is 0 for a periodic section, else
+    :func:`~analysis.dimensions.box_counting_dimension` with ``max_fill=box_max_fill`` and
+    ``min_boxes=box_min_boxes`` (relax them for short runs with few section points), nan if no
+    scaling region is found. Top-level so that it runs in process pools.
+    """
+    from analysis.dimensions import kaplan_yorke_dimension
+    from analysis.lyapunov import lyapunov_spectrum
+    from hysteresis.spin_dimers import SpinDimerEnsemble
+    from oscillators import ForcedOscillator
+
+    operator = SpinDimerEnsemble.random(spins, width, spread, spin_coupling, seed)
+    system = ForcedOscillator(operator, coupling, damping_ratio=damping_ratio, frequency=frequency)
+    ly = lyapunov_spectrum(system, t_end, transient, q0, v0, progress=False)
+    exponents = np.asarray(ly.exponents, dtype=float)
+    q, v, m_t, window = section_and_magnetization(system, t_end, transient, q0, v0)
+    d_bc, d_bc_err, period = _section_dimension(q, v, box_max_fill, box_min_boxes)
+    out: dict[str, Any] = {
+        "exponents": exponents,
+        "max_exponent": float(exponents[0]),
+        "kaplan_yorke": float(kaplan_yorke_dimension(exponents)),
+        "box_counting": d_bc,
+        "box_counting_stderr": d_bc_err,
+        "section_period": int(period),
+        "section_points": int(q.size),
+        "magnetization": float(m_t),
+        "window": float(window),
+        "switches": int(ly.n_switches),
+    }
+    if keep_section:
+        out["section_q"] = q
+        out["section_v"] = v
+    return out
+
+
+def ensemble_tasks(
+    spins_list: Sequence[int],
+    couplings: Sequence[float],
+    realizations: int,
+    base_seed: int,
+    t_end: float,
+    transient: float,
+    **task_kwargs: Any,
+) -> list[dict]:
+    """The task dicts of an ensemble, ordered by N, then C, then realization."""
+    if realizations < 1:
+        raise ValueError(f"realizations must be >= 1, got {realizations}")
+    tasks = []
+    for n in spins_list:
+        seeds = realization_seeds(base_seed, int(n), realizations)
+        for c in couplings:
+            for s in seeds:
+                tasks.append(
+                    dict(
+                        spins=int(n),
+                        coupling=float(c),
+                        seed=s,
+                        t_end=float(t_end),
+                        transient=float(transient),
+                        **task_kwargs,
+                    )
+                )
+    return tasks
+
+
+@dataclass(frozen=True)
+class EnsemblePoint:
+    """Statistics over the realizations at one (N, C)."""
+
+    spins: int
+    coupling: float
+    realizations: int
+    mean_kaplan_yorke: float
+    sap_kaplan_yorke: float
+    mean_box_counting: float
+    sap_box_counting: float
+    mean_magnetization: float
+    var_magnetization: float
+    regular_count: int
+    mean_max_exponent: float
+    kaplan_yorke: np.ndarray
+    box_counting: np.ndarray
+    magnetization: np.ndarray
+    max_exponent: np.ndarray
+
+    def to_json(self) -> dict:
+        """Summary as a JSON-ready dict (nan -> None)."""
+
+        def f(x: float) -> float | None:
+            return None if not np.isfinite(x) else float(x)
+
+        return {
+            "spins": self.spins,
+            "coupling": self.coupling,
+            "realizations": self.realizations,
+            "mean_kaplan_yorke": f(self.mean_kaplan_yorke),
+            "sap_kaplan_yorke": f(self.sap_kaplan_yorke),
+            "mean_box_counting": f(self.mean_box_counting),
+            "sap_box_counting": f(self.sap_box_counting),
+            "mean_magnetization": f(self.mean_magnetization),
+            "var_magnetization": f(self.var_magnetization),
+            "regular_count": self.regular_count,
+            "mean_max_exponent": f(self.mean_max_exponent),
+        }
+
+    def pdf(self, field: str = "magnetization", bins: int | Sequence[float] = 30):
+        """Empirical PDF of a per-realization field (paper fig:mag_his for M_T)."""
+        from analysis.statistics import empirical_pdf
+
+        return empirical_pdf(getattr(self, field), bins)
+
+
+def _sap(values: np.ndarray) -> float:
+    vals = values[np.isfinite(values)]
+    if vals.size == 0 or np.mean(vals) == 0.0:
+        return float("nan")
+    return self_averaging_parameter(vals)
+
+
+def aggregate_ensemble(
+    records: Iterable[tuple[Mapping[str, Any], Mapping[str, Any]]],
+) -> list[EnsemblePoint]:
+    """Reduce ``(params, results)`` pairs to one :class:`EnsemblePoint` per (N, C).
+
+    ``D_BC`` that could not be fitted (nan) is left out of its mean and SAP; a SAP whose mean
+    is 0 (every realization regular) is nan.
+    """
+    groups: dict[tuple[int, float], list[Mapping[str, Any]]] = {}
+    for params, results in records:
+        key = (int(params["spins"]), float(params["coupling"]))
+        groups.setdefault(key, []).append(results)
+    points = []
+    for (n, c), res in sorted(groups.items()):
+        dky = np.array([r["kaplan_yorke"] for r in res], dtype=float)
+        dbc = np.array(
+            [np.nan if r["box_counting"] is None else r["box_counting"] for r in res], dtype=float
+        )
+        m = np.array([r["magnetization"] for r in res], dtype=float)
+        lam = np.array([r["max_exponent"] for r in res], dtype=float)
+        finite_bc = dbc[np.isfinite(dbc)]
+        points.append(
+            EnsemblePoint(
+                spins=n,
+                coupling=c,
+                realizations=len(res),
+                mean_kaplan_yorke=float(np.mean(dky)),
+                sap_kaplan_yorke=_sap(dky),
+                mean_box_counting=float(np.mean(finite_bc)) if finite_bc.size else float("nan"),
+                sap_box_counting=_sap(dbc),
+                mean_magnetization=float(np.mean(m)),
+                var_magnetization=magnetization_variance(m),
+                regular_count=int(np.count_nonzero(dky == 0.0)),
+                mean_max_exponent=float(np.mean(lam)),
+                kaplan_yorke=dky,
+                box_counting=dbc,
+                magnetization=m,
+                max_exponent=lam,
+            )
+        )
+    return points
+
+
+def run_ensemble(
+    spins_list: Sequence[int],
+    couplings: Sequence[float],
+    realizations: int,
+    base_seed: int,
+    t_end: float,
+    transient: float,
+    store: ResultStore | str | os.PathLike | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    **task_kwargs: Any,
+) -> list[EnsemblePoint]:
+    """Run (or resume) the ensemble and aggregate it per (N, C).
+
+    Every (N, C, realization) is one task of :func:`ensemble_task` (experiment
+    ``"ensemble-dimers"``); ``store``/``workers``/``scheduler`` as in :func:`run_tasks`.
+    """
+    tasks = ensemble_tasks(
+        spins_list, couplings, realizations, base_seed, t_end, transient, **task_kwargs
+    )
+    results = run_tasks(
+        EXPERIMENT,
+        tasks,
+        ensemble_task,
+        store=store,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+    )
+    return aggregate_ensemble(zip(tasks, results, strict=True))

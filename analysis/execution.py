@@ -1,0 +1,218 @@
+"""Run independent tasks (disorder realizations, parameter points) through an executor.
+
+``run_tasks`` is the one place where sweeps meet parallelism and persistence:
+
+* tasks are dicts of JSON-serialisable parameters; ``func(**task) -> dict`` is a top-level
+  (picklable) function;
+* tasks already in the :class:`~analysis.store.ResultStore` are skipped (resume after a crash);
+* the rest run on a ``concurrent.futures.Executor``: the one given, a Dask distributed cluster
+  (``scheduler`` address), a local process pool (``workers``), or serially in-process;
+* each result is written to the store from the parent process as soon as it arrives, in one
+  transaction, with the task's wall time measured in the worker.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from typing import Any
+
+import numpy as np
+
+from analysis.store import ResultStore, task_key
+
+__all__ = ["run_tasks", "spawn_seeds", "TaskError"]
+
+
+class TaskError(RuntimeError):
+    """A task raised; carries the task parameters. The original exception is the cause."""
+
+    def __init__(self, experiment: str, task: Mapping[str, Any], error: BaseException) -> None:
+        super().__init__(f"{experiment}: task {dict(task)!r} failed: {error!r}")
+        self.task = dict(task)
+
+
+def spawn_seeds(base_seed: int, n: int) -> list[int]:
+    """``n`` independent seeds from one base seed (``numpy.random.SeedSequence.spawn``).
+
+    Each child sequence yields one 63-bit integer, so the seeds are plain JSON-serialisable
+    ints that can be part of a task key, and ``numpy.random.default_rng(seed)`` gives
+    statistically independent streams. The same ``(base_seed, n)`` always gives the same list,
+    and the first ``m`` seeds do not depend on ``n``.
+    """
+    if n < 0:
+        raise ValueError(f"n must be >= 0, got {n}")
+    if int(base_seed) < 0:
+        raise ValueError(f"base_seed must be >= 0, got {base_seed}")
+    children = np.random.SeedSequence(int(base_seed)).spawn(n)
+    return [int(c.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1)) for c in children]
+
+
+def _timed_call(func: Callable[..., Mapping[str, Any]], task: dict) -> tuple[dict, float]:
+    """Run one task in the worker and measure its wall time there (module level: picklable)."""
+    start = time.perf_counter()
+    result = func(**task)
+    wall = time.perf_counter() - start
+    if not isinstance(result, Mapping):
+        raise TypeError(f"task function must return a dict, got {type(result).__name__}")
+    return dict(result), wall
+
+
+def _dask_executor(scheduler: str) -> tuple[Executor, Callable[[], None]]:
+    try:
+        from distributed import Client
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            "a scheduler address needs Dask distributed: "
+            "pip install 'hysteresis-toolkit[distributed]'"
+        ) from exc
+    client = Client(scheduler)
+    # pure=False: every submission runs (tasks are unique by key anyway; no result caching)
+    return client.get_executor(pure=False), client.close
+
+
+def run_tasks(
+    experiment: str,
+    tasks: Sequence[Mapping[str, Any]],
+    func: Callable[..., Mapping[str, Any]],
+    store: ResultStore | str | os.PathLike | None = None,
+    executor: Executor | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> list[dict]:
+    """Run ``func(**task)`` for every task and return the results in task order.
+
+    Parameters
+    ----------
+    experiment:
+        Name of the sweep; part of every task key, and the store's ``experiment`` column.
+    tasks:
+        Parameter dicts (JSON-serialisable; include the ``seed``). Equal tasks run once.
+    func:
+        Top-level function returning a dict (JSON scalars/lists/dicts and numpy arrays).
+    store:
+        A :class:`ResultStore` or a path to one. Stored tasks are not run again; new results
+        are written as they complete. Without a store nothing is persisted.
+    executor:
+        Any ``concurrent.futures.Executor`` (used as is, not shut down).
+    workers:
+        Size of a local ``ProcessPoolExecutor`` when neither ``executor`` nor ``scheduler`` is
+        given (default: ``os.cpu_count()``); ``workers=1`` runs serially in this process.
+    scheduler:
+        Address of a Dask distributed scheduler, e.g. ``"tcp://10.0.0.5:8786"``; the tasks go
+        to ``Client(scheduler).get_executor()``. Needs the ``distributed`` extra.
+    progress:
+        Show a tqdm progress bar (counts, rate, ETA).
+
+    Returns
+    -------
+    list of dict
+        One result per task, in task order. With a store, every result is read back from it,
+        so fresh and resumed runs return identical objects (tuples become lists).
+    """
+    if sum(x is not None for x in (executor, scheduler)) > 1:
+        raise ValueError("give at most one of executor and scheduler")
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    task_list = [dict(t) for t in tasks]
+    keys = [task_key(experiment, t) for t in task_list]
+    own_store = False
+    if store is not None and not isinstance(store, ResultStore):
+        store = ResultStore(store)
+        own_store = True
+    try:
+        results: dict[str, dict] = {}
+        pending: dict[str, dict] = {}
+        for key, task in zip(keys, task_list, strict=True):
+            if key in results or key in pending:
+                continue
+            if store is not None and store.has(key):
+                results[key] = store.get(key).results
+            else:
+                pending[key] = task
+
+        from tqdm.auto import tqdm
+
+        bar = tqdm(
+            total=len(results) + len(pending),
+            initial=len(results),
+            desc=experiment,
+            unit="task",
+            disable=not progress,
+            dynamic_ncols=True,
+        )
+        try:
+            _run_pending(
+                experiment, pending, func, store, results, bar, executor, workers, scheduler
+            )
+        finally:
+            bar.close()
+
+        if store is not None:
+            return [store.get(k).results for k in keys]
+        return [results[k] for k in keys]
+    finally:
+        if own_store:
+            store.close()
+
+
+def _run_pending(
+    experiment: str,
+    pending: dict[str, dict],
+    func: Callable[..., Mapping[str, Any]],
+    store: ResultStore | None,
+    results: dict[str, dict],
+    bar: Any,
+    executor: Executor | None,
+    workers: int | None,
+    scheduler: str | None,
+) -> None:
+    def record(key: str, result: dict, wall: float) -> None:
+        if store is not None:
+            store.put(experiment, pending[key], result, wall_time=wall, key=key)
+        results[key] = result
+        bar.update(1)
+
+    if not pending:
+        return
+    serial = executor is None and scheduler is None and (workers == 1 or len(pending) == 1)
+    if serial:
+        for key, task in pending.items():
+            try:
+                result, wall = _timed_call(func, task)
+            except Exception as exc:
+                raise TaskError(experiment, task, exc) from exc
+            record(key, result, wall)
+        return
+
+    shutdown: Callable[[], None] | None = None
+    if executor is not None:
+        ex = executor
+    elif scheduler is not None:
+        ex, shutdown = _dask_executor(scheduler)
+    else:
+        n = workers if workers is not None else (os.cpu_count() or 1)
+        ex = ProcessPoolExecutor(max_workers=min(n, len(pending)))
+        shutdown = ex.shutdown
+    futures: dict[Future, str] = {}
+    try:
+        for key, task in pending.items():
+            futures[ex.submit(_timed_call, func, task)] = key
+        for fut in as_completed(futures):
+            key = futures[fut]
+            try:
+                result, wall = fut.result()
+            except Exception as exc:
+                for other in futures:
+                    other.cancel()
+                raise TaskError(experiment, pending[key], exc) from exc
+            record(key, result, wall)
+    finally:
+        if shutdown is not None:
+            if isinstance(ex, ProcessPoolExecutor):
+                ex.shutdown(wait=True, cancel_futures=True)
+            else:
+                shutdown()

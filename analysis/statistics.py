@@ -1,0 +1,146 @@
+"""Ensemble statistics over disorder realizations: self-averaging, variance, PDFs, power laws."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "self_averaging_parameter",
+    "magnetization_variance",
+    "empirical_pdf",
+    "EmpiricalPDF",
+    "power_law_fit",
+    "PowerLawFit",
+]
+
+
+def _values(values: Sequence[float] | np.ndarray, name: str = "values") -> np.ndarray:
+    x = np.asarray(values, dtype=float)
+    if x.ndim != 1 or x.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D sequence, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"{name} must be finite")
+    return x
+
+
+def self_averaging_parameter(values: Sequence[float] | np.ndarray) -> float:
+    """Self-averaging parameter ``SAP[D] = (mean(D²) − mean(D)²) / mean(D)²`` (paper eq. SAP).
+
+    The relative variance of a quantity over disorder realizations (population moments, i.e.
+    divided by K, not K − 1, as in the paper's overlines). It vanishes for N → ∞ when one large
+    realization represents the ensemble.
+
+    Raises ``ValueError`` when the mean is 0 (the SAP is undefined; use the variance then).
+    """
+    d = _values(values)
+    mean = float(np.mean(d))
+    if mean == 0.0:
+        raise ValueError("values have mean 0: SAP is undefined (use magnetization_variance)")
+    return float((np.mean(d * d) - mean * mean) / (mean * mean))
+
+
+def magnetization_variance(values: Sequence[float] | np.ndarray) -> float:
+    """``VAR[M] = mean(M_T²) − mean(M_T)²`` over realizations (population variance, paper)."""
+    m = _values(values)
+    mean = float(np.mean(m))
+    return float(max(np.mean(m * m) - mean * mean, 0.0))
+
+
+@dataclass(frozen=True)
+class EmpiricalPDF:
+    """Histogram normalized to a probability density: ``sum(density * widths) == 1``."""
+
+    edges: np.ndarray
+    density: np.ndarray
+
+    @property
+    def centers(self) -> np.ndarray:
+        return 0.5 * (self.edges[1:] + self.edges[:-1])
+
+    @property
+    def widths(self) -> np.ndarray:
+        return np.diff(self.edges)
+
+
+def empirical_pdf(
+    values: Sequence[float] | np.ndarray,
+    bins: int | Sequence[float] | np.ndarray = 30,
+    range: tuple[float, float] | None = None,  # noqa: A002 - numpy's name
+) -> EmpiricalPDF:
+    """Empirical probability density of ``values`` (e.g. the time-averaged magnetization M_T).
+
+    ``bins`` is a number of equal bins over ``range`` (default: the data range) or explicit
+    edges. Values outside explicit edges/range are not counted, and the density is normalized
+    by the number of values *inside*, so it integrates to 1 over the edges.
+    """
+    x = _values(values)
+    if isinstance(bins, int | np.integer) and bins < 1:
+        raise ValueError(f"bins must be >= 1, got {bins}")
+    counts, edges = np.histogram(x, bins=bins, range=range)
+    inside = counts.sum()
+    if inside == 0:
+        raise ValueError("no values fall inside the bins")
+    density = counts / (inside * np.diff(edges))
+    return EmpiricalPDF(edges=edges, density=density)
+
+
+@dataclass(frozen=True)
+class PowerLawFit:
+    """``y ≈ prefactor · x^exponent`` from a straight-line fit of ``log y`` on ``log x``."""
+
+    exponent: float
+    stderr: float
+    prefactor: float
+    n: int
+
+    def __call__(self, x: np.ndarray | float) -> np.ndarray | float:
+        return self.prefactor * np.asarray(x, dtype=float) ** self.exponent
+
+
+def power_law_fit(
+    x: Sequence[float] | np.ndarray,
+    y: Sequence[float] | np.ndarray,
+    sigma_y: Sequence[float] | np.ndarray | None = None,
+) -> PowerLawFit:
+    """Least-squares fit of ``log y = log a + b log x``; returns ``b`` and its standard error.
+
+    With ``sigma_y`` (absolute errors of y) the points are weighted by ``(y/σ_y)²`` (the
+    variance of ``log y`` is ``(σ_y/y)²``) and the standard error is the one of the weighted
+    fit scaled by the residual scatter (as ``numpy.polyfit(cov=True)``). Requires x, y > 0 and at
+    least 3 points for an error estimate (2 points give ``stderr = nan``).
+    """
+    xv = _values(x, "x")
+    yv = _values(y, "y")
+    if xv.shape != yv.shape:
+        raise ValueError(f"x and y must have the same length, got {xv.size} and {yv.size}")
+    if xv.size < 2:
+        raise ValueError("power_law_fit needs at least 2 points")
+    if np.any(xv <= 0) or np.any(yv <= 0):
+        raise ValueError("x and y must be > 0 for a log-log fit")
+    lx, ly = np.log(xv), np.log(yv)
+    if sigma_y is None:
+        w = np.ones_like(lx)
+    else:
+        s = _values(sigma_y, "sigma_y")
+        if s.shape != yv.shape or np.any(s <= 0):
+            raise ValueError("sigma_y must be > 0 and have the length of y")
+        w = (yv / s) ** 2
+    sw = w.sum()
+    xm = np.sum(w * lx) / sw
+    ym = np.sum(w * ly) / sw
+    sxx = np.sum(w * (lx - xm) ** 2)
+    if sxx == 0:
+        raise ValueError("x must take at least 2 distinct values")
+    slope = float(np.sum(w * (lx - xm) * (ly - ym)) / sxx)
+    intercept = float(ym - slope * xm)
+    n = xv.size
+    if n > 2:
+        resid = ly - (intercept + slope * lx)
+        chi2 = np.sum(w * resid**2) / (n - 2)
+        stderr = float(np.sqrt(chi2 / sxx))
+    else:
+        stderr = float("nan")
+    return PowerLawFit(exponent=slope, stderr=stderr, prefactor=float(np.exp(intercept)), n=n)

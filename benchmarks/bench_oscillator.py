@@ -1,0 +1,146 @@
+"""Speed of the event-driven oscillator integrator (paper Table II parameters, C = 4.0).
+
+Measures, for N = 20 000 spin dimers (seed 0): switches per second and seconds per 1000 time
+units for a trajectory alone (Poincaré run, no sampling) and with the tangent flow (Lyapunov
+spectrum); the same for the erf-play limit; and a baseline in the same run: scipy's solve_ivp
+(DOP853, rtol = atol = 1e-10) with terminal events on the nearest thresholds of the same kind of
+dimer system (smaller N; compared per switch). The last line is one JSON object.
+
+    python benchmarks/bench_oscillator.py [--spins 20000] [--time 2000] [--baseline-spins 2000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from analysis.lyapunov import lyapunov_spectrum
+from hysteresis.play import GeneralizedPlay
+from hysteresis.spin_dimers import SpinDimerEnsemble
+from oscillators import ForcedOscillator
+
+ZETA, OMEGA, P, R, J, Q0, V0 = 0.05, 1.0, 2.0, 1.0, 2.0, -1.0, 0.1
+
+
+def baseline(n_spins: int, c: float, t_end: float) -> tuple[int, float]:
+    """solve_ivp with events, dimers switched by hand; returns (switches, seconds)."""
+    ens = SpinDimerEnsemble.random(n_spins, P, R, J, seed=0)
+    b1, b2 = ens.fields[:, 0], ens.fields[:, 1]
+    alpha, beta = J - b1, -J - b2
+    up = alpha <= Q0
+    t, y, n = 0.0, np.array([Q0, V0]), 0
+    start = time.perf_counter()
+    while t < t_end:
+        m = np.mean(np.where(up, 1.0, -1.0))
+        nu = np.min(alpha[~up]) if np.any(~up) else np.inf
+        nd = np.max(beta[up]) if np.any(up) else -np.inf
+
+        def rhs(s, x, m=m):
+            return [x[1], -2 * ZETA * x[1] - x[0] + math.cos(OMEGA * s) + c * m]
+
+        def e_up(s, x, a=nu):
+            return x[0] - a
+
+        def e_dn(s, x, b=nd):
+            return x[0] - b
+
+        e_up.terminal = e_dn.terminal = True
+        e_up.direction, e_dn.direction = 1, -1
+        sol = solve_ivp(
+            rhs, (t, t_end), y, method="DOP853", rtol=1e-10, atol=1e-10, events=[e_up, e_dn]
+        )
+        if sol.status != 1:
+            break
+        if sol.t_events[0].size:
+            t, y = sol.t_events[0][0], sol.y_events[0][0]
+            up[alpha == nu] = True
+        else:
+            t, y = sol.t_events[1][0], sol.y_events[1][0]
+            up[beta == nd] = False
+        n += 1
+    return n, time.perf_counter() - start
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--spins", type=int, default=20000)
+    ap.add_argument("--coupling", type=float, default=4.0)
+    ap.add_argument("--time", type=float, default=2000.0, help="time units per measurement")
+    ap.add_argument("--baseline-spins", type=int, default=2000)
+    ap.add_argument("--baseline-time", type=float, default=30.0)
+    args = ap.parse_args()
+    c, t_run = args.coupling, args.time
+    period = 2 * math.pi / OMEGA
+    n_periods = int(round(t_run / period))
+    t_run = n_periods * period
+
+    sysm = ForcedOscillator(SpinDimerEnsemble.random(args.spins, P, R, J, seed=0), c, ZETA, OMEGA)
+    sysm.poincare_section(3)  # compile
+    lyapunov_spectrum(sysm, 10.0, progress=False)
+    t0 = time.perf_counter()
+    sec = sysm.poincare_section(n_periods + 1)
+    dt_traj = time.perf_counter() - t0
+    sw_traj = sec.n_switches
+    t0 = time.perf_counter()
+    res = lyapunov_spectrum(sysm, t_run, progress=False)
+    dt_tan = time.perf_counter() - t0
+    sw_tan = res.n_switches
+    print(
+        f"dimers N={args.spins}, C={c}: trajectory {sw_traj} switches in {dt_traj:.3f} s "
+        f"= {sw_traj / dt_traj:.3e} switches/s, {1000 * dt_traj / t_run:.4f} s per 1000 tu"
+    )
+    print(
+        f"  with tangent flow: {sw_tan} switches in {dt_tan:.3f} s = {sw_tan / dt_tan:.3e} "
+        f"switches/s, {1000 * dt_tan / t_run:.4f} s per 1000 tu; lambda = {res.exponents}"
+    )
+
+    lim = ForcedOscillator(GeneralizedPlay.erf(P, R), c, ZETA, OMEGA)
+    t_lim = min(t_run, 500.0)
+    lim.poincare_section(2)
+    t0 = time.perf_counter()
+    lim.poincare_section(int(t_lim / period) + 1)
+    dt_lim = time.perf_counter() - t0
+    lim_s = 1000 * dt_lim / (int(t_lim / period) * period)
+    t0 = time.perf_counter()
+    lres = lyapunov_spectrum(lim, t_lim, progress=False)
+    dt_limt = time.perf_counter() - t0
+    lim_tan_s = 1000 * dt_limt / t_lim
+    print(
+        f"erf-play limit: {lim_s:.3f} s per 1000 tu (trajectory), {lim_tan_s:.3f} s per 1000 tu "
+        f"(tangent); lambda = {lres.exponents}"
+    )
+
+    n_b, dt_b = baseline(args.baseline_spins, c, args.baseline_time)
+    base = n_b / dt_b
+    ratio = (sw_tan / dt_tan) / base
+    print(
+        f"baseline solve_ivp+events, N={args.baseline_spins}: {n_b} switches in {dt_b:.2f} s = "
+        f"{base:.3e} switches/s; ratio (kernel with tangent / baseline) = {ratio:.0f}"
+    )
+    print(
+        json.dumps(
+            {
+                "spins": args.spins,
+                "coupling": c,
+                "time_units": t_run,
+                "switches_per_s": sw_traj / dt_traj,
+                "switches_per_s_tangent": sw_tan / dt_tan,
+                "s_per_1000tu": 1000 * dt_traj / t_run,
+                "s_per_1000tu_tangent": 1000 * dt_tan / t_run,
+                "baseline_spins": args.baseline_spins,
+                "baseline_switches_per_s": base,
+                "ratio": ratio,
+                "limit_s_per_1000tu": lim_s,
+                "limit_tangent_s_per_1000tu": lim_tan_s,
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

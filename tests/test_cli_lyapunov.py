@@ -1,0 +1,154 @@
+"""``hyst lyapunov`` / ``hyst trajectory`` / ``hyst poincare`` command lines."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from analysis.cli import main
+
+
+def run_cli(*args):
+    proc = subprocess.run(
+        [sys.executable, "-m", "analysis.cli", *args], capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout
+
+
+def test_lyapunov_dimers_json():
+    out = run_cli(
+        "lyapunov",
+        "--model",
+        "dimers",
+        "--spins",
+        "200",
+        "--coupling",
+        "4.0",
+        "--t-end",
+        "200",
+        "--json",
+    )
+    rec = json.loads(out)
+    assert len(rec["exponents"]) == 2
+    lam = np.array(rec["exponents"], dtype=float)
+    assert lam[0] >= lam[1]
+    assert abs(lam.sum() + 2 * 0.05) < 1e-6
+    assert rec["switches"] > 100 and rec["t_end"] == 200.0
+    assert rec["spins"] == 200 and rec["seed"] == 0 and rec["damping_ratio"] == 0.05
+    assert isinstance(rec["kaplan_yorke"], float)
+
+
+def test_lyapunov_include_phase_and_fields(capsys):
+    code = main(
+        [
+            "lyapunov",
+            "--model",
+            "dimers",
+            "--fields",
+            "2",
+            "0",
+            "-0.5",
+            "-2.5",
+            "--coupling",
+            "2.9",
+            "--t-end",
+            "300",
+            "--include-phase",
+            "--json",
+        ]
+    )
+    assert code == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert len(rec["exponents"]) == 3
+    assert min(abs(float(x)) for x in rec["exponents"]) < 1e-9
+    assert rec["fields"] == [2.0, 0.0, -0.5, -2.5]
+
+
+def test_lyapunov_relay_and_bad_input(capsys):
+    assert (
+        main(["lyapunov", "--model", "relay", "--coupling", "2", "--t-end", "300", "--json"]) == 0
+    )
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["alpha"] == 1.0 and rec["beta"] == -1.0
+    assert (
+        main(
+            [
+                "lyapunov",
+                "--model",
+                "dimers",
+                "--spins",
+                "20",
+                "--coupling",
+                "2",
+                "--damping-ratio",
+                "-1",
+                "--json",
+            ]
+        )
+        == 2
+    )
+    assert "damping_ratio" in capsys.readouterr().err
+
+
+def test_lyapunov_play_limit_minus_inf(capsys):
+    pytest.importorskip("oscillators.play_flow")
+    code = main(
+        ["lyapunov", "--model", "erf-play", "--coupling", "4.0", "--t-end", "100", "--json"]
+    )
+    assert code == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert len(rec["exponents"]) == 3
+    assert rec["exponents"][-1] == "-inf"
+    assert rec["w0"] == -2.0
+
+
+def test_trajectory_and_poincare_files(tmp_path, capsys):
+    assert (
+        main(
+            [
+                "trajectory",
+                "--model",
+                "dimers",
+                "--spins",
+                "200",
+                "--coupling",
+                "4",
+                "--t-end",
+                "20",
+                "--out",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
+    data = np.load(tmp_path / "trajectory.npz")
+    assert data["t"][-1] == pytest.approx(20.0) and data["switch_time"].size > 10
+    assert (tmp_path / "trajectory.png").stat().st_size > 1000
+    assert (
+        main(
+            [
+                "poincare",
+                "--model",
+                "dimers",
+                "--spins",
+                "200",
+                "--coupling",
+                "4",
+                "--periods",
+                "30",
+                "--transient-periods",
+                "5",
+                "--out",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
+    sec = np.load(tmp_path / "poincare.npz")
+    assert sec["q"].size == 30
+    assert (tmp_path / "poincare.png").stat().st_size > 1000

@@ -1,0 +1,74 @@
+"""The iid-input reference: M_T against brute-force spins, VAR[M] against the CLT."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from analysis.execution import spawn_seeds
+from analysis.iid import iid_inputs, iid_magnetization, iid_task, iid_variance_scaling
+
+
+def test_iid_task_matches_brute_force_spin_flips():
+    from hysteresis.spin_dimers import SpinDimerEnsemble
+
+    res = iid_task(spins=200, n_steps=3000, seed=11, input_seed=12)
+    ensemble = SpinDimerEnsemble.random(200, 2.0, 1.0, 2.0, 11)
+    m, _ = ensemble.simulate(iid_inputs(3000, 2.0, 12))  # all spins down, relaxed at u_0
+    assert res["magnetization"] == pytest.approx(float(np.mean(m)), abs=1e-12)
+
+
+def _relay_time_average(centres: np.ndarray, u: np.ndarray, half_width: float) -> np.ndarray:
+    """Time-averaged output of relays α = s + r, β = s − r driven by u, started at −1 and
+    relaxed at u_0 — written directly from the relay rule, independent of the package."""
+    y = np.where(u[0] >= centres + half_width, 1.0, -1.0)
+    total = np.zeros_like(centres)
+    for x in u:
+        y = np.where(x >= centres + half_width, 1.0, np.where(x < centres - half_width, -1.0, y))
+        total += y
+    return total / u.size
+
+
+def test_variance_matches_central_limit_prediction():
+    # M_T = (2/N) Σ_k g(s_k) with g the time-averaged relay output: VAR[M] = (2/N) Var_s[g(s)],
+    # s ~ N(0, R² = 1), loop width p = 2 (half width 1). Var_s[g] by quadrature on a fine grid.
+    n_spins, n_steps, k = 400, 400, 400
+    u = iid_inputs(n_steps, 2.0, 99)
+    s_grid = np.linspace(-7.0, 7.0, 4001)
+    g = _relay_time_average(s_grid, u, 1.0)
+    w = stats.norm.pdf(s_grid)
+    w /= w.sum()
+    var_g = np.sum(w * g**2) - np.sum(w * g) ** 2
+    predicted = 2.0 / n_spins * var_g
+    m = np.array(
+        [
+            iid_task(spins=n_spins, n_steps=n_steps, seed=s, input_seed=99)["magnetization"]
+            for s in spawn_seeds(3, k)
+        ]
+    )
+    measured = np.var(m)
+    # relative standard error of a sample variance of K values ≈ sqrt(2/(K−1)) = 0.07
+    assert measured == pytest.approx(predicted, rel=4 * np.sqrt(2.0 / (k - 1)))
+    # the ensemble mean is the quadrature mean of g
+    assert np.mean(m) == pytest.approx(np.sum(w * g), abs=4 * np.sqrt(predicted / k))
+
+
+def test_variance_scales_as_inverse_spin_number():
+    res = iid_variance_scaling([100, 300, 1000, 3000], n_steps=500, realizations=300, seed=5)
+    assert abs(res.fit.exponent + 1.0) < 0.1
+    assert res.fit.stderr < 0.05
+    assert np.all(np.diff(res.variance) < 0)
+
+
+def test_iid_magnetization_reproducible_and_input_modes():
+    a = iid_magnetization(100, 200, 5, seed=1)
+    b = iid_magnetization(100, 200, 5, seed=1)
+    assert a.tolist() == b.tolist()
+    assert not np.array_equal(a, iid_magnetization(100, 200, 5, seed=2))
+    c = iid_magnetization(100, 200, 5, seed=1, common_input=False)
+    assert c[0] == a[0] and not np.array_equal(a[1:], c[1:])  # first input shared, others new
+    with pytest.raises(ValueError):
+        iid_magnetization(100, 200, 0, seed=1)
+    with pytest.raises(ValueError):
+        iid_inputs(10, 0.0, 1)
