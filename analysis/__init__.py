@@ -19,6 +19,10 @@ _LAZY = {
     "self_averaging_parameter": "analysis.statistics",
     "identify_preisach": "analysis.identification",
     "bifurcation_diagram": "analysis.bifurcation",
+    "magnetization_variance": "analysis.statistics",
+    "run_ensemble": "analysis.ensemble",
+    "ensemble_task": "analysis.ensemble",
+    "iid_magnetization": "analysis.iid",
     "ResultStore": "analysis.store",
     "run_tasks": "analysis.execution",
 }

@@ -20,3 +20,15 @@ def test_ci_runs_exactly_the_readme_test_command():
 def test_readme_main_command_runs_the_quick_paper_reproduction():
     readme = (ROOT / "README.md").read_text()
     assert "hyst paper --quick" in readme
+
+
+def test_readme_api_tour_runs():
+    """Every ```python block of the README runs as written (in order, one namespace)."""
+    import re
+
+    readme = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", readme, flags=re.S)
+    assert len(blocks) >= 3
+    namespace: dict = {}
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), namespace)
