@@ -185,6 +185,27 @@ class PaperContext:
         path.write_text(json.dumps(payload, indent=2, default=_json_default))
         return path
 
+    @property
+    def task_workers(self) -> int | None:
+        """Workers for task sweeps: smoke tasks take milliseconds, so they run in this process
+        (a process pool, and loading the numba caches in every worker, would cost more)."""
+        return 1 if self.workers is None and self.size.name == "smoke" else self.workers
+
+    def run(self, experiment: str, tasks: list[dict], func: Callable[..., Any]) -> list[dict]:
+        """Run independent tasks through :func:`analysis.execution.run_tasks` with this run's
+        results store, workers and scheduler (parallel, and resumable on a rerun)."""
+        from analysis.execution import run_tasks
+
+        return run_tasks(
+            experiment,
+            tasks,
+            func,
+            store=self.store_path,
+            workers=self.task_workers,
+            scheduler=self.scheduler,
+            progress=self.progress,
+        )
+
     def describe(self) -> dict[str, Any]:
         return asdict(self.size)
 

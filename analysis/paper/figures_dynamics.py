@@ -66,7 +66,7 @@ def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
             paper="points of S1 and S2 in -2 < q < 0",
             measured=f"{n1} points on S1 and {n2} on S2 in -2 < q < 0",
             run=f"C={C_N2_SECTION:g} (not given in the paper; the only C of a 0.5-step scan whose "
-        f"section reaches -2<q<0), {periods} periods after 100",
+            f"section reaches -2<q<0), {periods} periods after 100",
             verdict=verdict(n1 > 0 and n2 > 0),
         )
     ]
@@ -204,20 +204,6 @@ def dky_task(
     return {"exponents": exps, "kaplan_yorke": float(res.kaplan_yorke)}
 
 
-def _run(ctx: PaperContext, experiment: str, tasks: list[dict], func) -> list[dict]:
-    from analysis.execution import run_tasks
-
-    return run_tasks(
-        experiment,
-        tasks,
-        func,
-        store=ctx.store_path,
-        workers=ctx.workers,
-        scheduler=ctx.scheduler,
-        progress=ctx.progress,
-    )
-
-
 def fig_mboa(ctx: PaperContext) -> list[Claim]:
     """Paper fig:mboa: D_KY of the limit vs the initial conditions q0 (outside) and w0 (inside)."""
     import matplotlib.pyplot as plt
@@ -234,7 +220,7 @@ def fig_mboa(ctx: PaperContext) -> list[Claim]:
         "d": [(1.9, float(q), float(q) - 1.0) for q in q0s],
     }
     tasks = [{"coupling": c, "q0": q, "w0": w, **base} for p in panels.values() for c, q, w in p]
-    results = _run(ctx, "mboa", tasks, dky_task)
+    results = ctx.run("mboa", tasks, dky_task)
     by_key = {(t["coupling"], t["q0"], t["w0"]): r for t, r in zip(tasks, results, strict=True)}
 
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))

@@ -134,26 +134,6 @@ def limit_dimension_task(
     }
 
 
-def _workers(ctx: PaperContext) -> int | None:
-    # smoke tasks take milliseconds: starting a process pool (and loading the numba caches in
-    # every worker) would cost more than running them in this process
-    return 1 if ctx.workers is None and ctx.size.name == "smoke" else ctx.workers
-
-
-def _run(ctx: PaperContext, experiment: str, tasks: list[dict], func) -> list[dict]:
-    from analysis.execution import run_tasks
-
-    return run_tasks(
-        experiment,
-        tasks,
-        func,
-        store=ctx.store_path,
-        workers=_workers(ctx),
-        scheduler=ctx.scheduler,
-        progress=ctx.progress,
-    )
-
-
 def _fmt(x: float, digits: int = 3) -> str:
     return "nan" if not np.isfinite(x) else f"{x:.{digits}f}"
 
@@ -269,7 +249,7 @@ def fig_bif_0(ctx: PaperContext) -> list[Claim]:
         "transient": 2 * int(s.bif0_transient),
         "lyapunov_t": float(s.bif0_lyapunov_t),
     }
-    main, zoom = _run(ctx, "paper-bif0", [main_task, zoom_task], bifurcation_task)
+    main, zoom = ctx.run("paper-bif0", [main_task, zoom_task], bifurcation_task)
 
     cs = np.asarray(main["couplings"])
     q = np.asarray(main["q"])
@@ -358,7 +338,7 @@ def fig_bif(ctx: PaperContext) -> list[Claim]:
         {"kind": "dimers", "spins": int(s.bif_spins), "seed": int(ctx.seed), **common},
         {"kind": "erf_play", "spins": 0, "seed": 0, **common},
     ]
-    dimers, limit = _run(ctx, "paper-bif", tasks, bifurcation_task)
+    dimers, limit = ctx.run("paper-bif", tasks, bifurcation_task)
     cs = np.asarray(dimers["couplings"])
     lam_n = np.asarray(dimers["max_exponent"])
     lam_inf = np.asarray(limit["max_exponent"])
@@ -463,7 +443,7 @@ def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
         s.ensemble_transient,
     )
     # run_ensemble would do the same; calling run_tasks here keeps the ctx's executor settings
-    results = _run(ctx, EXPERIMENT, tasks, ensemble_task)
+    results = ctx.run(EXPERIMENT, tasks, ensemble_task)
     points = {
         (p.spins, p.coupling): p for p in aggregate_ensemble(zip(tasks, results, strict=True))
     }
@@ -487,7 +467,7 @@ def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
     limits = dict(
         zip(
             ENSEMBLE_COUPLINGS,
-            _run(ctx, "paper-limit-dims", limit_tasks, limit_dimension_task),
+            ctx.run("paper-limit-dims", limit_tasks, limit_dimension_task),
             strict=True,
         )
     )
@@ -497,7 +477,7 @@ def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
         s.iid_realizations,
         ctx.seed,
         store=ctx.store_path,
-        workers=_workers(ctx),
+        workers=ctx.task_workers,
         scheduler=ctx.scheduler,
         progress=ctx.progress,
     )
