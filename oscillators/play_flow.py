@@ -359,10 +359,13 @@ def play_poincare(
     phi0: float = 0.0,
     progress: bool = False,
 ) -> PoincareSection:
-    """Stroboscopic section at φ = 0 mod 2π: one point per forcing period ``2π/Ω``.
+    """Stroboscopic section at φ = 0 mod 2π: one point per forcing period ``T = 2π/Ω``.
 
-    The points are the states at the section times after the start (``t = 2π/Ω, 4π/Ω, ...``
-    for ``phi0 = 0``), the first ``transient_periods`` of them discarded. ``w`` holds the wagon
+    Same convention as :meth:`ForcedOscillator.poincare_section` and
+    :func:`oscillators.piecewise_constant.pc_poincare`: the points are the states at the section
+    times ``t_k >= 0`` numbered from 0, ``k = transient_periods + i``, ``i = 0..n_periods-1``.
+    For ``phi0 = 0`` that is ``t = (transient_periods + i)·T``, so without transient the first
+    point is the initial state; otherwise ``t_0 = ((-phi0) mod 2π)/Ω``. ``w`` holds the wagon
     position, ``M = f(w)``; ``n_switches`` counts wall hits plus reversals over the whole run.
     """
     if int(n_periods) != n_periods or n_periods < 1:
@@ -376,9 +379,8 @@ def play_poincare(
     if t_first < 0.0:
         t_first += 2.0 * math.pi
     t_first /= par[1]
-    m0 = 0 if t_first > 0.0 else 1
-    m = np.arange(m0, m0 + int(transient_periods) + int(n_periods))
-    times = t_first + m * period
+    # t = 0 itself is a section time when phi0 = 0: the sampler returns the start state there.
+    times = t_first + np.arange(int(transient_periods) + int(n_periods)) * period
     out, _, n_events = _sample(par, st, times, False, progress, "play Poincaré section")
     keep = slice(int(transient_periods), None)
     return PoincareSection(

@@ -148,40 +148,6 @@ class ForcedOscillator:
             return self._operator.state(_finite(w0, "w0"), _finite(q0, "q0"))
         return self._operator.initial_state(_finite(q0, "q0"))
 
-    def _play_poincare(self, n_periods, transient_periods, q0, v0, operator_state, w0):
-        """Play section with this class's convention: points at t = (transient + i)·T, i >= 0
-        (the play-flow function starts its section one period after the start)."""
-        import numpy as np
-
-        from oscillators.play_flow import play_poincare
-
-        n_periods = int(n_periods)
-        transient_periods = int(transient_periods)
-        if n_periods < 1:
-            raise ValueError(f"n_periods must be >= 1, got {n_periods}")
-        if transient_periods < 0:
-            raise ValueError(f"transient_periods must be >= 0, got {transient_periods}")
-        w = self._play_w0(q0, operator_state, w0)
-        if transient_periods > 0:
-            return play_poincare(self, n_periods, transient_periods - 1, q0, v0, w)
-        q0 = _finite(q0, "q0")
-        v0 = _finite(v0, "v0")
-        m0 = float(self._operator.output(self._operator.state(w, q0)))
-        if n_periods == 1:
-            st = OscillatorState(q0, v0, 0.0, self._operator.state(w, q0), 0.0)
-            return PoincareSection(
-                np.array([q0]), np.array([v0]), np.array([m0]), st, np.array([w]), 0
-            )
-        sec = play_poincare(self, n_periods - 1, 0, q0, v0, w)
-        return PoincareSection(
-            q=np.concatenate([[q0], sec.q]),
-            v=np.concatenate([[v0], sec.v]),
-            M=np.concatenate([[m0], sec.M]),
-            final=sec.final,
-            w=np.concatenate([[w], sec.w]),
-            n_switches=sec.n_switches,
-        )
-
     # -- integration ------------------------------------------------------------------------
     def trajectory(
         self,
@@ -232,7 +198,10 @@ class ForcedOscillator:
                 raise ValueError("w0 is only meaningful for play-type operators")
             return pc.pc_poincare(self, n_periods, transient_periods, q0, v0, operator_state)
         if kind == "play":
-            return self._play_poincare(n_periods, transient_periods, q0, v0, operator_state, w0)
+            from oscillators.play_flow import play_poincare
+
+            w = self._play_w0(q0, operator_state, w0)
+            return play_poincare(self, n_periods, transient_periods, q0, v0, w)
         return self._continuous("poincare")(
             self, n_periods, transient_periods, q0, v0, operator_state
         )

@@ -274,7 +274,8 @@ def test_trajectory_conventions_and_final_state():
 def test_poincare_section_is_the_stroboscopic_sample():
     system = erf_play(4.0)
     period = 2 * math.pi
-    sec = play_poincare(system, 6, transient_periods=3)
+    # points at t = (transient_periods + i)·T, i = 0..5: the samples at 4T..9T
+    sec = play_poincare(system, 6, transient_periods=4)
     tr = play_trajectory(system, 9 * period, sample_dt=period)
     assert isinstance(sec, PoincareSection)
     np.testing.assert_allclose(sec.q, tr.q[4:10], atol=1e-10)
@@ -282,6 +283,10 @@ def test_poincare_section_is_the_stroboscopic_sample():
     np.testing.assert_allclose(sec.w, tr.w[4:10], atol=1e-10)
     np.testing.assert_allclose(sec.M, erf(sec.w / math.sqrt(2)), atol=1e-15)
     assert sec.n_switches == len(tr.events)
+    # without transient the first point is the initial state (t = 0)
+    start = play_poincare(system, 2)
+    assert (start.q[0], start.v[0], start.w[0]) == (-1.0, 0.1, -2.0)
+    np.testing.assert_allclose([start.q[1], start.v[1]], [tr.q[1], tr.v[1]], atol=1e-10)
 
 
 def test_bad_input_is_rejected():
