@@ -170,15 +170,13 @@ def bifurcation_diagram(
     from tqdm.auto import tqdm
 
     from analysis.lyapunov import lyapunov_spectrum
+    from hysteresis._validation import positive_integer
 
     values = np.asarray(parameter_values, dtype=float).ravel()
     if values.size == 0:
         raise ValueError("parameter_values must not be empty")
-    n_periods = int(n_periods)
-    if n_periods < 1:
-        raise ValueError(f"n_periods must be >= 1, got {n_periods}")
-    if int(transient_periods) < 0:
-        raise ValueError(f"transient_periods must be >= 0, got {transient_periods}")
+    n_periods = positive_integer(n_periods, "n_periods")
+    transient_periods = positive_integer(transient_periods, "transient_periods", minimum=0)
     if lyapunov and not lyapunov_t_end > 0:
         raise ValueError(f"lyapunov_t_end must be > 0, got {lyapunov_t_end}")
     qs = np.empty((values.size, n_periods))
@@ -190,7 +188,7 @@ def bifurcation_diagram(
     state_q, state_v, state_op = float(q0), float(v0), operator_state
     for i, value in enumerate(tqdm(values, desc=f"bifurcation {parameter}", disable=not progress)):
         system = make_system(float(value))
-        sec = system.poincare_section(n_periods, int(transient_periods), state_q, state_v, state_op)
+        sec = system.poincare_section(n_periods, transient_periods, state_q, state_v, state_op)
         qs[i], vs[i], ms[i] = sec.q, sec.v, sec.M
         finals.append(sec.final)
         if lyapunov:

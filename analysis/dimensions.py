@@ -92,10 +92,12 @@ def _as_points(points: np.ndarray) -> np.ndarray:
         pts = pts[:, None]
     if pts.ndim != 2 or pts.shape[0] < 2 or pts.shape[1] < 1:
         raise ValueError(f"points must have shape (n, d) with n >= 2, got {np.shape(points)}")
-    finite = np.all(np.isfinite(pts), axis=1)
-    pts = pts[finite]
-    if pts.shape[0] < 2:
-        raise ValueError("points must contain at least 2 finite rows")
+    bad = ~np.all(np.isfinite(pts), axis=1)
+    if np.any(bad):
+        raise ValueError(
+            f"points must be finite; row {int(np.argmax(bad))} (and {int(bad.sum()) - 1} more) "
+            "contains NaN or inf"
+        )
     return pts
 
 

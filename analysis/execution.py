@@ -15,13 +15,14 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from typing import Any
 
 import numpy as np
 
-from analysis.store import ResultStore, task_key
+from analysis.store import ResultStore, code_version, task_key
 
 __all__ = ["run_tasks", "spawn_seeds", "TaskError"]
 
@@ -126,13 +127,25 @@ def run_tasks(
     try:
         results: dict[str, dict] = {}
         pending: dict[str, dict] = {}
+        other_versions: set[str] = set()
+        current = code_version() if store is not None else ""
         for key, task in zip(keys, task_list, strict=True):
             if key in results or key in pending:
                 continue
             if store is not None and store.has(key):
-                results[key] = store.get(key).results
+                stored = store.get(key)
+                results[key] = stored.results
+                if stored.code_version != current:
+                    other_versions.add(str(stored.code_version))
             else:
                 pending[key] = task
+        if other_versions:
+            # Resuming across code changes mixes results; say so instead of silently reusing.
+            warnings.warn(
+                f"{experiment}: reusing stored results computed by other code versions "
+                f"{sorted(other_versions)} (now {current!r}); use a new store to recompute them",
+                stacklevel=2,
+            )
 
         from tqdm.auto import tqdm
 

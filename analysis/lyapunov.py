@@ -28,9 +28,10 @@ class LyapunovResult:
     ----------
     exponents:
         Descending; ``-inf`` allowed (the play limit's slaved direction).
-    labels:
-        Tangent direction each exponent's initial vector started on (``q``, ``v``, ``w``,
-        ``phi``), in the order of ``exponents``.
+    tangent_space:
+        The basis of the tangent space the flow was run in, e.g. ``("q", "v")`` for relays and
+        dimers, ``("q", "v", "w")`` for the play limit, with ``"phi"`` if the phase direction is
+        included. The exponents belong to no single coordinate.
     history_t, history:
         Running estimates (rows) at times ``history_t`` — the convergence record.
     n_switches:
@@ -45,7 +46,7 @@ class LyapunovResult:
     """
 
     exponents: np.ndarray
-    labels: tuple[str, ...]
+    tangent_space: tuple[str, ...]
     history_t: np.ndarray
     history: np.ndarray
     n_switches: int
@@ -94,15 +95,14 @@ def lyapunov_spectrum(
         kwargs["w0"] = w0
     raw = system.tangent(t_end, transient, q0, v0, operator_state, **kwargs)
     exps = np.asarray(raw.exponents, dtype=float)
-    order = np.argsort(-exps, kind="stable")
-    exps = exps[order]
-    labels = tuple(raw.labels[i] for i in order) if len(raw.labels) == exps.size else raw.labels
+    # The integrators report the exponents in descending order already; after QR they belong to
+    # no coordinate, so ``tangent_space`` names the basis the tangent flow was run in.
+    if np.any(np.diff(exps) > 0):
+        raise RuntimeError(f"tangent integrator returned unsorted exponents {exps}")
     history = np.asarray(raw.history, dtype=float)
-    if history.ndim == 2 and history.shape[1] == exps.size:
-        history = history[:, order]
     return LyapunovResult(
         exponents=exps,
-        labels=labels,
+        tangent_space=tuple(raw.labels),
         history_t=np.asarray(raw.history_t, dtype=float),
         history=history,
         n_switches=int(raw.n_switches),

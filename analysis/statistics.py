@@ -44,9 +44,7 @@ def self_averaging_parameter(values: Sequence[float] | np.ndarray) -> float:
 
 def magnetization_variance(values: Sequence[float] | np.ndarray) -> float:
     """``VAR[M] = mean(M_T²) − mean(M_T)²`` over realizations (population variance, paper)."""
-    m = _values(values)
-    mean = float(np.mean(m))
-    return float(max(np.mean(m * m) - mean * mean, 0.0))
+    return float(np.var(_values(values)))
 
 
 @dataclass(frozen=True)

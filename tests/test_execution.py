@@ -227,6 +227,18 @@ def test_duplicate_tasks_run_once_and_wall_time_recorded(tmp_path, helpers):
     assert len(walls) == 3 and all(w is not None and w >= 0 for w in walls)
 
 
+def test_resume_across_code_versions_warns(tmp_path, helpers):
+    path = tmp_path / "s.sqlite"
+    tasks = _tasks(2)
+    first = run_tasks("sweep", tasks, helpers.task, store=path, workers=1, progress=False)
+    with sqlite3.connect(path) as conn:
+        conn.execute("UPDATE tasks SET code_version = 'hysteresis-toolkit 0.0.1'")
+    helpers.CALLS.clear()
+    with pytest.warns(UserWarning, match="other code versions"):
+        again = run_tasks("sweep", tasks, helpers.task, store=path, workers=1, progress=False)
+    assert helpers.CALLS == [] and all(_equal(a, b) for a, b in zip(first, again, strict=True))
+
+
 def test_failing_task_raises_with_its_parameters_and_keeps_finished(tmp_path, helpers):
     path = tmp_path / "f.sqlite"
     with pytest.raises(TaskError, match="'x': 3") as info:

@@ -177,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
     record = dict(model_parameters(args))
     record.update(
         exponents=[_json_float(x) for x in res.exponents],
-        labels=list(res.labels),
+        tangent_space=list(res.tangent_space),
         kaplan_yorke=_json_float(res.kaplan_yorke),
         switches=res.n_switches,
         t_end=res.t_end,
@@ -191,7 +191,8 @@ def run(args: argparse.Namespace) -> int:
             f"model {args.model}, C = {args.coupling}, averaged over "
             f"[{res.transient}, {res.t_end}], {res.n_switches} switches"
         )
-        for lab, lam in zip(res.labels, res.exponents, strict=False):
-            print(f"  lambda ({lab:>3}) = {lam: .6f}")
+        print(f"  tangent space ({', '.join(res.tangent_space)})")
+        for i, lam in enumerate(res.exponents, start=1):
+            print(f"  lambda_{i} = {lam: .6f}")
         print(f"  D_KY = {res.kaplan_yorke:.4f}")
     return 0

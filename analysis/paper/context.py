@@ -165,6 +165,8 @@ class PaperContext:
         self.progress = progress
         self.seed = seed
         self.files: list[Path] = []
+        #: results shared by several figures of this run (e.g. one ensemble for four figures)
+        self.cache: dict[str, Any] = {}
 
     def save_figure(self, fig: Any, label: str, data: dict[str, Any]) -> list[Path]:
         """Write ``label``.png, .pdf and the data behind it as .npz (``fig:x`` -> ``fig_x``)."""

@@ -39,8 +39,6 @@ PAPER_REGULAR_FRACTION = 100 / 500
 #: amplitude 1/(2ζ) around q = C touches the down threshold β = −1 of the dimer b = (1, −1))
 CASCADE_ZOOM = (9.3, 7.0)
 
-_CACHE: dict[tuple, dict] = {}
-
 
 # ---------------------------------------------------------------------------------------------
 # task functions (top level: picklable for process pools and Dask)
@@ -427,9 +425,9 @@ def fig_bif(ctx: PaperContext) -> list[Claim]:
 
 def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
     """Ensembles at C = 2.9, 4.0, the limit values and the iid reference (computed once)."""
-    key = (str(ctx.out.resolve()), str(ctx.store_path), ctx.size.name, ctx.seed)
-    if key in _CACHE:
-        return _CACHE[key]
+    key = "ensemble_data"
+    if key in ctx.cache:
+        return ctx.cache[key]
     from analysis.ensemble import EXPERIMENT, aggregate_ensemble, ensemble_task, ensemble_tasks
     from analysis.iid import iid_variance_scaling
 
@@ -482,7 +480,7 @@ def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
         progress=ctx.progress,
     )
     data = {"points": points, "limits": limits, "iid": iid, "window_periods": window_periods}
-    _CACHE[key] = data
+    ctx.cache[key] = data
     return data
 
 
