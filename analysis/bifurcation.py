@@ -21,6 +21,7 @@ __all__ = [
     "bifurcation_diagram",
     "distinct_points",
     "orbit_period",
+    "section_period",
 ]
 
 
@@ -69,6 +70,14 @@ def orbit_period(
         if np.all(np.abs(pts[p:] - pts[:-p]) <= tolerance):
             return p
     return 0
+
+
+def section_period(q: np.ndarray, v: np.ndarray, relative_tolerance: float = 1e-7) -> int:
+    """:func:`orbit_period` of a Poincaré section (q, v) with a tolerance relative to its extent
+    (at least 1): the one period test used by ensembles, the paper figures and ``hyst dimension``.
+    """
+    scale = max(float(np.ptp(q)), float(np.ptp(v)), 1.0)
+    return orbit_period(q, v, tolerance=relative_tolerance * scale)
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,7 @@ __all__ = [
     "EnsemblePoint",
     "realization_seeds",
     "section_and_magnetization",
+    "section_dimension",
 ]
 
 EXPERIMENT = "ensemble-dimers"
@@ -96,15 +97,14 @@ def section_and_magnetization(
     return np.concatenate(qs), np.concatenate(vs), integral / window, window
 
 
-def _section_dimension(
+def section_dimension(
     q: np.ndarray, v: np.ndarray, max_fill: float, min_boxes: float
 ) -> tuple[float, float, int]:
     """(D_BC, its stderr, period): 0 for a periodic section, nan if no scaling region."""
-    from analysis.bifurcation import orbit_period
+    from analysis.bifurcation import section_period
     from analysis.dimensions import box_counting_dimension
 
-    scale = max(float(np.ptp(q)), float(np.ptp(v)), 1.0)
-    period = orbit_period(q, v, tolerance=1e-7 * scale)
+    period = section_period(q, v)
     if period > 0:
         return 0.0, 0.0, period
     try:
@@ -154,7 +154,7 @@ def ensemble_task(
     ly = lyapunov_spectrum(system, t_end, transient, q0, v0, progress=False)
     exponents = np.asarray(ly.exponents, dtype=float)
     q, v, m_t, window = section_and_magnetization(system, t_end, transient, q0, v0)
-    d_bc, d_bc_err, period = _section_dimension(q, v, box_max_fill, box_min_boxes)
+    d_bc, d_bc_err, period = section_dimension(q, v, box_max_fill, box_min_boxes)
     out: dict[str, Any] = {
         "exponents": exponents,
         "max_exponent": float(exponents[0]),

@@ -54,14 +54,14 @@ def test_magnetization_average_is_exact_and_section_matches():
 def test_regular_realization_single_dimer_above_grazing():
     # one dimer b = (1, -1), J = 2 at C = 9.5 > 9: the orbit stays on the sheet M = -1 (see
     # test_bifurcation), so M_T = -1, D_KY = 0 and the section is one point (D_BC = 0)
-    from analysis.ensemble import _section_dimension
+    from analysis.ensemble import section_dimension
     from hysteresis.spin_dimers import SpinDimerEnsemble
 
     system = _system(SpinDimerEnsemble(fields=[[1.0, -1.0]], coupling=2.0), 9.5)
     q, v, m_t, _ = section_and_magnetization(system, 1500.0, 1000.0)  # e^(-ζ·1000) ~ 1e-22
     assert m_t == pytest.approx(-1.0, abs=1e-12)  # round-off of the chunk sums only
     assert np.allclose(q, -9.5, atol=1e-6) and np.allclose(v, 10.0, atol=1e-6)
-    d_bc, _, period = _section_dimension(q, v, 0.1, 8.0)
+    d_bc, _, period = section_dimension(q, v, 0.1, 8.0)
     assert d_bc == 0.0 and period == 1
 
 

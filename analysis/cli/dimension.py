@@ -53,6 +53,7 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from analysis.bifurcation import section_period
     from analysis.cli.lyapunov import _json_float, build_system, model_parameters, play_w0
     from analysis.dimensions import box_counting_dimension
     from analysis.lyapunov import lyapunov_spectrum
@@ -78,11 +79,17 @@ def run(args: argparse.Namespace) -> int:
         kw = {"w0": w0} if w0 is not None else {}
         sec = system.poincare_section(n, transient_periods, args.q0, args.v0, **kw)
         points = np.column_stack([sec.q, sec.v])
-        try:
-            bc = box_counting_dimension(points, max_fill=args.max_fill, min_boxes=args.min_boxes)
-        except ValueError as exc:
-            bc = None
-            bc_error = str(exc)
+        period = section_period(sec.q, sec.v)
+        bc, bc_error = None, ""
+        if period > 0:
+            bc_error = f"periodic section (period {period}): D_BC = 0"
+        else:
+            try:
+                bc = box_counting_dimension(
+                    points, max_fill=args.max_fill, min_boxes=args.min_boxes
+                )
+            except ValueError as exc:
+                bc_error = str(exc)
     except (ValueError, NotImplementedError) as exc:
         print(f"hyst dimension: error: {exc}", file=sys.stderr)
         return 2
@@ -91,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
         exponents=[_json_float(x) for x in ly.exponents],
         kaplan_yorke=_json_float(ly.kaplan_yorke),
         section_points=int(n),
-        box_counting=None if bc is None else float(bc.dimension),
+        section_period=int(period),
+        box_counting=(0.0 if period > 0 else None) if bc is None else float(bc.dimension),
         box_counting_stderr=None if bc is None else float(bc.stderr),
         box_counting_region=None
         if bc is None

@@ -74,7 +74,7 @@ def bifurcation_task(
     (spins, 2, 1, 2, seed)``) or ``"erf_play"`` (the limit). Returns the Poincaré points q, v
     (n_values × n_periods), the spectra, λ_max and the orbit period per C (0: none found).
     """
-    from analysis.bifurcation import bifurcation_diagram, orbit_period
+    from analysis.bifurcation import bifurcation_diagram, section_period
     from oscillators import ForcedOscillator
 
     operator = _make_operator(kind, spins, seed)
@@ -91,10 +91,7 @@ def bifurcation_task(
         v0=V0,
         progress=False,
     )
-    periods = []
-    for i in range(values.size):
-        scale = max(float(np.ptp(bd.q[i])), float(np.ptp(bd.v[i])), 1.0)
-        periods.append(orbit_period(bd.q[i], bd.v[i], tolerance=1e-6 * scale))
+    periods = [section_period(bd.q[i], bd.v[i], 1e-6) for i in range(values.size)]
     return {
         "couplings": values,
         "q": bd.q,
