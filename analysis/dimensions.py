@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hysteresis._validation import as_generator
+
 __all__ = ["kaplan_yorke_dimension", "box_counting_dimension", "BoxCountingResult", "box_counts"]
 
 
@@ -120,7 +122,7 @@ def box_counts(
     points: np.ndarray,
     sizes: Sequence[float] | np.ndarray,
     offsets: int = 1,
-    seed: int | np.random.Generator | None = 0,
+    seed: int | np.random.Generator = 0,
     reduce: str = "min",
 ) -> np.ndarray:
     """Number of boxes of side ε that contain at least one point, for each ε in ``sizes``.
@@ -138,7 +140,7 @@ def box_counts(
         raise ValueError(f"offsets must be >= 1, got {offsets}")
     if reduce not in ("min", "mean"):
         raise ValueError(f"reduce must be 'min' or 'mean', got {reduce!r}")
-    rng = np.random.default_rng(seed)
+    rng = as_generator(seed)
     shifted = pts - pts.min(axis=0)
     counts = np.empty(eps.size)
     for i, e in enumerate(eps):
@@ -237,7 +239,7 @@ def box_counting_dimension(
     max_fill: float = 0.1,
     min_boxes: float = 8.0,
     min_points: int = 5,
-    seed: int | np.random.Generator | None = 0,
+    seed: int | np.random.Generator = 0,
 ) -> BoxCountingResult:
     """Box-counting (capacity) dimension ``D_0 = lim log N(ε) / log(1/ε)`` (paper eq.
     box_counting) of a point set, with the linear scaling region chosen automatically.
@@ -281,7 +283,7 @@ def box_counting_dimension(
         raise ValueError(f"min_boxes must be >= 1, got {min_boxes}")
     if min_points < 2:
         raise ValueError(f"min_points must be >= 2, got {min_points}")
-    rng = np.random.default_rng(seed)
+    rng = as_generator(seed)
     extent = float(np.max(pts.max(axis=0) - pts.min(axis=0)))
     if not extent > 0.0:
         raise ValueError("points all coincide: the box-counting dimension is 0 and not fitted")

@@ -20,6 +20,7 @@ __all__ = [
     "scalar_in_open_interval",
     "finite_array",
     "positive_integer",
+    "nonnegative_integer",
     "direction_sign",
     "as_generator",
 ]
@@ -107,6 +108,11 @@ def positive_integer(x: Any, name: str, minimum: int = 1) -> int:
     return value
 
 
+def nonnegative_integer(x: Any, name: str) -> int:
+    """``x`` as a Python int >= 0 (floats with integral value are not accepted)."""
+    return positive_integer(x, name, minimum=0)
+
+
 def direction_sign(direction: Any, name: str = "direction") -> int:
     """``direction`` as +1 (rising input) or -1 (falling input)."""
     if isinstance(direction, bool) or direction not in (1, -1):
@@ -115,9 +121,18 @@ def direction_sign(direction: Any, name: str = "direction") -> int:
 
 
 def as_generator(seed: Any, name: str = "seed") -> np.random.Generator:
-    """A numpy Generator from an int seed, a Generator (used as is) or None (fresh entropy)."""
+    """A numpy Generator from a non-negative int seed or a Generator (used as is).
+
+    ``None`` is rejected: every random quantity must be reproducible, so a silent fall-back to
+    fresh OS entropy is not offered.
+    """
     if isinstance(seed, np.random.Generator):
         return seed
-    if seed is None or (isinstance(seed, Integral) and not isinstance(seed, bool) and seed >= 0):
+    if seed is None:
+        raise ValueError(
+            f"{name} is required: give a non-negative int or a numpy.random.Generator "
+            "(None would draw fresh, irreproducible entropy)"
+        )
+    if isinstance(seed, Integral) and not isinstance(seed, bool) and seed >= 0:
         return np.random.default_rng(seed)
     raise ValueError(f"{name} must be a non-negative int or a numpy.random.Generator, got {seed!r}")

@@ -242,7 +242,8 @@ class GeneralizedPlay(_PlayBase):
     ----------
     shape_kind:
         ``"erf"`` for :meth:`erf` (then ``spread`` = R is set) or ``"custom"``, so that compiled
-        integrators can specialise on the paper's case.
+        integrators can specialise on the paper's case. ``shape_kind``, ``spread`` and ``name``
+        are read-only properties.
     """
 
     def __init__(
@@ -259,9 +260,11 @@ class GeneralizedPlay(_PlayBase):
             raise ValueError("shape_derivative must be a callable (derivative of shape)")
         self._shape = shape
         self._shape_derivative = shape_derivative
-        self.name = name
-        self.shape_kind = "custom"
-        self.spread: float | None = None
+        # read-only after construction (properties below): the play-limit integrator dispatches
+        # on shape_kind/spread, so changing them later would desynchronise them from the shape.
+        self._name = name
+        self._shape_kind = "custom"
+        self._spread: float | None = None
 
     @classmethod
     def erf(cls, width: float, spread: float) -> GeneralizedPlay:
@@ -273,9 +276,24 @@ class GeneralizedPlay(_PlayBase):
         spread = positive_scalar(spread, "spread")
         shape, derivative = _erf_shape(spread)
         op = cls(width, shape, derivative, name=f"erf(w/(sqrt(2)*{spread}))")
-        op.shape_kind = "erf"
-        op.spread = spread
+        op._shape_kind = "erf"
+        op._spread = spread
         return op
+
+    @property
+    def shape_kind(self) -> str:
+        """``"erf"`` for :meth:`erf`, ``"custom"`` otherwise (read-only)."""
+        return self._shape_kind
+
+    @property
+    def spread(self) -> float | None:
+        """R of :meth:`erf` (read-only); ``None`` for a custom shape."""
+        return self._spread
+
+    @property
+    def name(self) -> str | None:
+        """Optional label (read-only)."""
+        return self._name
 
     @property
     def shape(self) -> Callable:

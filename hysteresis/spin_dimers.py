@@ -26,7 +26,6 @@ The state ``(σ1, σ2) = (↓, ↑)`` is never metastable for ``b1 >= b2``. The 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numba import njit
@@ -157,13 +156,19 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
 
     @classmethod
     def random(
-        cls, n_spins: int, width: float, spread: float, coupling: float, seed: Any = None
+        cls,
+        n_spins: int,
+        width: float,
+        spread: float,
+        coupling: float,
+        seed: int | np.random.Generator,
     ) -> SpinDimerEnsemble:
         """The paper's disorder: loop width ``p`` fixed, centres ``s_k ~ N(0, R²)``,
         ``b_{2k-1} = -s_k + J - p/2``, ``b_{2k} = -s_k - J + p/2``.
 
         ``n_spins`` = N (even, >= 2), ``width`` = p with ``0 < p < 2J``, ``spread`` = R > 0,
-        ``coupling`` = J > 0, ``seed`` an int or a ``numpy.random.Generator``.
+        ``coupling`` = J > 0, ``seed`` (required) a non-negative int or a
+        ``numpy.random.Generator``; ``None`` raises ``ValueError`` (no irreproducible default).
         """
         n_spins = positive_integer(n_spins, "n_spins", minimum=2)
         if n_spins % 2:

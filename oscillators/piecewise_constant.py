@@ -24,11 +24,13 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._validation import nonnegative_integer, positive_integer
 from oscillators import _pc_kernels as kern
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
 from oscillators.results import OscillatorState, PoincareSection, TangentResult, Trajectory
 
 __all__ = [
+    "GrazingError",
     "EqualWidthPlan",
     "equal_width_plan",
     "pc_trajectory",
@@ -39,6 +41,25 @@ __all__ = [
 ]
 
 SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8")])
+
+
+class GrazingError(ValueError):
+    """A switch at a turning point (``v* = 0``) while the tangent flow is propagated.
+
+    The kernels' grazing rule (:mod:`oscillators._pc_kernels`) makes a maximum that reaches an
+    upper threshold switch; the saltation ``C·ΔM/v*`` of that switch is infinite, so the flow map
+    is not differentiable on this orbit and Lyapunov exponents / Jacobians are undefined. A
+    ``ValueError`` subclass so that callers reporting bad input also report this.
+    """
+
+
+def _grazing_message(t: float | None = None) -> str:
+    where = f" at t = {t!r}" if t is not None else ""
+    return (
+        f"grazing switch{where}: a threshold was reached exactly at a turning point (v* = 0), "
+        "so the saltation C·ΔM/v* is infinite and the tangent flow is undefined on this orbit; "
+        "perturb the initial condition or the parameters"
+    )
 
 
 # -- equal-width plan -------------------------------------------------------------------------
@@ -107,10 +128,10 @@ def equal_width_plan(operator: Any) -> EqualWidthPlan | None:
     # output with the first k groups up, the rest down: M = sum(up w) - sum(down w)
     total = float(np.sum(w))
     if np.all(w == w[0]):
-        # equal weights (dimers: M_k = 4k/N - 1): exact integer counting, no summation drift
+        # equal weights (dimers: M_k = 4k/N - 1 for Σw = 1): exact integer counting, no
+        # summation drift; scaled by Σw like the unequal-weight branch
         counts = np.concatenate([[0], np.cumsum(np.diff(np.append(starts, a.size)))])
-        scale = 1.0 if abs(total - 1.0) <= 1e-12 else total
-        mval = (2.0 * counts - a.size) / a.size * scale
+        mval = (2.0 * counts - a.size) / a.size * total
     else:
         cum = np.concatenate([[0.0], np.cumsum(gw)])
         mval = 2.0 * cum - total
@@ -235,7 +256,10 @@ class _GenericEngine:
                 _, self.opstate = self.op.apply(np.array([below]), self.opstate)
             jump = self.output - m_old
             if y is not None:
-                sal = coupling * jump / self.v if self.v != 0.0 else np.inf
+                if self.v == 0.0 and coupling * jump != 0.0:
+                    t = par[kern.P_TBASE] + self.n * par[kern.P_T] + self.tau
+                    raise GrazingError(_grazing_message(float(t)))
+                sal = coupling * jump / self.v if coupling * jump != 0.0 else 0.0
                 y[1, :ntan] += sal * y[0, :ntan]
             self.n_switches += 1
             if record:
@@ -257,6 +281,16 @@ class _GenericEngine:
                 out[i] = (self.q, self.v, self.output)
             if on_target is not None:
                 on_target(i)
+
+
+def _wrap_phase(phi: float) -> float:
+    """``phi`` mod 2π in [0, 2π)."""
+    two_pi = 2.0 * math.pi
+    wrapped = math.fmod(phi, two_pi)
+    if wrapped < 0.0:
+        wrapped += two_pi
+    # fmod of a tiny negative number plus 2π rounds to exactly 2π
+    return 0.0 if wrapped >= two_pi else wrapped
 
 
 # -- shared preparation -----------------------------------------------------------------------
@@ -288,7 +322,8 @@ class _Run:
         n = self.engine.n if self.engine is not None else int(self.ist[kern.I_N])
         period = float(self.par[kern.P_T])
         phi0 = float(self.par[kern.P_PHI0])
-        phi = math.fmod(phi0 + float(system.frequency) * tau, 2.0 * math.pi)
+        # wrap to [0, 2π) like the play path (math.fmod keeps the sign: φ < 0 for phi0 < 0)
+        phi = _wrap_phase(phi0 + float(system.frequency) * tau)
         return OscillatorState(
             q=q,
             v=v,
@@ -426,12 +461,8 @@ def pc_poincare(
     taylor: bool = True,
 ) -> PoincareSection:
     """Stroboscopic points at t = (transient_periods + i)·T, i = 0..n_periods-1 (φ = 0)."""
-    n_periods = int(n_periods)
-    transient_periods = int(transient_periods)
-    if n_periods < 1:
-        raise ValueError(f"n_periods must be >= 1, got {n_periods}")
-    if transient_periods < 0:
-        raise ValueError(f"transient_periods must be >= 0, got {transient_periods}")
+    n_periods = positive_integer(n_periods, "n_periods")
+    transient_periods = nonnegative_integer(transient_periods, "transient_periods")
     run = _prepare(system, q0, v0, 0.0, operator_state, 0.0, engine, taylor)
     tgt_n = transient_periods + np.arange(n_periods, dtype=np.int64)
     tgt_tau = np.zeros(n_periods)
@@ -485,6 +516,14 @@ def pc_tangent(
 
     Tangent space (δq, δv) — or (δq, δv, δφ) with ``include_phase`` — propagated with the closed
     form fundamental matrices of the segments and the saltation matrix at every switch.
+    ``exponents`` (and the columns of ``history``) are in descending order; ``labels`` names the
+    tangent-space basis, ``("q", "v")`` or ``("q", "v", "phi")``, in this fixed order — after the
+    QR re-orthonormalisation an exponent is not tied to one basis direction, so ``labels`` is not
+    a per-exponent tag (same convention as :func:`oscillators.play_flow.play_tangent`).
+
+    A switch reached exactly at a turning point (grazing, ``v* = 0``) makes the saltation
+    ``C·ΔM/v*`` infinite: the flow is not differentiable there and a ``FloatingPointError`` is
+    raised instead of returning NaN exponents.
     """
     t_end = float(t_end)
     transient = float(transient)
@@ -546,6 +585,9 @@ def pc_tangent(
                 hcount,
                 True,
             )
+            if not (np.all(np.isfinite(y)) and np.all(np.isfinite(lsum))):
+                # the kernel applies sal = inf at v* = 0; report it instead of NaN exponents
+                raise GrazingError(_grazing_message())
         if bar is not None:
             bar.update(float(elapsed[j - 1] - (elapsed[i - 1] if i > 0 else 0.0)))
         i = j
@@ -555,12 +597,14 @@ def pc_tangent(
     raw = lsum[:ntan] / duration
     order = np.argsort(-raw, kind="stable")
     exponents = raw[order]
-    q, v, tau, opstate, nsw = run.final(system)
+    # history: the same descending order per checkpoint as the exponents (as in play_tangent)
+    history = -np.sort(-hist[: hcount[0], :ntan], axis=1)
+    _, _, _, _, nsw = run.final(system)
     return TangentResult(
         exponents=exponents,
-        labels=tuple(labels[o] for o in order),
+        labels=labels,
         history_t=transient + elapsed[flags],
-        history=hist[: hcount[0], :ntan][:, order],
+        history=history,
         n_switches=nsw,
         t_end=t_end,
         final=run.final_state(system),
@@ -615,6 +659,8 @@ def pc_jacobian(
             np.zeros(1, dtype=np.int64),
             False,
         )
+        if not np.all(np.isfinite(y)):
+            raise GrazingError(_grazing_message())
     return y[:ntan, :ntan].copy()
 
 

@@ -59,7 +59,9 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
 from oscillators import _play_kernels as _k
+from oscillators.linear import particular_amplitudes
 from oscillators.results import OscillatorState, PoincareSection, TangentResult, Trajectory
 
 __all__ = [
@@ -84,16 +86,6 @@ _EPS = np.finfo(np.float64).eps
 # --------------------------------------------------------------------------------------------
 # parameters and initial state
 # --------------------------------------------------------------------------------------------
-def _finite(x: Any, name: str) -> float:
-    try:
-        value = float(x)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a finite real number, got {x!r}") from exc
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite real number, got {value}")
-    return value
-
-
 def _shape_code(operator: Any) -> tuple[float, float]:
     """(kind, spread) of a play-type operator: 0 identity (PlayOperator), 1 erf."""
     if not hasattr(operator, "width"):
@@ -117,11 +109,11 @@ def make_parameters(
 ) -> np.ndarray:
     """Flat parameter array of the kernels (layout in :mod:`oscillators._play_kernels`)."""
     kind, spread = _shape_code(system.operator)
-    zeta = _finite(system.damping_ratio, "damping_ratio")
-    omega = _finite(system.frequency, "frequency")
-    coupling = _finite(system.coupling, "coupling")
-    width = _finite(system.operator.width, "width")
-    phi0 = _finite(phi0, "phi0")
+    zeta = finite_scalar(system.damping_ratio, "damping_ratio")
+    omega = finite_scalar(system.frequency, "frequency")
+    coupling = finite_scalar(system.coupling, "coupling")
+    width = finite_scalar(system.operator.width, "width")
+    phi0 = finite_scalar(phi0, "phi0")
     if not 0.0 <= zeta < 1.0:
         raise ValueError(
             f"damping_ratio must lie in [0, 1) for the play-limit flow (underdamped), got {zeta}"
@@ -132,11 +124,11 @@ def make_parameters(
         raise ValueError(f"width must be >= 0, got {width}")
     if kind == 1.0 and not spread > 0.0:
         raise ValueError(f"spread must be > 0, got {spread}")
-    den = (1.0 - omega**2) ** 2 + (2.0 * zeta * omega) ** 2
-    if den == 0.0:
-        raise ValueError("damping_ratio = 0 with frequency = 1 is exact resonance (unbounded)")
-    amp_a = (1.0 - omega**2) / den
-    amp_b = 2.0 * zeta * omega / den
+    if zeta == 0.0 and omega == 1.0:
+        raise ValueError(
+            "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
+        )
+    amp_a, amp_b = particular_amplitudes(zeta, omega)
     par = np.zeros(15)
     par[:15] = [
         zeta,
@@ -171,8 +163,8 @@ def _initial_state(
     par: np.ndarray, q0: Any, v0: Any, w0: Any, operator_state: Any
 ) -> tuple[np.ndarray, bool]:
     """State array [t, q, v, w, mode] and whether the start is on a wall moving outward."""
-    q0 = _finite(q0, "q0")
-    v0 = _finite(v0, "v0")
+    q0 = finite_scalar(q0, "q0")
+    v0 = finite_scalar(v0, "v0")
     hp = par[3]
     if operator_state is not None:
         if w0 is not None:
@@ -180,7 +172,7 @@ def _initial_state(
         w0 = getattr(operator_state, "position", None)
         if w0 is None:
             raise ValueError("operator_state must be a PlayState (attribute 'position' = w)")
-    w0 = q0 - hp if w0 is None else _finite(w0, "w0")
+    w0 = q0 - hp if w0 is None else finite_scalar(w0, "w0")
     gap = q0 - w0
     tol = 8.0 * _EPS * max(abs(q0), abs(w0), hp, 1.0)
     if abs(gap) > hp + tol:
@@ -320,8 +312,8 @@ def play_trajectory(
     Trajectory with ``w`` (wagon position), ``M = f(w)``, ``phi`` (mod 2π) and ``events``
     (structured: ``time, q, v, kind, w``; kind +1 leaving the play onto a wall, -1 entering).
     """
-    t_end = _finite(t_end, "t_end")
-    sample_dt = _finite(sample_dt, "sample_dt")
+    t_end = finite_scalar(t_end, "t_end")
+    sample_dt = finite_scalar(sample_dt, "sample_dt")
     if not t_end > 0.0:
         raise ValueError(f"t_end must be > 0, got {t_end}")
     if not sample_dt > 0.0:
@@ -368,10 +360,9 @@ def play_poincare(
     point is the initial state; otherwise ``t_0 = ((-phi0) mod 2π)/Ω``. ``w`` holds the wagon
     position, ``M = f(w)``; ``n_switches`` counts wall hits plus reversals over the whole run.
     """
-    if int(n_periods) != n_periods or n_periods < 1:
-        raise ValueError(f"n_periods must be an integer >= 1, got {n_periods}")
-    if int(transient_periods) != transient_periods or transient_periods < 0:
-        raise ValueError(f"transient_periods must be an integer >= 0, got {transient_periods}")
+    n_periods = positive_integer(n_periods, "n_periods")
+    transient_periods = nonnegative_integer(transient_periods, "transient_periods")
+    phi0 = finite_scalar(phi0, "phi0")
     par = make_parameters(system, phi0)
     st, _ = _initial_state(par, q0, v0, w0, operator_state)
     period = 2.0 * math.pi / par[1]
@@ -380,9 +371,9 @@ def play_poincare(
         t_first += 2.0 * math.pi
     t_first /= par[1]
     # t = 0 itself is a section time when phi0 = 0: the sampler returns the start state there.
-    times = t_first + np.arange(int(transient_periods) + int(n_periods)) * period
+    times = t_first + np.arange(transient_periods + n_periods) * period
     out, _, n_events = _sample(par, st, times, False, progress, "play Poincaré section")
-    keep = slice(int(transient_periods), None)
+    keep = slice(transient_periods, None)
     return PoincareSection(
         q=out[keep, 0].copy(),
         v=out[keep, 1].copy(),
@@ -421,7 +412,7 @@ def play_fundamental_matrix(
     A start on a wall moving outward is a wall hit at t = 0 (one-sided derivative: a δw into the
     play is wiped out), so the w column is then zero.
     """
-    t_end = _finite(t_end, "t_end")
+    t_end = finite_scalar(t_end, "t_end")
     if not t_end > 0.0:
         raise ValueError(f"t_end must be > 0, got {t_end}")
     par = make_parameters(system, phi0)
@@ -457,20 +448,22 @@ def play_tangent(
 ) -> TangentResult:
     """Lyapunov spectrum of the play-limit system by the tangent flow (Benettin/QR).
 
-    The run covers ``[0, t_end]``; the exponents are averaged over ``[transient, t_end]``.
-    Tangent space ``(q, v, w)`` (paper: the phase direction neglected, δφ ≡ 0) or
-    ``(q, v, φ, w)`` with ``include_phase`` (adds the exponent 0 of the phase). Exponents in
-    descending order; the last is exactly ``-inf`` as soon as the input leaves the play after
-    the transient (rank collapse at ``V_out``, module docstring). ``history`` holds the running
-    estimates (sorted, one row per checkpoint). ``extra``: ``n_exits``, ``n_entries`` (after the
-    transient), ``collapse_residual`` (largest relative remainder of the collapsed column, a
-    round-off check), ``log_sums``, ``transient``, ``renormalize_dt``, and with
-    ``record_events`` the wall hits / reversals of the whole run (``events``, as in
-    :func:`play_trajectory`).
+    The run covers ``[0, t_end]``; the exponents are averaged over ``[transient, t_end]``. Tangent
+    space ``(q, v, w)`` (paper: the phase direction neglected, δφ ≡ 0) or ``(q, v, φ, w)`` with
+    ``include_phase`` (adds the exponent 0 of the phase); ``labels`` names that tangent-space basis,
+    ``("q", "v", "w")`` or ``("q", "v", "phi", "w")``, in this fixed order. After the QR
+    re-orthonormalisation the exponents are not tied to single basis directions, so ``labels`` is
+    not a per-exponent tag. Exponents in descending order; the last is exactly ``-inf`` as soon as
+    the input leaves the play after the transient (rank collapse at ``V_out``, module docstring).
+    ``history`` holds the running estimates (sorted, one row per checkpoint). ``extra``:
+    ``n_exits``, ``n_entries`` (after the transient), ``collapse_residual`` (largest relative
+    remainder of the collapsed column, a round-off check), ``log_sums``, ``transient``,
+    ``renormalize_dt``, and with ``record_events`` the wall hits / reversals of the whole run
+    (``events``, as in :func:`play_trajectory`).
     """
-    t_end = _finite(t_end, "t_end")
-    transient = _finite(transient, "transient")
-    renormalize_dt = _finite(renormalize_dt, "renormalize_dt")
+    t_end = finite_scalar(t_end, "t_end")
+    transient = finite_scalar(transient, "transient")
+    renormalize_dt = finite_scalar(renormalize_dt, "renormalize_dt")
     if not transient >= 0.0:
         raise ValueError(f"transient must be >= 0, got {transient}")
     if not t_end > transient:
@@ -507,6 +500,7 @@ def play_tangent(
     if bar is not None:
         bar.close()
     exponents = np.sort(logs / span)[::-1]
+    # the tangent-space basis (fixed order), not a per-exponent tag: see the docstring
     labels = ("q", "v", "phi", "w") if include_phase else ("q", "v", "w")
     extra_events = {}
     if recorder is not None:

@@ -62,9 +62,10 @@ class PoincareSection:
 class TangentResult:
     """Raw output of a tangent-flow (Benettin/QR) run.
 
-    ``exponents`` are per direction of the tangent space used (see ``labels``), in descending
-    order; ``history`` holds the running estimates (rows: checkpoints, columns: exponents) at
-    times ``history_t``.
+    ``exponents`` are in descending order (after QR they belong to no single coordinate);
+    ``labels`` names the basis of the tangent space the flow ran in (e.g. ``("q", "v", "w")``);
+    ``history`` holds the running estimates (rows: checkpoints, each sorted descending) at times
+    ``history_t``.
     """
 
     exponents: np.ndarray

@@ -15,21 +15,12 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from hysteresis._validation import finite_scalar
 from hysteresis.base import Hysteron
 from oscillators import piecewise_constant as pc
 from oscillators.results import OscillatorState, PoincareSection, TangentResult, Trajectory
 
 __all__ = ["ForcedOscillator"]
-
-
-def _finite(value: Any, name: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite real number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return x
 
 
 class ForcedOscillator:
@@ -42,7 +33,8 @@ class ForcedOscillator:
     coupling:
         C, strength of the hysteresis force (finite, any sign).
     damping_ratio:
-        ζ >= 0 (Table II: 0.05).
+        ζ >= 0 (Table II: 0.05); play-type operators need ζ < 1 (the play-limit integrator
+        uses the underdamped closed form).
     frequency:
         Ω > 0, excitation frequency (Table II: 1.0). ζ = 0 with Ω = 1 (undamped resonance) is
         rejected.
@@ -58,16 +50,23 @@ class ForcedOscillator:
         if not isinstance(operator, Hysteron):
             raise ValueError(f"operator must be a Hysteron, got {type(operator).__name__}")
         self._operator = operator
-        self._coupling = _finite(coupling, "coupling")
-        zeta = _finite(damping_ratio, "damping_ratio")
+        self._coupling = finite_scalar(coupling, "coupling")
+        zeta = finite_scalar(damping_ratio, "damping_ratio")
         if zeta < 0.0:
             raise ValueError(f"damping_ratio must be >= 0, got {damping_ratio}")
-        omega = _finite(frequency, "frequency")
+        omega = finite_scalar(frequency, "frequency")
         if omega <= 0.0:
             raise ValueError(f"frequency must be > 0, got {frequency}")
         if zeta == 0.0 and omega == 1.0:
             raise ValueError(
                 "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
+            )
+        if zeta >= 1.0 and self.is_play_type:
+            # checked here, not first at integration time: the play-limit flow
+            # (oscillators.play_flow) uses the underdamped propagator only
+            raise ValueError(
+                f"damping_ratio must lie in [0, 1) for play-type operators (the play-limit "
+                f"integrator supports underdamped motion only), got {zeta}"
             )
         self._zeta = zeta
         self._omega = omega
@@ -119,23 +118,18 @@ class ForcedOscillator:
             return "play"
         return "continuous"
 
-    def _continuous(self, name: str):
-        from oscillators import play_flow
-
-        fn = getattr(play_flow, f"continuous_{name}", None)
-        if fn is None:
-            raise NotImplementedError(
-                f"{type(self._operator).__name__} is a continuous operator that is not play-type; "
-                "the oscillator integrates piecewise-constant operators and PlayOperator/"
-                "GeneralizedPlay only"
-            )
-        return fn
+    def _unsupported(self) -> NotImplementedError:
+        return NotImplementedError(
+            f"{type(self._operator).__name__} is a continuous operator that is not play-type; "
+            "the oscillator integrates piecewise-constant operators and PlayOperator/"
+            "GeneralizedPlay only"
+        )
 
     def _play_w0(self, q0: float, operator_state: Any, w0: float | None) -> float:
         if operator_state is not None and w0 is not None:
             raise ValueError("give either operator_state or w0, not both")
         if w0 is not None:
-            return _finite(w0, "w0")
+            return finite_scalar(w0, "w0")
         if operator_state is not None:
             return float(operator_state.position)
         return float(self._operator.initial_state(q0).position)
@@ -145,8 +139,8 @@ class ForcedOscillator:
         if w0 is not None:
             if not self.is_play_type:
                 raise ValueError("w0 is only meaningful for play-type operators")
-            return self._operator.state(_finite(w0, "w0"), _finite(q0, "q0"))
-        return self._operator.initial_state(_finite(q0, "q0"))
+            return self._operator.state(finite_scalar(w0, "w0"), finite_scalar(q0, "q0"))
+        return self._operator.initial_state(finite_scalar(q0, "q0"))
 
     # -- integration ------------------------------------------------------------------------
     def trajectory(
@@ -165,7 +159,7 @@ class ForcedOscillator:
         ``operator_state=None`` means ``operator.initial_state(q0)`` (play: ``w0 = q0 − p/2``
         unless ``w0`` is given).
         """
-        phi0 = _finite(phi0, "phi0")
+        phi0 = finite_scalar(phi0, "phi0")
         kind = self._kind()
         if kind == "pc":
             if w0 is not None:
@@ -176,7 +170,7 @@ class ForcedOscillator:
 
             w = self._play_w0(q0, operator_state, w0)
             return play_trajectory(self, t_end, q0, v0, w, sample_dt, phi0)
-        return self._continuous("trajectory")(self, t_end, q0, v0, operator_state, sample_dt)
+        raise self._unsupported()
 
     def poincare_section(
         self,
@@ -202,9 +196,7 @@ class ForcedOscillator:
 
             w = self._play_w0(q0, operator_state, w0)
             return play_poincare(self, n_periods, transient_periods, q0, v0, w)
-        return self._continuous("poincare")(
-            self, n_periods, transient_periods, q0, v0, operator_state
-        )
+        raise self._unsupported()
 
     def stroboscopic_map(self, state: OscillatorState) -> OscillatorState:
         """The state one forcing period T after ``state`` (any phase)."""
@@ -234,7 +226,12 @@ class ForcedOscillator:
         include_phase: bool = False,
         progress: bool = True,
     ) -> TangentResult:
-        """Lyapunov spectrum by the tangent flow with QR, averaged over [transient, t_end]."""
+        """Lyapunov spectrum by the tangent flow with QR, averaged over [transient, t_end].
+
+        ``exponents`` are descending; ``labels`` names the tangent-space basis in a fixed order
+        (``("q", "v"[, "phi"])`` piecewise-constant, ``("q", "v"[, "phi"], "w")`` play-type),
+        not the direction of each exponent.
+        """
         kind = self._kind()
         if kind == "pc":
             if w0 is not None:
@@ -249,6 +246,4 @@ class ForcedOscillator:
             return play_tangent(
                 self, t_end, transient, q0, v0, w, include_phase=include_phase, progress=progress
             )
-        return self._continuous("tangent")(
-            self, t_end, transient, q0, v0, operator_state, include_phase, progress
-        )
+        raise self._unsupported()

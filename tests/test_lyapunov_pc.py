@@ -166,3 +166,40 @@ def test_paper_c4_twenty_thousand_spins_chaotic():
     assert res.exponents[0] > 0.01
     assert abs(res.exponents.sum() + 2 * ZETA) < 1e-6
     assert 1.0 < res.kaplan_yorke < 2.0
+
+
+@pytest.mark.parametrize("engine", ["kernel", "generic"])
+def test_labels_name_the_tangent_basis_not_the_exponents(engine):
+    """C = 0 with the phase: exponents (0, -ζ, -ζ) come out in the order opposite to the basis
+    (q, v, phi); ``labels`` stays the basis, the history rows stay descending."""
+    sysm = ForcedOscillator(dimers(20), 0.0)
+    res = pc.pc_tangent(sysm, 600.0, 50.0, include_phase=True, progress=False, engine=engine)
+    assert res.labels == ("q", "v", "phi")
+    np.testing.assert_allclose(res.exponents, [0.0, -ZETA, -ZETA], atol=5e-3)
+    assert np.all(np.diff(res.history, axis=1) <= 0.0)
+    res2 = pc.pc_tangent(sysm, 100.0, progress=False, engine=engine)
+    assert res2.labels == ("q", "v")
+
+
+def test_generic_engine_grazing_switch_raises(monkeypatch):
+    """A switch found at a turning point (v* = 0, the kernels' rule: a maximum reaching the upper
+    threshold switches) has an infinite saltation: a clear error, not NaN exponents."""
+    from hysteresis.relay import Relay
+
+    sysm = ForcedOscillator(Relay(0.5, -0.5), 2.0)
+    scan = pc.kern.scan_crossing
+    calls = []
+
+    def switch_here_once(par, force, q, v, c, s, tau, horizon, up, down):
+        calls.append(v)
+        if len(calls) == 1:
+            return 0.0, 1  # the crossing is the current point, where v = 0
+        return scan(par, force, q, v, c, s, tau, horizon, up, down)
+
+    monkeypatch.setattr(pc.kern, "scan_crossing", switch_here_once)
+    with pytest.raises(pc.GrazingError, match="grazing"):
+        pc.pc_jacobian(sysm, 1.0, q0=0.0, v0=0.0, engine="generic")
+    # the trajectory itself is defined there: the relay switches (u >= alpha), no error
+    calls.clear()
+    traj = pc.pc_trajectory(sysm, 0.05, q0=0.0, v0=0.0, engine="generic")
+    assert traj.switches["v"][0] == 0.0 and traj.switches["jump"][0] == 2.0

@@ -274,6 +274,45 @@ def test_validation():
         sysm.trajectory(-1.0)
     with pytest.raises(ValueError, match="n_periods"):
         sysm.poincare_section(0)
+    # non-integer counts are rejected, not truncated
+    with pytest.raises(ValueError, match="n_periods"):
+        sysm.poincare_section(2.5)
+    with pytest.raises(ValueError, match="transient_periods"):
+        sysm.poincare_section(2, transient_periods=1.5)
+    with pytest.raises(ValueError, match="transient_periods"):
+        sysm.poincare_section(2, transient_periods=-1)
+    # overdamped motion is fine for piecewise-constant operators (closed form for any ζ) ...
+    ForcedOscillator(ens, 1.0, damping_ratio=1.5)
+    # ... but rejected at construction for play-type operators (underdamped limit integrator)
+    from hysteresis.play import GeneralizedPlay, PlayOperator
+
+    for op in (GeneralizedPlay.erf(2.0, 1.0), PlayOperator(2.0)):
+        with pytest.raises(ValueError, match="damping_ratio"):
+            ForcedOscillator(op, 1.0, damping_ratio=1.0)
+
+
+def test_final_phase_is_wrapped_to_zero_two_pi():
+    """Negative phi0: the final phase is (phi0 + Ω t) mod 2π in [0, 2π), as on the play path."""
+    sysm = ForcedOscillator(Relay(0.5, -0.5), 1.0, frequency=1.3)
+    for phi0 in (-1.0, -7.5, 4.0):
+        fin = sysm.trajectory(0.4, phi0=phi0).final
+        expected = (phi0 + 1.3 * 0.4) % (2.0 * math.pi)
+        assert 0.0 <= fin.phi < 2.0 * math.pi
+        assert abs(fin.phi - expected) < 1e-12
+
+
+def test_continuous_non_play_operator_is_not_implemented():
+    from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
+
+    sysm = ForcedOscillator(PrandtlIshlinskii([1.0, 2.0], [0.5, 0.5]), 1.0)
+    calls = (
+        lambda: sysm.trajectory(1.0),
+        lambda: sysm.poincare_section(2),
+        lambda: sysm.tangent(10.0, progress=False),
+    )
+    for call in calls:
+        with pytest.raises(NotImplementedError, match="PlayOperator/GeneralizedPlay only"):
+            call()
 
 
 def test_play_dispatch_uses_the_same_section_convention():

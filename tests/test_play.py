@@ -180,6 +180,11 @@ def test_generalized_custom_shape_and_attributes():
     assert gp.output_range == (-1.0, 1.0)
     e = GeneralizedPlay.erf(2.0, 1.5)
     assert e.shape_kind == "erf" and e.spread == 1.5 and e.width == 2.0
+    # read-only: the play-limit integrator dispatches on shape_kind / spread
+    for attr, value in (("shape_kind", "custom"), ("spread", 3.0), ("name", "x")):
+        with pytest.raises(AttributeError):
+            setattr(e, attr, value)
+    assert e.shape_kind == "erf" and e.spread == 1.5 and gp.name == "tanh"
     # derivative of erf(w/(sqrt2 R)) at 0 is sqrt(2/pi)/R
     assert e.shape_derivative(0.0) == pytest.approx(math.sqrt(2 / math.pi) / 1.5)
     _finite_difference_check(gp, gp.initial_state(0.2), +1)

@@ -303,6 +303,13 @@ def test_bad_input_is_rejected():
         play_trajectory(system, 1.0, w0=-1.5, operator_state=PlayState(-1.5, -1.0))
     with pytest.raises(ValueError, match="n_periods"):
         play_poincare(system, 0)
+    # non-integer counts are rejected, not truncated
+    with pytest.raises(ValueError, match="n_periods"):
+        play_poincare(system, 2.5)
+    with pytest.raises(ValueError, match="transient_periods"):
+        play_poincare(system, 2, transient_periods=1.5)
+    with pytest.raises(ValueError, match="transient_periods"):
+        play_poincare(system, 2, transient_periods=-1)
     custom = GeneralizedPlay(2.0, np.tanh, lambda w: 1 / np.cosh(w) ** 2)
     with pytest.raises(NotImplementedError, match="custom"):
         play_trajectory(System(custom, 1.0), 1.0)

@@ -201,6 +201,7 @@ def test_preisach_delegation_when_available():
         (lambda: SpinDimerEnsemble.random(4, 1.0, 0.0, 2.0, seed=0), "spread"),
         (lambda: SpinDimerEnsemble.random(4, 1.0, 1.0, 0.0, seed=0), "coupling"),
         (lambda: SpinDimerEnsemble.random(4, 1.0, 1.0, 2.0, seed=-3), "seed"),
+        (lambda: SpinDimerEnsemble.random(4, 1.0, 1.0, 2.0, seed=None), "seed"),
         (lambda: SpinDimerEnsemble([[1.0, 0.0]], 1.0).simulate([]), "inputs"),
         (lambda: SpinDimerEnsemble([[1.0, 0.0]], 1.0).simulate([np.inf]), "inputs"),
         (lambda: SpinDimerEnsemble([[1.0, 0.0]], 1.0).simulate([0.0], spins=[1, 0]), "spins"),
@@ -209,6 +210,12 @@ def test_preisach_delegation_when_available():
 def test_bad_input(factory, name):
     with pytest.raises(ValueError, match=name):
         factory()
+
+
+def test_random_requires_a_seed():
+    """No silent fall-back to fresh entropy: the seed is a required argument."""
+    with pytest.raises(TypeError, match="seed"):
+        SpinDimerEnsemble.random(4, 1.0, 1.0, 2.0)
 
 
 def test_all_four_states_enumerated_energetics_match_table_one():

@@ -9,6 +9,7 @@ from hysteresis._validation import (
     direction_sign,
     finite_array,
     finite_scalar,
+    nonnegative_integer,
     nonnegative_scalar,
     positive_integer,
     positive_scalar,
@@ -73,6 +74,14 @@ def test_direction_and_generator():
     g = np.random.default_rng(3)
     assert as_generator(g) is g
     assert as_generator(5).normal() == np.random.default_rng(5).normal()
-    for bad in (-1, 1.5, "a"):
+    for bad in (-1, 1.5, "a", None):
         with pytest.raises(ValueError, match="seed"):
             as_generator(bad)
+
+
+def test_nonnegative_integer():
+    assert nonnegative_integer(0, "transient_periods") == 0
+    assert nonnegative_integer(np.int64(7), "transient_periods") == 7
+    for bad in (-1, 2.5, 2.0, True, "3", None):
+        with pytest.raises(ValueError, match="transient_periods"):
+            nonnegative_integer(bad, "transient_periods")
