@@ -24,10 +24,10 @@ orders. The switching relays of one staircase step are a contiguous index range 
 (rising) filtered by ``beta > m``: a 3-sided range query answered in O(1 + k) by a sparse-table
 range-maximum of beta over alpha-order (report the argmax if it passes, recurse on both sides).
 Falling inputs use the range-minimum of alpha over beta-order. A range of at most ``_SHORT``
-(128) relays is not split further but summed branch-free (four independent accumulators): a
-bounded amount of work per visited node, so a step still costs O(1 + k) node visits, and at the
-paper's densities (~100 thresholds crossed per step, ~5 switching) this is about 2x faster than
-recursing down to single relays. (The callers pass as
+(256) relays is not split further but summed branch-free (four independent accumulators, packed
+in one SIMD register): a bounded amount of work per visited node, so a step still costs O(1 + k)
+node visits, and at the paper's densities (~100 thresholds crossed per step, ~5 switching) this
+is much faster than recursing down to single relays. (The callers pass as
 ``beta_by_a``/``alpha_by_b`` search keys in which relays of zero weight carry beta = -inf and
 alpha = +inf, so that they are never reported.)
 
@@ -40,12 +40,17 @@ state unchanged.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 #: ranges of at most this many relays are scanned instead of split by range-extremum queries
-_SHORT = 128
+_SHORT = 256
 #: capacity of the explicit stack of the range recursion (log2(n) + 1 <= 64 pending ranges)
 _WORK_RANGES = 66
+#: inputs per block of the threshold-count pre-pass of :func:`discrete_apply`
+_CHUNK = 256
 
 # --------------------------------------------------------------------------------------------
 # sparse tables
@@ -200,9 +205,12 @@ def _bucket_of(x, lo, inv_h, nb):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def bucket_starts(sorted_values, lo, inv_h, nb):  # pragma: no cover - compiled
-    """``starts[b]`` = first index whose value lies in bucket >= b (``starts[nb] = n``)."""
+    """``starts[b]`` = first index whose value lies in bucket >= b (``starts[nb] = n``).
+
+    int32 (half the cache footprint of int64), like the sparse tables: ``n < 2**31``.
+    """
     n = sorted_values.size
-    starts = np.empty(nb + 1, dtype=np.int64)
+    starts = np.empty(nb + 1, dtype=np.int32)
     i = 0
     for b in range(nb + 1):
         while i < n and _bucket_of(sorted_values[i], lo, inv_h, nb) < b:
@@ -218,18 +226,20 @@ def _count_le_bucket(sorted_values, starts, lo, inv_h, x):  # pragma: no cover -
     Because the bucket map is monotone, every value in a lower bucket than ``x``'s is <= x and
     every value in a higher bucket is > x: the answer lies in ``[starts[b], starts[b+1]]`` and
     a binary search over that bucket finishes it (O(log n) worst case for clustered values).
+    The search halves a candidate count with conditional moves, not branches: the outcome of
+    each comparison is unpredictable, a mispredicted branch would cost more than the loads.
     """
     nb = starts.size - 1
     b = _bucket_of(x, lo, inv_h, nb)
-    left = starts[b]
-    right = starts[b + 1]
-    while left < right:
-        mid = (left + right) >> 1
-        if sorted_values[mid] <= x:
-            left = mid + 1
-        else:
-            right = mid
-    return left
+    base = starts[b]
+    n = starts[b + 1] - base
+    if n == 0:
+        return base
+    while n > 1:
+        half = n >> 1
+        base = base + half if sorted_values[base + half] <= x else base
+        n -= half
+    return base + (sorted_values[base] <= x)
 
 
 @njit(cache=True)
@@ -251,44 +261,99 @@ def _count_lt(sorted_values, x):  # pragma: no cover - compiled
 # --------------------------------------------------------------------------------------------
 
 
+_V4 = ir.VectorType(ir.DoubleType(), 4)
+
+
+def _lane_sums_intrinsic(predicate):
+    """Build an intrinsic ``(keys, weights, a, n_blocks, x) -> (s0, s1, s2, s3)``.
+
+    Plain-Python reading::
+
+        s = [0.0, 0.0, 0.0, 0.0]
+        for j in range(n_blocks):
+            for lane in range(4):
+                i = a + 4 * j + lane
+                s[lane] += weights[i] if predicate(keys[i], x) else 0.0
+        return tuple(s)
+
+    The four lanes are four independent addition chains kept in one AVX register: the same
+    additions in the same order as four scalar accumulators, so the sums are bit-identical to
+    the scalar loop, but one packed compare/select/add handles four relays.
+    """
+
+    @intrinsic
+    def lane_sums(typingctx, keys, weights, a, n_blocks, x):
+        for arr in (keys, weights):
+            # raw pointer arithmetic below: only contiguous float64 arrays
+            if not (isinstance(arr, types.Array) and arr.dtype == types.float64):
+                return None
+            if arr.ndim != 1 or arr.layout not in "CF":
+                return None
+        # the call site casts the integers to intp and x to float64
+        sig = types.UniTuple(types.float64, 4)(keys, weights, types.intp, types.intp, types.float64)
+
+        def codegen(context, builder, signature, args):
+            keys_v, weights_v, a_v, n_v, x_v = args
+            kp = context.make_array(signature.args[0])(context, builder, keys_v).data
+            wp = context.make_array(signature.args[1])(context, builder, weights_v).data
+            zero = ir.Constant(_V4, [0.0] * 4)
+            xv = zero
+            for lane in range(4):
+                xv = builder.insert_element(xv, x_v, ir.Constant(ir.IntType(32), lane))
+            acc = cgutils.alloca_once_value(builder, zero)
+            with cgutils.for_range(builder, n_v) as loop:
+                i = builder.add(a_v, builder.mul(loop.index, ir.Constant(loop.index.type, 4)))
+                kv = builder.load(builder.bitcast(builder.gep(kp, [i]), _V4.as_pointer()), align=8)
+                wv = builder.load(builder.bitcast(builder.gep(wp, [i]), _V4.as_pointer()), align=8)
+                hit = builder.fcmp_ordered(predicate, kv, xv)
+                builder.store(builder.fadd(builder.load(acc), builder.select(hit, wv, zero)), acc)
+            total = builder.load(acc)
+            lanes = [
+                builder.extract_element(total, ir.Constant(ir.IntType(32), j)) for j in range(4)
+            ]
+            return context.make_tuple(builder, signature.return_type, lanes)
+
+        return sig, codegen
+
+    return lane_sums
+
+
+_lane_sums_above = _lane_sums_intrinsic(">")
+_lane_sums_at_most = _lane_sums_intrinsic("<=")
+
+
 @njit(cache=True, inline="always")
 def _masked_sum_above(keys, weights, a, b, m):  # pragma: no cover - compiled
-    """``sum(weights[i] for i in range(a, b) if keys[i] > m)`` with four independent
-    accumulators (the additions do not wait for each other: ~4x faster than one chain)."""
-    s0 = 0.0
-    s1 = 0.0
-    s2 = 0.0
-    s3 = 0.0
-    i = a
-    while i + 4 <= b:
-        s0 += weights[i] * (keys[i] > m)
-        s1 += weights[i + 1] * (keys[i + 1] > m)
-        s2 += weights[i + 2] * (keys[i + 2] > m)
-        s3 += weights[i + 3] * (keys[i + 3] > m)
-        i += 4
-    while i < b:
-        s0 += weights[i] * (keys[i] > m)
-        i += 1
+    """``sum(weights[i] for i in range(a, b) if keys[i] > m)`` (``b >= a``, ``keys`` non-empty)
+    with four independent accumulators: lane ``j`` adds the relays ``i = a + j (mod 4)`` in
+    order, the tail goes to lane 0, and the result is ``(s0 + s1) + (s2 + s3)``. The lanes are
+    packed in one SIMD register (:func:`_lane_sums_intrinsic`)."""
+    n_blocks = (b - a) >> 2
+    s0, s1, s2, s3 = _lane_sums_above(keys, weights, a, n_blocks, m)
+    # the 0..3 remaining relays go to lane 0 in order; a fixed three-step branch-free tail
+    # (an index past the range reads a clamped, in-bounds entry and adds +0.0, which leaves
+    # the non-negative sum s0 unchanged)
+    i = a + 4 * n_blocks
+    last = keys.size - 1
+    for j in range(3):
+        k = min(i + j, last)
+        s0 += weights[k] * ((i + j < b) & (keys[k] > m))
     return (s0 + s1) + (s2 + s3)
 
 
 @njit(cache=True, inline="always")
 def _masked_sum_at_most(keys, weights, a, b, big):  # pragma: no cover - compiled
     """``sum(weights[i] for i in range(a, b) if keys[i] <= big)`` (as :func:`_masked_sum_above`)."""
-    s0 = 0.0
-    s1 = 0.0
-    s2 = 0.0
-    s3 = 0.0
-    i = a
-    while i + 4 <= b:
-        s0 += weights[i] * (keys[i] <= big)
-        s1 += weights[i + 1] * (keys[i + 1] <= big)
-        s2 += weights[i + 2] * (keys[i + 2] <= big)
-        s3 += weights[i + 3] * (keys[i + 3] <= big)
-        i += 4
-    while i < b:
-        s0 += weights[i] * (keys[i] <= big)
-        i += 1
+    n_blocks = (b - a) >> 2
+    s0, s1, s2, s3 = _lane_sums_at_most(keys, weights, a, n_blocks, big)
+    # the 0..3 remaining relays go to lane 0 in order; a fixed three-step branch-free tail
+    # (an index past the range reads a clamped, in-bounds entry and adds +0.0, which leaves
+    # the non-negative sum s0 unchanged)
+    i = a + 4 * n_blocks
+    last = keys.size - 1
+    for j in range(3):
+        k = min(i + j, last)
+        s0 += weights[k] * ((i + j < b) & (keys[k] <= big))
     return (s0 + s1) + (s2 + s3)
 
 
@@ -416,7 +481,9 @@ def discrete_apply(
     spare capacity: the stack grows by at most one entry per input and pruning bounds it by
     ``2 n_relays + 6``) with the current input at index ``top``. ``starts_*``/``grid`` are the
     bucket grids of :func:`_count_le_bucket`. Returns ``top = -1`` if the capacity was too small
-    (a bug in the caller, never silently ignored).
+    (a bug in the caller, never silently ignored). The counts ``count(alpha <= v)`` and
+    ``count(beta <= v)`` of the inputs are looked up ``_CHUNK`` inputs at a time before the
+    staircase pass over those inputs (same values, but independent lookups overlap in the CPU).
 
     Plain-Python reading::
 
@@ -439,54 +506,66 @@ def discrete_apply(
     work = np.empty(2 * _WORK_RANGES, dtype=np.int64)
     pa = cnt_a[top]
     pb = cnt_b[top]
-    for t in range(n_in):
-        v = inputs[t]
-        u = vals[top]
-        if v > u:
-            npa = _count_le_bucket(alpha_by_a, starts_a, grid[0], grid[1], v)
-            npb = _count_le_bucket(beta_by_b, starts_b, grid[2], grid[3], v)
-            if top & 1:
-                # the current minimum becomes a turning point
-                if top >= 5 and cnt_b[top] == cnt_b[top - 2]:
-                    top -= 2  # equivalent to the previous minimum: drop (M, m) between them
-                top += 1
-                if top >= vals.size:
-                    return outputs[:t], vals, cnt_a, cnt_b, -1, output  # caller: capacity bug
-            lo = pa
-            while v >= vals[top - 2]:
-                hi = cnt_a[top - 2]
-                output += 2.0 * _sum_up(table_a, beta_by_a, w_by_a, lo, hi, vals[top - 1], work)
-                lo = hi
-                top -= 2
-            output += 2.0 * _sum_up(table_a, beta_by_a, w_by_a, lo, npa, vals[top - 1], work)
-            vals[top] = v
-            cnt_a[top] = npa
-            cnt_b[top] = npb
-            pa = npa
-            pb = npb
-        elif v < u:
-            npa = _count_le_bucket(alpha_by_a, starts_a, grid[0], grid[1], v)
-            npb = _count_le_bucket(beta_by_b, starts_b, grid[2], grid[3], v)
-            if not (top & 1):
-                # the current maximum becomes a turning point
-                if top >= 4 and cnt_a[top] == cnt_a[top - 2]:
+    chunk_a = np.empty(_CHUNK, dtype=np.int64)
+    chunk_b = np.empty(_CHUNK, dtype=np.int64)
+    for c0 in range(0, n_in, _CHUNK):
+        c1 = min(c0 + _CHUNK, n_in)
+        # the threshold counts of a chunk of inputs first: independent lookups that the CPU
+        # overlaps, instead of one exposed lookup latency per step in the branchy main loop
+        for t in range(c0, c1):
+            v = inputs[t]
+            chunk_a[t - c0] = _count_le_bucket(alpha_by_a, starts_a, grid[0], grid[1], v)
+            chunk_b[t - c0] = _count_le_bucket(beta_by_b, starts_b, grid[2], grid[3], v)
+        for t in range(c0, c1):
+            v = inputs[t]
+            u = vals[top]
+            if v > u:
+                npa = chunk_a[t - c0]
+                npb = chunk_b[t - c0]
+                if top & 1:
+                    # the current minimum becomes a turning point
+                    if top >= 5 and cnt_b[top] == cnt_b[top - 2]:
+                        top -= 2  # equivalent to the previous minimum: drop (M, m) between them
+                    top += 1
+                    if top >= vals.size:
+                        return outputs[:t], vals, cnt_a, cnt_b, -1, output  # caller: capacity bug
+                lo = pa
+                while v >= vals[top - 2]:
+                    hi = cnt_a[top - 2]
+                    output += 2.0 * _sum_up(table_a, beta_by_a, w_by_a, lo, hi, vals[top - 1], work)
+                    lo = hi
                     top -= 2
-                top += 1
-                if top >= vals.size:
-                    return outputs[:t], vals, cnt_a, cnt_b, -1, output  # caller: capacity bug
-            hi = pb
-            while v <= vals[top - 2]:
-                lo = cnt_b[top - 2]
-                output -= 2.0 * _sum_down(table_b, alpha_by_b, w_by_b, lo, hi, vals[top - 1], work)
-                hi = lo
-                top -= 2
-            output -= 2.0 * _sum_down(table_b, alpha_by_b, w_by_b, npb, hi, vals[top - 1], work)
-            vals[top] = v
-            cnt_a[top] = npa
-            cnt_b[top] = npb
-            pa = npa
-            pb = npb
-        outputs[t] = output
+                output += 2.0 * _sum_up(table_a, beta_by_a, w_by_a, lo, npa, vals[top - 1], work)
+                vals[top] = v
+                cnt_a[top] = npa
+                cnt_b[top] = npb
+                pa = npa
+                pb = npb
+            elif v < u:
+                npa = chunk_a[t - c0]
+                npb = chunk_b[t - c0]
+                if not (top & 1):
+                    # the current maximum becomes a turning point
+                    if top >= 4 and cnt_a[top] == cnt_a[top - 2]:
+                        top -= 2
+                    top += 1
+                    if top >= vals.size:
+                        return outputs[:t], vals, cnt_a, cnt_b, -1, output  # caller: capacity bug
+                hi = pb
+                while v <= vals[top - 2]:
+                    lo = cnt_b[top - 2]
+                    output -= 2.0 * _sum_down(
+                        table_b, alpha_by_b, w_by_b, lo, hi, vals[top - 1], work
+                    )
+                    hi = lo
+                    top -= 2
+                output -= 2.0 * _sum_down(table_b, alpha_by_b, w_by_b, npb, hi, vals[top - 1], work)
+                vals[top] = v
+                cnt_a[top] = npa
+                cnt_b[top] = npb
+                pa = npa
+                pb = npb
+            outputs[t] = output
     return outputs, vals, cnt_a, cnt_b, top, output
 
 

@@ -276,12 +276,14 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
         self._table_a = _k.sparse_table_argmax(self._beta_key_a)
         self._table_b = _k.sparse_table_argmin(self._alpha_key_b)
         self._cum_w_a = np.concatenate([[0.0], np.cumsum(self._w_by_a)])
-        # uniform bucket grids over the thresholds: O(1) expected "count <= u" per input step
+        # uniform bucket grids over the thresholds: O(1) expected "count <= u" per input step;
+        # 8 buckets per relay keep the in-bucket search (unpredictable branches) to about one
+        # comparison where the thresholds are densest, for 32 bytes per relay (int32 starts)
         grid = []
         starts = []
         for values in (self._alpha_by_a, self._beta_by_b):
             lo, hi = float(values[0]), float(values[-1])
-            nb = max(1, n)
+            nb = max(1, 8 * n)
             inv_h = nb / (hi - lo) if hi > lo else 0.0
             grid += [lo, inv_h]
             starts.append(_k.bucket_starts(values, lo, inv_h, nb))
