@@ -149,6 +149,21 @@ class PiecewiseConstantHysteron(Hysteron):
     def switching(self, state: Any) -> Switching:
         """Next switching inputs below/above the state's current input and the jumps there."""
 
+    # -- what the oscillator's relay engine needs (oscillators.engine.select_engine) ----------
+    def relay_table(self) -> Any:
+        """The operator as a table of relays (:class:`hysteresis.relay_table.RelayTable`):
+        thresholds, weights, ``M = Σ weights·y``. The oscillator's event-driven engine runs on
+        it; operators that cannot provide one are not coupled to the oscillator."""
+        raise NotImplementedError(f"{type(self).__name__} provides no relay_table()")
+
+    def relay_outputs(self, state: Any) -> np.ndarray:
+        """Outputs ``y_i = ±1`` of the relays of :meth:`relay_table` in ``state`` (table order)."""
+        raise NotImplementedError(f"{type(self).__name__} provides no relay_outputs()")
+
+    def state_from_relay_outputs(self, outputs: np.ndarray, input: float) -> Any:
+        """The operator state whose relays output ``outputs`` at the current ``input``."""
+        raise NotImplementedError(f"{type(self).__name__} provides no state_from_relay_outputs()")
+
 
 class ContinuousHysteron(Hysteron):
     """Operator with continuous, piecewise-smooth branches (play-type)."""
@@ -162,3 +177,17 @@ class ContinuousHysteron(Hysteron):
     @abstractmethod
     def linearize(self, state: Any, direction: int) -> Linearization:
         """Derivatives on the branch followed in ``direction`` (+1 rising, -1 falling)."""
+
+    # -- what the oscillator's continuous engines need (oscillators.engine.select_engine) -----
+    def branch_flow(self, state: Any, direction: int) -> Any:
+        """The branch followed in ``direction`` as a function of the input, with its memory
+        variables, their linearization and the next breakpoint
+        (:class:`hysteresis.flow.BranchFlow`). The generic continuous engine of the oscillator
+        integrates any operator that provides it."""
+        raise NotImplementedError(f"{type(self).__name__} provides no branch_flow()")
+
+    def compiled_play(self) -> Any:
+        """A description for the compiled play-limit kernel
+        (:class:`hysteresis.play.CompiledPlay`) if this operator is a play with a shape the
+        kernel knows (identity, erf), else ``None`` (the default): a fast path only."""
+        return None
