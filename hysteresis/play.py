@@ -37,6 +37,7 @@ from hysteresis._validation import (
     positive_scalar,
 )
 from hysteresis.base import Branch, ContinuousHysteron, Linearization
+from hysteresis.flow import BranchFlow
 
 __all__ = ["PlayState", "PlayOperator", "GeneralizedPlay", "play_positions"]
 
@@ -186,6 +187,62 @@ class _PlayBase(ContinuousHysteron):
             reset = np.array([0], dtype=np.int64)
         return Linearization(
             d_output_d_input=0.0, d_output_d_memory=dm, slaved=slaved, reset_on_leave=reset
+        )
+
+    def branch_flow(self, state: PlayState, direction: int) -> BranchFlow:
+        """The branch in ``direction`` as a :class:`~hysteresis.flow.BranchFlow` (any shape).
+
+        Memory ``("w",)``, output ``y = f(w)`` (``∂y/∂u = 0``, ``∂y/∂w = f'(w)``). On the wall
+        the input pushes: ``w`` slaved, ``y(u) = f(w0 + u − u0)``, no breakpoint. Inside:
+        ``w`` frozen, ``y = f(w0)``; the breakpoint is the wall ahead, ``w0 ± p/2``, where
+        ``δw := δu`` (``V_out``). A reversal pushes nothing (``V_in = I``).
+        """
+        direction = direction_sign(direction)
+        w0 = float(state.position)
+        u0 = float(state.input)
+        f, df = self._f, self._df
+        if self.on_wall(state, direction):
+
+            def output(u):
+                return f(w0 + (np.asarray(u, dtype=np.float64) - u0))
+
+            def partials(u):
+                u = np.asarray(u, dtype=np.float64)
+                d_w = np.asarray(df(w0 + (u - u0)), dtype=np.float64)
+                return np.zeros(u.shape)[()], d_w[..., None]
+
+            return BranchFlow(
+                direction=direction,
+                input=u0,
+                labels=("w",),
+                memory=np.array([w0]),
+                slaved=np.array([True]),
+                output=output,
+                partials=partials,
+                breakpoint=direction * np.inf,
+            )
+        y0 = float(f(w0))
+        d_w0 = float(df(w0))
+
+        def output_inside(u):
+            u = np.asarray(u, dtype=np.float64)
+            return np.full(u.shape, y0)[()]
+
+        def partials_inside(u):
+            u = np.asarray(u, dtype=np.float64)
+            return np.zeros(u.shape)[()], np.full(u.shape + (1,), d_w0)
+
+        return BranchFlow(
+            direction=direction,
+            input=u0,
+            labels=("w",),
+            memory=np.array([w0]),
+            slaved=np.array([False]),
+            output=output_inside,
+            partials=partials_inside,
+            breakpoint=w0 + direction * self.half_width,
+            breakpoint_resets=("w",),
+            constant_partials=True,
         )
 
 

@@ -34,6 +34,7 @@ from numba import njit
 
 from hysteresis._validation import as_input_sequence, direction_sign, finite_array, finite_scalar
 from hysteresis.base import Branch, ContinuousHysteron, Linearization
+from hysteresis.flow import BranchFlow
 from hysteresis.play import _touches_wall, _wall_tolerance
 
 __all__ = ["PrandtlIshlinskii", "PIState"]
@@ -249,4 +250,43 @@ class PrandtlIshlinskii(ContinuousHysteron):
             d_output_d_memory=np.array(self._weights),
             slaved=walls,
             reset_on_leave=reset,
+        )
+
+    def branch_flow(self, state: PIState, direction: int) -> BranchFlow:
+        """The branch in ``direction`` as a :class:`~hysteresis.flow.BranchFlow`.
+
+        Memory: the K wagon positions ``w0 ... w{K-1}`` (order of increasing width). Wagons
+        whose wall the input pushes are slaved, the others frozen; ``y = Σ a_i w_i`` is affine
+        on the branch, ``y(u) = y0 + (Σ_slaved a_i)(u − u0)``, with ``∂y/∂u = 0`` and
+        ``∂y/∂w_i = a_i``. Breakpoint: the nearest wall ahead of a frozen wagon, where that
+        wagon (every wagon with that wall, ties included) gets ``δw_i := δu`` (``V_out``);
+        ``±inf`` once every wagon is dragged. A reversal pushes nothing (``V_in = I``).
+        """
+        direction = direction_sign(direction)
+        walls = self._walls(state, direction)
+        bp, reset = self._breakpoint(state, direction, walls)
+        labels = tuple(f"w{i}" for i in range(self._widths.size))
+        u0 = float(state.input)
+        y0 = self.output(state)
+        dragged = float(np.sum(self._weights[walls]))
+        weights = np.array(self._weights)
+
+        def output(u):
+            return y0 + dragged * (np.asarray(u, dtype=np.float64) - u0)
+
+        def partials(u):
+            u = np.asarray(u, dtype=np.float64)
+            return np.zeros(u.shape)[()], np.broadcast_to(weights, u.shape + weights.shape)
+
+        return BranchFlow(
+            direction=direction,
+            input=u0,
+            labels=labels,
+            memory=np.asarray(state.positions, dtype=np.float64),
+            slaved=walls,
+            output=output,
+            partials=partials,
+            breakpoint=bp,
+            breakpoint_resets=tuple(labels[i] for i in reset),
+            constant_partials=True,
         )

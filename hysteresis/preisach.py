@@ -54,6 +54,7 @@ from hysteresis.base import (
     PiecewiseConstantHysteron,
     Switching,
 )
+from hysteresis.flow import BranchFlow
 
 __all__ = [
     "PreisachModel",
@@ -815,4 +816,96 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
             d_output_d_memory=memory.copy(),
             slaved=np.zeros(memory.size, dtype=bool),
             reset_on_leave=np.zeros(0, dtype=np.int64),
+        )
+
+    # -- branch flow for the oscillator's continuous engine ------------------------------------
+    @staticmethod
+    def extremum_label(index: int) -> str:
+        """Memory label of ``extrema[index]``: ``"M1", "m1", "M2", "m2", ...``."""
+        return f"M{index // 2 + 1}" if index % 2 == 0 else f"m{index // 2 + 1}"
+
+    def branch_flow(self, state: PreisachState, direction: int) -> BranchFlow:
+        """The branch in ``direction`` as a :class:`~hysteresis.flow.BranchFlow`.
+
+        Memory: the remembered extrema (labels :meth:`extremum_label`), all frozen. Continuing
+        the last monotone segment they are ``extrema[:-1]``; reversing, the current input
+        becomes a new extremum (flagged ``pushed``, ``δm := δu``) and the memory is all of
+        ``extrema``. With ``m`` the last memory variable (partner of the moving input) and
+        ``c`` the Everett prefix sum up to it, the output is
+        ``y(u) = −1 + 2c + 2E(u, m)`` rising and ``y(u) = −1 + 2c − 2E(m, u)`` falling, so
+        ``∂y/∂u = 2∂E/∂α(u, m)`` / ``−2∂E/∂β(m, u)``; ``∂y/∂m_j`` is constant for every
+        extremum but ``m``, which adds ``2∂E/∂β(u, m)`` / ``−2∂E/∂α(m, u)``
+        (:meth:`everett_gradient`). Breakpoint: the previous extremum of the moving input's
+        kind; reaching it wipes it out together with ``m`` (``breakpoint_removes``). A reversal
+        pushes the reversal input (``reversal_pushes``).
+        """
+        direction = direction_sign(direction)
+        stack, prefix = self._unpack(state)
+        top = stack.size - 1
+        rising_state = top % 2 == 0
+        reversing = (direction > 0) != rising_state
+        partner = top if reversing else top - 1  # stack index of the memory variable m
+        n_mem = partner - 1  # stack indices 2 .. partner
+        memory = stack[2 : partner + 1].copy()
+        labels = tuple(self.extremum_label(k) for k in range(n_mem))
+        pushed = np.zeros(n_mem, dtype=bool)
+        if reversing:
+            pushed[-1] = True
+        # constant gradient of the Everett terms that do not involve the moving input
+        grad0 = np.zeros(stack.size)
+        if partner >= 2:
+            idx = np.arange(2, partner + 1)
+            even = idx % 2 == 0
+            a = np.where(even, stack[idx], stack[idx - 1])
+            b = np.where(even, stack[idx - 1], stack[idx])
+            da, db = self.everett_gradient(a, b)
+            sign = np.where(even, 2.0, -2.0)
+            np.add.at(grad0, np.where(even, idx, idx - 1), sign * da)
+            np.add.at(grad0, np.where(even, idx - 1, idx), sign * db)
+        grad0 = grad0[2 : partner + 1]
+        m = float(stack[partner])
+        base = -1.0 + 2.0 * float(prefix[partner])
+        k_last = n_mem - 1
+        everett, gradient = self.everett, self.everett_gradient
+        if direction > 0:
+
+            def output(u):
+                return base + 2.0 * everett(u, m)[()]
+
+            def partials(u):
+                u = np.asarray(u, dtype=np.float64)
+                ea, eb = gradient(u, m)
+                d_m = np.broadcast_to(grad0, u.shape + grad0.shape).copy()
+                if k_last >= 0:
+                    d_m[..., k_last] += 2.0 * eb
+                return (2.0 * ea)[()], d_m
+
+        else:
+
+            def output(u):
+                return base - 2.0 * everett(m, u)[()]
+
+            def partials(u):
+                u = np.asarray(u, dtype=np.float64)
+                ea, eb = gradient(m, u)
+                d_m = np.broadcast_to(grad0, u.shape + grad0.shape).copy()
+                if k_last >= 0:
+                    d_m[..., k_last] -= 2.0 * ea
+                return (-2.0 * eb)[()], d_m
+
+        bp_index = partner - 1
+        breakpoint = float(stack[bp_index])
+        removes = tuple(labels[i - 2] for i in (bp_index, partner) if i >= 2)
+        return BranchFlow(
+            direction=direction,
+            input=float(stack[top]),
+            labels=labels,
+            memory=memory,
+            slaved=np.zeros(n_mem, dtype=bool),
+            output=output,
+            partials=partials,
+            breakpoint=breakpoint,
+            breakpoint_removes=removes if np.isfinite(breakpoint) else (),
+            reversal_pushes=True,
+            pushed=pushed,
         )

@@ -1,0 +1,165 @@
+"""Branch flows: what an integrator needs while the input of a continuous operator moves one way.
+
+A continuous hysteresis operator (play, generalized play, Prandtl–Ishlinskii, continuous
+Preisach) is, for a fixed direction of input motion, a smooth function of the input between
+*breakpoints*. :meth:`ContinuousHysteron.branch_flow(state, direction)
+<hysteresis.base.ContinuousHysteron.branch_flow>` describes that piece as a
+:class:`BranchFlow`: the operator's memory variables, the output as a function of the input with
+its partial derivatives, the next breakpoint and what happens to the memory there. The generic
+continuous engine of the oscillator (:mod:`oscillators.continuous`) integrates any operator that
+provides it, tangent flow included.
+
+Memory variables
+----------------
+``memory`` holds the values ``m_i`` of the operator's memory variables at the branch start
+(input ``u0``) and ``labels`` names them. A label is stable and unique for as long as the
+variable lives: the play's wagon is ``"w"``, the wagons of a Prandtl–Ishlinskii operator are
+``"w0" ... "w{K-1}"`` (in the order of increasing width), the remembered extrema of a continuous
+Preisach staircase are ``"M1", "m1", "M2", "m2", ...`` (position in the staircase, which only
+grows and shrinks at its end, so a label is reused only after its variable was wiped out).
+
+On the branch each memory variable is either
+
+* **frozen**: ``m_i`` stays constant, ``δm_i`` stays constant (a play wagon strictly inside,
+  every remembered Preisach extremum);
+* **slaved** (``slaved[i]``): ``m_i`` follows the input, ``m_i(u) = m_i(u0) + (u − u0)``, and so
+  does its perturbation, ``δm_i = δu`` (a wagon dragged by the finger on a wall).
+
+Output and derivatives
+----------------------
+``output(u)`` is ``y(u)`` on the branch (frozen memory fixed, slaved memory following ``u``);
+``partials(u)`` returns ``(∂y/∂u, ∂y/∂m)``: the partial derivatives of ``y(u; m)`` with respect
+to the input and to each memory variable (array of length ``len(memory)``), *all memory held
+fixed* in the first. The slope of the branch is therefore
+``dy/du = ∂y/∂u + Σ_{slaved} ∂y/∂m_i`` (:meth:`BranchFlow.slope`), and a perturbation moves the
+output by ``δy = ∂y/∂u δu + Σ_i ∂y/∂m_i δm_i``. Both callables are vectorised (an array of
+inputs gives arrays, ``partials`` then an ``(..., n)`` array) and cheap on a scalar; with
+``constant_partials`` the partials do not depend on ``u`` (play inside, Prandtl–Ishlinskii), so
+an integrator may evaluate them once per branch.
+
+Events
+------
+``breakpoint`` is the input at which the branch ends in its direction (``±inf`` if none):
+
+* a **wall hit** (play, Prandtl–Ishlinskii): the memory variables ``breakpoint_resets`` start
+  being dragged; their perturbations are reset, ``δm_i := δu`` (paper ``V_out``);
+* a **wipe-out** (continuous Preisach): the input reaches a remembered extremum of the same kind,
+  which is removed together with its partner (``breakpoint_removes``); their rows of the tangent
+  map are dropped.
+
+The output is continuous at both, so the oscillator's (q, v) perturbations need no correction
+there. A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
+Prandtl–Ishlinskii push nothing (``V_in = I``); a continuous Preisach model remembers ``u*`` as a
+new extremum (``reversal_pushes``), a new memory variable with ``δm := δu``. A branch that starts
+with such a reversal relative to its state (the state's last motion went the other way) flags
+the variable it created at ``u0`` in ``pushed``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["BranchFlow"]
+
+
+def _readonly(a, dtype=np.float64) -> np.ndarray:
+    arr = np.array(a, dtype=dtype)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class BranchFlow:
+    """The branch a continuous operator follows while its input moves in ``direction``.
+
+    See the module docstring for the meaning of every field.
+
+    Attributes
+    ----------
+    direction:
+        +1 (rising input) or -1 (falling input).
+    input:
+        ``u0``, the input at the start of the branch (the state's current input).
+    labels:
+        Names of the memory variables (stable and unique while alive).
+    memory:
+        Values ``m_i`` at ``u0`` (read-only).
+    slaved:
+        ``slaved[i]``: ``m_i`` (and ``δm_i``) follow the input on this branch; else frozen.
+    output:
+        ``y(u)`` on the branch (vectorised).
+    partials:
+        ``u -> (∂y/∂u, ∂y/∂m)`` (vectorised; ``∂y/∂m`` has length ``len(memory)``).
+    breakpoint:
+        Input at which the branch ends in its direction (``±inf`` if it never does).
+    breakpoint_resets:
+        Labels whose perturbation is reset ``δm := δu`` at the breakpoint (wall hit, ``V_out``).
+    breakpoint_removes:
+        Labels removed at the breakpoint (wiped-out extrema).
+    reversal_pushes:
+        True if a reversal of the input at the end of this branch creates a new memory variable
+        (the reversal input, ``δm := δu``): continuous Preisach. False: ``V_in = I``.
+    pushed:
+        ``pushed[i]``: memory variable ``i`` was created at ``u0`` by a reversal relative to the
+        state (``δm_i := δu`` there).
+    constant_partials:
+        True if ``partials`` does not depend on ``u``.
+    """
+
+    direction: int
+    input: float
+    labels: tuple[str, ...]
+    memory: np.ndarray
+    slaved: np.ndarray
+    output: Callable
+    partials: Callable
+    breakpoint: float
+    breakpoint_resets: tuple[str, ...] = ()
+    breakpoint_removes: tuple[str, ...] = ()
+    reversal_pushes: bool = False
+    pushed: np.ndarray | None = None
+    constant_partials: bool = False
+
+    def __post_init__(self) -> None:
+        if self.direction not in (-1, 1):
+            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
+        n = len(self.labels)
+        if len(set(self.labels)) != n:
+            raise ValueError(f"labels must be unique, got {self.labels}")
+        object.__setattr__(self, "memory", _readonly(self.memory))
+        object.__setattr__(self, "slaved", _readonly(self.slaved, bool))
+        pushed = np.zeros(n, dtype=bool) if self.pushed is None else self.pushed
+        object.__setattr__(self, "pushed", _readonly(pushed, bool))
+        for name in ("memory", "slaved", "pushed"):
+            if getattr(self, name).shape != (n,):
+                raise ValueError(f"{name} must have one entry per label ({n})")
+        bp = float(self.breakpoint)
+        if bp == bp and (bp - self.input) * self.direction < 0:
+            raise ValueError(
+                f"breakpoint {bp} lies behind the input {self.input} in direction {self.direction}"
+            )
+        for name in ("breakpoint_resets", "breakpoint_removes"):
+            unknown = set(getattr(self, name)) - set(self.labels)
+            if unknown:
+                raise ValueError(f"{name} names unknown memory labels {sorted(unknown)}")
+
+    @property
+    def n_memory(self) -> int:
+        """Number of memory variables."""
+        return len(self.labels)
+
+    def slope(self, u) -> np.ndarray | float:
+        """Total derivative ``dy/du`` along the branch, ``∂y/∂u + Σ_slaved ∂y/∂m_i``."""
+        d_u, d_m = self.partials(u)
+        d_m = np.asarray(d_m, dtype=np.float64)
+        if not np.any(self.slaved):
+            return d_u
+        return d_u + np.sum(d_m[..., self.slaved], axis=-1)
+
+    def memory_at(self, u) -> np.ndarray:
+        """Memory values at input ``u`` on this branch (slaved ones moved by ``u − u0``)."""
+        u = np.asarray(u, dtype=np.float64)
+        return self.memory + self.slaved * (u[..., None] - self.input)
