@@ -31,6 +31,8 @@ amortised O(1) Everett evaluations per step through cached prefix sums along the
 
 from __future__ import annotations
 
+import functools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -497,9 +499,12 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
 # ============================================================================================
 
 
+@functools.lru_cache(maxsize=8)
 def _gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
+    # cached: leggauss solves an eigenvalue problem, and everett_gradient needs the nodes on
+    # every call (the oscillator's continuous engine calls it once per integrator stage)
     x, w = np.polynomial.legendre.leggauss(n)
-    return 0.5 * (x + 1.0), 0.5 * w  # on [0, 1]
+    return _readonly(0.5 * (x + 1.0)), _readonly(0.5 * w)  # on [0, 1]
 
 
 class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
@@ -866,32 +871,32 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
         m = float(stack[partner])
         base = -1.0 + 2.0 * float(prefix[partner])
         k_last = n_mem - 1
-        everett, gradient = self.everett, self.everett_gradient
+        everett, gradient = self._scalar_everett(), self._scalar_gradient()
         if direction > 0:
 
             def output(u):
-                return base + 2.0 * everett(u, m)[()]
+                return base + 2.0 * everett(u, m)
 
             def partials(u):
-                u = np.asarray(u, dtype=np.float64)
                 ea, eb = gradient(u, m)
+                u = np.asarray(u, dtype=np.float64)
                 d_m = np.broadcast_to(grad0, u.shape + grad0.shape).copy()
                 if k_last >= 0:
                     d_m[..., k_last] += 2.0 * eb
-                return (2.0 * ea)[()], d_m
+                return 2.0 * ea, d_m
 
         else:
 
             def output(u):
-                return base - 2.0 * everett(m, u)[()]
+                return base - 2.0 * everett(m, u)
 
             def partials(u):
-                u = np.asarray(u, dtype=np.float64)
                 ea, eb = gradient(m, u)
+                u = np.asarray(u, dtype=np.float64)
                 d_m = np.broadcast_to(grad0, u.shape + grad0.shape).copy()
                 if k_last >= 0:
                     d_m[..., k_last] -= 2.0 * ea
-                return (-2.0 * eb)[()], d_m
+                return -2.0 * eb, d_m
 
         bp_index = partner - 1
         breakpoint = float(stack[bp_index])
@@ -909,3 +914,76 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
             reversal_pushes=True,
             pushed=pushed,
         )
+
+    def _scalar_everett(self) -> Callable:
+        """``everett`` with a fast path for scalar arguments (same arithmetic as the tabulated
+        bilinear interpolation, so the result is identical; the engine calls it per stage)."""
+        vector = self.everett
+        if getattr(self, "_table", None) is None:
+
+            def everett_any(a, b):
+                return vector(a, b)[()]
+
+            return everett_any
+        rows = self.__dict__.get("_table_rows")
+        if rows is None:
+            rows = self._table.tolist()
+            self._table_rows = rows
+        lo, up, h, n = self._lower, self._upper, self._h, self._n
+
+        def everett(a, b):
+            if not (isinstance(a, float) and isinstance(b, float)):
+                return vector(a, b)[()]
+            a = min(max(a, lo), up)
+            b = min(max(b, lo), up)
+            if not a > b:
+                return 0.0
+            fa = (a - lo) / h
+            fb = (b - lo) / h
+            i = min(max(math.floor(fa), 0), n - 1)
+            j = min(max(math.floor(fb), 0), n - 1)
+            ta = fa - i
+            tb = fb - j
+            r0, r1 = rows[i], rows[i + 1]
+            e = (
+                r0[j] * (1 - ta) * (1 - tb)
+                + r1[j] * ta * (1 - tb)
+                + r0[j + 1] * (1 - ta) * tb
+                + r1[j + 1] * ta * tb
+            )
+            return max(e, 0.0)
+
+        return everett
+
+    def _scalar_gradient(self) -> Callable:
+        """``everett_gradient`` with a fast path for scalar arguments of a density model."""
+        vector = self.everett_gradient
+
+        def gradient_any(a, b):
+            da, db = vector(a, b)
+            return da[()], db[()]
+
+        if self._density_fn is None or self._gradient_fn != self._gradient_from_density:
+            return gradient_any
+        nodes, weights = _gauss(64)
+        mu = self._density_fn
+        lo, up, scale = self._lower, self._upper, self._mass_scale
+
+        def gradient(a0, b0):
+            if not (isinstance(a0, float) and isinstance(b0, float)):
+                return gradient_any(a0, b0)
+            a = min(max(a0, lo), up)
+            b = min(max(b0, lo), up)
+            if not a > b:
+                return 0.0, 0.0
+            span = a - b
+            pts = b + span * nodes
+            da = 0.0
+            db = 0.0
+            if lo <= a0 <= up:
+                da = float(np.dot(np.asarray(mu(np.full(pts.shape, a), pts)), weights))
+            if lo <= b0 <= up:
+                db = -float(np.dot(np.asarray(mu(pts, np.full(pts.shape, b))), weights))
+            return da * scale * span, db * scale * span
+
+        return gradient

@@ -176,9 +176,9 @@ class ContinuousEngine(Engine):
     def _check(self) -> None:
         q, v = self._q, self._v
         if not (math.isfinite(q) and math.isfinite(v)) or max(abs(q), abs(v)) > self._runaway:
+            t = self.start.t + self.elapsed
             raise DivergenceError(
-                f"continuous engine: state diverged (q={q}, v={v}) at t={self.start.t + self.elapsed}",
-                time=self.start.t + self.elapsed,
+                f"continuous engine: state diverged (q={q}, v={v}) at t={t}", time=t
             )
 
     # -- motion --------------------------------------------------------------------------------

@@ -144,7 +144,9 @@ def test_pi_flow_against_apply():
             _, after = op.apply(np.array([flow.breakpoint + d * 1e-9]), state)
             new = op.branch_flow(after, d)
             became = {
-                lab for lab, s0, s1 in zip(flow.labels, flow.slaved, new.slaved) if s1 and not s0
+                lab
+                for lab, s0, s1 in zip(flow.labels, flow.slaved, new.slaved, strict=True)
+                if s1 and not s0
             }
             assert became == set(flow.breakpoint_resets) and became
 

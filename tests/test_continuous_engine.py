@@ -1,0 +1,350 @@
+"""The generic continuous engine (oscillators.continuous) against independent truths.
+
+* the compiled play-limit kernel (oscillators.play_flow), an independent implementation: a
+  user-supplied erf shape and a one-play Prandtl–Ishlinskii operator give its sections and its
+  tangent flow;
+* central finite differences of the engine's own flow map (state-only runs, no tangent code)
+  for the tangent flow across reversals, wall hits and wipe-outs, perturbing q, v, φ and every
+  memory variable;
+* C = 0: the oscillator decouples, its exponents are exactly −ζ (closed form).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import erf, ndtr
+
+from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii, PreisachModel
+from oscillators.continuous import ContinuousEngine
+from oscillators.engine import DivergenceError
+from oscillators.results import OscillatorState
+from oscillators.system import ForcedOscillator
+
+ZETA = 0.05
+
+
+def _erf_play_custom(width=2.0, spread=1.0):
+    scale = math.sqrt(2.0) * spread
+    norm = math.sqrt(2.0 / math.pi) / spread
+    return GeneralizedPlay(
+        width,
+        lambda w: erf(np.asarray(w) / scale),
+        lambda w: norm * np.exp(-0.5 * (np.asarray(w) / spread) ** 2),
+    )
+
+
+def _tanh_play(width=2.0):
+    return GeneralizedPlay(
+        width, lambda w: np.tanh(np.asarray(w)), lambda w: 1.0 / np.cosh(np.asarray(w)) ** 2
+    )
+
+
+def _pi5():
+    return PrandtlIshlinskii([0.0, 0.5, 1.0, 2.0, 3.0], [0.15, 0.2, 0.25, 0.2, 0.2])
+
+
+def _preisach_analytic(scale=1.3, lower=-6.0, upper=6.0):
+    """Product density ∝ φ(α)φ(β): Everett ``((Φ(a)−Φ(b))/Z)²`` and its exact gradient."""
+    z = ndtr(upper / scale) - ndtr(lower / scale)
+
+    def pdf(x):
+        return np.exp(-0.5 * (np.asarray(x) / scale) ** 2) / (scale * math.sqrt(2 * math.pi))
+
+    def everett(a, b):
+        return ((ndtr(np.asarray(a) / scale) - ndtr(np.asarray(b) / scale)) / z) ** 2
+
+    def gradient(a, b):
+        diff = ndtr(np.asarray(a) / scale) - ndtr(np.asarray(b) / scale)
+        return 2 * diff * pdf(a) / z**2, -2 * diff * pdf(b) / z**2
+
+    return PreisachModel.from_everett(everett, lower, upper, gradient)
+
+
+def _start(op, q0=-1.0, v0=0.1, phi0=0.0, operator_state=None):
+    if operator_state is None:
+        operator_state = op.initial_state(q0)
+    return OscillatorState(q0, v0, phi0, operator_state)
+
+
+def _engine(op, coupling, state=None, **options):
+    options.setdefault("rtol", 1e-12)
+    options.setdefault("atol", 1e-12)
+    system = ForcedOscillator(op, coupling, ZETA, 1.0)
+    return ContinuousEngine(system, _start(op) if state is None else state, **options)
+
+
+def _section(engine, n_periods):
+    times = np.arange(n_periods) * 2.0 * math.pi
+    out = np.empty((n_periods, len(engine.sample_columns)))
+    engine.advance(times, out)
+    return out
+
+
+def _spectrum(engine, t_end, dt=1.0, include_phase=False):
+    """Textbook Benettin/QR loop (Benettin et al. 1980) over the engine's tangent primitives;
+    directions beyond ``rank_bound()`` get exactly −inf."""
+    engine.start_tangent(include_phase)
+    k = engine.deviations().shape[1]
+    logs = np.zeros(k)
+    t = 0.0
+    while t < t_end - 1e-12:
+        t = min(t + dt, t_end)
+        engine.advance(t)
+        dev = engine.deviations()
+        q, r = np.linalg.qr(dev)
+        if q.shape[1] < k:  # more columns than rows
+            q = np.hstack([q, np.zeros((q.shape[0], k - q.shape[1]))])
+            r = np.vstack([r, np.zeros((k - r.shape[0], k))])
+        with np.errstate(divide="ignore"):
+            step = np.log(np.abs(np.diag(r)))
+        step[engine.rank_bound() :] = -np.inf
+        logs += step
+        signs = np.sign(np.diag(r))
+        signs[signs == 0] = 1.0
+        engine.set_deviations(q * signs)
+    return np.sort(logs / t_end)[::-1]
+
+
+# ------------------------------------------------------------------------------------------
+# agreement with the compiled play kernel
+# ------------------------------------------------------------------------------------------
+def test_custom_erf_shape_gives_the_compiled_erf_section():
+    from oscillators.play_flow import play_poincare
+
+    ref = play_poincare(ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 4.0, ZETA, 1.0), 25)
+    engine = _engine(_erf_play_custom(), 4.0)
+    assert engine.sample_columns == ("q", "v", "M", "w")
+    out = _section(engine, 25)
+    np.testing.assert_allclose(out[:, 0], ref.q, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(out[:, 1], ref.v, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(out[:, 3], ref.w, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(out[:, 2], ref.M, atol=1e-6, rtol=0)
+    assert engine.n_events > 40
+
+
+@pytest.mark.parametrize("coupling", [0.6, -0.8])
+def test_single_play_prandtl_ishlinskii_gives_the_play_section(coupling):
+    from oscillators.play_flow import play_poincare
+
+    ref = play_poincare(ForcedOscillator(PlayOperator(2.0), coupling, ZETA, 1.0), 25)
+    pi = PrandtlIshlinskii([2.0], [1.0])
+    out = _section(_engine(pi, coupling), 25)
+    np.testing.assert_allclose(out[:, 0], ref.q, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(out[:, 1], ref.v, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(out[:, 2], ref.M, atol=1e-6, rtol=0)
+    # and the plain play itself through the generic engine
+    out_play = _section(_engine(PlayOperator(2.0), coupling), 25)
+    np.testing.assert_allclose(out_play[:, 0], ref.q, atol=1e-6, rtol=0)
+
+
+def test_erf_play_tangent_flow_and_dky_agree_with_compiled_kernel():
+    from analysis.dimensions import kaplan_yorke_dimension
+    from oscillators.play_flow import play_tangent
+
+    t_end = 150.0  # both runs stay on one trajectory (λ_max·t_end ≈ 8 against ~1e-11 errors)
+    ref = play_tangent(
+        ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 4.0, ZETA, 1.0), t_end, progress=False
+    )
+    exps = _spectrum(_engine(_erf_play_custom(), 4.0, rtol=1e-11, atol=1e-11), t_end)
+    assert exps[2] == -np.inf and ref.exponents[2] == -np.inf
+    np.testing.assert_allclose(exps[:2], ref.exponents[:2], rtol=1e-4, atol=1e-6)
+    assert kaplan_yorke_dimension(exps) == pytest.approx(
+        kaplan_yorke_dimension(ref.exponents), abs=1e-3
+    )
+    assert kaplan_yorke_dimension(exps) > 1.0  # chaotic at C = 4 (paper)
+
+
+# ------------------------------------------------------------------------------------------
+# tangent flow against finite differences of the flow map
+# ------------------------------------------------------------------------------------------
+def _fd_jacobian(flow_map, x0, h):
+    cols = []
+    for j in range(x0.size):
+        xp = x0.copy()
+        xp[j] += h
+        xm = x0.copy()
+        xm[j] -= h
+        cols.append((flow_map(xp) - flow_map(xm)) / (2 * h))
+    return np.array(cols).T
+
+
+def test_pi_tangent_flow_matches_finite_differences():
+    op = PrandtlIshlinskii([0.0, 0.6, 1.5, 2.4], [0.2, 0.3, 0.3, 0.2])
+    coupling = 0.8
+    pre = _engine(op, coupling)
+    pre.advance(30.0, record=True)
+    ev = pre.records()["events"]
+    # start 0.3 after a reversal: every wagon with width > 0 frozen strictly inside
+    t_rev = ev["time"][ev["kind"] == -1][2]
+    warm = _engine(op, coupling)
+    warm.advance(t_rev + 0.3)
+    start = warm.state()
+    duration = 9.0
+    eng = _engine(op, coupling, start)
+    eng.start_tangent(include_phase=True)
+    assert eng.tangent_space == ("q", "v", "phi", "w0", "w1", "w2", "w3")
+    eng.advance(duration, record=True)
+    kinds = eng.records()["events"]["kind"]
+    assert np.sum(kinds == -1) >= 2 and np.sum(kinds == 1) >= 4  # reversals and wall hits
+    jac = eng.deviations()
+
+    def flow_map(x):
+        pos = x[3:].copy()
+        pos[0] = x[0]  # the width-0 wagon is the input itself
+        state = OscillatorState(x[0], x[1], x[2], op.state(pos, x[0]))
+        e = _engine(op, coupling, state)
+        e.advance(duration)
+        f = e.state()
+        return np.concatenate([[f.q, f.v, f.phi], f.operator_state.positions])
+
+    x0 = np.concatenate([[start.q, start.v, start.phi], start.operator_state.positions])
+    fd = _fd_jacobian(flow_map, x0, 1e-6)
+    fd[:, 3] = 0.0  # δw0 alone is no state (w0 ≡ q): the engine resets it, column zero
+    np.testing.assert_allclose(jac, fd, atol=2e-7 * np.max(np.abs(fd)), rtol=0)
+    # every wagon was dragged at some point: only (q, v, φ) directions survive
+    assert eng.rank_bound() == 3
+    assert np.linalg.matrix_rank(jac, tol=1e-8) == 3
+
+
+def test_preisach_tangent_flow_matches_finite_differences():
+    op = _preisach_analytic()
+    coupling = 3.0
+    warm = _engine(op, coupling)
+    warm.advance(60.0)
+    start = warm.state()
+    extrema0 = np.array(start.operator_state.extrema)
+    duration = 12.0
+    eng = _engine(op, coupling, start)
+    eng.start_tangent(include_phase=True)
+    labels0 = eng.tangent_space[3:]
+    assert labels0 == tuple(op.extremum_label(i) for i in range(extrema0.size - 1))
+    eng.advance(duration, record=True)
+    kinds = eng.records()["events"]["kind"]
+    assert np.sum(kinds == -1) >= 3 and np.sum(kinds == 1) >= 1  # reversals and a wipe-out
+    jac = eng.deviations()
+    final = eng.state().operator_state.extrema
+    assert eng.tangent_space[3:] == tuple(op.extremum_label(i) for i in range(final.size - 1))
+
+    def flow_map(x):
+        extrema = np.append(x[3:], x[0])
+        state = OscillatorState(x[0], x[1], x[2], op.state_from_extrema(extrema))
+        e = _engine(op, coupling, state)
+        e.advance(duration)
+        f = e.state()
+        ext = f.operator_state.extrema
+        assert ext.size == final.size  # same event sequence
+        return np.concatenate([[f.q, f.v, f.phi], ext[:-1]])
+
+    x0 = np.concatenate([[start.q, start.v, start.phi], extrema0[:-1]])
+    fd = _fd_jacobian(flow_map, x0, 1e-6)
+    np.testing.assert_allclose(jac, fd, atol=1e-6 * np.max(np.abs(fd)), rtol=0)
+    # structural rank: (q, v, φ) plus the initial extrema that survived (neither wiped out nor
+    # replaced by a later extremum with the same label)
+    survived = [
+        lab for i, lab in enumerate(labels0) if i < final.size - 1 and final[i] == extrema0[i]
+    ]
+    assert eng.rank_bound() == min(jac.shape[1], 3 + len(survived))
+    assert len(survived) < len(labels0)
+
+
+# ------------------------------------------------------------------------------------------
+# spectra
+# ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "op",
+    [_tanh_play(), _pi5(), _preisach_analytic()],
+    ids=["tanh-play", "pi5", "preisach"],
+)
+def test_zero_coupling_oscillator_exponents_are_minus_zeta(op):
+    exps = _spectrum(_engine(op, 0.0, rtol=1e-10, atol=1e-10), 300.0)
+    # the decoupled oscillator contributes -ζ twice (complex pair); memory directions are
+    # frozen (0) or reset (-inf)
+    finite = exps[np.isfinite(exps)]
+    osc = finite[np.abs(finite + ZETA) < 0.02]
+    assert osc.size == 2, exps
+    np.testing.assert_allclose(osc, -ZETA, atol=0.01)
+    assert np.all((np.abs(finite) < 1e-9) | (np.abs(finite + ZETA) < 0.02))
+
+
+@pytest.mark.parametrize(
+    ("op", "coupling"),
+    [(_tanh_play(), 4.0), (_pi5(), 0.8)],
+    ids=["tanh-play", "pi5"],
+)
+def test_tanh_play_and_pi5_couple_with_finite_spectra(op, coupling):
+    engine = _engine(op, coupling, rtol=1e-10, atol=1e-10)
+    exps = _spectrum(engine, 200.0)
+    assert np.all(np.isfinite(exps[:2])), exps
+    assert exps[0] < 1.0 and exps[1] < 0.0
+    # every memory direction is reset by a wall hit: exactly -inf (paper's λ_4 = -∞)
+    assert np.all(exps[2:] == -np.inf)
+    assert engine.n_events > 50
+
+
+# ------------------------------------------------------------------------------------------
+# engine contract
+# ------------------------------------------------------------------------------------------
+def test_advance_in_pieces_equals_one_run_and_state_is_consistent():
+    op = _pi5()
+    one = _engine(op, 0.8)
+    one.advance(37.5)
+    two = _engine(op, 0.8)
+    for t in (3.0, 11.25, 11.25, 30.0, 37.5):
+        two.advance(t)
+    a, b = one.state(), two.state()
+    assert b.t == pytest.approx(37.5)
+    assert a.q == pytest.approx(b.q, abs=1e-9) and a.v == pytest.approx(b.v, abs=1e-9)
+    np.testing.assert_allclose(a.operator_state.positions, b.operator_state.positions, atol=1e-9)
+    assert a.phi == pytest.approx(math.fmod(37.5, 2 * math.pi))
+    # the operator state is the operator's: its output drives the oscillator
+    out = np.empty((1, 3))
+    two.advance(37.5, out)
+    assert out[0, 2] == pytest.approx(op.output(b.operator_state), abs=1e-12)
+
+
+def test_tangent_space_and_rank_bound_at_start():
+    op = PlayOperator(2.0)
+    # inside the play: w is a free direction
+    inside = _engine(op, 0.5, _start(op, operator_state=op.state(-1.5, -1.0)))
+    inside.start_tangent(include_phase=True)
+    assert inside.tangent_space == ("q", "v", "phi", "w")
+    np.testing.assert_array_equal(inside.deviations(), np.eye(4))
+    assert inside.rank_bound() == 4
+    # on the wall moving outward: δw := δq at t = 0 (one-sided derivative), rank 2 + phase
+    wall = _engine(op, 0.5, _start(op, v0=-0.1, operator_state=op.state(0.0, -1.0)))
+    wall.start_tangent()
+    dev = wall.deviations()
+    np.testing.assert_array_equal(dev[2], dev[0])
+    assert wall.rank_bound() == 2
+    with pytest.raises(ValueError, match="shape"):
+        wall.set_deviations(np.eye(4))
+
+
+def test_bad_input_raises():
+    op = _pi5()
+    with pytest.raises(ValueError, match="rtol"):
+        _engine(op, 0.5, rtol=0.5)
+    with pytest.raises(ValueError, match="max_step"):
+        _engine(op, 0.5, max_step=0.0)
+    with pytest.raises(ValueError, match="input"):
+        _engine(op, 0.5, OscillatorState(1.0, 0.0, 0.0, op.initial_state(0.0)))
+    engine = _engine(op, 0.5)
+    engine.advance(2.0)
+    with pytest.raises(ValueError, match="times"):
+        engine.advance(1.0)
+    with pytest.raises(RuntimeError, match="start_tangent"):
+        engine.deviations()
+    with pytest.raises(TypeError, match="branch_flow"):
+        from hysteresis import Relay
+
+        ContinuousEngine(ForcedOscillator(Relay(1.0, -1.0), 1.0), _start(Relay(1.0, -1.0)))
+
+
+def test_negative_stiffness_diverges():
+    # PI with total weight 1 and C = 2: on the walls q'' = ... + (C − 1) q grows without bound
+    engine = _engine(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), 2.0, runaway=1e4)
+    with pytest.raises(DivergenceError):
+        engine.advance(200.0)
