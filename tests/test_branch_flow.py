@@ -232,3 +232,33 @@ def test_branchflow_validates():
         BranchFlow(1, 0.0, ("a", "a"), [0, 0], [0, 0], abs, abs, 1.0)
     with pytest.raises(ValueError, match="unknown"):
         BranchFlow(1, 0.0, ("a",), [0], [0], abs, abs, 1.0, breakpoint_resets=("b",))
+
+
+def test_gaussian_ridge_model_everett_and_play_limit():
+    from hysteresis import ContinuousPreisachModel
+
+    model = ContinuousPreisachModel.gaussian(2.0, 1.0, 0.05)
+    a = np.array([1.0, 2.0, 3.0, 0.5])
+    b = np.array([-2.0, -1.0, 0.5, 0.2])
+    da, db = model.everett_gradient(a, b)
+    h = 1e-6
+    np.testing.assert_allclose(
+        da, (model.everett(a + h, b) - model.everett(a - h, b)) / (2 * h), rtol=1e-6
+    )
+    np.testing.assert_allclose(
+        db, (model.everett(a, b + h) - model.everett(a, b - h)) / (2 * h), rtol=1e-6
+    )
+    assert float(model.everett(model.upper, model.lower)) == pytest.approx(1.0, abs=1e-12)
+    # a narrow ridge δ(r − p/2): the major loop is the erf play's, E(a, b) = Φ(a − 1) − Φ(b + 1)
+    assert float(model.everett(3.0, -0.5)) == pytest.approx(ndtr(2.0) - ndtr(0.5), abs=2e-3)
+    # input-output behaviour tends to GeneralizedPlay.erf(2, 1) as σ_r -> 0
+    play = GeneralizedPlay.erf(2.0, 1.0)
+    u = np.concatenate([np.linspace(-8, 3, 50), np.linspace(3, -1, 30), np.linspace(-1, 2, 30)])
+    y_play = play.apply(u, play.initial_state(-8.0))[0]
+    errors = [
+        np.max(np.abs(ContinuousPreisachModel.gaussian(2.0, 1.0, s).apply(u)[0] - y_play))
+        for s in (0.2, 0.05, 0.0125)
+    ]
+    assert errors[0] > errors[1] > errors[2] and errors[2] < 2e-3
+    with pytest.raises(ValueError, match="width_spread"):
+        ContinuousPreisachModel.gaussian(2.0, 1.0, 0.0)

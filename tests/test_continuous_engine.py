@@ -348,3 +348,31 @@ def test_negative_stiffness_diverges():
     engine = _engine(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), 2.0, runaway=1e4)
     with pytest.raises(DivergenceError):
         engine.advance(200.0)
+
+
+# ------------------------------------------------------------------------------------------
+# width disorder: the Gaussian-ridge Preisach model tends to the erf play as σ_r -> 0
+# ------------------------------------------------------------------------------------------
+@pytest.mark.slow
+def test_gaussian_preisach_approaches_the_erf_play_as_width_spread_shrinks():
+    from hysteresis import ContinuousPreisachModel
+    from oscillators.play_flow import play_poincare, play_tangent
+
+    coupling = 4.0
+    play_system = ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), coupling, ZETA, 1.0)
+    ref = play_poincare(play_system, 12)
+    # λ_max over a horizon on which the orbits still shadow each other (finite-time exponent
+    # along nearly one trajectory): differences then measure the model difference
+    t_end = 40.0
+    ref_max = play_tangent(play_system, t_end, progress=False).exponents[0]
+    distances, gaps = [], []
+    for width_spread in (0.1, 0.05, 0.025):
+        model = ContinuousPreisachModel.gaussian(2.0, 1.0, width_spread)
+        out = _section(_engine(model, coupling, rtol=1e-10, atol=1e-10), 12)
+        distances.append(np.max(np.hypot(out[:, 0] - ref.q, out[:, 1] - ref.v)))
+        exps = _spectrum(_engine(model, coupling, rtol=1e-10, atol=1e-10), t_end)
+        gaps.append(abs(exps[0] - ref_max))
+    assert distances[0] > distances[1] > distances[2]
+    assert gaps[0] > gaps[1] > gaps[2]
+    assert distances[2] < 0.1 * distances[0] and distances[2] < 0.1
+    assert gaps[2] < 2e-3
