@@ -919,6 +919,16 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
         """``everett`` with a fast path for scalar arguments (same arithmetic as the tabulated
         bilinear interpolation, so the result is identical; the engine calls it per stage)."""
         vector = self.everett
+        fast = getattr(self, "_fast_scalar", None)
+        if fast is not None:
+            everett_scalar = fast[0]
+
+            def everett_fast(a, b):
+                if isinstance(a, float) and isinstance(b, float):
+                    return everett_scalar(a, b)
+                return vector(a, b)[()]
+
+            return everett_fast
         if getattr(self, "_table", None) is None:
 
             def everett_any(a, b):
@@ -963,6 +973,16 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
             da, db = vector(a, b)
             return da[()], db[()]
 
+        fast = getattr(self, "_fast_scalar", None)
+        if fast is not None:
+            gradient_scalar = fast[1]
+
+            def gradient_fast(a, b):
+                if isinstance(a, float) and isinstance(b, float):
+                    return gradient_scalar(a, b)
+                return gradient_any(a, b)
+
+            return gradient_fast
         if self._density_fn is None or self._gradient_fn != self._gradient_from_density:
             return gradient_any
         nodes, weights = _gauss(64)
@@ -1051,6 +1071,37 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
             db = -np.sum(wr * np.exp(-0.5 * ((b + r) / spread) ** 2), axis=-1) * norm_s
             return da / total, db / total
 
+        def weights_at(a, b):
+            top = min(max(0.5 * (a - b), r_lo), r_hi)
+            span = top - r_lo
+            r = r_lo + span * g
+            return r, span * gw * norm_r * np.exp(-0.5 * ((r - half) / width_spread) ** 2)
+
+        # scalar fast paths with the semantics of everett()/everett_gradient() (arguments
+        # clipped to the support, zero off the triangle): the oscillator engine evaluates them
+        # once per integrator stage
+        def everett_scalar(a, b):
+            a = min(max(a, -bound), bound)
+            b = min(max(b, -bound), bound)
+            if not a > b:
+                return 0.0
+            r, wr = weights_at(a, b)
+            return float(np.dot(wr, ndtr((a - r) / spread) - ndtr((b + r) / spread))) / total
+
+        def gradient_scalar(a0, b0):
+            a = min(max(a0, -bound), bound)
+            b = min(max(b0, -bound), bound)
+            if not a > b:
+                return 0.0, 0.0
+            r, wr = weights_at(a, b)
+            da = db = 0.0
+            if -bound <= a0 <= bound:
+                da = float(np.dot(wr, np.exp(-0.5 * ((a - r) / spread) ** 2))) * norm_s / total
+            if -bound <= b0 <= bound:
+                db = -float(np.dot(wr, np.exp(-0.5 * ((b + r) / spread) ** 2))) * norm_s / total
+            return da, db
+
         model = cls._from_everett(everett, -bound, bound, gradient)
         model._gaussian = (width, spread, width_spread)
+        model._fast_scalar = (everett_scalar, gradient_scalar)
         return model
