@@ -177,18 +177,27 @@ class ForcedOscillator:
             raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
         return self._engine_cls(self, state, **engine_options)
 
-    def check_finite(self, engine: Engine, values: np.ndarray) -> None:
-        """Raise :class:`DivergenceError` if ``values`` (states just computed) are not finite
-        or have run away (``|q|`` or ``|v|`` above ``1e12``)."""
+    def check_finite(
+        self, engine: Engine, values: np.ndarray, times: np.ndarray | None = None
+    ) -> None:
+        """Raise :class:`DivergenceError` if ``values`` (rows of states just computed, first
+        columns q and v) are not finite or have run away (``|q|`` or ``|v|`` above ``1e12``).
+
+        ``times`` (elapsed, one per row) locate the first bad row in the message.
+        """
         values = np.asarray(values, dtype=np.float64)
-        if not (np.all(np.isfinite(values)) and np.all(np.abs(values) <= 1e12)):
-            t = engine.start.t + engine.elapsed
-            raise DivergenceError(
-                f"the motion diverged by t = {t:.6g} (non-finite or |q|, |v| > 1e12) for "
-                f"{self!r}; an unbounded operator with C·slope >= 1 is a positive-feedback "
-                "instability",
-                time=t,
-            )
+        good = np.isfinite(values) & (np.abs(values) <= 1e12)
+        if good.all():
+            return
+        rows = good.reshape(values.shape[0], -1).all(axis=1) if values.ndim > 1 else good
+        first = int(np.argmin(rows)) if values.ndim > 1 else 0
+        elapsed = engine.elapsed if times is None else float(np.asarray(times)[first])
+        t = engine.start.t + elapsed
+        raise DivergenceError(
+            f"the motion diverged by t = {t:.6g} (non-finite or |q|, |v| > 1e12) for {self!r}; "
+            "an unbounded operator with C·slope >= 1 is a positive-feedback instability",
+            time=t,
+        )
 
     # -- derived maps --------------------------------------------------------------------------
     def trajectory(
@@ -341,7 +350,7 @@ class ForcedOscillator:
             if i1 <= i0:
                 continue
             eng.advance(times[i0:i1], out[i0:i1], record)
-            self.check_finite(eng, out[i0:i1, :2])
+            self.check_finite(eng, out[i0:i1, :2], times[i0:i1])
             if bar is not None:
                 bar.update(i1 - i0)
         if bar is not None:
