@@ -32,13 +32,14 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dop
+from oscillators import _dop853 as _dop
 
-# Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step.
-_N_STAGES = 12
-RK_A = np.ascontiguousarray(_dop.A[:_N_STAGES, :_N_STAGES], dtype=np.float64)
+# Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step
+# (coefficients carried in oscillators/_dop853.py with their citation).
+_N_STAGES = _dop.N_STAGES
+RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
-RK_C = np.ascontiguousarray(_dop.C[:_N_STAGES], dtype=np.float64)
+RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
 
 # Width of the interval on which a possible wall hit inside the play is resolved exactly
 # (there the input velocity has at most one zero and the Hermite error bound is ~1e-14).
