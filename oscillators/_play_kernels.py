@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 from numba import njit
+
 from oscillators import _dop853 as _dop
 
 # Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step
