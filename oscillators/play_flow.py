@@ -36,11 +36,11 @@ to ``v``) gives exactly the paper's ``V_out``: ``δw := δq``, (δq, δv, δφ) 
 time-lag correction in (q, v). The tests check this against finite differences of the
 stroboscopic map.
 
-Lyapunov spectrum: Benettin/QR (modified Gram–Schmidt) every ``renormalize_dt`` and at every
-exit. ``V_out`` has rank k-1 (kernel: the pure-δw direction), so after an exit the last diagonal
-element of R is exactly 0: it is recorded structurally as ``log R_kk = -inf`` (the paper's
-``λ_4 = -∞``), not as the log of a round-off remainder; the remainder actually found is reported
-in ``extra["collapse_residual"]`` (~1e-16).
+Lyapunov spectrum: the one Benettin/QR loop of :mod:`analysis.lyapunov` drives
+:class:`PlayEngine`. ``V_out`` has rank k-1 (kernel: the pure-δw direction), so after an exit
+the last diagonal element of R is exactly 0; the engine reports it through ``rank_bound()`` and
+the loop records ``log R_kk = -inf`` structurally (the paper's ``λ_4 = -∞``), not the log of a
+round-off remainder.
 
 Invariant used in the tests: on a wall the tangent flow restricted to ``{δw = δq}`` has trace
 ``-2ζ``; inside, the (δq, δv) map from an entry (time ``t_e``) to the next exit (``Δ`` later) is
@@ -201,65 +201,6 @@ def _play_state(q: float, w: float) -> Any:
     return PlayState(float(w), float(q))
 
 
-def _final_state(par: np.ndarray, st: np.ndarray) -> OscillatorState:
-    phi = math.fmod(par[6] + par[1] * st[0], 2.0 * math.pi)
-    if phi < 0.0:
-        phi += 2.0 * math.pi
-    return OscillatorState(
-        q=float(st[1]),
-        v=float(st[2]),
-        phi=phi,
-        operator_state=_play_state(st[1], st[3]),
-        t=float(st[0]),
-    )
-
-
-def _sample(
-    par: np.ndarray, st: np.ndarray, times: np.ndarray, keep_events: bool, progress: bool, desc: str
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Advance through ``times``; returns samples (n, 3) [q, v, w], events (m, 5), count."""
-    out = np.empty((times.size, 3))
-    empty_t = np.zeros((4, 0))
-    logs = np.zeros(0)
-    diag = np.zeros(4)
-    flags = np.array([0, 1], dtype=np.int64)
-    work = _k.make_work(0)
-    events = []
-    n_events = 0
-    n_chunks = max(1, min(200, times.size // 2000))
-    bounds = np.linspace(0, times.size, n_chunks + 1).astype(int)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=times.size, desc=desc, unit="pt")
-    for i0, i1 in zip(bounds[:-1], bounds[1:], strict=True):
-        if i1 <= i0:
-            continue
-        span = times[i1 - 1] - st[0]
-        cap = int(20.0 * span + 100) if keep_events else 0
-        while True:
-            saved = st.copy()
-            ev = np.empty((cap, 5))
-            cnt = np.zeros(1, dtype=np.int64)
-            _k.sample_kernel(
-                par, st, times[i0:i1], out[i0:i1], empty_t, logs, diag, ev, cnt, flags, work
-            )
-            if not keep_events or cnt[0] <= cap:
-                break
-            st[:] = saved
-            cap = int(cnt[0]) + 100
-        n_events += int(cnt[0])
-        if keep_events:
-            events.append(ev[: cnt[0]].copy())
-        if bar is not None:
-            bar.update(i1 - i0)
-    if bar is not None:
-        bar.close()
-    ev_all = np.concatenate(events) if events else np.empty((0, 5))
-    return out, ev_all, n_events
-
-
 def _events_array(ev: np.ndarray) -> np.ndarray:
     arr = np.empty(ev.shape[0], dtype=EVENT_DTYPE)
     arr["time"] = ev[:, 0]
@@ -302,7 +243,6 @@ class PlayEngine(Engine):
             )
         self._st, self._on_wall = _initial_state(self._par, state.q, state.v, None, opstate)
         self._T = np.zeros((4, 0))
-        self._logs = np.zeros(0)
         self._diag = np.zeros(4)
         self._work = _k.make_work(0)
         # [accumulate event counts, qr_mode]: 0 applies V_out as a plain matrix; 2 omits it (a
@@ -339,7 +279,6 @@ class PlayEngine(Engine):
                 times,
                 buf,
                 self._T,
-                self._logs,
                 self._diag,
                 ev,
                 cnt,
@@ -386,12 +325,11 @@ class PlayEngine(Engine):
         for j, r in enumerate(self._rows):
             self._T[r, j] = 1.0
         self._work = _k.make_work(k)
-        self._logs = np.zeros(k)
         self._exits_at_set = float(self._diag[0])
         self._w_reset = False
         if self._st[4] != 0.0:
             # on a wall moving outward: w is slaved from the start (one-sided derivative)
-            _k.leave_play(self._T, self._logs, self._diag, False, int(self._flags[1]))
+            _k.leave_play(self._T, int(self._flags[1]))
             self._w_reset = True
 
     @property
