@@ -1,8 +1,8 @@
 """The generic continuous engine (oscillators.continuous) against independent truths.
 
-* the compiled play-limit kernel (oscillators.play_flow), an independent implementation: a
-  user-supplied erf shape and a one-play Prandtl–Ishlinskii operator give its sections and its
-  tangent flow;
+* the compiled play-limit kernel (``PlayEngine``, an independent implementation) through the
+  public API (``ForcedOscillator`` picks the engine, ``lyapunov_spectrum``): a user-supplied erf
+  shape and a one-play Prandtl–Ishlinskii operator give its sections and its tangent flow;
 * central finite differences of the engine's own flow map (state-only runs, no tangent code)
   for the tangent flow across reversals, wall hits and wipe-outs, perturbing q, v, φ and every
   memory variable;
@@ -17,13 +17,16 @@ import numpy as np
 import pytest
 from scipy.special import erf, ndtr
 
+from analysis.lyapunov import lyapunov_spectrum
 from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii, PreisachModel
 from oscillators.continuous import ContinuousEngine
 from oscillators.engine import DivergenceError
+from oscillators.play_flow import PlayEngine
 from oscillators.results import OscillatorState
 from oscillators.system import ForcedOscillator
 
 ZETA = 0.05
+TIGHT = {"rtol": 1e-12, "atol": 1e-12}
 
 
 def _erf_play_custom(width=2.0, spread=1.0):
@@ -83,78 +86,70 @@ def _section(engine, n_periods):
     return out
 
 
-def _spectrum(engine, t_end, dt=1.0, include_phase=False):
-    """Textbook Benettin/QR loop (Benettin et al. 1980) over the engine's tangent primitives;
-    directions beyond ``rank_bound()`` get exactly −inf."""
-    engine.start_tangent(include_phase)
-    k = engine.deviations().shape[1]
-    logs = np.zeros(k)
-    t = 0.0
-    while t < t_end - 1e-12:
-        t = min(t + dt, t_end)
-        engine.advance(t)
-        dev = engine.deviations()
-        q, r = np.linalg.qr(dev)
-        if q.shape[1] < k:  # more columns than rows
-            q = np.hstack([q, np.zeros((q.shape[0], k - q.shape[1]))])
-            r = np.vstack([r, np.zeros((k - r.shape[0], k))])
-        with np.errstate(divide="ignore"):
-            step = np.log(np.abs(np.diag(r)))
-        step[engine.rank_bound() :] = -np.inf
-        logs += step
-        signs = np.sign(np.diag(r))
-        signs[signs == 0] = 1.0
-        engine.set_deviations(q * signs)
-    return np.sort(logs / t_end)[::-1]
-
-
 # ------------------------------------------------------------------------------------------
 # agreement with the compiled play kernel
 # ------------------------------------------------------------------------------------------
 def test_custom_erf_shape_gives_the_compiled_erf_section():
-    from oscillators.play_flow import play_poincare
-
-    ref = play_poincare(ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 4.0, ZETA, 1.0), 25)
-    engine = _engine(_erf_play_custom(), 4.0)
-    assert engine.sample_columns == ("q", "v", "M", "w")
+    compiled = ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 4.0, ZETA, 1.0)
+    custom = ForcedOscillator(_erf_play_custom(), 4.0, ZETA, 1.0)
+    assert compiled.engine_class is PlayEngine and custom.engine_class is ContinuousEngine
+    ref = compiled.poincare_section(25)
+    sec = custom.poincare_section(25, engine_options=TIGHT)
+    np.testing.assert_allclose(sec.q, ref.q, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(sec.v, ref.v, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(sec.w, ref.w, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(sec.M, ref.M, atol=1e-6, rtol=0)
+    assert sec.n_switches > 40
+    # the erf play itself through the generic engine (forced by building it directly)
+    engine = ContinuousEngine(compiled, compiled.initial_state(), **TIGHT)
     out = _section(engine, 25)
     np.testing.assert_allclose(out[:, 0], ref.q, atol=1e-6, rtol=0)
     np.testing.assert_allclose(out[:, 1], ref.v, atol=1e-6, rtol=0)
-    np.testing.assert_allclose(out[:, 3], ref.w, atol=1e-6, rtol=0)
-    np.testing.assert_allclose(out[:, 2], ref.M, atol=1e-6, rtol=0)
-    assert engine.n_events > 40
 
 
 @pytest.mark.parametrize("coupling", [0.6, -0.8])
 def test_single_play_prandtl_ishlinskii_gives_the_play_section(coupling):
-    from oscillators.play_flow import play_poincare
-
-    ref = play_poincare(ForcedOscillator(PlayOperator(2.0), coupling, ZETA, 1.0), 25)
-    pi = PrandtlIshlinskii([2.0], [1.0])
-    out = _section(_engine(pi, coupling), 25)
-    np.testing.assert_allclose(out[:, 0], ref.q, atol=1e-6, rtol=0)
-    np.testing.assert_allclose(out[:, 1], ref.v, atol=1e-6, rtol=0)
-    np.testing.assert_allclose(out[:, 2], ref.M, atol=1e-6, rtol=0)
+    play = ForcedOscillator(PlayOperator(2.0), coupling, ZETA, 1.0)
+    pi = ForcedOscillator(PrandtlIshlinskii([2.0], [1.0]), coupling, ZETA, 1.0)
+    assert play.engine_class is PlayEngine and pi.engine_class is ContinuousEngine
+    ref = play.poincare_section(25)
+    sec = pi.poincare_section(25, engine_options=TIGHT)
+    np.testing.assert_allclose(sec.q, ref.q, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(sec.v, ref.v, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(sec.M, ref.M, atol=1e-6, rtol=0)
     # and the plain play itself through the generic engine
-    out_play = _section(_engine(PlayOperator(2.0), coupling), 25)
+    out_play = _section(ContinuousEngine(play, play.initial_state(), **TIGHT), 25)
     np.testing.assert_allclose(out_play[:, 0], ref.q, atol=1e-6, rtol=0)
 
 
 def test_erf_play_tangent_flow_and_dky_agree_with_compiled_kernel():
-    from analysis.dimensions import kaplan_yorke_dimension
-    from oscillators.play_flow import play_tangent
-
     t_end = 150.0  # both runs stay on one trajectory (λ_max·t_end ≈ 8 against ~1e-11 errors)
-    ref = play_tangent(
-        ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 4.0, ZETA, 1.0), t_end, progress=False
+    compiled = ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 4.0, ZETA, 1.0)
+    custom = ForcedOscillator(_erf_play_custom(), 4.0, ZETA, 1.0)
+    ref = lyapunov_spectrum(compiled, t_end)
+    res = lyapunov_spectrum(custom, t_end, engine_options={"rtol": 1e-11, "atol": 1e-11})
+    assert (
+        res.extra["engine"] == ContinuousEngine.name and ref.extra["engine"] != res.extra["engine"]
     )
-    exps = _spectrum(_engine(_erf_play_custom(), 4.0, rtol=1e-11, atol=1e-11), t_end)
-    assert exps[2] == -np.inf and ref.exponents[2] == -np.inf
-    np.testing.assert_allclose(exps[:2], ref.exponents[:2], rtol=1e-4, atol=1e-6)
-    assert kaplan_yorke_dimension(exps) == pytest.approx(
-        kaplan_yorke_dimension(ref.exponents), abs=1e-3
-    )
-    assert kaplan_yorke_dimension(exps) > 1.0  # chaotic at C = 4 (paper)
+    assert res.tangent_space == ref.tangent_space == ("q", "v", "w")
+    assert res.exponents[2] == -np.inf and ref.exponents[2] == -np.inf
+    np.testing.assert_allclose(res.exponents[:2], ref.exponents[:2], rtol=1e-4, atol=1e-6)
+    assert res.kaplan_yorke == pytest.approx(ref.kaplan_yorke, abs=1e-3)
+    assert res.kaplan_yorke > 1.0  # chaotic at C = 4 (paper)
+
+
+@pytest.mark.slow
+def test_erf_play_dky_from_a_moderate_run_agrees_with_compiled_kernel():
+    # the paper's D_KY at C = 4 (fig:mboa: [1.42, 1.48] from long runs) from a moderate run on
+    # both engines: the orbits separate after ~300 time units, so this compares two estimates
+    # of one attractor's exponents (statistical, not round-off, agreement)
+    moderate = {"t_end": 3000.0, "transient": 100.0}
+    compiled = ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 4.0, ZETA, 1.0)
+    custom = ForcedOscillator(_erf_play_custom(), 4.0, ZETA, 1.0)
+    d_ref = lyapunov_spectrum(compiled, **moderate).kaplan_yorke
+    d_gen = lyapunov_spectrum(custom, **moderate, engine_options={"rtol": 1e-10, "atol": 1e-10})
+    assert d_gen.kaplan_yorke == pytest.approx(d_ref, abs=0.06)
+    assert 1.3 < d_gen.kaplan_yorke < 1.6
 
 
 # ------------------------------------------------------------------------------------------
@@ -190,6 +185,10 @@ def test_pi_tangent_flow_matches_finite_differences():
     kinds = eng.records()["events"]["kind"]
     assert np.sum(kinds == -1) >= 2 and np.sum(kinds == 1) >= 4  # reversals and wall hits
     jac = eng.deviations()
+    system = ForcedOscillator(op, coupling, ZETA, 1.0)
+    jac_api, labels = system.jacobian(duration, start, engine_options=TIGHT)
+    assert labels == eng.tangent_space
+    np.testing.assert_array_equal(jac_api, jac)
 
     def flow_map(x):
         pos = x[3:].copy()
@@ -259,7 +258,10 @@ def test_preisach_tangent_flow_matches_finite_differences():
     ids=["tanh-play", "pi5", "preisach"],
 )
 def test_zero_coupling_oscillator_exponents_are_minus_zeta(op):
-    exps = _spectrum(_engine(op, 0.0, rtol=1e-10, atol=1e-10), 300.0)
+    system = ForcedOscillator(op, 0.0, ZETA, 1.0)
+    assert system.engine_class is ContinuousEngine
+    res = lyapunov_spectrum(system, 300.0, engine_options={"rtol": 1e-10, "atol": 1e-10})
+    exps = res.exponents
     # the decoupled oscillator contributes -ζ twice (complex pair); memory directions are
     # frozen (0) or reset (-inf)
     finite = exps[np.isfinite(exps)]
@@ -270,18 +272,21 @@ def test_zero_coupling_oscillator_exponents_are_minus_zeta(op):
 
 
 @pytest.mark.parametrize(
-    ("op", "coupling"),
-    [(_tanh_play(), 4.0), (_pi5(), 0.8)],
+    ("op", "coupling", "memory"),
+    [(_tanh_play(), 4.0, ("w",)), (_pi5(), 0.8, ("w0", "w1", "w2", "w3", "w4"))],
     ids=["tanh-play", "pi5"],
 )
-def test_tanh_play_and_pi5_couple_with_finite_spectra(op, coupling):
-    engine = _engine(op, coupling, rtol=1e-10, atol=1e-10)
-    exps = _spectrum(engine, 200.0)
+def test_tanh_play_and_pi5_couple_with_finite_spectra(op, coupling, memory):
+    system = ForcedOscillator(op, coupling, ZETA, 1.0)
+    res = lyapunov_spectrum(system, 200.0, engine_options={"rtol": 1e-10, "atol": 1e-10})
+    exps = res.exponents
+    assert res.tangent_space == ("q", "v") + memory
     assert np.all(np.isfinite(exps[:2])), exps
     assert exps[0] < 1.0 and exps[1] < 0.0
     # every memory direction is reset by a wall hit: exactly -inf (paper's λ_4 = -∞)
     assert np.all(exps[2:] == -np.inf)
-    assert engine.n_events > 50
+    assert res.n_switches > 50
+    assert np.isfinite(res.kaplan_yorke)
 
 
 # ------------------------------------------------------------------------------------------
@@ -345,7 +350,8 @@ def test_bad_input_raises():
 
 def test_negative_stiffness_diverges():
     # PI with total weight 1 and C = 2: on the walls q'' = ... + (C − 1) q grows without bound
-    engine = _engine(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), 2.0, runaway=1e4)
+    with pytest.warns(RuntimeWarning, match="unbounded"):
+        engine = _engine(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), 2.0, runaway=1e4)
     with pytest.raises(DivergenceError):
         engine.advance(200.0)
 
@@ -356,22 +362,23 @@ def test_negative_stiffness_diverges():
 @pytest.mark.slow
 def test_gaussian_preisach_approaches_the_erf_play_as_width_spread_shrinks():
     from hysteresis import ContinuousPreisachModel
-    from oscillators.play_flow import play_poincare, play_tangent
 
     coupling = 4.0
     play_system = ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), coupling, ZETA, 1.0)
-    ref = play_poincare(play_system, 12)
+    ref = play_system.poincare_section(12)
     # λ_max over a horizon on which the orbits still shadow each other (finite-time exponent
     # along nearly one trajectory): differences then measure the model difference
     t_end = 40.0
-    ref_max = play_tangent(play_system, t_end, progress=False).exponents[0]
+    ref_max = lyapunov_spectrum(play_system, t_end).max_exponent
+    options = {"rtol": 1e-10, "atol": 1e-10}
     distances, gaps = [], []
     for width_spread in (0.1, 0.05, 0.025):
         model = ContinuousPreisachModel.gaussian(2.0, 1.0, width_spread)
-        out = _section(_engine(model, coupling, rtol=1e-10, atol=1e-10), 12)
-        distances.append(np.max(np.hypot(out[:, 0] - ref.q, out[:, 1] - ref.v)))
-        exps = _spectrum(_engine(model, coupling, rtol=1e-10, atol=1e-10), t_end)
-        gaps.append(abs(exps[0] - ref_max))
+        system = ForcedOscillator(model, coupling, ZETA, 1.0)
+        sec = system.poincare_section(12, engine_options=options)
+        distances.append(np.max(np.hypot(sec.q - ref.q, sec.v - ref.v)))
+        res = lyapunov_spectrum(system, t_end, engine_options=options)
+        gaps.append(abs(res.max_exponent - ref_max))
     assert distances[0] > distances[1] > distances[2]
     assert gaps[0] > gaps[1] > gaps[2]
     assert distances[2] < 0.1 * distances[0] and distances[2] < 0.1
