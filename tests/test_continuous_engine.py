@@ -328,6 +328,21 @@ def test_tangent_space_and_rank_bound_at_start():
         wall.set_deviations(np.eye(4))
 
 
+def test_preisach_start_at_a_reversal_pushes_the_input_as_memory():
+    op = _preisach_analytic()
+    # rising from saturation to q0 = 0.5, then moving down: the reversal at t = 0 makes q0 an
+    # extremum whose perturbation is δq (one-sided derivative, as a play wall at t = 0)
+    eng = _engine(op, 2.0, _start(op, q0=0.5, v0=-0.3))
+    eng.start_tangent()
+    assert eng.tangent_space == ("q", "v", "M1")
+    dev = eng.deviations()
+    np.testing.assert_array_equal(dev[2], dev[0])
+    assert eng.rank_bound() == 2
+    eng.advance(3.0)
+    assert eng.tangent_space[:3] == ("q", "v", "M1")
+    assert eng.state().operator_state.extrema[0] == 0.5
+
+
 def test_bad_input_raises():
     op = _pi5()
     with pytest.raises(ValueError, match="rtol"):
@@ -359,7 +374,6 @@ def test_negative_stiffness_diverges():
 # ------------------------------------------------------------------------------------------
 # width disorder: the Gaussian-ridge Preisach model tends to the erf play as σ_r -> 0
 # ------------------------------------------------------------------------------------------
-@pytest.mark.slow
 def test_gaussian_preisach_approaches_the_erf_play_as_width_spread_shrinks():
     from hysteresis import ContinuousPreisachModel
 
