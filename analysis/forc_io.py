@@ -274,8 +274,11 @@ _KEYS = {
 # field factor to mT, moment factor to A·m², by "Units of measure"
 _UNIT_SYSTEMS = {"cgs": (0.1, 1e-3), "si": (1e3, 1.0), "hybrid si": (1e3, 1.0)}
 _REFUSED = (
-    ("multiple segments", "MicroMag 'Direct moment vs. field; Multiple segments' export "
-     "(irregular or remanence FORC protocol)"),
+    (
+        "multiple segments",
+        "MicroMag 'Direct moment vs. field; Multiple segments' export "
+        "(irregular or remanence FORC protocol)",
+    ),
     ("remanence", "MicroMag remanence-curve export"),
     ("hysteresis loop", "MicroMag hysteresis-loop export"),
 )
@@ -630,9 +633,11 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
         if k.lower().startswith("calibration field"):
             num = _header_number(v, 0, k, False)
             if num is not None:
-                unit = _column_unit(k + " " + v, _FIELD_UNITS, 0, "calibration") if (
-                    "[" in k or "(" in k
-                ) else f_fac
+                unit = (
+                    _column_unit(k + " " + v, _FIELD_UNITS, 0, "calibration")
+                    if ("[" in k or "(" in k)
+                    else f_fac
+                )
                 h_cal = num * unit
     # split where the field falls
     blocks: list[list[tuple[float, float, int]]] = [[pts[0]]]

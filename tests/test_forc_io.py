@@ -100,7 +100,10 @@ def test_micromag_round_trip_and_drift_correction(tmp_path):
     # distorted; a final calibration point closes the last curve, so the correction is exact
     cal = float(op.apply(np.array([5.0]), op.initial_state(5.0))[0][0])
     path = write_micromag(
-        tmp_path / "d.txt", curves, calibration_field=5.0, calibration_moments=[cal] * curves.n_curves
+        tmp_path / "d.txt",
+        curves,
+        calibration_field=5.0,
+        calibration_moments=[cal] * curves.n_curves,
     )
     text = path.read_text().splitlines()
     end = text.index("MicroMag 2900/3900 Data File ends")

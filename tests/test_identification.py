@@ -186,7 +186,7 @@ def test_irregular_curves_without_shared_fields_telescope():
         y, _ = op.apply(pts, op.initial_state(a))
         fields.append(pts)
         moments.append(y)
-    ident = identify_from_curves(ReversalCurves(rev, tuple(fields), tuple(moments)))
+    ident = identify_from_curves(ReversalCurves(rev, tuple(fields), tuple(moments)), grid="native")
     assert ident.step is None
 
     def everett(a, b):  # P(b + p/2 < s <= a - p/2)
@@ -351,7 +351,7 @@ def test_smoothing_quadratic_surface_exact(convention, irregular):
         # Mayergoyz: M(alpha = r, beta = h); Pike: M(H_r = r, H = h)
         moments.append(_quadratic(r, h, g))
     curves = ReversalCurves(rev, tuple(fields), tuple(moments), convention)
-    ident = identify_from_curves(curves, smoothing=(2.0, 3.0), extend=False)
+    ident = identify_from_curves(curves, smoothing=(2.0, 3.0), extend=False, grid="native")
     dens = ident.density_alpha_beta
     finite = np.isfinite(dens)
     assert finite.sum() > 20
