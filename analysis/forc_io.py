@@ -628,7 +628,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
         )
     if not pts:
         raise ValueError(f"{path}: no data rows after the column titles (line {ln_t})")
-    h_cal = None
+    h_cal: float | None = None
     for k, v in header.items():
         if k.lower().startswith("calibration field"):
             num = _header_number(v, 0, k, False)
@@ -639,15 +639,25 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
                     else f_fac
                 )
                 h_cal = num * unit
-    # split where the field falls
-    blocks: list[list[tuple[float, float, int]]] = [[pts[0]]]
-    for p in pts[1:]:
-        if p[0] < blocks[-1][-1][0]:
-            blocks.append([p])
-        else:
-            blocks[-1].append(p)
-    if h_cal is None and len(blocks) > 1 and len(blocks[0]) == 1:
-        h_cal = blocks[0][0][0]
+    # calibration points: near HCal, reached by a jump up (> 2 field steps) and followed by a
+    # fall (or the end); curves: split where the field falls
+    h = np.array([p[0] for p in pts])
+    rises = np.diff(h)
+    step = float(np.median(rises[rises > 0])) if np.any(rises > 0) else 0.0
+    if h_cal is None and h.size > 1 and h[1] < h[0]:
+        h_cal = float(h[0])
+    blocks: list[list[tuple[float, float, int]]] = []
+    for i, p in enumerate(pts):
+        is_cal = (
+            h_cal is not None
+            and abs(p[0] - h_cal) <= _CAL_REL_TOL * abs(h_cal)
+            and (i == 0 or p[0] - h[i - 1] > 2 * step)
+            and (i == h.size - 1 or h[i + 1] < p[0])
+        )
+        if is_cal or not blocks or p[0] < blocks[-1][-1][0] or blocks[-1][-1][3]:
+            blocks.append([])
+        blocks[-1].append((*p, is_cal))
+    blocks = [[q[:3] for q in b] for b in blocks]
     curves, cal_m, cal_h = _build_curves(blocks, h_cal, drift, None)
     notes = []
     if drift is not None and cal_m is not None:

@@ -539,6 +539,7 @@ def _is_regular(alpha: np.ndarray, beta: np.ndarray) -> float | None:
 
 
 GRIDS = ("auto", "native", "protocol")
+WINDOWS = ("rs", "pike")
 
 
 def identify_from_curves(
@@ -549,6 +550,7 @@ def identify_from_curves(
     extend: bool = True,
     grid: str = "auto",
     step: float | None = None,
+    window: str = "rs",
 ) -> PreisachIdentification:
     """Identify from reversal-curve data (measured or simulated, regular or irregular).
 
@@ -582,6 +584,11 @@ def identify_from_curves(
         fields), else ``"native"``.
     step:
         Lattice step of the protocol grid (> 0); ignored on the native grid.
+    window:
+        Shape of the regression window on the protocol grid: ``"rs"`` (default),
+        ``|Δr| <= SF_r·Δ`` and ``|Δs| <= SF_s·Δ``; ``"pike"``, Pike et al. (1999)'s square
+        ``|Δα| <= SF·Δ`` and ``|ΔB_r| = |Δβ| <= SF·Δ`` (``(2 SF + 1)²`` points, ``SF = SF_r``).
+        The native grid always uses ``"rs"``.
 
     Returns
     -------
@@ -597,8 +604,10 @@ def identify_from_curves(
         n_union = np.unique(np.concatenate(curves.fields)).size
         longest = max(h.size for h in curves.fields)
         grid = "protocol" if n_union > 2 * (longest + curves.n_curves) else "native"
+    if window not in WINDOWS:
+        raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
     if grid == "protocol":
-        return _identify_protocol(curves, smoothing, output_range, extend, step)
+        return _identify_protocol(curves, smoothing, output_range, extend, step, window)
     alpha, beta, E = _everett_table(curves)
     if alpha.size < 2 or beta.size < 2:
         raise ValueError("need at least two reversal curves and two distinct fields")
@@ -736,6 +745,7 @@ def _identify_protocol(
     output_range: tuple[float, float],
     extend: bool,
     step: float | None,
+    window: str = "rs",
 ) -> PreisachIdentification:
     nodes, E, measured, step = _protocol_table(curves, step)
     mass = E[1:, :-1] - E[:-1, :-1] - E[1:, 1:] + E[:-1, 1:]
@@ -746,7 +756,7 @@ def _identify_protocol(
         aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
         valid = measured | ((bb > aa) if extend else False)
         evaluate = measured & (bb <= aa)
-        density = grid_quadratic_density(E, valid, evaluate, step, sm[0], sm[1])
+        density = grid_quadratic_density(E, valid, evaluate, step, sm[0], sm[1], window)
         density.setflags(write=False)
     alpha = nodes.copy()
     beta = nodes.copy()
@@ -776,6 +786,7 @@ def grid_quadratic_density(
     step: float,
     sf_r: float,
     sf_s: float,
+    window: str = "rs",
 ) -> np.ndarray:
     """Local quadratic regression of ``E`` on a regular lattice (fast, FFT correlations).
 
@@ -798,6 +809,9 @@ def grid_quadratic_density(
         Lattice step (> 0).
     sf_r, sf_s:
         Window half-widths across ``r`` and along ``s`` in steps (> 0).
+    window:
+        ``"rs"`` as above, or ``"pike"``: the square ``|Δα|, |Δβ| <= sf_r·step`` of Pike et al.
+        (1999) (``sf_s`` unused).
 
     Returns
     -------
@@ -816,13 +830,18 @@ def grid_quadratic_density(
     step = _positive(step, "step")
     sf_r = _positive(sf_r, "sf_r")
     sf_s = _positive(sf_s, "sf_s")
-    w = int(math.floor(sf_r + sf_s + 1e-9))
+    if window not in WINDOWS:
+        raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
+    w = int(math.floor((sf_r if window == "pike" else sf_r + sf_s) + 1e-9))
     out = np.full(E.shape, np.nan)
     if w < 1:
         return out
     d = np.arange(-w, w + 1)
     di, dj = np.meshgrid(d, d, indexing="ij")
-    K = (np.abs(di - dj) <= 2 * sf_r + 1e-9) & (np.abs(di + dj) <= 2 * sf_s + 1e-9)
+    if window == "pike":
+        K = np.ones(di.shape, dtype=bool)
+    else:
+        K = (np.abs(di - dj) <= 2 * sf_r + 1e-9) & (np.abs(di + dj) <= 2 * sf_s + 1e-9)
     x = di / w
     y = dj / w
     vf = v.astype(float)
