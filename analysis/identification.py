@@ -596,7 +596,7 @@ def identify_from_curves(
         With ``measured`` set on the protocol grid (nodes backed by data; outside it ``E`` is
         extended: 0 for ``β >= α``, constant beyond a curve's last point) and the smoothed
         density NaN wherever the node is not measured or its window lacks data on either side
-        along ``α`` or ``β``.
+        across or along the diagonal.
     """
     if grid not in GRIDS:
         raise ValueError(f"grid must be one of {GRIDS}, got {grid!r}")
@@ -725,6 +725,13 @@ def _protocol_table(
     # nodes farther than half a step outside the reversal-field range are not measured
     outside = (nodes < rev[0] - half) | (nodes > rev[-1] + half)
     m_tab[outside] = False
+    # above the highest reversal field nothing reverses: E(x, h) = E_last(h) − E_last(x) (the
+    # upper branch of the last curve; a constant in x would pile its cumulative rise into
+    # every diagonal cell)
+    above = np.flatnonzero(nodes > rev[-1] + half)
+    if above.size:
+        last = g[np.argmax(rev)] if rev.size else g[0]
+        table[above] = last[None, :] - last[above][:, None]
     # table[R, h]; physical region h >= R; on and below the diagonal E = 0 exactly
     below = nodes[None, :] <= nodes[:, None]
     table[below] = 0.0
@@ -817,7 +824,8 @@ def grid_quadratic_density(
     -------
     numpy.ndarray
         ``μ_αβ`` at the nodes; NaN where not evaluated, where the window lacks a valid node on
-        either side of the node along ``α`` or along ``β`` (the fit would extrapolate), or
+        either side of the node across (``r``) or along (``s``) the diagonal (the fit would
+        extrapolate; without the extension this blanks the diagonal ``r = 0``), or
         where the design is rank-deficient.
     """
     from scipy.signal import fftconvolve
@@ -851,7 +859,9 @@ def grid_quadratic_density(
         return fftconvolve(img, kern[::-1, ::-1], mode="same")
 
     targets = np.flatnonzero(ev)
-    sides = [K & (di <= -1), K & (di >= 1), K & (dj <= -1), K & (dj >= 1)]
+    # data on both sides of the node across and along the diagonal (r and s): no extrapolation
+    # onto the diagonal from one side, nor past the end of the curves
+    sides = [K & (di - dj <= -1), K & (di - dj >= 1), K & (di + dj <= -1), K & (di + dj >= 1)]
     ok = np.ones(targets.size, dtype=bool)
     for side in sides:
         ok &= corr(vf, side.astype(float)).ravel()[targets] > 0.5

@@ -51,7 +51,7 @@ REV_FRACTION, REV_FIELD = 0.15, 60.0
 MOMENT = 5e-6  # A·m²
 STEP, H_SAT, H_CAL = 2.0, 150.0, 150.0
 HR_MIN, HR_MAX, H_MAX = -70.0, 20.0, 90.0
-NOISE, JITTER, CAL_DRIFT, GAIN_DRIFT = 1e-3, 0.05, 2.0, 2e-6
+NOISE, JITTER, CAL_DRIFT, GAIN_DRIFT = 1e-3, 0.05, 2.0, 1e-5
 SAMPLE_FILES = {
     "0015": HERE / "forc_micromag_0015_cgs.frc",
     "0016": HERE / "forc_micromag_0016_hybrid_si.frc",
