@@ -812,6 +812,9 @@ def grid_quadratic_density(
         Boolean mask of the nodes whose ``E`` enters the regression.
     evaluate:
         Boolean mask of the nodes where the density is wanted.
+        A node gets a value only if each of its eight half-windows (``Δr < 0``, ``Δr > 0``,
+        ``Δs < 0``, ``Δs > 0``, ``Δα < 0``, ``Δα > 0``, ``Δβ < 0``, ``Δβ > 0``) has at least half
+        of its nodes valid.
     step:
         Lattice step (> 0).
     sf_r, sf_s:
@@ -824,8 +827,9 @@ def grid_quadratic_density(
     -------
     numpy.ndarray
         ``μ_αβ`` at the nodes; NaN where not evaluated, where the window lacks a valid node on
-        either side of the node across (``r``) or along (``s``) the diagonal (the fit would
-        extrapolate; without the extension this blanks the diagonal ``r = 0``), or
+        either side of the node across (``r``) or along (``s``) the diagonal, or along ``α``
+        or ``β`` (the fit would extrapolate; without the extension this blanks the diagonal
+        ``r = 0``), or
         where the design is rank-deficient.
     """
     from scipy.signal import fftconvolve
@@ -861,10 +865,14 @@ def grid_quadratic_density(
     targets = np.flatnonzero(ev)
     # data on both sides of the node across and along the diagonal (r and s): no extrapolation
     # onto the diagonal from one side, nor past the end of the curves
+    # (and along α and β: no extrapolation past the end of a curve or the last reversal field)
     sides = [K & (di - dj <= -1), K & (di - dj >= 1), K & (di + dj <= -1), K & (di + dj >= 1)]
+    sides += [K & (di <= -1), K & (di >= 1), K & (dj <= -1), K & (dj >= 1)]
     ok = np.ones(targets.size, dtype=bool)
     for side in sides:
-        ok &= corr(vf, side.astype(float)).ravel()[targets] > 0.5
+        # at least half of every half-window: a lopsided window extrapolates its quadratic
+        # from one side and biases the mixed derivative (by tens of % of the peak at an edge)
+        ok &= corr(vf, side.astype(float)).ravel()[targets] >= 0.75 * side.sum() - 1e-6
     targets = targets[ok]
     if targets.size == 0:
         return out

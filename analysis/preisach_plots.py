@@ -222,8 +222,9 @@ def plot_forc_diagram(
 ) -> Any:
     """FORC diagram of the smoothed density: ``ρ`` over ``(B_c, B_u)``; returns the mappable.
 
-    ``cmap="auto"``: ``"viridis"`` from 0 when ``min ρ >= −5 %·max ρ`` (noise-level negatives
-    drawn as 0), else ``"RdBu_r"`` centred at 0 (meaningful negative regions). NaN nodes
+    ``cmap="auto"``: ``"RdBu_r"`` centred at 0 when at least 1 % of the nodes lie below
+    −5 % of the peak (a negative region, e.g. of interacting single-domain particles), else
+    ``"viridis"`` from 0 (noise-level negatives drawn as 0). NaN nodes
     (outside the measured region) stay blank. Contours at ``contours`` × the peak.
     """
     from matplotlib.colors import Normalize, TwoSlopeNorm
@@ -239,7 +240,9 @@ def plot_forc_diagram(
     top = float(np.nanmax(rho))
     low = float(np.nanmin(rho))
     top = top if top > 0 else 1.0
-    diverging = low < -NEGATIVE_FRACTION * top
+    # meaningful negative region: at least 1 % of the nodes below −5 % of the peak (isolated
+    # noise or edge values do not switch the map)
+    diverging = float(np.nanpercentile(rho, 1.0)) < -NEGATIVE_FRACTION * top
     if cmap == "auto":
         cmap = "RdBu_r" if diverging else "viridis"
     if diverging:
