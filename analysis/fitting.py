@@ -7,11 +7,14 @@ input record is fixed, so the identification is a constrained linear least-squar
 * :func:`fit_preisach_record` — a discrete Preisach model on a lattice: one relay per lattice
   cell (the corner relays of :mod:`hysteresis.fitting`), ``y_t ≈ c + Σ_k m_k r_k(t)`` with the
   relay outputs ``r_k(t) ∈ {−1, +1}`` computed from the input record and ``m_k >= 0``.
-* :func:`fit_prandtl_ishlinskii` — a Prandtl–Ishlinskii operator, ``y_t ≈ c + Σ_i a_i F_{p_i}[u]_t``
-  with plays of given widths (width 0 = the linear term), ``a_0 >= a_min > 0`` and
-  ``a_i >= 0``, which makes every partial sum positive: the fitted operator always has the
-  exact inverse :meth:`hysteresis.PrandtlIshlinskii.inverse` (compensation, see
-  ``examples/compensate_actuator.py``).
+* :func:`fit_prandtl_ishlinskii` — a Prandtl–Ishlinskii operator,
+  ``y_t ≈ c + Σ_i a_i F_{p_i}[u]_t`` with plays of given widths (width 0 = the linear term).
+  The weights may be negative (a saturating actuator needs them: its loading curve is
+  concave) but every partial sum ``A_i = a_0 + … + a_i`` is kept ``>= a_min > 0``, the exact
+  condition for the inverse :meth:`hysteresis.PrandtlIshlinskii.inverse` to exist: the fit is
+  a bound-constrained least-squares problem in the partial sums,
+  ``y ≈ c + Σ_i A_i (F_{p_i} − F_{p_{i+1}})`` (``F_{p_{n+1}} = 0``). See
+  ``examples/compensate_actuator.py``.
 
 Train/validation split: the record is split in time; the operators are driven through the
 whole record (their memory at the start of the validation part is the one the training inputs
@@ -161,9 +164,9 @@ def fit_prandtl_ishlinskii(
     widths: Any,
     *,
     train_fraction: float = 0.7,
-    min_linear_weight: float | None = None,
+    min_partial_sum: float | None = None,
 ) -> RecordFit:
-    """Fit Prandtl–Ishlinskii weights to a record ``(u, y)`` by bounded least squares.
+    """Fit Prandtl–Ishlinskii weights to a record ``(u, y)`` by constrained least squares.
 
     Parameters
     ----------
@@ -173,10 +176,10 @@ def fit_prandtl_ishlinskii(
         Distinct play widths ``p_i >= 0``; a width 0 (the linear term) is added if missing.
     train_fraction:
         Fraction (0, 1] of the record, from its start, used for the fit.
-    min_linear_weight:
-        Lower bound ``a_min > 0`` of the linear weight (default ``10⁻³ · ptp(y)/ptp(u)``):
-        with ``a_i >= 0`` for the plays it keeps every partial sum positive, so the fitted
-        operator is invertible.
+    min_partial_sum:
+        Lower bound ``a_min > 0`` of every partial sum ``a_0 + … + a_i`` (default
+        ``10⁻³ · ptp(y)/ptp(u)``): the fitted operator is invertible, with the slope of its
+        inverse bounded by ``1/a_min``.
 
     Returns
     -------
@@ -193,19 +196,21 @@ def fit_prandtl_ishlinskii(
     span_u = float(np.ptp(u))
     if span_u == 0.0:
         raise ValueError("u must vary (a constant input identifies nothing)")
-    if min_linear_weight is None:
-        min_linear_weight = 1e-3 * max(float(np.ptp(y)), 1e-300) / span_u
-    if not (math.isfinite(min_linear_weight) and min_linear_weight > 0):
-        raise ValueError(f"min_linear_weight must be > 0, got {min_linear_weight!r}")
+    if min_partial_sum is None:
+        min_partial_sum = 1e-3 * max(float(np.ptp(y)), 1e-300) / span_u
+    if not (math.isfinite(min_partial_sum) and min_partial_sum > 0):
+        raise ValueError(f"min_partial_sum must be > 0, got {min_partial_sum!r}")
     plays = np.column_stack(
         [PrandtlIshlinskii([w], [1.0]).apply(u)[0] for w in p]  # F_p[u] from initial_state(u0)
     )
-    design = np.column_stack([np.ones(u.size), plays])
-    lower = np.concatenate([[-np.inf, min_linear_weight], np.zeros(p.size - 1)])
-    coef = _bounded_lstsq(design[:n_train], y[:n_train], lower[1:])
-    weights = np.maximum(coef[1:], lower[1:])
+    # y = c + Σ a_i F_i = c + Σ A_i (F_i − F_{i+1}) with A_i the partial sums
+    diffs = plays - np.column_stack([plays[:, 1:], np.zeros(u.size)])
+    design = np.column_stack([np.ones(u.size), diffs])
+    coef = _bounded_lstsq(design[:n_train], y[:n_train], np.full(p.size, min_partial_sum))
+    partial = np.maximum(coef[1:], min_partial_sum)
+    weights = np.diff(np.concatenate([[0.0], partial]))
     model = PrandtlIshlinskii(p, weights)
-    pred = design @ np.concatenate([[coef[0]], weights])
+    pred = design @ np.concatenate([[coef[0]], partial])
     return _fit_result(model, float(coef[0]), 1.0, pred, y, n_train)
 
 
