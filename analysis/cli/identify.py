@@ -69,6 +69,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="--input: linear drift correction from the calibration points (default none)",
     )
     p.add_argument(
+        "--window",
+        choices=("rs", "pike"),
+        default="rs",
+        help="--input: smoothing window, |dr|,|ds| <= SF steps (rs, default) or Pike et al. "
+        "(1999)'s square |dB|,|dB_r| <= SF steps (pike)",
+    )
+    p.add_argument(
         "--grid-step",
         type=float,
         default=None,
@@ -234,6 +241,7 @@ def _run_measured(args: argparse.Namespace, out: Path, t0: float) -> int:
         output_range=(-math.inf, math.inf),
         extend=args.reversible_ridge,
         step=args.grid_step,
+        window=args.window,
     )
     bc, bu, rho = ident.density_peak()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
@@ -251,6 +259,7 @@ def _run_measured(args: argparse.Namespace, out: Path, t0: float) -> int:
         "grid_step_mT": step,
         "grid_regular": ident.is_regular,
         "smoothing_factor": list(smoothing),
+        "window": args.window,
         "reversible_ridge": args.reversible_ridge,
         "peak_bc_mT": bc,
         "peak_bu_mT": bu,
