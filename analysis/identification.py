@@ -547,7 +547,7 @@ def identify_from_curves(
     *,
     smoothing: float | tuple[float, float] | None = None,
     output_range: tuple[float, float] = (-1.0, 1.0),
-    extend: bool = True,
+    extend: bool | None = None,
     grid: str = "auto",
     step: float | None = None,
     window: str = "rs",
@@ -567,10 +567,12 @@ def identify_from_curves(
         Saturation outputs (for :attr:`PreisachIdentification.mass_outside_grid`); pass
         ``(-inf, inf)`` for measured data of unknown saturation.
     extend:
-        Use the exact extension ``E = 0`` for ``β >= α`` in the regression. This is exact for
-        relay (Preisach) systems and puts the reversible part of a measured sample into a ridge
-        at ``r = 0``; ``False`` regresses measured points only (the usual irreversible FORC
-        density, NaN where a window has no data on one side of a node).
+        Use the extension ``E = 0`` for ``β >= α`` in the regression. This is exact for relay
+        (Preisach) systems and puts the reversible part of a measured sample into a ridge at
+        ``r = 0``; ``False`` regresses measured points only (the usual irreversible FORC
+        density, NaN where a window has no data on one side of a node). Default (``None``):
+        ``True`` on the native grid (simulated data), ``False`` on the protocol grid
+        (measured data: the reversible ridge is excluded unless asked for).
     grid:
         ``"native"``: nodes are the reversal fields along one axis and the union of all field
         values along the other (exact cell masses of simulated or shared-lattice data; no
@@ -607,7 +609,9 @@ def identify_from_curves(
     if window not in WINDOWS:
         raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
     if grid == "protocol":
-        return _identify_protocol(curves, smoothing, output_range, extend, step, window)
+        ext = False if extend is None else bool(extend)
+        return _identify_protocol(curves, smoothing, output_range, ext, step, window)
+    extend = True if extend is None else bool(extend)
     alpha, beta, E = _everett_table(curves)
     if alpha.size < 2 or beta.size < 2:
         raise ValueError("need at least two reversal curves and two distinct fields")

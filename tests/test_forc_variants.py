@@ -180,7 +180,8 @@ def test_forc_density_agrees_with_pike_1999_and_the_known_peak(sf):
 
 def test_density_is_nan_outside_the_measured_region_and_ridge_switch():
     data = read_micromag(MK.SAMPLE_FILES["0016"])
-    irr = identify_from_curves(data.curves, smoothing=3, extend=False)
+    irr = identify_from_curves(data.curves, smoothing=3)  # measured data: no ridge by default
+    assert irr.reversible_ridge is False
     rev = identify_from_curves(data.curves, smoothing=3, extend=True)
     aa, bb = np.meshgrid(irr.alpha, irr.beta, indexing="ij")
     beyond = (aa > MK.H_MAX + MK.STEP) | (bb > MK.HR_MAX + MK.STEP) | (bb > aa)
@@ -224,5 +225,39 @@ def test_cli_measured_json_and_figures(tmp_path, capsys):
         assert Path(p).stat().st_size > 0
     assert main(args + ["--json", "--reversible-ridge"]) == 0
     assert json.loads(capsys.readouterr().out)["reversible_ridge"] is True
+    # an aborted run and the Lake Shore export go through the same path
+    assert (
+        main(
+            [
+                "identify",
+                "--input",
+                str(MK.SAMPLE_FILES["aborted"]),
+                "--out",
+                str(tmp_path),
+                "--json",
+            ]
+        )
+        == 0
+    )
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["complete"] is False and rep["n_curves"] == 30 and rep["units_of_measure"] == "SI"
+    assert (
+        main(
+            [
+                "identify",
+                "--input",
+                str(MK.SAMPLE_FILES["lakeshore"]),
+                "--out",
+                str(tmp_path),
+                "--json",
+                "--window",
+                "pike",
+            ]
+        )
+        == 0
+    )
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["format"] == "lakeshore" and rep["n_curves"] == 46 and rep["window"] == "pike"
+    assert abs(rep["peak_bc_mT"] - 30.0) <= 2.0 and abs(rep["peak_bu_mT"]) <= 2.0
     with pytest.raises(ValueError, match="Multiple segments"):
         main(["identify", "--input", str(MK.SAMPLE_FILES["irregular"]), "--out", str(tmp_path)])
