@@ -1,10 +1,15 @@
-"""Read and write first-order reversal curve (FORC) data: plain CSV and MicroMag text.
+"""Read and write first-order reversal curve (FORC) data: CSV, MicroMag and Lake Shore exports.
 
-Both readers return :class:`analysis.identification.ReversalCurves`; identify with
-:func:`analysis.identification.identify_from_curves`. Every reader either returns the complete
-data set or raises :class:`ValueError` naming the (1-based) line that is wrong: missing or
-inconsistent header fields, ragged rows, non-numeric values, NaN/inf, curves that do not start
-at their reversal field or whose fields are not monotone.
+The readers return :class:`analysis.identification.ReversalCurves` (:func:`read_csv`,
+:func:`read_forc`) or :class:`MicroMagData` (curves plus calibration points, header, units;
+:func:`read_micromag`, :func:`read_lakeshore_csv`, :func:`read_forc_file` with format detection);
+identify with :func:`analysis.identification.identify_from_curves`. Every reader either returns
+the data set (an aborted instrument run is returned as far as it was measured, flagged
+``complete=False``) or raises a one-line :class:`ValueError` naming the (1-based) line that is
+wrong and what was expected: missing or inconsistent header fields, ragged rows, non-numeric
+values, NaN/inf, curves that do not start at their reversal field or whose fields are not
+monotone, unknown units, or an export variant that is not supported. Text is decoded as UTF-8
+or else cp1252/Latin-1, never with a ``UnicodeDecodeError``.
 
 CSV format (:func:`read_csv`, :func:`write_csv`)
 -----------------------------------------------
@@ -569,7 +574,6 @@ def _column_unit(title: str, table: dict[str, float], lineno: int, what: str) ->
     units = re.findall(r"[\[(]([^\])]*)[\])]", title)
     for u in reversed(units):
         key = u.strip().lower().replace("^2", "²").replace(" ", "")
-        key = key.replace("a·m²", "a·m²")
         for name, fac in table.items():
             if key == name.replace(" ", ""):
                 return fac
@@ -588,6 +592,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     drift = _drift_mode(drift_correction)
     lines = _decode(path).splitlines()
     header: dict[str, str] = {}
+    header_line: dict[str, int] = {}
     title_line = None
     for idx, raw in enumerate(lines):
         cells = [c.strip().strip('"') for c in raw.split(",")]
@@ -597,6 +602,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
             break
         if len(cells) >= 2 and cells[0]:
             header[cells[0].rstrip(":")] = cells[1]
+            header_line[cells[0].rstrip(":")] = idx + 1
     if title_line is None:
         raise ValueError(
             f"{path}: no column-title row naming a field and a moment column "
@@ -631,10 +637,10 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     h_cal: float | None = None
     for k, v in header.items():
         if k.lower().startswith("calibration field"):
-            num = _header_number(v, 0, k, False)
+            num = _header_number(v, header_line[k], k, False)
             if num is not None:
                 unit = (
-                    _column_unit(k + " " + v, _FIELD_UNITS, 0, "calibration")
+                    _column_unit(k + " " + v, _FIELD_UNITS, header_line[k], "calibration")
                     if ("[" in k or "(" in k)
                     else f_fac
                 )
