@@ -48,9 +48,11 @@ reads (FORCinel, VARIFORC, FORCsensei):
 * **Data.** ``field,moment`` lines (a third column, e.g. temperature or time, is ignored), in
   blocks separated by blank lines; column-title lines (``Field, Moment``, ``(Oe)  (emu)``)
   before the first block are skipped. A one-point block whose field lies within 5 % of
-  ``HCal`` (the measured calibration field drifts by a few mT) is a calibration (drift)
-  point; every other block is a curve, a Pike FORC starting at its reversal field with
-  rising fields. Reading stops at the end marker ``MicroMag 2900/3900 Data File ends``.
+  ``HCal`` or, when the units are known, within 5 mT (the measured calibration field drifts
+  by a few mT) is a calibration (drift) point, unless the block before it was one too (then it
+  is the one-point curve reversing at HCal); every other block is a curve, a Pike FORC
+  starting at its reversal field with rising fields. Reading stops at the end marker
+  ``MicroMag 2900/3900 Data File ends``.
 * **Aborted measurements.** Fewer curves or points than the header announces (a last curve
   cut short, no end marker) are read; :attr:`MicroMagData.complete` is then ``False`` and
   :attr:`MicroMagData.notes` says what is missing. More curves than announced is an error.
@@ -288,6 +290,7 @@ _REFUSED = (
     ("hysteresis loop", "MicroMag hysteresis-loop export"),
 )
 _CAL_REL_TOL = 0.05
+_CAL_ABS_TOL_MT = 5.0  # the measured calibration field drifts by a few mT
 DriftMode = str | bool | None
 
 
@@ -366,11 +369,12 @@ def _build_curves(
     h_cal: float | None,
     drift: str | None,
     max_curves: int | None,
+    abs_tol: float = 0.0,
 ) -> tuple[ReversalCurves, np.ndarray | None, np.ndarray | None]:
     """Split blocks into calibration points and Pike curves; validate; correct drift."""
     cal_m, cal_h, cal_t, cal_lines = [], [], [], []
     curves: list[list[tuple[float, float, int]]] = []
-    tol = _CAL_REL_TOL * abs(h_cal) if h_cal is not None else 0.0
+    tol = max(_CAL_REL_TOL * abs(h_cal), abs_tol) if h_cal is not None else 0.0
     previous_cal = False
     for block in blocks:
         # calibration points never come in pairs: a second one-point block at HCal is the
@@ -527,7 +531,10 @@ def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> Micr
     if current:
         blocks.append(current)
     cal = h_cal * f_fac if h_cal is not None else None
-    curves, cal_m, cal_h = _build_curves(blocks, cal, drift, n_curves)
+    # with known units a calibration field drifting by a few mT is recognised at any HCal
+    curves, cal_m, cal_h = _build_curves(
+        blocks, cal, drift, n_curves, _CAL_ABS_TOL_MT if units else 0.0
+    )
     notes = []
     complete = True
     n_cal = 0 if cal_m is None else cal_m.size
@@ -656,7 +663,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     for i, p in enumerate(pts):
         is_cal = (
             h_cal is not None
-            and abs(p[0] - h_cal) <= _CAL_REL_TOL * abs(h_cal)
+            and abs(p[0] - h_cal) <= max(_CAL_REL_TOL * abs(h_cal), _CAL_ABS_TOL_MT)
             and (i == 0 or p[0] - h[i - 1] > 2 * step)
             and (i == h.size - 1 or h[i + 1] < p[0])
         )
@@ -664,7 +671,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
             blocks.append([])
         blocks[-1].append((*p, is_cal))
     blocks = [[q[:3] for q in b] for b in blocks]
-    curves, cal_m, cal_h = _build_curves(blocks, h_cal, drift, None)
+    curves, cal_m, cal_h = _build_curves(blocks, h_cal, drift, None, _CAL_ABS_TOL_MT)
     notes = []
     if drift is not None and cal_m is not None:
         notes.append(f"{drift} drift correction from {cal_m.size} calibration points")
