@@ -259,5 +259,8 @@ def test_cli_measured_json_and_figures(tmp_path, capsys):
     rep = json.loads(capsys.readouterr().out)
     assert rep["format"] == "lakeshore" and rep["n_curves"] == 46 and rep["window"] == "pike"
     assert abs(rep["peak_bc_mT"] - 30.0) <= 2.0 and abs(rep["peak_bu_mT"]) <= 2.0
-    with pytest.raises(ValueError, match="Multiple segments"):
-        main(["identify", "--input", str(MK.SAMPLE_FILES["irregular"]), "--out", str(tmp_path)])
+    # refused or malformed files: exit code 2 and one line on stderr, no traceback
+    code = main(["identify", "--input", str(MK.SAMPLE_FILES["irregular"]), "--out", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and "line 2:" in err and "Multiple segments" in err
+    assert err.count("\n") == 1 and "Traceback" not in err

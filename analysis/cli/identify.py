@@ -136,7 +136,12 @@ def run(args: argparse.Namespace) -> int:
     if args.smoothing is not None and len(args.smoothing) not in (1, 2):
         raise ValueError("--smoothing takes one factor SF or two, SF_R SF_S")
     if args.input:
-        return _run_measured(args, out, t0)
+        try:
+            return _run_measured(args, out, t0)
+        except (ValueError, OSError) as exc:
+            # a user's file: one line naming the problem (and its line), not a traceback
+            print(f"hyst identify: error: {args.input}: {exc}", file=sys.stderr)
+            return 2
     smoothing = tuple(args.smoothing) if args.smoothing else None
     if smoothing is not None and len(smoothing) == 1:
         smoothing = (smoothing[0], smoothing[0])
