@@ -270,3 +270,12 @@ def test_micromag_optional_ndata_and_aborted_measurement(tmp_path):
 def test_micromag_without_data(tmp_path):
     with pytest.raises(ValueError, match="no data lines"):
         read_micromag(_mm(tmp_path, "MicroMag\nNCrv = 1\nNData = 1\n"))
+
+
+def test_csv_with_crlf_and_cp1252_comment(tmp_path):
+    text = "# sample: Fe3O4, 20 °C, moments in µAm²\r\n" + GOOD_CSV.replace("\n", "\r\n")
+    p = tmp_path / "w.csv"
+    p.write_bytes(text.encode("cp1252"))
+    curves = read_csv(p)
+    assert curves.n_curves == 3 and curves.n_points == 6
+    np.testing.assert_array_equal(curves.moments[2], [1.0, 0.5, -1.0])
