@@ -168,9 +168,19 @@ def run(args: argparse.Namespace) -> int:
     if args.model == "dimers":
         report.update(spins=args.spins, seed=args.seed, spin_coupling=args.spin_coupling)
     label = args.model
-    # the paper's ridge metrics: only for the paper's models, never over user data
-    cmp = compare_with_ridge(ident, args.width, args.spread, centres=extra.get("centres"))
-    report.update(cmp.as_dict())
+    # the paper's ridge metrics: only for the paper's models (dimers, erf play), never over
+    # user data or other operators
+    cmp = None
+    if args.model in ("dimers", "erf-play"):
+        cmp = compare_with_ridge(ident, args.width, args.spread, centres=extra.get("centres"))
+        report.update(cmp.as_dict())
+    else:
+        report.pop("spread")
+        report.update(
+            total_mass=ident.total_mass,
+            irreversible_mass=ident.irreversible_mass,
+            reversible_mass=ident.reversible_mass,
+        )
     report["mass_outside_grid"] = ident.mass_outside_grid
     report["smoothing"] = list(smoothing) if smoothing else None
     if args.model == "dimers":
@@ -205,6 +215,12 @@ def run(args: argparse.Namespace) -> int:
     (out / "identify.json").write_text(text + "\n")
     if args.json:
         sys.stdout.write(text + "\n")
+    elif cmp is None:
+        print(
+            f"total mass {ident.total_mass:.12g} (irreversible {ident.irreversible_mass:.6g}, "
+            f"on the diagonal {ident.reversible_mass:.6g})"
+        )
+        print(f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}")
     else:
         print(
             f"total mass {cmp.total_mass:.12g}, r centre {cmp.r_centre:.12g}, "
