@@ -539,6 +539,7 @@ def _is_regular(alpha: np.ndarray, beta: np.ndarray) -> float | None:
 
 
 GRIDS = ("auto", "native", "protocol")
+MAX_PROTOCOL_NODES = 3000
 WINDOWS = ("rs", "pike")
 
 
@@ -689,9 +690,11 @@ def protocol_lattice(curves: ReversalCurves, step: float | None = None) -> np.nd
     k_hi = int(np.floor((hi - offset) / step + 0.5))
     if k_hi - k_lo < 1:
         raise ValueError(f"step {step} is larger than the field range of the data")
-    if k_hi - k_lo > 20000:
+    if k_hi - k_lo >= MAX_PROTOCOL_NODES:
+        # the lattice is square: memory and time grow with the square of the node count
         raise ValueError(
-            f"step {step} gives {k_hi - k_lo + 1} nodes (> 20001); choose a larger step"
+            f"step {step} gives {k_hi - k_lo + 1} nodes (> {MAX_PROTOCOL_NODES}); choose a "
+            "larger step"
         )
     return offset + step * np.arange(k_lo, k_hi + 1, dtype=float)
 
