@@ -184,6 +184,23 @@ class PreisachModel(Hysteron):
         """
         return ContinuousPreisachModel._from_everett(everett, lower, upper, everett_gradient)
 
+    @classmethod
+    def from_identification(
+        cls, result: Any, *, use_measured_only: bool = True
+    ) -> DiscretePreisachModel:
+        """Valid discrete model from an identified (noisy, partly negative) density.
+
+        Non-negative least squares on the cell masses so that the model's Everett function —
+        hence its reversal curves — fits the identified one on the measured nodes; one relay
+        per cell at its upper corner; weights normalised to sum 1 (the measured output is
+        ``offset + K · M[u]`` with ``K`` the fitted total mass). See
+        :func:`hysteresis.fitting.project_identification`, which also returns ``K`` and the
+        residual.
+        """
+        from hysteresis.fitting import project_identification
+
+        return project_identification(result, use_measured_only=use_measured_only).model()
+
     # -- shared -----------------------------------------------------------------------------
     def output(self, state: PreisachState) -> float:
         self._check_state(state)
