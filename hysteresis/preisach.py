@@ -12,8 +12,8 @@ extrema after it. :class:`PreisachState` holds this staircase and the output.
 
 Everett function (docs/architecture.md): ``E(α, β) = (f_α − f_αβ)/2`` — half the output drop
 when the input rises from negative saturation to ``α`` and then falls to ``β``; equivalently the
-mass of the triangle ``{β < β' <= α' <= α}`` of the Preisach plane, and ``μ = −∂²E/∂α∂β``. With the
-staircase ``M_1, m_1, ..., `` (``m_0 = −∞``)::
+mass of the triangle ``{β < β' <= α' <= α}`` of the Preisach plane, and ``μ = −∂²E/∂α∂β``.
+With the staircase ``M_1, m_1, ..., `` (``m_0 = −∞``)::
 
     M = −1 + 2 Σ_k [E(M_k, m_{k−1}) − E(M_k, m_k)]
 
