@@ -45,13 +45,17 @@ from oscillators.linear import exact_step, hom_matrix, phase_column
 ORDER = 8
 _IFAC = np.array([1.0 / math.factorial(n) for n in range(ORDER + 2)])
 
-# parameter vector layout
-P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE = range(10)
-N_PAR = 10
-# float state layout: q, v, tau, cos(phi), sin(phi)
-S_Q, S_V, S_TAU, S_COS, S_SIN = range(5)
-# int state layout: k (index), n (period), number of switches so far
-I_K, I_N, I_NSW = range(3)
+# parameter vector layout (P_UNIT: weight unit of the heap table's integer output, 0 = float)
+P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE, P_UNIT = range(11)
+N_PAR = 11
+# float state layout: q, v, tau, cos(phi), sin(phi), next up / down threshold, output M now,
+# compensated output (heap table, float weights: value and Neumaier compensation)
+S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC = range(10)
+N_ST = 10
+# int state layout: k (nested index), n (period), number of switches so far, weight units up and
+# in total (heap table, integer output)
+I_K, I_N, I_NSW, I_UP, I_TOT = range(5)
+N_IST = 5
 
 
 def make_params(
@@ -277,15 +281,155 @@ def _tangent_update(y, ntan, m00, m01, m10, m11, pq, pv):
         y[1, j] = m10 * dq + m11 * dv + pv * dphi
 
 
-@njit(cache=True)
-def advance(
-    par, up_thr, down_thr, mval, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
-):
-    """Advance the equal-width kernel state (st, ist) to period time ``tau_stop``.
+# -- relay tables -------------------------------------------------------------------------------
+# kind 0, nested plan (O(1)): tf = (up, down, mval, -), state k = ist[I_K] groups up.
+# kind 1, bitset heaps (O(log_64 N)): tf = (alpha ascending, beta descending, weight by alpha
+#   rank, weight by beta rank), ti = (beta rank of each alpha rank, alpha rank of each beta rank,
+#   integer units by alpha rank, by beta rank); bits = two hierarchical bitsets, D over the alpha
+#   ranks (bit set = relay down) and U over the beta ranks (bit set = relay up), layout in lay.
+KIND_NESTED = 0
+KIND_HEAP = 1
 
-    Switch records go to ``sw`` (rows: time, q, v, ΔM) while ``rec_on``; returns 1 if that buffer
-    filled up (state left right after the last recorded switch, call again to continue), else 0.
-    Tangent vectors (columns of ``y``, rows δq, δv, δφ) are propagated while ``tan_on``.
+_DEBRUIJN = np.uint64(0x03F79D71B4CB0A89)
+_CTZ_TABLE = np.zeros(64, dtype=np.int64)
+for _i in range(64):
+    _CTZ_TABLE[int(((1 << _i) * 0x03F79D71B4CB0A89 % (1 << 64)) >> 58)] = _i
+_U0 = np.uint64(0)
+_U1 = np.uint64(1)
+_U6 = np.uint64(6)
+_U58 = np.uint64(58)
+_U63 = np.uint64(63)
+
+
+@njit(cache=True)
+def _ctz(x):
+    """Index of the lowest set bit of a non-zero uint64 (de Bruijn multiplication)."""
+    low = x & (_U0 - x)
+    return _CTZ_TABLE[(low * _DEBRUIJN) >> _U58]
+
+
+@njit(cache=True)
+def _bs_first(bits, lay, base, levels):
+    """Smallest set index of the bitset whose level offsets are lay[base:base+levels], or -1."""
+    idx = 0
+    for lv in range(levels - 1, -1, -1):
+        w = bits[lay[base + lv] + idx]
+        if w == _U0:
+            return -1
+        idx = idx * 64 + _ctz(w)
+    return idx
+
+
+@njit(cache=True)
+def _bs_set(bits, lay, base, levels, idx):
+    for lv in range(levels):
+        pos = lay[base + lv] + (idx >> 6)
+        w = bits[pos]
+        bits[pos] = w | (_U1 << np.uint64(idx & 63))
+        if w != _U0:
+            return  # the summary bits above are set already
+        idx >>= 6
+
+
+@njit(cache=True)
+def _bs_clear(bits, lay, base, levels, idx):
+    for lv in range(levels):
+        pos = lay[base + lv] + (idx >> 6)
+        w = bits[pos] & ~(_U1 << np.uint64(idx & 63))
+        bits[pos] = w
+        if w != _U0:
+            return  # the word still holds a set bit: the summary bit above stays
+        idx >>= 6
+
+
+@njit(cache=True)
+def _table_refresh(par, kind, tf, ti, bits, lay, st, ist):
+    """Next up / down thresholds and the output of the current table state into st."""
+    if kind == KIND_NESTED:
+        up_thr = tf[0]
+        k = ist[I_K]
+        st[S_UP] = up_thr[k] if k < up_thr.shape[0] else np.inf
+        st[S_DN] = tf[1][k - 1] if k > 0 else -np.inf
+        st[S_MV] = tf[2][k]
+        return
+    levels = lay[0]
+    i = _bs_first(bits, lay, 1, levels)
+    st[S_UP] = tf[0][i] if i >= 0 else np.inf
+    j = _bs_first(bits, lay, 1 + levels, levels)
+    st[S_DN] = tf[1][j] if j >= 0 else -np.inf
+    unit = par[P_UNIT]
+    if unit > 0.0:
+        st[S_MV] = unit * (2 * ist[I_UP] - ist[I_TOT])
+    else:
+        st[S_MV] = st[S_M] + st[S_MC]
+
+
+@njit(cache=True)
+def _neumaier_add(st, x):
+    """st[S_M] + st[S_MC] += x with Neumaier's compensation (no drift over many switches)."""
+    s = st[S_M]
+    t = s + x
+    if abs(s) >= abs(x):
+        st[S_MC] += (s - t) + x
+    else:
+        st[S_MC] += (x - t) + s
+    st[S_M] = t
+
+
+@njit(cache=True)
+def _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction):
+    """Switch every relay at the current threshold in ``direction``; returns the jump ΔM."""
+    if kind == KIND_NESTED:
+        mval = tf[2]
+        k_old = ist[I_K]
+        ist[I_K] = k_old + direction
+        return mval[k_old + direction] - mval[k_old]
+    levels = lay[0]
+    unit = par[P_UNIT]
+    du = 0
+    dw = 0.0
+    if direction > 0:
+        thr = st[S_UP]
+        a = tf[0]
+        while True:
+            i = _bs_first(bits, lay, 1, levels)
+            if i < 0 or a[i] != thr:
+                break
+            _bs_clear(bits, lay, 1, levels, i)
+            _bs_set(bits, lay, 1 + levels, levels, ti[0][i])
+            du += ti[2][i]
+            dw += tf[2][i]
+    else:
+        thr = st[S_DN]
+        b = tf[1]
+        while True:
+            j = _bs_first(bits, lay, 1 + levels, levels)
+            if j < 0 or b[j] != thr:
+                break
+            _bs_clear(bits, lay, 1 + levels, levels, j)
+            _bs_set(bits, lay, 1, levels, ti[1][j])
+            du -= ti[3][j]
+            dw -= tf[3][j]
+    if unit > 0.0:
+        ist[I_UP] += du
+        return 2.0 * unit * du
+    _neumaier_add(st, 2.0 * dw)
+    return 2.0 * dw
+
+
+# -- the event loop (one body for every table kind) ----------------------------------------------
+@njit(cache=True)
+def advance_table(
+    par, kind, tf, ti, bits, lay, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
+):
+    """Advance the kernel state (st, ist, table state) to period time ``tau_stop``.
+
+    Switch records go to ``sw`` (rows: time, q, v, ΔM) while ``rec_on``. Returns 0 when
+    ``tau_stop`` was reached, 1 if the record buffer filled up (state left right after the last
+    recorded switch; call again to continue), 2 at a grazing switch (v* = 0) while ``tan_on``
+    (state left right after that switch, tangent not updated by it). Tangent vectors (columns of
+    ``y``, rows δq, δv, δφ) are propagated while ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and
+    ``st[S_MV]`` must be current (:func:`_table_refresh`).
     """
     zeta = par[P_ZETA]
     omega = par[P_OMEGA]
@@ -295,23 +439,22 @@ def advance(
     amp_b = par[P_B]
     period = par[P_T]
     h_taylor = par[P_HT]
-    n_groups = up_thr.shape[0]
     cap = sw.shape[0]
     q = st[S_Q]
     v = st[S_V]
     tau = st[S_TAU]
     c = st[S_COS]
     s = st[S_SIN]
-    k = ist[I_K]
+    up = st[S_UP]
+    down = st[S_DN]
+    mv = st[S_MV]
     nsw = ist[I_NSW]
     status = 0
     while True:
         horizon = tau_stop - tau
         if horizon <= 0.0:
             break
-        force = coupling * mval[k]
-        up = up_thr[k] if k < n_groups else np.inf
-        down = down_thr[k - 1] if k > 0 else -np.inf
+        force = coupling * mv
         mode = 0  # 1 Taylor hop to a switch, 2 Taylor hop to the stop, 0 exact flight
         h = 0.0
         theta = 0.0
@@ -407,16 +550,23 @@ def advance(
                 break
             q = up if direction > 0 else down
             tau += hh
-        # the switch: every relay of the group flips at once
-        k_old = k
-        k += direction
-        jump = mval[k] - mval[k_old]
+        # the switch: every relay at this threshold flips at once
+        st[S_UP] = up
+        st[S_DN] = down
+        jump = _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction)
+        _table_refresh(par, kind, tf, ti, bits, lay, st, ist)
+        up = st[S_UP]
+        down = st[S_DN]
+        mv = st[S_MV]
+        nsw += 1
         if tan_on:
+            if v == 0.0:
+                status = 2
+                break
             # saltation X = [[1,0,0],[C ΔM / v*, 1, 0],[0,0,1]]
-            sal = coupling * jump / v if v != 0.0 else np.inf
+            sal = coupling * jump / v
             for j in range(ntan):
                 y[1, j] += sal * y[0, j]
-        nsw += 1
         if rec_on:
             i = sw_count[0]
             sw[i, 0] = par[P_TBASE] + ist[I_N] * period + tau
@@ -432,7 +582,6 @@ def advance(
     st[S_TAU] = tau
     st[S_COS] = c
     st[S_SIN] = s
-    ist[I_K] = k
     ist[I_NSW] = nsw
     return status
 
@@ -446,11 +595,13 @@ def _wrap(par, st, ist):
 
 
 @njit(cache=True)
-def run_targets(
+def run_table(
     par,
-    up_thr,
-    down_thr,
-    mval,
+    kind,
+    tf,
+    ti,
+    bits,
+    lay,
     st,
     ist,
     tgt_n,
@@ -460,60 +611,179 @@ def run_targets(
     rec_on,
     sw,
     sw_count,
+    tan_on,
+    y,
+    ntan,
+    mp,
 ):
-    """Advance through the targets (period index, period time); row i of ``out`` = (q, v, M).
+    """Advance through the targets (period index, period time) from target ``i_start``.
 
-    Returns (status, next target index); status 1 means the switch buffer is full.
+    Row i of ``out`` (if ``out`` has rows) receives (q, v, M) at target i. Returns (status,
+    next target index); status as :func:`advance_table` (0 done, 1 record buffer full, 2
+    grazing switch with the tangent flow on).
     """
     e = np.empty(ORDER + 1)
-    y = np.zeros((3, 3))
-    mp = np.zeros((ORDER + 1, 4))
     period = par[P_T]
+    sample = out.shape[0] > 0
     for i in range(i_start, tgt_n.shape[0]):
         while ist[I_N] < tgt_n[i]:
-            status = advance(
-                par,
-                up_thr,
-                down_thr,
-                mval,
-                st,
-                ist,
-                period,
-                False,
-                y,
-                0,
-                e,
-                mp,
-                rec_on,
-                sw,
-                sw_count,
-            )
+            status = advance_table(
+                par, kind, tf, ti, bits, lay, st, ist, period, tan_on, y, ntan, e, mp, rec_on,
+                sw, sw_count,
+            )  # fmt: skip
             if status != 0:
                 return status, i
             _wrap(par, st, ist)
-        status = advance(
-            par,
-            up_thr,
-            down_thr,
-            mval,
-            st,
-            ist,
-            tgt_tau[i],
-            False,
-            y,
-            0,
-            e,
-            mp,
-            rec_on,
-            sw,
-            sw_count,
-        )
+        status = advance_table(
+            par, kind, tf, ti, bits, lay, st, ist, tgt_tau[i], tan_on, y, ntan, e, mp, rec_on,
+            sw, sw_count,
+        )  # fmt: skip
         if status != 0:
             return status, i
-        out[i, 0] = st[S_Q]
-        out[i, 1] = st[S_V]
-        out[i, 2] = mval[ist[I_K]]
+        if sample:
+            out[i, 0] = st[S_Q]
+            out[i, 1] = st[S_V]
+            out[i, 2] = st[S_MV]
     return 0, tgt_n.shape[0]
+
+
+# -- building the kernel tables (Python) ----------------------------------------------------------
+_EMPTY_F = np.zeros(1)
+_EMPTY_I = np.zeros(1, dtype=np.int64)
+
+
+def _bitset_layout(n: int) -> list[int]:
+    """Word counts per level of a 64-ary hierarchical bitset over n >= 1 items (top: 1 word)."""
+    sizes = [max(1, -(-n // 64))]
+    while sizes[-1] > 1:
+        sizes.append(-(-sizes[-1] // 64))
+    return sizes
+
+
+def nested_kernel_table(plan) -> tuple:
+    """(tf, ti, bits, lay) for a :class:`~hysteresis.relay_table.NestedPlan` (kind 0)."""
+    tf = (
+        np.array(plan.up, dtype=np.float64),
+        np.array(plan.down, dtype=np.float64),
+        np.array(plan.mval, dtype=np.float64),
+        _EMPTY_F,
+    )
+    ti = (_EMPTY_I, _EMPTY_I, _EMPTY_I, _EMPTY_I)
+    return tf, ti, np.zeros(1, dtype=np.uint64), np.zeros(1, dtype=np.int64)
+
+
+class HeapTable:
+    """The bitset-heap form (kind 1) of the relays of positive weight of a relay table.
+
+    ``active`` are the table indices of those relays; ``rank_a`` / ``rank_b`` map the alpha
+    ranks (ascending) and beta ranks (descending) to table indices. ``unit > 0`` when every
+    active weight is an integer multiple of ``unit`` (then ``M`` is kept as integer units).
+    """
+
+    def __init__(self, alpha: np.ndarray, beta: np.ndarray, weights: np.ndarray) -> None:
+        active = np.flatnonzero(weights > 0.0)
+        if active.size == 0:
+            raise ValueError("the relay table has no relay of positive weight")
+        a = alpha[active]
+        b = beta[active]
+        w = weights[active]
+        order_a = np.lexsort((-b, a))  # ties in alpha: any order, kept deterministic
+        order_b = np.lexsort((a, -b))
+        inv_b = np.empty(active.size, dtype=np.int64)
+        inv_b[order_b] = np.arange(active.size)
+        inv_a = np.empty(active.size, dtype=np.int64)
+        inv_a[order_a] = np.arange(active.size)
+        unit = float(w.min())
+        units = np.rint(w / unit)
+        if not (np.all(units * unit == w) and units.max() * active.size < 2**52):
+            unit = 0.0
+            units = np.zeros(active.size)
+        units = units.astype(np.int64)
+        self.n = int(active.size)
+        self.active = active
+        self.rank_a = active[order_a]
+        self.rank_b = active[order_b]
+        self.unit = unit
+        self.total_units = int(units.sum())
+        self.total_weight = math.fsum(w)
+        self.tf = (
+            np.ascontiguousarray(a[order_a]),
+            np.ascontiguousarray(b[order_b]),
+            np.ascontiguousarray(w[order_a]),
+            np.ascontiguousarray(w[order_b]),
+        )
+        self.ti = (
+            np.ascontiguousarray(inv_b[order_a]),
+            np.ascontiguousarray(inv_a[order_b]),
+            np.ascontiguousarray(units[order_a]),
+            np.ascontiguousarray(units[order_b]),
+        )
+        sizes = _bitset_layout(self.n)
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self.n_words = int(offsets[-1])
+        levels = len(sizes)
+        self.lay = np.concatenate([[levels], offsets[:-1], offsets[:-1] + self.n_words]).astype(
+            np.int64
+        )
+
+    def bits_from_outputs(self, outputs: np.ndarray) -> np.ndarray:
+        """The two bitsets for relay outputs ``outputs`` (table order, ±1)."""
+        down = np.asarray(outputs)[self.rank_a] < 0
+        up = np.asarray(outputs)[self.rank_b] > 0
+        bits = np.zeros(2 * self.n_words, dtype=np.uint64)
+        levels = int(self.lay[0])
+        for flags, base in ((down, 1), (up, 1 + levels)):
+            for idx in np.flatnonzero(flags):
+                _bs_set(bits, self.lay, base, levels, int(idx))
+        return bits
+
+    def outputs_from_bits(self, bits: np.ndarray, n_relays: int) -> np.ndarray:
+        """Relay outputs (table order, ±1; relays of zero weight: 0) from the bitsets."""
+        leaf = bits[: -(-self.n // 64)]
+        flags = np.unpackbits(leaf.view(np.uint8), bitorder="little")[: self.n].astype(bool)
+        y = np.zeros(n_relays)
+        y[self.rank_a] = np.where(flags, -1.0, 1.0)
+        return y
+
+    def state_arrays(self, outputs: np.ndarray) -> tuple[np.ndarray, int, float, float]:
+        """(bits, units up, M, compensation) for relay outputs ``outputs``."""
+        bits = self.bits_from_outputs(outputs)
+        y = np.asarray(outputs)[self.rank_a]
+        units_up = int(self.ti[2][y > 0].sum())
+        m = math.fsum(self.tf[2] * y)
+        return bits, units_up, m, 0.0
+
+
+# -- pre-seam entry points of the equal-width kernel (thin wrappers, removed with the old API) ----
+@njit(cache=True)
+def _expand(par, tf, ti, bits, lay, st, ist):
+    st2 = np.zeros(N_ST)
+    st2[:5] = st[:5]
+    ist2 = np.zeros(N_IST, dtype=np.int64)
+    ist2[:3] = ist[:3]
+    _table_refresh(par, KIND_NESTED, tf, ti, bits, lay, st2, ist2)
+    return st2, ist2
+
+
+@njit(cache=True)
+def run_targets(
+    par, up_thr, down_thr, mval, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw, sw_count
+):
+    """Equal-width kernel through the targets (old API): (status, next target index)."""
+    tf = (up_thr, down_thr, mval, mval)
+    ti = (ist, ist, ist, ist)
+    bits = np.zeros(1, dtype=np.uint64)
+    lay = np.zeros(1, dtype=np.int64)
+    st2, ist2 = _expand(par, tf, ti, bits, lay, st, ist)
+    y = np.zeros((3, 3))
+    mp = np.zeros((ORDER + 1, 4))
+    status, i = run_table(
+        par, KIND_NESTED, tf, ti, bits, lay, st2, ist2, tgt_n, tgt_tau, i_start, out, rec_on,
+        sw, sw_count, False, y, 0, mp,
+    )  # fmt: skip
+    st[:5] = st2[:5]
+    ist[:3] = ist2[:3]
+    return status, i
 
 
 @njit(cache=True)
@@ -554,23 +824,26 @@ def run_tangent(
     hist_count,
     do_qr,
 ):
-    """Tangent flow through the targets; at each target QR (if do_qr) and optional history row.
+    """Equal-width tangent flow with QR at each target (old API); returns next target index.
 
-    ``hist`` rows receive lsum/elapsed at targets with ``hist_flag``. Returns next target index.
+    A grazing switch leaves non-finite deviations (the caller reports it).
     """
-    e = np.empty(ORDER + 1)
+    tf = (up_thr, down_thr, mval, mval)
+    ti = (ist, ist, ist, ist)
+    bits = np.zeros(1, dtype=np.uint64)
+    lay = np.zeros(1, dtype=np.int64)
+    st2, ist2 = _expand(par, tf, ti, bits, lay, st, ist)
     sw = np.zeros((1, 4))
     swc = np.zeros(1, dtype=np.int64)
-    period = par[P_T]
+    out = np.zeros((0, 3))
     for i in range(i_start, tgt_n.shape[0]):
-        while ist[I_N] < tgt_n[i]:
-            advance(
-                par, up_thr, down_thr, mval, st, ist, period, True, y, ntan, e, mp, False, sw, swc
-            )
-            _wrap(par, st, ist)
-        advance(
-            par, up_thr, down_thr, mval, st, ist, tgt_tau[i], True, y, ntan, e, mp, False, sw, swc
-        )
+        status, _ = run_table(
+            par, KIND_NESTED, tf, ti, bits, lay, st2, ist2, tgt_n[i : i + 1],
+            tgt_tau[i : i + 1], 0, out, False, sw, swc, True, y, ntan, mp,
+        )  # fmt: skip
+        if status == 2:
+            y[:, :] = np.inf
+            break
         if do_qr:
             _gram_schmidt(y, ntan, lsum)
         if hist_flag[i]:
@@ -578,4 +851,6 @@ def run_tangent(
             for j in range(ntan):
                 hist[r, j] = lsum[j] / tgt_elapsed[i]
             hist_count[0] = r + 1
+    st[:5] = st2[:5]
+    ist[:3] = ist2[:3]
     return tgt_n.shape[0]
