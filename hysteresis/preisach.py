@@ -544,12 +544,14 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
         a = self._alpha[up][order]
         if c.size:
             smax = np.maximum.accumulate(a[::-1])[::-1]
-            # g on (c[i-1], c[i]] is smax[i]; it drops after the last entry of a tie group
-            # when the next suffix maximum is smaller (and to -inf after the last one)
-            nxt = np.append(smax[1:], -np.inf)
-            ends = np.flatnonzero((np.append(c[1:], np.inf) > c) & (nxt < smax))
-            minima = c[ends]
-            maxima = np.concatenate([[smax[0]], smax[ends[:-1] + 1]])
+            # g on (c_{l-1}, c_l] is the suffix maximum at the first relay with β = c_l (tie
+            # groups of equal β); it drops after group l when the next group's value is
+            # smaller (and to -inf after the last group)
+            first = np.flatnonzero(np.concatenate([[True], c[1:] > c[:-1]]))
+            gval = smax[first]
+            ends = np.flatnonzero(np.append(gval[1:], -np.inf) < gval)
+            minima = c[first[ends]]
+            maxima = np.concatenate([[gval[0]], gval[ends[:-1] + 1]])
             gb = np.searchsorted(c, self._beta[down], side="left")
             g = np.where(gb < c.size, smax[np.minimum(gb, c.size - 1)], -np.inf)
             bad = np.flatnonzero(self._alpha[down] <= g)
