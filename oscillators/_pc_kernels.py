@@ -559,9 +559,9 @@ def advance_table(
         down = st[S_DN]
         mv = st[S_MV]
         nsw += 1
-        if tan_on:
+        if tan_on and coupling * jump != 0.0:
             if v == 0.0:
-                status = 2
+                status = 2  # grazing: infinite saltation, the caller raises GrazingError
                 break
             # saltation X = [[1,0,0],[C ΔM / v*, 1, 0],[0,0,1]]
             sal = coupling * jump / v
