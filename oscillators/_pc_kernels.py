@@ -4,14 +4,29 @@ The system is ``q'' + 2ζq' + q = cos φ + C·M``, ``φ' = Ω``, with ``M`` cons
 Time is kept as (period index ``n``, time ``τ`` since the start of the period, ``0 <= τ < T``,
 ``T = 2π/Ω``) so that the forcing phase ``φ = φ_0 + Ωτ`` never loses digits on long runs.
 
-Equal-width discrete Preisach models (all relays of one width, e.g. the paper's spin dimers) are
-handled in O(1) per switch: the relays are grouped by equal thresholds and sorted by centre; the
-state is one index ``k`` = number of up groups; the next up threshold is ``up[k]`` (switch when
-``q >= up[k]``), the next down threshold ``down[k-1]`` (switch when ``q < down[k-1]``).
+The relays come as a *table* of one of two kinds, and one event loop (:func:`advance_table`)
+serves both; the kind only decides how the next thresholds are found and how a switch updates
+the relays and ``M`` (:func:`_table_refresh`, :func:`_table_switch`):
 
-Plain-Python reading of one hop (``_advance``)::
+* kind 0, **nested plan** (O(1) per switch): relays whose upper and lower thresholds increase
+  together (:meth:`hysteresis.relay_table.RelayTable.nested_plan`, every equal-width model, the
+  paper's spin dimers), grouped by equal thresholds; the state is one index ``k`` = number of up
+  groups; the next up threshold is ``up[k]`` (switch when ``q >= up[k]``), the next down
+  threshold ``down[k-1]`` (switch when ``q < down[k-1]``), the output ``mval[k]``.
+* kind 1, **heap** (any relays): a down relay has ``alpha > q`` and an up relay ``beta <= q``,
+  so the next up switch is the smallest ``alpha`` among the down relays and the next down switch
+  the largest ``beta`` among the up relays. The two priority queues are hierarchical 64-ary
+  bitsets over the presorted thresholds (alpha ascending, beta descending): a set bit is a
+  member; the minimum is one "lowest set bit" lookup (de Bruijn multiplication) per level, insert
+  and delete touch one word per level (3 levels up to 262 144 relays): O(log₆₄ N) per switched
+  relay, with no key comparisons and no unpredictable sift branches of a binary heap.
+  All relays at the current threshold switch together (their weights form the jump). ``M`` is
+  kept in integer weight units when all weights are multiples of one unit (dimers: 1/N and
+  2/N), else as a Neumaier-compensated sum, so it does not drift over 10⁹ switches.
 
-    F = C*M[k]; derivatives d_n of q at the current point from the equation of motion
+Plain-Python reading of one hop (``advance_table``)::
+
+    F = C*M; derivatives d_n of q at the current point from the equation of motion
     if the next threshold in the direction of v is predicted within h_T (linear estimate) :
         Newton on the Taylor polynomial  sum d_n h^n/n! = threshold  -> h
         if |sum_{n>=2} d_n h^(n-1)/(n-1)!| < |v|/2 (q provably monotone on [0, h]):
@@ -21,7 +36,7 @@ Plain-Python reading of one hop (``_advance``)::
         the zero of q'' and at the zero of v, so q is monotone between checkpoints; the first
         checkpoint at or past a threshold brackets the crossing, found by safeguarded Newton
         on the exact solution.
-    at a switch: q := threshold exactly, k += ±1, tangent vectors get the saltation
+    at a switch: q := threshold exactly, the table switches, tangent vectors get the saltation
         δv += C·ΔM/v* · δq  (paper eq. salt_matrix)
 
 Grazing: crossings are decided on the computed extrema. A maximum that reaches ``up`` (``>=``)
