@@ -11,7 +11,7 @@ the output on the way down, ``f_α = f_αα``. The Everett function is
 and for a Preisach operator ``M = ∬ μ(α, β) y_αβ`` it counts the relays that switched up on the
 way to ``α`` and back down on the way to ``β``::
 
-    E(α, β) = Σ_k w_k [α_k <= α] [β_k > β]           (relay conventions of DESIGN.md)
+    E(α, β) = Σ_k w_k [α_k <= α] [β_k > β]           (relay conventions of docs/architecture.md)
 
 so that ``μ(α, β) = −∂²E/∂α∂β``. ``E(α, β) = 0`` for ``β >= α`` (nothing can have switched back),
 which is the exact constant extension of the measured region used below.

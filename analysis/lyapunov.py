@@ -1,23 +1,46 @@
 """Lyapunov spectra of forced oscillators with hysteresis (paper Sec. "Lyapunov exponents").
 
-The tangent flow is propagated by the system's integrator: closed-form fundamental matrices
-between switches and the saltation matrix ``X`` (paper eq. salt_matrix) at every relay switch for
-piecewise-constant operators, the play-limit linearization (paper eqs. limit_W_0/1, V_in/V_out)
-for the play. The exponents come from QR re-orthonormalisation at fixed time intervals
-(Benettin et al. 1980; Geist et al. 1990), averaged over ``[transient, t_end]``.
+One algorithm, in one place, over a small stepper interface (after ChaosTools'
+``lyapunovspectrum``): :class:`TangentStepper` re-initialises a system's engine at a state,
+steps it by a time interval with the tangent (variational) flow on, and reads / sets the
+deviation vectors. :func:`lyapunov_spectrum` runs the Benettin/Geist QR loop on it:
+
+    reinit(state); step(transient) without tangent; deviations := I
+    repeat every Δt:  step(Δt);  Y = deviations();  Q R = Y;  Σ_j += log|R_jj|;  set(Q)
+    λ_j = Σ_j / (t_end − transient)
+
+The engines supply the physics: closed-form fundamental matrices between relay switches with the
+saltation ``C·ΔM/v*`` at each switch (paper eq. salt_matrix); the play-limit linearization
+(paper eqs. limit_W_0/1, ``V_in = I``, ``V_out``: ``δw := δq``); the generic continuous engine
+with the operator's memory directions. The tangent space is named by the engine
+(``("q", "v"[, "phi"], *memory)``), the exponents belong to no single coordinate.
+
+Structural collapse: an engine reports through ``rank_bound()`` how many independent directions
+its tangent map can have kept since the last re-orthonormalisation (a play wall hit resets
+``δw := δq``; a wiped-out Preisach extremum removes its direction). The diagonal entries of R
+beyond that bound are exactly zero in exact arithmetic: they are recorded as ``log R_jj = -inf``
+(the paper's ``λ = -∞``), not as the log of a round-off remainder. When the number of rows of the
+deviation matrix is smaller than the number of tracked vectors (memory removed), the missing
+directions are -inf and their columns are continued as zero vectors.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from analysis.dimensions import kaplan_yorke_dimension
+from hysteresis._validation import finite_scalar, positive_integer
+from oscillators.engine import DivergenceError, Engine
 from oscillators.results import OscillatorState
 
-__all__ = ["LyapunovResult", "lyapunov_spectrum"]
+__all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]
+
+#: Longest run one call may ask for, in forcing periods.
+MAX_PERIODS = 10**8
 
 
 @dataclass(frozen=True)
@@ -27,22 +50,24 @@ class LyapunovResult:
     Attributes
     ----------
     exponents:
-        Descending; ``-inf`` allowed (the play limit's slaved direction).
+        Descending; ``-inf`` allowed (a collapsed memory direction, e.g. the play limit's ``w``).
     tangent_space:
-        The basis of the tangent space the flow was run in, e.g. ``("q", "v")`` for relays and
-        dimers, ``("q", "v", "w")`` for the play limit, with ``"phi"`` if the phase direction is
-        included. The exponents belong to no single coordinate.
+        The basis of the tangent space the flow was started in, e.g. ``("q", "v")`` for relays
+        and dimers, ``("q", "v", "w")`` for the play limit, with ``"phi"`` if the phase
+        direction is included. The exponents belong to no single coordinate.
     history_t, history:
-        Running estimates (rows) at times ``history_t`` — the convergence record.
+        Running estimates (rows, each sorted descending) at times ``history_t``.
     n_switches:
-        Output switches (piecewise-constant) or wall events (play) during the run.
-    t_end:
-        End time; the average runs over ``[transient, t_end]``.
+        Events (relay switches, wall hits and reversals) during the averaging window.
+    t_end, transient:
+        The average runs over ``[transient, t_end]`` (time units).
     kaplan_yorke:
-        ``D_KY`` of the exponents (paper eq. kaplan_yorke). With ``include_phase`` the zero
-        phase exponent is included, as requested.
+        ``D_KY`` of the exponents (paper eq. kaplan_yorke).
     final:
         System state at ``t_end`` (to continue a run, e.g. along a parameter continuation).
+    extra:
+        ``engine``, ``renormalize_dt``, ``n_collapses`` (QR intervals with a structural rank
+        drop).
     """
 
     exponents: np.ndarray
@@ -62,6 +87,127 @@ class LyapunovResult:
         return float(self.exponents[0])
 
 
+class TangentStepper:
+    """A system's engine as the stepper of the Benettin loop.
+
+    Build it once and :meth:`reinit` it for every initial condition (the engine class and the
+    compiled kernels are reused).
+
+    Parameters
+    ----------
+    system:
+        A :class:`~oscillators.system.ForcedOscillator` (any operator).
+    include_phase:
+        Also follow the forcing-phase direction φ (its exponent is 0). The paper's spectrum
+        neglects it (Poincaré section φ = 0).
+    engine_options:
+        Passed to the engine (e.g. ``{"method": "generic"}`` for relay systems).
+    """
+
+    def __init__(
+        self,
+        system: Any,
+        include_phase: bool = False,
+        engine_options: dict | None = None,
+    ) -> None:
+        self.system = system
+        self.include_phase = bool(include_phase)
+        self.engine_options = dict(engine_options or {})
+        self._engine: Engine | None = None
+        self._t = 0.0
+        self._events_at_start = 0
+
+    # -- re-initialise ---------------------------------------------------------------------------
+    def reinit(self, state: OscillatorState | None = None, transient: float = 0.0) -> None:
+        """Start at ``state`` (default: the system's initial state), integrate ``transient``
+        time units without the tangent flow, then set the deviations to the identity."""
+        transient = finite_scalar(transient, "transient")
+        if transient < 0.0:
+            raise ValueError(f"transient must be >= 0, got {transient}")
+        self._engine = self.system.engine(state, **self.engine_options)
+        self._t = 0.0
+        if transient > 0.0:
+            self._advance(transient)
+        self._engine.start_tangent(self.include_phase)
+        self._events_at_start = self._engine.n_events
+
+    # -- step ------------------------------------------------------------------------------------
+    def step(self, dt: float) -> None:
+        """Advance by ``dt`` with the tangent flow on."""
+        self._advance(self._t + dt)
+
+    def _advance(self, t: float) -> None:
+        eng = self.engine
+        out = np.empty((1, len(eng.sample_columns)))
+        eng.advance(np.array([t]), out)
+        self._t = t
+        self.system.check_finite(eng, out[:, :2])
+
+    # -- deviations ------------------------------------------------------------------------------
+    @property
+    def engine(self) -> Engine:
+        """The current engine (after :meth:`reinit`)."""
+        if self._engine is None:
+            raise RuntimeError("call reinit() first")
+        return self._engine
+
+    @property
+    def elapsed(self) -> float:
+        """Time since :meth:`reinit` (transient included)."""
+        return self._t
+
+    @property
+    def tangent_space(self) -> tuple[str, ...]:
+        """Names of the rows of :meth:`deviations` now."""
+        return self.engine.tangent_space
+
+    def deviations(self) -> np.ndarray:
+        """Deviation vectors (columns)."""
+        return self.engine.deviations()
+
+    def set_deviations(self, y: np.ndarray) -> None:
+        """Replace the deviation vectors."""
+        self.engine.set_deviations(y)
+
+    def rank_bound(self) -> int:
+        """Structural bound of the tangent map's rank since the last set (see module)."""
+        return self.engine.rank_bound()
+
+    def state(self) -> OscillatorState:
+        """The full state now."""
+        return self.engine.state()
+
+    @property
+    def n_events(self) -> int:
+        """Events since the tangent flow was started."""
+        return self.engine.n_events - self._events_at_start
+
+
+def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.ndarray, bool]:
+    """One re-orthonormalisation: adds log|R_jj| (or -inf beyond ``rank``) to ``lsum``.
+
+    Returns the new deviation matrix (same number of rows as ``y``, ``k`` columns) and whether a
+    direction collapsed structurally in this interval.
+    """
+    d = y.shape[0]
+    if not np.all(np.isfinite(y)):
+        raise DivergenceError("the tangent flow became non-finite (deviation vectors overflow)")
+    q, r = np.linalg.qr(y)  # reduced: q (d, m), r (m, k), m = min(d, k)
+    m = q.shape[1]
+    diag = np.abs(np.diag(r))
+    rank = min(rank, m)
+    collapsed = False
+    for j in range(k):
+        if j < rank:
+            lsum[j] += math.log(diag[j]) if diag[j] > 0.0 else -math.inf
+        elif math.isfinite(lsum[j]):
+            lsum[j] = -math.inf
+            collapsed = True
+    new = np.zeros((d, k))
+    new[:, :m] = q
+    return new, collapsed
+
+
 def lyapunov_spectrum(
     system: Any,
     t_end: float,
@@ -69,46 +215,104 @@ def lyapunov_spectrum(
     q0: float = -1.0,
     v0: float = 0.1,
     operator_state: Any = None,
-    w0: float | None = None,
     include_phase: bool = False,
-    progress: bool = True,
+    progress: bool = False,
+    renormalize_dt: float | None = None,
+    history_points: int = 200,
+    engine_options: dict | None = None,
+    *,
+    state: OscillatorState | None = None,
+    stepper: TangentStepper | None = None,
 ) -> LyapunovResult:
     """Lyapunov spectrum of ``system`` (a :class:`~oscillators.system.ForcedOscillator`).
 
     Parameters
     ----------
     t_end:
-        End of the run; exponents are averaged over ``[transient, t_end]``.
+        End of the run (time units); exponents are averaged over ``[transient, t_end]``.
     transient:
-        Time integrated without the tangent flow first.
-    q0, v0, operator_state, w0:
-        Initial condition (``w0``: play wagon position, play-type operators only). The defaults
-        are the paper's Table II.
+        Time integrated without the tangent flow first (time units).
+    q0, v0, operator_state:
+        Initial condition (defaults: the paper's Table II, the operator rising from negative
+        saturation to q0). For other memory pass an explicit operator state, e.g.
+        ``play.state(position=w0, input=q0)``. Alternatively a full ``state``.
     include_phase:
-        Also follow the forcing-phase direction φ (its exponent is 0). The paper's spectrum
-        neglects it (Poincaré section φ = 0): (q, v) for relays/dimers, (q, v, w) for the play.
+        Also follow the forcing-phase direction φ (exponent 0).
     progress:
-        tqdm progress bar on long runs.
+        tqdm progress bar (off by default; the command line turns it on).
+    renormalize_dt:
+        Time between re-orthonormalisations (default: one forcing period).
+    history_points:
+        Number of running estimates kept in ``history``.
+    engine_options:
+        Passed to the engine.
+    stepper:
+        A :class:`TangentStepper` of this system to reuse (its ``include_phase`` and
+        ``engine_options`` then apply).
     """
-    kwargs: dict[str, Any] = {"include_phase": bool(include_phase), "progress": bool(progress)}
-    if w0 is not None:
-        kwargs["w0"] = w0
-    raw = system.tangent(t_end, transient, q0, v0, operator_state, **kwargs)
-    exps = np.asarray(raw.exponents, dtype=float)
-    # The integrators report the exponents in descending order already; after QR they belong to
-    # no coordinate, so ``tangent_space`` names the basis the tangent flow was run in.
-    if np.any(np.diff(exps) > 0):
-        raise RuntimeError(f"tangent integrator returned unsorted exponents {exps}")
-    history = np.asarray(raw.history, dtype=float)
+    t_end = finite_scalar(t_end, "t_end")
+    transient = finite_scalar(transient, "transient")
+    if transient < 0.0:
+        raise ValueError(f"transient must be >= 0, got {transient}")
+    if not t_end > transient:
+        raise ValueError(f"t_end must be > transient = {transient}, got {t_end}")
+    period = float(system.period)
+    if t_end / period > MAX_PERIODS:
+        raise ValueError(f"t_end spans more than {MAX_PERIODS:.0e} forcing periods")
+    dt = period if renormalize_dt is None else finite_scalar(renormalize_dt, "renormalize_dt")
+    if not dt > 0.0:
+        raise ValueError(f"renormalize_dt must be > 0, got {renormalize_dt}")
+    history_points = positive_integer(history_points, "history_points")
+    if stepper is None:
+        stepper = TangentStepper(system, include_phase, engine_options)
+    elif stepper.system is not system:
+        raise ValueError("stepper belongs to another system")
+    if state is None:
+        state = system.initial_state(q0, v0, operator_state)
+    elif operator_state is not None:
+        raise ValueError("give either state or operator_state, not both")
+    stepper.reinit(state, transient)
+    labels = stepper.tangent_space
+    k = len(labels)
+    span = t_end - transient
+    n_steps = max(1, int(math.ceil(span / dt - 1e-9)))
+    marks = set(np.unique(np.linspace(0, n_steps - 1, min(history_points, n_steps)).round()))
+    lsum = np.zeros(k)
+    hist_t: list[float] = []
+    hist: list[np.ndarray] = []
+    n_collapses = 0
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
+    for i in range(n_steps):
+        target = transient + (span if i == n_steps - 1 else (i + 1) * dt)
+        stepper.step(target - stepper.elapsed)
+        y, collapsed = _qr_step(stepper.deviations(), k, stepper.rank_bound(), lsum)
+        n_collapses += int(collapsed)
+        stepper.set_deviations(y)
+        if i in marks:
+            hist_t.append(target)
+            hist.append(-np.sort(-lsum / (target - transient)))
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    exponents = -np.sort(-lsum / span)
     return LyapunovResult(
-        exponents=exps,
-        tangent_space=tuple(raw.labels),
-        history_t=np.asarray(raw.history_t, dtype=float),
-        history=history,
-        n_switches=int(raw.n_switches),
-        t_end=float(raw.t_end),
-        transient=float(transient),
-        kaplan_yorke=kaplan_yorke_dimension(exps),
-        final=raw.final,
-        extra=dict(raw.extra),
+        exponents=exponents,
+        tangent_space=tuple(labels),
+        history_t=np.asarray(hist_t),
+        history=np.asarray(hist).reshape(len(hist), k),
+        n_switches=int(stepper.n_events),
+        t_end=t_end,
+        transient=transient,
+        kaplan_yorke=kaplan_yorke_dimension(exponents),
+        final=stepper.state(),
+        extra={
+            "engine": stepper.engine.name,
+            "renormalize_dt": dt,
+            "n_collapses": n_collapses,
+        },
     )

@@ -38,7 +38,7 @@ from hysteresis._validation import (
 )
 from hysteresis.base import Branch, ContinuousHysteron, Linearization
 
-__all__ = ["PlayState", "PlayOperator", "GeneralizedPlay", "play_positions"]
+__all__ = ["CompiledPlay", "PlayState", "PlayOperator", "GeneralizedPlay", "play_positions"]
 
 _EPS = np.finfo(np.float64).eps
 
@@ -50,6 +50,26 @@ class PlayState:
 
     position: float
     input: float
+
+
+@dataclass(frozen=True)
+class CompiledPlay:
+    """What the oscillator's compiled play-limit kernel needs (a fast path, see
+    :meth:`hysteresis.base.ContinuousHysteron.compiled_play`).
+
+    Attributes
+    ----------
+    width:
+        Wagon length p.
+    shape:
+        ``"identity"`` (plain play, output ``w``) or ``"erf"`` (output ``erf(w/(√2 R))``).
+    spread:
+        R of the erf shape (1.0 for the identity).
+    """
+
+    width: float
+    shape: str
+    spread: float = 1.0
 
 
 @njit(cache=True)
@@ -206,6 +226,10 @@ class PlayOperator(_PlayBase):
     def output_range(self) -> tuple[float, float]:
         return (-np.inf, np.inf)
 
+    def compiled_play(self) -> CompiledPlay:
+        """The plain play runs on the compiled play-limit kernel (identity shape)."""
+        return CompiledPlay(width=self._width, shape="identity")
+
     def __repr__(self) -> str:
         return f"PlayOperator(width={self._width!r})"
 
@@ -327,6 +351,13 @@ class GeneralizedPlay(_PlayBase):
             lo = float(self._shape(np.array(-np.inf)))
             hi = float(self._shape(np.array(np.inf)))
         return (lo if not math.isnan(lo) else -np.inf, hi if not math.isnan(hi) else np.inf)
+
+    def compiled_play(self) -> CompiledPlay | None:
+        """``GeneralizedPlay.erf`` runs on the compiled play-limit kernel; a custom shape has no
+        compiled description (``None``) and is integrated by the generic continuous engine."""
+        if self._shape_kind == "erf":
+            return CompiledPlay(width=self._width, shape="erf", spread=float(self._spread))
+        return None
 
     def __repr__(self) -> str:
         if self.shape_kind == "erf":

@@ -10,7 +10,7 @@ Memory (Mayergoyz): the alternating sequence of dominant input extrema left afte
 previous maximum (``u >= M_k``) or falls to a previous minimum (``u <= m_k``) wipes out all
 extrema after it. :class:`PreisachState` holds this staircase and the output.
 
-Everett function (DESIGN.md): ``E(α, β) = (f_α − f_αβ)/2`` — half the output drop when the
+Everett function (docs/architecture.md): ``E(α, β) = (f_α − f_αβ)/2`` — half the output drop when the
 input rises from negative saturation to ``α`` and then falls to ``β``; equivalently the mass
 of the triangle ``{β < β' <= α' <= α}`` of the Preisach plane, and ``μ = −∂²E/∂α∂β``. With the
 staircase ``M_1, m_1, ..., `` (``m_0 = −∞``)::

@@ -17,11 +17,10 @@ Everything lives in flat float64 arrays so that numba compiles one specialisatio
 right wall moving right (w = q - hp, v > 0), -1 on the left wall moving left (w = q + hp, v < 0).
 
 ``T`` (4, k): tangent vectors as columns, rows (δq, δv, δφ, δw); k = 0 switches the tangent
-flow off. ``logs`` (k,): accumulated log R_ii of the QR steps. ``diag``: [exits, entries,
-max relative residual of the collapsed column, collapses] counted while accumulating.
-``flags`` = [accumulate, qr_mode]: qr_mode 1 re-orthonormalises at every exit and records the
-rank collapse as log R_kk = -inf; qr_mode 0 applies V_out as a plain matrix (fundamental matrix);
-qr_mode 2 omits V_out (a diagnostic showing that the saltation is needed).
+flow off. ``diag``: [exits, entries, -, -] counted while accumulating.
+``flags`` = [accumulate, qr_mode]: qr_mode 0 applies V_out as a plain matrix (the tangent flow
+between the Lyapunov loop's re-orthonormalisations); qr_mode 2 omits V_out (a diagnostic
+showing that the saltation is needed). The QR itself lives once, in analysis/lyapunov.py.
 ``ev`` (cap, 5): events [t, q, v, kind, w] (kind +1 leaving the play, -1 entering), ``cnt[0]``
 counts all events (also those beyond ``cap``).
 """
@@ -32,13 +31,15 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dop
 
-# Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step.
-_N_STAGES = 12
-RK_A = np.ascontiguousarray(_dop.A[:_N_STAGES, :_N_STAGES], dtype=np.float64)
+from oscillators import _dop853 as _dop
+
+# Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step
+# (coefficients carried in oscillators/_dop853.py with their citation).
+_N_STAGES = _dop.N_STAGES
+RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
-RK_C = np.ascontiguousarray(_dop.C[:_N_STAGES], dtype=np.float64)
+RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
 
 # Width of the interval on which a possible wall hit inside the play is resolved exactly
 # (there the input velocity has at most one zero and the Hermite error bound is ~1e-14).
@@ -81,79 +82,20 @@ def _record(ev, cnt, t, q, v, kind, w):
 
 
 @njit(cache=True)
-def qr_step(T, logs, accumulate):
-    """Modified Gram–Schmidt (twice, for orthogonality at round-off) on the columns of T;
-    adds log R_ii to ``logs`` if ``accumulate``."""
-    n, k = T.shape
-    for j in range(k):
-        norm0 = 0.0
-        for r in range(n):
-            norm0 += T[r, j] * T[r, j]
-        for _ in range(2):
-            for i in range(j):
-                d = 0.0
-                for r in range(n):
-                    d += T[r, i] * T[r, j]
-                for r in range(n):
-                    T[r, j] -= d * T[r, i]
-        norm = 0.0
-        for r in range(n):
-            norm += T[r, j] * T[r, j]
-        norm = math.sqrt(norm)
-        if accumulate:
-            logs[j] += math.log(norm) if norm > 0.0 else -np.inf
-        if norm > 0.0:
-            for r in range(n):
-                T[r, j] /= norm
-
-
-@njit(cache=True)
-def leave_play(T, logs, diag, accumulate, qr_mode):
+def leave_play(T, qr_mode):
     """Saltation at the instant the input hits a wall (paper's V_out: δw := δq).
 
-    With ``qr_mode`` the image V_out·T is re-orthonormalised at once. V_out has rank k - 1
-    (its kernel is the pure-δw direction), so the component of the last column orthogonal to
-    the first k - 1 is *exactly* zero: log R_kk = -inf is set structurally instead of taking
-    the log of a round-off residual (whose size, ~1e-17, would only measure rounding). The
-    residual actually found is kept in ``diag[2]`` as a check, and the last column is replaced
-    by the unit normal (e_q - e_w)/√2 of the image {δw = δq}, so the frame stays orthonormal.
+    The standard saltation ``S = I + (F⁺ − F⁻) nᵀ / (n·F⁻)`` with ``n = ∇(q − w ∓ p/2)`` and
+    ``F⁺ − F⁻ = (0, 0, 0, v)``: the force ``C f(w)`` is continuous at the hit and only ``ẇ``
+    jumps from 0 to ``v``, so ``δw := δq`` and (δq, δv, δφ) are unchanged. ``V_out`` has rank
+    k − 1 (its kernel is the pure-δw direction); the Lyapunov loop learns of it through the
+    engine's ``rank_bound()``. ``qr_mode == 2`` omits it (a diagnostic showing it is needed).
     """
     k = T.shape[1]
-    if k == 0 or qr_mode == 2:  # 2: diagnostic run without the saltation
+    if k == 0 or qr_mode == 2:
         return
     for j in range(k):
         T[3, j] = T[0, j]
-    if qr_mode == 0:
-        return
-    n = T.shape[0]
-    # norm of the last column before projection (scale of the residual check)
-    last_norm = 0.0
-    for r in range(n):
-        last_norm += T[r, k - 1] * T[r, k - 1]
-    last_norm = math.sqrt(last_norm)
-    sub = T[:, : k - 1]
-    qr_step(sub, logs, accumulate)
-    # residual of the last column against the orthonormalised image
-    for _ in range(2):
-        for i in range(k - 1):
-            d = 0.0
-            for r in range(n):
-                d += T[r, i] * T[r, k - 1]
-            for r in range(n):
-                T[r, k - 1] -= d * T[r, i]
-    res = 0.0
-    for r in range(n):
-        res += T[r, k - 1] * T[r, k - 1]
-    res = math.sqrt(res)
-    if last_norm > 0.0 and res / last_norm > diag[2]:
-        diag[2] = res / last_norm
-    for r in range(n):
-        T[r, k - 1] = 0.0
-    T[0, k - 1] = 1.0 / math.sqrt(2.0)
-    T[3, k - 1] = -1.0 / math.sqrt(2.0)
-    if accumulate:
-        logs[k - 1] = -np.inf
-        diag[3] += 1.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -353,7 +295,7 @@ def _inside_tangent(par, T, w, phi_s, tau):
 
 
 @njit(cache=True)
-def _inside(par, st, t_target, T, logs, diag, ev, cnt, flags):
+def _inside(par, st, t_target, T, diag, ev, cnt, flags):
     """Advance inside the play until t_target or the first wall hit (then switch to the wall).
 
     Plain reading: with F = C f(w) the motion is q(τ) = F + q_p(φ(τ)) + damped free motion.
@@ -439,7 +381,7 @@ def _inside(par, st, t_target, T, logs, diag, ev, cnt, flags):
         if accumulate:
             diag[0] += 1.0
         _record(ev, cnt, st[0], st[1], st[2], 1.0, w)
-        leave_play(T, logs, diag, accumulate, flags[1])
+        leave_play(T, flags[1])
         return
     qe, ve, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tau_end)
     if T.shape[1] > 0:
@@ -496,7 +438,7 @@ def _rk8(par, side, t, y, h, out, K, tmp, k):
 
 
 @njit(cache=True)
-def _outside(par, st, t_target, T, logs, diag, ev, cnt, flags, work):
+def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
     """Advance on a wall until t_target or the reversal v = 0 where the input re-enters.
 
     Plain reading: RK8 steps of length h_out; a step whose end has the velocity reversed
@@ -609,7 +551,7 @@ def _outside(par, st, t_target, T, logs, diag, ev, cnt, flags, work):
             if accumulate:
                 diag[0] += 1.0
             _record(ev, cnt, t, q, 0.0, 1.0, st[3])
-            leave_play(T, logs, diag, accumulate, flags[1])
+            leave_play(T, flags[1])
     else:
         st[0] = t_target
         st[2] = y[1]
@@ -619,14 +561,14 @@ def _outside(par, st, t_target, T, logs, diag, ev, cnt, flags, work):
 # drivers
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
-def advance(par, st, t_target, T, logs, diag, ev, cnt, flags, work):
+def advance(par, st, t_target, T, diag, ev, cnt, flags, work):
     """Advance the full state (and tangent columns) to exactly ``t_target``."""
     guard = 0
     while st[0] < t_target:
         if st[4] == 0.0:
-            _inside(par, st, t_target, T, logs, diag, ev, cnt, flags)
+            _inside(par, st, t_target, T, diag, ev, cnt, flags)
         else:
-            _outside(par, st, t_target, T, logs, diag, ev, cnt, flags, work)
+            _outside(par, st, t_target, T, diag, ev, cnt, flags, work)
         guard += 1
         if guard > 100_000_000:
             raise RuntimeError("play flow: no progress (too many events)")
@@ -638,21 +580,10 @@ def make_work(k: int) -> np.ndarray:
 
 
 @njit(cache=True)
-def sample_kernel(par, st, times, out, T, logs, diag, ev, cnt, flags, work):
+def sample_kernel(par, st, times, out, T, diag, ev, cnt, flags, work):
     """Advance through ``times`` (increasing), storing q, v, w at each into ``out`` rows."""
     for i in range(times.shape[0]):
-        advance(par, st, times[i], T, logs, diag, ev, cnt, flags, work)
+        advance(par, st, times[i], T, diag, ev, cnt, flags, work)
         out[i, 0] = st[1]
         out[i, 1] = st[2]
         out[i, 2] = st[3]
-
-
-@njit(cache=True)
-def tangent_kernel(par, st, t_stop, renorm_dt, T, logs, diag, ev, cnt, flags, work):
-    """Advance to ``t_stop`` re-orthonormalising every ``renorm_dt`` (Benettin/QR)."""
-    while st[0] < t_stop:
-        t_next = min(st[0] + renorm_dt, t_stop)
-        if t_stop - t_next < 1e-9 * renorm_dt:
-            t_next = t_stop
-        advance(par, st, t_next, T, logs, diag, ev, cnt, flags, work)
-        qr_step(T, logs, flags[0] != 0)

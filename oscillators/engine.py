@@ -198,9 +198,12 @@ def select_engine(operator: Any) -> type[Engine]:
 
         return PlayEngine
     if callable(getattr(operator, "branch_flow", None)):
-        from oscillators.continuous import ContinuousEngine
-
-        return ContinuousEngine
+        try:
+            from oscillators.continuous import ContinuousEngine
+        except ImportError:  # pragma: no cover - the generic engine is part of the package
+            ContinuousEngine = None
+        if ContinuousEngine is not None:
+            return ContinuousEngine
     raise TypeError(
         f"operator {type(operator).__name__} cannot be coupled to the oscillator: a "
         "piecewise-constant operator must provide relay_table(), a continuous one "

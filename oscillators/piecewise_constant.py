@@ -24,33 +24,20 @@ from typing import Any
 
 import numpy as np
 
-from hysteresis._validation import nonnegative_integer, positive_integer
 from oscillators import _pc_kernels as kern
+from oscillators.engine import Engine, GrazingError, split_times, wrap_phase
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
-from oscillators.results import OscillatorState, PoincareSection, TangentResult, Trajectory
+from oscillators.results import OscillatorState
 
 __all__ = [
     "GrazingError",
     "EqualWidthPlan",
+    "RelayEngine",
     "equal_width_plan",
-    "pc_trajectory",
-    "pc_poincare",
-    "pc_tangent",
-    "pc_jacobian",
     "SWITCH_DTYPE",
 ]
 
 SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8")])
-
-
-class GrazingError(ValueError):
-    """A switch at a turning point (``v* = 0``) while the tangent flow is propagated.
-
-    The kernels' grazing rule (:mod:`oscillators._pc_kernels`) makes a maximum that reaches an
-    upper threshold switch; the saltation ``C·ΔM/v*`` of that switch is infinite, so the flow map
-    is not differentiable on this orbit and Lyapunov exponents / Jacobians are undefined. A
-    ``ValueError`` subclass so that callers reporting bad input also report this.
-    """
 
 
 def _grazing_message(t: float | None = None) -> str:
@@ -168,16 +155,6 @@ def _index_from_state(operator: Any, plan: EqualWidthPlan, q0: float, state: Any
 
 
 # -- targets (period index, time in period) ---------------------------------------------------
-def _split_times(times: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray]:
-    n = np.floor(times / period).astype(np.int64)
-    tau = times - n * period
-    fix = tau >= period
-    n[fix] += 1
-    tau[fix] = 0.0
-    tau[tau < 0.0] = 0.0
-    return n, tau
-
-
 def _params(system: Any, phi0: float, t_base: float, taylor: bool = True) -> np.ndarray:
     zeta = float(system.damping_ratio)
     omega = float(system.frequency)
@@ -283,16 +260,6 @@ class _GenericEngine:
                 on_target(i)
 
 
-def _wrap_phase(phi: float) -> float:
-    """``phi`` mod 2π in [0, 2π)."""
-    two_pi = 2.0 * math.pi
-    wrapped = math.fmod(phi, two_pi)
-    if wrapped < 0.0:
-        wrapped += two_pi
-    # fmod of a tiny negative number plus 2π rounds to exactly 2π
-    return 0.0 if wrapped >= two_pi else wrapped
-
-
 # -- shared preparation -----------------------------------------------------------------------
 @dataclass
 class _Run:
@@ -323,7 +290,7 @@ class _Run:
         period = float(self.par[kern.P_T])
         phi0 = float(self.par[kern.P_PHI0])
         # wrap to [0, 2π) like the play path (math.fmod keeps the sign: φ < 0 for phi0 < 0)
-        phi = _wrap_phase(phi0 + float(system.frequency) * tau)
+        phi = wrap_phase(phi0 + float(system.frequency) * tau)
         return OscillatorState(
             q=q,
             v=v,
@@ -410,263 +377,154 @@ def _switch_array(sw: np.ndarray) -> np.ndarray:
     return rec
 
 
-# -- public drivers ---------------------------------------------------------------------------
-def pc_trajectory(
-    system: Any,
-    t_end: float,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    operator_state: Any = None,
-    sample_dt: float = 0.01,
-    phi0: float = 0.0,
-    t0: float = 0.0,
-    engine: str = "auto",
-    taylor: bool = True,
-) -> Trajectory:
-    """Samples every ``sample_dt`` on [t0, t0 + t_end] plus the exact list of switches."""
-    t_end = float(t_end)
-    sample_dt = float(sample_dt)
-    if not math.isfinite(t_end) or t_end <= 0.0:
-        raise ValueError(f"t_end must be finite and > 0, got {t_end}")
-    if not math.isfinite(sample_dt) or sample_dt <= 0.0:
-        raise ValueError(f"sample_dt must be finite and > 0, got {sample_dt}")
-    run = _prepare(system, q0, v0, phi0, operator_state, t0, engine, taylor)
-    n = int(math.floor(t_end / sample_dt + 1e-9))
-    times = np.arange(n + 1) * sample_dt
-    if times[-1] < t_end * (1 - 1e-12):
-        times = np.append(times, t_end)
-    tgt_n, tgt_tau = _split_times(times, float(run.par[kern.P_T]))
-    out, sw = _run_targets(run, tgt_n, tgt_tau, True)
-    omega = float(system.frequency)
-    phi = np.mod(phi0 + omega * tgt_tau, 2.0 * np.pi)
-    return Trajectory(
-        t=t0 + times,
-        q=out[:, 0],
-        v=out[:, 1],
-        phi=phi,
-        M=out[:, 2],
-        switches=_switch_array(sw),
-        final=run.final_state(system),
-    )
+# -- the engine ------------------------------------------------------------------------------
+class RelayEngine(Engine):
+    """Event-driven engine for piecewise-constant operators (see the module docstring).
 
-
-def pc_poincare(
-    system: Any,
-    n_periods: int,
-    transient_periods: int = 0,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    operator_state: Any = None,
-    engine: str = "auto",
-    taylor: bool = True,
-) -> PoincareSection:
-    """Stroboscopic points at t = (transient_periods + i)·T, i = 0..n_periods-1 (φ = 0)."""
-    n_periods = positive_integer(n_periods, "n_periods")
-    transient_periods = nonnegative_integer(transient_periods, "transient_periods")
-    run = _prepare(system, q0, v0, 0.0, operator_state, 0.0, engine, taylor)
-    tgt_n = transient_periods + np.arange(n_periods, dtype=np.int64)
-    tgt_tau = np.zeros(n_periods)
-    out, _ = _run_targets(run, tgt_n, tgt_tau, False)
-    _, _, _, _, nsw = run.final(system)
-    return PoincareSection(
-        q=out[:, 0], v=out[:, 1], M=out[:, 2], final=run.final_state(system), n_switches=nsw
-    )
-
-
-def pc_stroboscopic_map(
-    system: Any, state: OscillatorState, engine: str = "auto"
-) -> OscillatorState:
-    """The state one forcing period after ``state``."""
-    run = _prepare(
-        system, state.q, state.v, float(state.phi), state.operator_state, float(state.t), engine
-    )
-    _run_targets(run, np.array([1], dtype=np.int64), np.zeros(1), False)
-    return run.final_state(system)
-
-
-def _tangent_targets(
-    t_start: float, t_stop: float, period: float, qr_per_period: int, history_points: int
-):
-    dt = period / qr_per_period
-    n_qr = max(1, int(math.ceil((t_stop - t_start) / dt - 1e-9)))
-    times = t_start + dt * np.arange(1, n_qr + 1)
-    times[-1] = t_stop
-    elapsed = times - t_start
-    flags = np.zeros(n_qr, dtype=np.bool_)
-    idx = np.unique(np.linspace(0, n_qr - 1, min(history_points, n_qr)).round().astype(int))
-    flags[idx] = True
-    return times, elapsed, flags
-
-
-def pc_tangent(
-    system: Any,
-    t_end: float,
-    transient: float = 0.0,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    operator_state: Any = None,
-    include_phase: bool = False,
-    progress: bool = True,
-    qr_per_period: int = 8,
-    history_points: int = 200,
-    engine: str = "auto",
-    taylor: bool = True,
-) -> TangentResult:
-    """Lyapunov spectrum by QR (Benettin/Geist), averaged over [transient, t_end].
-
-    Tangent space (δq, δv) — or (δq, δv, δφ) with ``include_phase`` — propagated with the closed
-    form fundamental matrices of the segments and the saltation matrix at every switch.
-    ``exponents`` (and the columns of ``history``) are in descending order; ``labels`` names the
-    tangent-space basis, ``("q", "v")`` or ``("q", "v", "phi")``, in this fixed order — after the
-    QR re-orthonormalisation an exponent is not tied to one basis direction, so ``labels`` is not
-    a per-exponent tag (same convention as :func:`oscillators.play_flow.play_tangent`).
-
-    A switch reached exactly at a turning point (grazing, ``v* = 0``) makes the saltation
-    ``C·ΔM/v*`` infinite: the flow is not differentiable there and a ``FloatingPointError`` is
-    raised instead of returning NaN exponents.
+    ``method``: ``"auto"`` (the compiled kernel when the thresholds nest, else the generic
+    path), ``"nested"`` (require the kernel) or ``"generic"`` (the Python reference path through
+    ``switching()``/``apply()``). ``taylor=False`` disables the short-hop Taylor expansion
+    (exact propagator everywhere; a cross-check).
     """
-    t_end = float(t_end)
-    transient = float(transient)
-    if not math.isfinite(transient) or transient < 0.0:
-        raise ValueError(f"transient must be finite and >= 0, got {transient}")
-    if not math.isfinite(t_end) or t_end <= transient:
-        raise ValueError(f"t_end must be finite and > transient={transient}, got {t_end}")
-    run = _prepare(system, q0, v0, 0.0, operator_state, 0.0, engine, taylor)
-    period = float(run.par[kern.P_T])
-    if transient > 0.0:
-        tn, tt = _split_times(np.array([transient]), period)
-        _run_targets(run, tn, tt, False)
-    ntan = 3 if include_phase else 2
-    labels = ("q", "v", "phi")[:ntan]
-    y = np.zeros((3, 3))
-    for j in range(ntan):
-        y[j, j] = 1.0
-    times, elapsed, flags = _tangent_targets(
-        transient, t_end, period, qr_per_period, history_points
-    )
-    tgt_n, tgt_tau = _split_times(times, period)
-    lsum = np.zeros(3)
-    hist = np.zeros((int(flags.sum()), 3))
-    hcount = np.zeros(1, dtype=np.int64)
-    mp = kern.taylor_matrix_coefficients(float(system.damping_ratio))
-    bar = _progress_bar(progress and (t_end - transient) > 2000.0, t_end - transient)
-    chunk = max(1, int(200.0 / (period / qr_per_period)))
-    i = 0
-    while i < tgt_n.size:
-        j = min(i + chunk, tgt_n.size)
-        if run.engine is not None:
-            eng = run.engine
 
-            def on_target(r, _i=i):
-                kern._gram_schmidt(y, ntan, lsum)
-                if flags[_i + r]:
-                    hist[hcount[0], :ntan] = lsum[:ntan] / elapsed[_i + r]
-                    hcount[0] += 1
+    name = "relay"
 
-            eng.run_targets(tgt_n[i:j], tgt_tau[i:j], None, False, y, ntan, on_target)
-        else:
-            kern.run_tangent(
-                run.par,
-                run.plan.up,
-                run.plan.down,
-                run.plan.mval,
-                run.st,
-                run.ist,
-                tgt_n[i:j],
-                tgt_tau[i:j],
-                elapsed[i:j],
-                flags[i:j],
-                0,
-                y,
-                ntan,
-                mp,
-                lsum,
-                hist,
-                hcount,
-                True,
-            )
-            if not (np.all(np.isfinite(y)) and np.all(np.isfinite(lsum))):
-                # the kernel applies sal = inf at v* = 0; report it instead of NaN exponents
-                raise GrazingError(_grazing_message())
-        if bar is not None:
-            bar.update(float(elapsed[j - 1] - (elapsed[i - 1] if i > 0 else 0.0)))
-        i = j
-    if bar is not None:
-        bar.close()
-    duration = t_end - transient
-    raw = lsum[:ntan] / duration
-    order = np.argsort(-raw, kind="stable")
-    exponents = raw[order]
-    # history: the same descending order per checkpoint as the exponents (as in play_tangent)
-    history = -np.sort(-hist[: hcount[0], :ntan], axis=1)
-    _, _, _, _, nsw = run.final(system)
-    return TangentResult(
-        exponents=exponents,
-        labels=labels,
-        history_t=transient + elapsed[flags],
-        history=history,
-        n_switches=nsw,
-        t_end=t_end,
-        final=run.final_state(system),
-        extra={
-            "transient": transient,
-            "qr_per_period": qr_per_period,
-            "engine": "generic" if run.engine is not None else "equal-width kernel",
-        },
-    )
-
-
-def pc_jacobian(
-    system: Any,
-    duration: float,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    phi0: float = 0.0,
-    operator_state: Any = None,
-    include_phase: bool = True,
-    engine: str = "auto",
-    taylor: bool = True,
-) -> np.ndarray:
-    """Jacobian of the flow map over ``duration`` in (q, v[, φ]) (tangent flow, no QR)."""
-    run = _prepare(system, q0, v0, phi0, operator_state, 0.0, engine, taylor)
-    period = float(run.par[kern.P_T])
-    ntan = 3 if include_phase else 2
-    y = np.zeros((3, 3))
-    for j in range(ntan):
-        y[j, j] = 1.0
-    tn, tt = _split_times(np.array([float(duration)]), period)
-    if run.engine is not None:
-        run.engine.run_targets(tn, tt, None, False, y, ntan)
-    else:
-        mp = kern.taylor_matrix_coefficients(float(system.damping_ratio))
-        kern.run_tangent(
-            run.par,
-            run.plan.up,
-            run.plan.down,
-            run.plan.mval,
-            run.st,
-            run.ist,
-            tn,
-            tt,
-            np.array([float(duration)]),
-            np.zeros(1, dtype=np.bool_),
-            0,
-            y,
-            ntan,
-            mp,
-            np.zeros(3),
-            np.zeros((0, 3)),
-            np.zeros(1, dtype=np.int64),
-            False,
+    def __init__(
+        self, system: Any, state: OscillatorState, method: str = "auto", taylor: bool = True
+    ) -> None:
+        super().__init__(system, state)
+        methods = {"auto": "auto", "nested": "kernel", "kernel": "kernel", "generic": "generic"}
+        if method not in methods:
+            raise ValueError(f"method must be one of {sorted(methods)}, got {method!r}")
+        self._run = _prepare(
+            system,
+            state.q,
+            state.v,
+            float(state.phi),
+            state.operator_state,
+            float(state.t),
+            methods[method],
+            taylor,
         )
-        if not np.all(np.isfinite(y)):
-            raise GrazingError(_grazing_message())
-    return y[:ntan, :ntan].copy()
+        self.name = "relay generic" if self._run.engine is not None else "relay kernel"
+        self._period = float(self._run.par[kern.P_T])
+        self._chunks: list[np.ndarray] = []
+        self._y: np.ndarray | None = None
+        self._ntan = 0
+        self._mp = kern.taylor_matrix_coefficients(float(system.damping_ratio))
 
+    # -- motion
+    @property
+    def elapsed(self) -> float:
+        run = self._run
+        if run.engine is not None:
+            return run.engine.n * self._period + run.engine.tau
+        return int(run.ist[kern.I_N]) * self._period + float(run.st[kern.S_TAU])
 
-def _progress_bar(enabled: bool, total: float):
-    if not enabled:
-        return None
-    from tqdm.auto import tqdm
+    def _output(self) -> float:
+        run = self._run
+        if run.engine is not None:
+            return run.engine.output
+        return float(run.plan.mval[int(run.ist[kern.I_K])])
 
-    return tqdm(total=total, unit="tu", desc="tangent flow", leave=False)
+    def _qv(self) -> tuple[float, float]:
+        run = self._run
+        if run.engine is not None:
+            return run.engine.q, run.engine.v
+        return float(run.st[kern.S_Q]), float(run.st[kern.S_V])
+
+    def advance(
+        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
+    ) -> None:
+        times = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        tgt_n, tgt_tau = split_times(times, self._period)
+        run = self._run
+        if self._y is None:
+            o, sw = _run_targets(run, tgt_n, tgt_tau, record)
+            if out is not None:
+                out[:, :3] = o
+            if record and sw.size:
+                self._chunks.append(sw)
+            return
+        if record:
+            raise ValueError("record=True with the tangent flow on is not supported")
+        y, ntan = self._y, self._ntan
+        for i in range(tgt_n.size):
+            n1, t1 = tgt_n[i : i + 1], tgt_tau[i : i + 1]
+            if run.engine is not None:
+                run.engine.run_targets(n1, t1, None, False, y, ntan)
+            else:
+                kern.run_tangent(
+                    run.par,
+                    run.plan.up,
+                    run.plan.down,
+                    run.plan.mval,
+                    run.st,
+                    run.ist,
+                    n1,
+                    t1,
+                    np.zeros(1),
+                    np.zeros(1, dtype=np.bool_),
+                    0,
+                    y,
+                    ntan,
+                    self._mp,
+                    np.zeros(3),
+                    np.zeros((0, 3)),
+                    np.zeros(1, dtype=np.int64),
+                    False,
+                )
+                if not np.all(np.isfinite(y)):
+                    # the kernel applies sal = inf at v* = 0; report it instead of NaN
+                    raise GrazingError(_grazing_message())
+            if out is not None:
+                q, v = self._qv()
+                out[i, :3] = (q, v, self._output())
+
+    def state(self) -> OscillatorState:
+        return self._run.final_state(self.system)
+
+    def records(self) -> dict[str, np.ndarray]:
+        run = self._run
+        if run.engine is not None:
+            sw = np.array(run.engine.switches, dtype=float).reshape(-1, 4)
+        else:
+            sw = np.concatenate(self._chunks) if self._chunks else np.empty((0, 4))
+        return {"switches": _switch_array(sw)}
+
+    @property
+    def n_events(self) -> int:
+        run = self._run
+        if run.engine is not None:
+            return int(run.engine.n_switches)
+        return int(run.ist[kern.I_NSW])
+
+    # -- tangent flow
+    def start_tangent(self, include_phase: bool = False) -> None:
+        self._ntan = 3 if include_phase else 2
+        self._y = np.zeros((3, 3))
+        for j in range(self._ntan):
+            self._y[j, j] = 1.0
+
+    @property
+    def tangent_space(self) -> tuple[str, ...]:
+        return ("q", "v", "phi")[: self._ntan]
+
+    def deviations(self) -> np.ndarray:
+        if self._y is None:
+            raise RuntimeError("start_tangent() first")
+        return self._y[: self._ntan, : self._ntan].copy()
+
+    def set_deviations(self, y: np.ndarray) -> None:
+        if self._y is None:
+            raise RuntimeError("start_tangent() first")
+        y = np.asarray(y, dtype=np.float64)
+        if y.shape != (self._ntan, self._ntan):
+            raise ValueError(
+                f"deviations must have shape {(self._ntan, self._ntan)}, got {y.shape}"
+            )
+        self._y[: self._ntan, : self._ntan] = y
+
+    def rank_bound(self) -> int:
+        # relay systems carry no memory directions; the saltation has determinant 1
+        return self._ntan

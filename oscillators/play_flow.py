@@ -36,11 +36,11 @@ to ``v``) gives exactly the paper's ``V_out``: ``δw := δq``, (δq, δv, δφ) 
 time-lag correction in (q, v). The tests check this against finite differences of the
 stroboscopic map.
 
-Lyapunov spectrum: Benettin/QR (modified Gram–Schmidt) every ``renormalize_dt`` and at every
-exit. ``V_out`` has rank k-1 (kernel: the pure-δw direction), so after an exit the last diagonal
-element of R is exactly 0: it is recorded structurally as ``log R_kk = -inf`` (the paper's
-``λ_4 = -∞``), not as the log of a round-off remainder; the remainder actually found is reported
-in ``extra["collapse_residual"]`` (~1e-16).
+Lyapunov spectrum: the one Benettin/QR loop of :mod:`analysis.lyapunov` drives
+:class:`PlayEngine`. ``V_out`` has rank k-1 (kernel: the pure-δw direction), so after an exit
+the last diagonal element of R is exactly 0; the engine reports it through ``rank_bound()`` and
+the loop records ``log R_kk = -inf`` structurally (the paper's ``λ_4 = -∞``), not the log of a
+round-off remainder.
 
 Invariant used in the tests: on a wall the tangent flow restricted to ``{δw = δq}`` has trace
 ``-2ζ``; inside, the (δq, δv) map from an entry (time ``t_e``) to the next exit (``Δ`` later) is
@@ -59,18 +59,13 @@ from typing import Any
 
 import numpy as np
 
-from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
+from hysteresis._validation import finite_scalar
 from oscillators import _play_kernels as _k
+from oscillators.engine import Engine, wrap_phase
 from oscillators.linear import particular_amplitudes
-from oscillators.results import OscillatorState, PoincareSection, TangentResult, Trajectory
+from oscillators.results import OscillatorState
 
-__all__ = [
-    "play_trajectory",
-    "play_poincare",
-    "play_tangent",
-    "play_fundamental_matrix",
-    "EVENT_DTYPE",
-]
+__all__ = ["EVENT_DTYPE", "PlayEngine", "make_parameters"]
 
 #: Fields of ``Trajectory.events``: kind +1 = the input leaves the play onto a wall (hit),
 #: -1 = it enters the play (reversal on a wall); ``w`` is the wagon position at the event.
@@ -87,18 +82,18 @@ _EPS = np.finfo(np.float64).eps
 # parameters and initial state
 # --------------------------------------------------------------------------------------------
 def _shape_code(operator: Any) -> tuple[float, float]:
-    """(kind, spread) of a play-type operator: 0 identity (PlayOperator), 1 erf."""
-    if not hasattr(operator, "width"):
-        raise ValueError("system.operator must be a PlayOperator or GeneralizedPlay (no width)")
-    kind = getattr(operator, "shape_kind", None)
-    if kind is None or kind == "identity":
+    """(kind, spread) from the operator's ``compiled_play()``: 0 identity, 1 erf."""
+    spec = operator.compiled_play() if callable(getattr(operator, "compiled_play", None)) else None
+    if spec is None:
+        raise ValueError(
+            f"{operator!r} has no compiled play description (compiled_play() is None); the "
+            "generic continuous engine integrates it"
+        )
+    if spec.shape == "identity":
         return 0.0, 1.0
-    if kind == "erf":
-        return 1.0, float(operator.spread)
-    raise NotImplementedError(
-        f"play_flow integrates the plain play and GeneralizedPlay.erf only; shape_kind={kind!r} "
-        "(a custom shape) has no compiled kernel"
-    )
+    if spec.shape == "erf":
+        return 1.0, float(spec.spread)
+    raise ValueError(f"compiled play shape must be 'identity' or 'erf', got {spec.shape!r}")
 
 
 def make_parameters(
@@ -112,7 +107,7 @@ def make_parameters(
     zeta = finite_scalar(system.damping_ratio, "damping_ratio")
     omega = finite_scalar(system.frequency, "frequency")
     coupling = finite_scalar(system.coupling, "coupling")
-    width = finite_scalar(system.operator.width, "width")
+    width = finite_scalar(system.operator.compiled_play().width, "width")
     phi0 = finite_scalar(phi0, "phi0")
     if not 0.0 <= zeta < 1.0:
         raise ValueError(
@@ -206,65 +201,6 @@ def _play_state(q: float, w: float) -> Any:
     return PlayState(float(w), float(q))
 
 
-def _final_state(par: np.ndarray, st: np.ndarray) -> OscillatorState:
-    phi = math.fmod(par[6] + par[1] * st[0], 2.0 * math.pi)
-    if phi < 0.0:
-        phi += 2.0 * math.pi
-    return OscillatorState(
-        q=float(st[1]),
-        v=float(st[2]),
-        phi=phi,
-        operator_state=_play_state(st[1], st[3]),
-        t=float(st[0]),
-    )
-
-
-def _sample(
-    par: np.ndarray, st: np.ndarray, times: np.ndarray, keep_events: bool, progress: bool, desc: str
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Advance through ``times``; returns samples (n, 3) [q, v, w], events (m, 5), count."""
-    out = np.empty((times.size, 3))
-    empty_t = np.zeros((4, 0))
-    logs = np.zeros(0)
-    diag = np.zeros(4)
-    flags = np.array([0, 1], dtype=np.int64)
-    work = _k.make_work(0)
-    events = []
-    n_events = 0
-    n_chunks = max(1, min(200, times.size // 2000))
-    bounds = np.linspace(0, times.size, n_chunks + 1).astype(int)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=times.size, desc=desc, unit="pt")
-    for i0, i1 in zip(bounds[:-1], bounds[1:], strict=True):
-        if i1 <= i0:
-            continue
-        span = times[i1 - 1] - st[0]
-        cap = int(20.0 * span + 100) if keep_events else 0
-        while True:
-            saved = st.copy()
-            ev = np.empty((cap, 5))
-            cnt = np.zeros(1, dtype=np.int64)
-            _k.sample_kernel(
-                par, st, times[i0:i1], out[i0:i1], empty_t, logs, diag, ev, cnt, flags, work
-            )
-            if not keep_events or cnt[0] <= cap:
-                break
-            st[:] = saved
-            cap = int(cnt[0]) + 100
-        n_events += int(cnt[0])
-        if keep_events:
-            events.append(ev[: cnt[0]].copy())
-        if bar is not None:
-            bar.update(i1 - i0)
-    if bar is not None:
-        bar.close()
-    ev_all = np.concatenate(events) if events else np.empty((0, 5))
-    return out, ev_all, n_events
-
-
 def _events_array(ev: np.ndarray) -> np.ndarray:
     arr = np.empty(ev.shape[0], dtype=EVENT_DTYPE)
     arr["time"] = ev[:, 0]
@@ -276,277 +212,147 @@ def _events_array(ev: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------------------------
-# public API
+# the engine
 # --------------------------------------------------------------------------------------------
-def play_trajectory(
-    system: Any,
-    t_end: float,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    w0: float | None = None,
-    sample_dt: float = 0.01,
-    phi0: float = 0.0,
-    *,
-    operator_state: Any = None,
-    progress: bool = False,
-) -> Trajectory:
-    """Trajectory of the oscillator with a play-type operator, sampled every ``sample_dt``.
+class PlayEngine(Engine):
+    """Compiled play-limit engine: plain play and ``GeneralizedPlay.erf`` (the paper's limit).
 
-    Parameters
-    ----------
-    system:
-        Object with ``operator`` (``PlayOperator`` or ``GeneralizedPlay.erf``), ``coupling`` (C),
-        ``damping_ratio`` (ζ, in [0, 1)) and ``frequency`` (Ω).
-    t_end:
-        Final time (> 0); samples at ``0, sample_dt, ...`` and at ``t_end``.
-    q0, v0:
-        Initial position and velocity (paper: -1, 0.1).
-    w0:
-        Initial wagon position, ``|q0 - w0| <= p/2``; ``None`` means ``q0 - p/2`` (paper's
-        ``w0 = q0 - p/2``: on the right wall). Alternatively ``operator_state`` (a ``PlayState``).
-    phi0:
-        Initial forcing phase φ(0); the force is ``cos(φ0 + Ω t)``.
-
-    Returns
-    -------
-    Trajectory with ``w`` (wagon position), ``M = f(w)``, ``phi`` (mod 2π) and ``events``
-    (structured: ``time, q, v, kind, w``; kind +1 leaving the play onto a wall, -1 entering).
+    Tangent space ``(q, v[, phi], w)``. Between the loop's re-orthonormalisations ``V_out``
+    (``δw := δq`` at a wall hit) is applied as a plain matrix; every wall hit since the last
+    :meth:`set_deviations` lowers :meth:`rank_bound` by one (the ``w`` direction is gone), so the
+    QR loop records the paper's ``λ = -∞`` structurally.
     """
-    t_end = finite_scalar(t_end, "t_end")
-    sample_dt = finite_scalar(sample_dt, "sample_dt")
-    if not t_end > 0.0:
-        raise ValueError(f"t_end must be > 0, got {t_end}")
-    if not sample_dt > 0.0:
-        raise ValueError(f"sample_dt must be > 0, got {sample_dt}")
-    par = make_parameters(system, phi0)
-    st, _ = _initial_state(par, q0, v0, w0, operator_state)
-    n = int(math.floor(t_end / sample_dt + 1e-9)) + 1
-    times = np.arange(n) * sample_dt
-    if t_end - times[-1] > 1e-9 * sample_dt:
-        times = np.append(times, t_end)
-    out, ev, _ = _sample(par, st, times, True, progress, "play trajectory")
-    phi = np.mod(phi0 + par[1] * times, 2.0 * math.pi)
-    return Trajectory(
-        t=times,
-        q=out[:, 0].copy(),
-        v=out[:, 1].copy(),
-        phi=phi,
-        M=_shape_value(par, out[:, 2]),
-        switches=np.empty(0, dtype=_SWITCH_DTYPE),
-        final=_final_state(par, st),
-        w=out[:, 2].copy(),
-        events=_events_array(ev),
-    )
 
+    name = "play kernel"
 
-def play_poincare(
-    system: Any,
-    n_periods: int,
-    transient_periods: int = 0,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    w0: float | None = None,
-    operator_state: Any = None,
-    *,
-    phi0: float = 0.0,
-    progress: bool = False,
-) -> PoincareSection:
-    """Stroboscopic section at φ = 0 mod 2π: one point per forcing period ``T = 2π/Ω``.
+    @classmethod
+    def check_system(cls, system: Any) -> None:
+        """Refuse parameters the kernel does not integrate (checked at construction)."""
+        make_parameters(system)
 
-    Same convention as :meth:`ForcedOscillator.poincare_section` and
-    :func:`oscillators.piecewise_constant.pc_poincare`: the points are the states at the section
-    times ``t_k >= 0`` numbered from 0, ``k = transient_periods + i``, ``i = 0..n_periods-1``.
-    For ``phi0 = 0`` that is ``t = (transient_periods + i)·T``, so without transient the first
-    point is the initial state; otherwise ``t_0 = ((-phi0) mod 2π)/Ω``. ``w`` holds the wagon
-    position, ``M = f(w)``; ``n_switches`` counts wall hits plus reversals over the whole run.
-    """
-    n_periods = positive_integer(n_periods, "n_periods")
-    transient_periods = nonnegative_integer(transient_periods, "transient_periods")
-    phi0 = finite_scalar(phi0, "phi0")
-    par = make_parameters(system, phi0)
-    st, _ = _initial_state(par, q0, v0, w0, operator_state)
-    period = 2.0 * math.pi / par[1]
-    t_first = math.fmod(-phi0, 2.0 * math.pi)
-    if t_first < 0.0:
-        t_first += 2.0 * math.pi
-    t_first /= par[1]
-    # t = 0 itself is a section time when phi0 = 0: the sampler returns the start state there.
-    times = t_first + np.arange(transient_periods + n_periods) * period
-    out, _, n_events = _sample(par, st, times, False, progress, "play Poincaré section")
-    keep = slice(transient_periods, None)
-    return PoincareSection(
-        q=out[keep, 0].copy(),
-        v=out[keep, 1].copy(),
-        M=_shape_value(par, out[keep, 2]),
-        final=_final_state(par, st),
-        w=out[keep, 2].copy(),
-        n_switches=n_events,
-    )
+    def __init__(self, system: Any, state: OscillatorState, saltation: bool = True) -> None:
+        super().__init__(system, state)
+        if not isinstance(saltation, bool):
+            raise TypeError(f"saltation must be a bool, got {saltation!r}")
+        self._par = make_parameters(system, float(state.phi))
+        opstate = state.operator_state
+        if getattr(opstate, "position", None) is None:
+            raise TypeError(
+                f"operator_state must be a PlayState (attribute 'position' = w), got "
+                f"{type(opstate).__name__}"
+            )
+        self._st, self._on_wall = _initial_state(self._par, state.q, state.v, None, opstate)
+        self._T = np.zeros((4, 0))
+        self._diag = np.zeros(4)
+        self._work = _k.make_work(0)
+        # [accumulate event counts, qr_mode]: 0 applies V_out as a plain matrix; 2 omits it (a
+        # diagnostic showing that the saltation is needed, ``saltation=False``)
+        self._flags = np.array([1, 0 if saltation else 2], dtype=np.int64)
+        self._events: list[np.ndarray] = []
+        self._n_events = 0
+        self._rows: list[int] = []
+        self._exits_at_set = 0.0
+        self._w_reset = False
 
+    @property
+    def sample_columns(self) -> tuple[str, ...]:
+        return ("q", "v", "M", "w")
 
-def _initial_frame(include_phase: bool) -> np.ndarray:
-    cols = [0, 1, 2, 3] if include_phase else [0, 1, 3]
-    frame = np.zeros((4, len(cols)))
-    for j, r in enumerate(cols):
-        frame[r, j] = 1.0
-    return frame
+    @property
+    def elapsed(self) -> float:
+        return float(self._st[0])
 
-
-def play_fundamental_matrix(
-    system: Any,
-    t_end: float,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    w0: float | None = None,
-    operator_state: Any = None,
-    *,
-    phi0: float = 0.0,
-    include_phase: bool = False,
-    saltation: bool = True,
-) -> tuple[np.ndarray, OscillatorState]:
-    """Derivative of the flow map over ``[0, t_end]`` with respect to the initial state.
-
-    Rows and columns are ``(q, v, w)`` (or ``(q, v, φ, w)`` with ``include_phase``). Built from
-    the same segments as the trajectory: exact ``W0`` inside, RK8 ``W1`` on walls, ``V_in = I``,
-    ``V_out`` (δw := δq) at every wall hit, applied as plain matrices (no re-orthonormalisation).
-    A start on a wall moving outward is a wall hit at t = 0 (one-sided derivative: a δw into the
-    play is wiped out), so the w column is then zero.
-    """
-    t_end = finite_scalar(t_end, "t_end")
-    if not t_end > 0.0:
-        raise ValueError(f"t_end must be > 0, got {t_end}")
-    par = make_parameters(system, phi0)
-    st, on_wall = _initial_state(par, q0, v0, w0, operator_state)
-    T = _initial_frame(include_phase)
-    logs = np.zeros(T.shape[1])
-    diag = np.zeros(4)
-    mode = 0 if saltation else 2
-    flags = np.array([0, mode], dtype=np.int64)
-    if on_wall:
-        _k.leave_play(T, logs, diag, False, mode)
-    ev = np.empty((0, 5))
-    cnt = np.zeros(1, dtype=np.int64)
-    _k.advance(par, st, t_end, T, logs, diag, ev, cnt, flags, _k.make_work(T.shape[1]))
-    rows = [0, 1, 2, 3] if include_phase else [0, 1, 3]
-    return T[rows, :].copy(), _final_state(par, st)
-
-
-def play_tangent(
-    system: Any,
-    t_end: float,
-    transient: float = 0.0,
-    q0: float = -1.0,
-    v0: float = 0.1,
-    w0: float | None = None,
-    operator_state: Any = None,
-    include_phase: bool = False,
-    progress: bool = True,
-    renormalize_dt: float = 1.0,
-    *,
-    phi0: float = 0.0,
-    record_events: bool = False,
-) -> TangentResult:
-    """Lyapunov spectrum of the play-limit system by the tangent flow (Benettin/QR).
-
-    The run covers ``[0, t_end]``; the exponents are averaged over ``[transient, t_end]``. Tangent
-    space ``(q, v, w)`` (paper: the phase direction neglected, δφ ≡ 0) or ``(q, v, φ, w)`` with
-    ``include_phase`` (adds the exponent 0 of the phase); ``labels`` names that tangent-space basis,
-    ``("q", "v", "w")`` or ``("q", "v", "phi", "w")``, in this fixed order. After the QR
-    re-orthonormalisation the exponents are not tied to single basis directions, so ``labels`` is
-    not a per-exponent tag. Exponents in descending order; the last is exactly ``-inf`` as soon as
-    the input leaves the play after the transient (rank collapse at ``V_out``, module docstring).
-    ``history`` holds the running estimates (sorted, one row per checkpoint). ``extra``:
-    ``n_exits``, ``n_entries`` (after the transient), ``collapse_residual`` (largest relative
-    remainder of the collapsed column, a round-off check), ``log_sums``, ``transient``,
-    ``renormalize_dt``, and with ``record_events`` the wall hits / reversals of the whole run
-    (``events``, as in :func:`play_trajectory`).
-    """
-    t_end = finite_scalar(t_end, "t_end")
-    transient = finite_scalar(transient, "transient")
-    renormalize_dt = finite_scalar(renormalize_dt, "renormalize_dt")
-    if not transient >= 0.0:
-        raise ValueError(f"transient must be >= 0, got {transient}")
-    if not t_end > transient:
-        raise ValueError(f"t_end must be > transient = {transient}, got {t_end}")
-    if not renormalize_dt > 0.0:
-        raise ValueError(f"renormalize_dt must be > 0, got {renormalize_dt}")
-    par = make_parameters(system, phi0)
-    st, on_wall = _initial_state(par, q0, v0, w0, operator_state)
-    T = _initial_frame(include_phase)
-    k = T.shape[1]
-    logs = np.zeros(k)
-    diag = np.zeros(4)
-    recorder: list | None = [] if record_events else None
-    work = _k.make_work(k)
-    flags = np.array([1 if transient == 0.0 else 0, 1], dtype=np.int64)
-    if on_wall:
-        _k.leave_play(T, logs, diag, flags[0] != 0, 1)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=float(t_end), desc="play tangent flow", unit="t", leave=False)
-    if transient > 0.0:
-        _chunked(par, st, transient, renormalize_dt, T, logs, diag, flags, work, bar, recorder)
-        flags[0] = 1
-    span = t_end - transient
-    n_hist = int(min(500, max(1, round(span / renormalize_dt))))
-    checkpoints = transient + span * np.arange(1, n_hist + 1) / n_hist
-    checkpoints[-1] = t_end
-    history = np.empty((n_hist, k))
-    for i, t_c in enumerate(checkpoints):
-        _chunked(par, st, t_c, renormalize_dt, T, logs, diag, flags, work, bar, recorder)
-        history[i] = np.sort(logs / (t_c - transient))[::-1]
-    if bar is not None:
-        bar.close()
-    exponents = np.sort(logs / span)[::-1]
-    # the tangent-space basis (fixed order), not a per-exponent tag: see the docstring
-    labels = ("q", "v", "phi", "w") if include_phase else ("q", "v", "w")
-    extra_events = {}
-    if recorder is not None:
-        ev_all = np.concatenate(recorder) if recorder else np.empty((0, 5))
-        extra_events["events"] = _events_array(ev_all)
-    return TangentResult(
-        exponents=exponents,
-        labels=labels,
-        history_t=checkpoints,
-        history=history,
-        n_switches=int(diag[0] + diag[1]),
-        t_end=t_end,
-        final=_final_state(par, st),
-        extra={
-            "n_exits": int(diag[0]),
-            "n_entries": int(diag[1]),
-            "collapse_residual": float(diag[2]),
-            "n_collapses": int(diag[3]),
-            "log_sums": logs.copy(),
-            "transient": transient,
-            "renormalize_dt": renormalize_dt,
-            **extra_events,
-        },
-    )
-
-
-def _chunked(par, st, t_stop, renorm, T, logs, diag, flags, work, bar, recorder) -> None:
-    """Tangent kernel to ``t_stop`` in pieces of ~200 time units (progress bar updates); with a
-    ``recorder`` list the events of each piece are appended (a piece whose event buffer
-    overflows is redone from a snapshot with a larger buffer)."""
-    cap = 0
-    while st[0] < t_stop:
-        t0 = st[0]
-        t_next = min(t_stop, t0 + max(200.0, renorm))
-        if recorder is not None:
-            cap = max(cap, int(20.0 * (t_next - t0)) + 100)
-            snapshot = (st.copy(), T.copy(), logs.copy(), diag.copy())
+    def advance(
+        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
+    ) -> None:
+        times = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        buf = np.empty((times.size, 3))
+        span = float(times[-1] - self._st[0]) if times.size else 0.0
+        cap = int(20.0 * max(span, 0.0) + 100) if record else 0
         while True:
+            saved = (self._st.copy(), self._T.copy(), self._diag.copy())
             ev = np.empty((cap, 5))
             cnt = np.zeros(1, dtype=np.int64)
-            _k.tangent_kernel(par, st, t_next, renorm, T, logs, diag, ev, cnt, flags, work)
-            if recorder is None or cnt[0] <= cap:
+            _k.sample_kernel(
+                self._par,
+                self._st,
+                times,
+                buf,
+                self._T,
+                self._diag,
+                ev,
+                cnt,
+                self._flags,
+                self._work,
+            )
+            if not record or cnt[0] <= cap:
                 break
-            st[:], T[:], logs[:], diag[:] = snapshot
+            self._st[:], self._T[:], self._diag[:] = saved
             cap = int(cnt[0]) + 100
-        if recorder is not None:
-            recorder.append(ev[: cnt[0]].copy())
-        if bar is not None:
-            bar.update(st[0] - t0)
+        self._n_events += int(cnt[0])
+        if record:
+            self._events.append(ev[: cnt[0]].copy())
+        if out is not None:
+            out[:, 0] = buf[:, 0]
+            out[:, 1] = buf[:, 1]
+            out[:, 2] = _shape_value(self._par, buf[:, 2])
+            if out.shape[1] > 3:
+                out[:, 3] = buf[:, 2]
+
+    def state(self) -> OscillatorState:
+        st = self._st
+        return OscillatorState(
+            q=float(st[1]),
+            v=float(st[2]),
+            phi=wrap_phase(float(self._par[6] + self._par[1] * st[0])),
+            operator_state=_play_state(st[1], st[3]),
+            t=float(self.start.t + st[0]),
+        )
+
+    def records(self) -> dict[str, np.ndarray]:
+        ev = np.concatenate(self._events) if self._events else np.empty((0, 5))
+        return {"events": _events_array(ev)}
+
+    @property
+    def n_events(self) -> int:
+        return self._n_events
+
+    # -- tangent flow
+    def start_tangent(self, include_phase: bool = False) -> None:
+        self._rows = [0, 1, 2, 3] if include_phase else [0, 1, 3]
+        k = len(self._rows)
+        self._T = np.zeros((4, k))
+        for j, r in enumerate(self._rows):
+            self._T[r, j] = 1.0
+        self._work = _k.make_work(k)
+        self._exits_at_set = float(self._diag[0])
+        self._w_reset = False
+        if self._st[4] != 0.0:
+            # on a wall moving outward: w is slaved from the start (one-sided derivative)
+            _k.leave_play(self._T, int(self._flags[1]))
+            self._w_reset = True
+
+    @property
+    def tangent_space(self) -> tuple[str, ...]:
+        return ("q", "v", "phi", "w") if len(self._rows) == 4 else ("q", "v", "w")
+
+    def deviations(self) -> np.ndarray:
+        if not self._rows:
+            raise RuntimeError("start_tangent() first")
+        return self._T[self._rows, :].copy()
+
+    def set_deviations(self, y: np.ndarray) -> None:
+        if not self._rows:
+            raise RuntimeError("start_tangent() first")
+        y = np.asarray(y, dtype=np.float64)
+        k = len(self._rows)
+        if y.shape != (k, k):
+            raise ValueError(f"deviations must have shape {(k, k)}, got {y.shape}")
+        self._T[:] = 0.0
+        self._T[self._rows, :] = y
+        self._exits_at_set = float(self._diag[0])
+        self._w_reset = False
+
+    def rank_bound(self) -> int:
+        lost = self._w_reset or self._diag[0] > self._exits_at_set
+        return len(self._rows) - (1 if lost else 0)

@@ -6,12 +6,12 @@ integrator (event-driven relay kernel, play-limit flow, generic Python loop) pro
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["OscillatorState", "Trajectory", "PoincareSection", "TangentResult"]
+__all__ = ["OscillatorState", "Trajectory", "PoincareSection"]
 
 
 @dataclass(frozen=True)
@@ -56,23 +56,3 @@ class PoincareSection:
     final: OscillatorState
     w: np.ndarray | None = None
     n_switches: int = 0
-
-
-@dataclass(frozen=True)
-class TangentResult:
-    """Raw output of a tangent-flow (Benettin/QR) run.
-
-    ``exponents`` are in descending order (after QR they belong to no single coordinate);
-    ``labels`` names the basis of the tangent space the flow ran in (e.g. ``("q", "v", "w")``);
-    ``history`` holds the running estimates (rows: checkpoints, each sorted descending) at times
-    ``history_t``.
-    """
-
-    exponents: np.ndarray
-    labels: tuple[str, ...]
-    history_t: np.ndarray
-    history: np.ndarray
-    n_switches: int
-    t_end: float
-    final: OscillatorState
-    extra: dict = field(default_factory=dict)

@@ -1,26 +1,43 @@
 """The forced oscillator coupled to a hysteresis operator, as a system object.
 
 Paper eq. (eom_2): ``q'' + 2ζ q' + q = cos φ + C·M[q]``, ``φ' = Ω``, state
-``x = (q, v = q', φ)`` plus the operator's memory. The object holds the parameters and the
-operator; integrators are chosen by operator type:
+``x = (q, v = q', φ)`` plus the operator's memory (its state object). The system holds the
+parameters and the operator; it asks the operator's contract once which engine integrates it
+(:func:`oscillators.engine.select_engine`) and writes every derived map once on top of the
+:class:`~oscillators.engine.Engine` interface: trajectories, Poincaré (stroboscopic) sections, the
+stroboscopic map and flow-map Jacobians. Lyapunov spectra live in :mod:`analysis.lyapunov`.
 
-* piecewise-constant operators (relay, discrete Preisach, spin dimers): exact event-driven
-  integration (:mod:`oscillators.piecewise_constant`);
-* play-type operators (``PlayOperator``, ``GeneralizedPlay``): the play-limit flow
-  (:mod:`oscillators.play_flow`).
+Every driver checks the state it reports: a non-finite or runaway state raises
+:class:`~oscillators.engine.DivergenceError` naming the time, never a number.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
-from hysteresis._validation import finite_scalar
+import numpy as np
+
+from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
 from hysteresis.base import Hysteron
-from oscillators import piecewise_constant as pc
-from oscillators.results import OscillatorState, PoincareSection, TangentResult, Trajectory
+from oscillators.engine import DivergenceError, Engine, select_engine, wrap_phase
+from oscillators.results import OscillatorState, PoincareSection, Trajectory
 
 __all__ = ["ForcedOscillator"]
+
+_SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8")])
+
+#: Largest number of forcing periods / samples a single call may demand (a guard against
+#: parameters such as Ω = 1e-300 that would make a run last forever).
+MAX_PERIODS = 10**8
+MAX_SAMPLES = 10**8
+
+
+def _real_parameter(value: Any, name: str) -> float:
+    if isinstance(value, (str, bytes)) or value is None or isinstance(value, complex):
+        raise TypeError(f"{name} must be a real number, got {value!r}")
+    return finite_scalar(value, name)
 
 
 class ForcedOscillator:
@@ -29,15 +46,23 @@ class ForcedOscillator:
     Parameters
     ----------
     operator:
-        Any :class:`~hysteresis.base.Hysteron` (the paper's ``M[q]``).
+        Any :class:`~hysteresis.base.Hysteron` whose contract hands over what an engine needs
+        (``relay_table()`` for piecewise-constant operators, ``branch_flow()`` for continuous
+        ones). Checked here, not first at integration time.
     coupling:
-        C, strength of the hysteresis force (finite, any sign).
+        C, strength of the hysteresis force (finite, any sign, ``|C| <= 1e6``).
     damping_ratio:
-        ζ >= 0 (Table II: 0.05); play-type operators need ζ < 1 (the play-limit integrator
-        uses the underdamped closed form).
+        ζ in [0, 1e6]; the compiled play-limit engine needs ζ < 1 (underdamped closed form).
     frequency:
-        Ω > 0, excitation frequency (Table II: 1.0). ζ = 0 with Ω = 1 (undamped resonance) is
-        rejected.
+        Ω in [1e-6, 1e6], the excitation frequency (Table II: 1.0). ζ = 0 with Ω = 1 (undamped
+        resonance) is rejected.
+
+    Notes
+    -----
+    An operator with unbounded output and slope ``s`` on a branch gives the stiffness
+    ``1 − C·s`` there; for ``C·s >= 1`` the coupled motion is a positive-feedback instability
+    (the plain play at ``C >= 1``). Such systems are accepted with a ``RuntimeWarning`` and any
+    run that diverges raises :class:`~oscillators.engine.DivergenceError`.
     """
 
     def __init__(
@@ -48,28 +73,38 @@ class ForcedOscillator:
         frequency: float = 1.0,
     ) -> None:
         if not isinstance(operator, Hysteron):
-            raise ValueError(f"operator must be a Hysteron, got {type(operator).__name__}")
-        self._operator = operator
-        self._coupling = finite_scalar(coupling, "coupling")
-        zeta = finite_scalar(damping_ratio, "damping_ratio")
-        if zeta < 0.0:
-            raise ValueError(f"damping_ratio must be >= 0, got {damping_ratio}")
-        omega = finite_scalar(frequency, "frequency")
-        if omega <= 0.0:
-            raise ValueError(f"frequency must be > 0, got {frequency}")
+            raise TypeError(f"operator must be a Hysteron, got {type(operator).__name__}")
+        coupling = _real_parameter(coupling, "coupling")
+        if abs(coupling) > 1e6:
+            raise ValueError(f"coupling must lie in [-1e6, 1e6], got {coupling}")
+        zeta = _real_parameter(damping_ratio, "damping_ratio")
+        if not 0.0 <= zeta <= 1e6:
+            raise ValueError(f"damping_ratio must lie in [0, 1e6], got {damping_ratio}")
+        omega = _real_parameter(frequency, "frequency")
+        if not 1e-6 <= omega <= 1e6:
+            raise ValueError(f"frequency must lie in [1e-6, 1e6], got {frequency}")
         if zeta == 0.0 and omega == 1.0:
             raise ValueError(
                 "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
             )
-        if zeta >= 1.0 and self.is_play_type:
-            # checked here, not first at integration time: the play-limit flow
-            # (oscillators.play_flow) uses the underdamped propagator only
-            raise ValueError(
-                f"damping_ratio must lie in [0, 1) for play-type operators (the play-limit "
-                f"integrator supports underdamped motion only), got {zeta}"
-            )
+        self._operator = operator
+        self._coupling = coupling
         self._zeta = zeta
         self._omega = omega
+        self._engine_cls = select_engine(operator)
+        check = getattr(self._engine_cls, "check_system", None)
+        if check is not None:
+            check(self)
+        lo, hi = operator.output_range
+        if (math.isinf(lo) or math.isinf(hi)) and coupling >= 1.0:
+            warnings.warn(
+                f"{operator!r} has an unbounded output; with coupling C = {coupling} >= 1 the "
+                "stiffness 1 − C·slope can vanish or turn negative on a branch of slope 1 "
+                "(positive-feedback instability): runs may diverge and then raise "
+                "DivergenceError",
+                RuntimeWarning,
+                stacklevel=2,
+            )
 
     # -- parameters --------------------------------------------------------------------------
     @property
@@ -79,7 +114,7 @@ class ForcedOscillator:
 
     @property
     def coupling(self) -> float:
-        """C."""
+        """C, the strength of the hysteretic force."""
         return self._coupling
 
     @property
@@ -97,52 +132,74 @@ class ForcedOscillator:
         """Forcing period T = 2π/Ω."""
         return 2.0 * math.pi / self._omega
 
+    @property
+    def engine_class(self) -> type[Engine]:
+        """The engine chosen for the operator (from its contract)."""
+        return self._engine_cls
+
     def __repr__(self) -> str:
         return (
             f"ForcedOscillator({self._operator!r}, coupling={self._coupling!r}, "
             f"damping_ratio={self._zeta!r}, frequency={self._omega!r})"
         )
 
-    # -- dispatch ----------------------------------------------------------------------------
-    @property
-    def is_play_type(self) -> bool:
-        """True for ``PlayOperator`` / ``GeneralizedPlay`` (memory: the wagon position w)."""
-        from hysteresis.play import GeneralizedPlay, PlayOperator
+    # -- states and engines --------------------------------------------------------------------
+    def initial_state(
+        self,
+        q0: float = -1.0,
+        v0: float = 0.1,
+        operator_state: Any = None,
+        phi0: float = 0.0,
+        t0: float = 0.0,
+    ) -> OscillatorState:
+        """The full state at ``t0``; ``operator_state=None`` means ``initial_state(q0)``.
 
-        return isinstance(self._operator, (PlayOperator, GeneralizedPlay))
-
-    def _kind(self) -> str:
-        if getattr(self._operator, "piecewise_constant", False):
-            return "pc"
-        if self.is_play_type:
-            return "play"
-        return "continuous"
-
-    def _unsupported(self) -> NotImplementedError:
-        return NotImplementedError(
-            f"{type(self._operator).__name__} is a continuous operator that is not play-type; "
-            "the oscillator integrates piecewise-constant operators and PlayOperator/"
-            "GeneralizedPlay only"
+        The paper's initial condition (Table II) is ``q0 = -1, v0 = 0.1`` with the operator
+        rising from negative saturation to ``q0`` (all spins down, then relaxed; the play's
+        ``w0 = q0 − p/2``). Any other memory is passed as an explicit operator state, e.g.
+        ``play.state(position=w0, input=q0)``.
+        """
+        q0 = _real_parameter(q0, "q0")
+        v0 = _real_parameter(v0, "v0")
+        phi0 = _real_parameter(phi0, "phi0")
+        t0 = _real_parameter(t0, "t0")
+        if operator_state is None:
+            operator_state = self._operator.initial_state(q0)
+        return OscillatorState(
+            q=q0, v=v0, phi=wrap_phase(phi0), operator_state=operator_state, t=t0
         )
 
-    def _play_w0(self, q0: float, operator_state: Any, w0: float | None) -> float:
-        if operator_state is not None and w0 is not None:
-            raise ValueError("give either operator_state or w0, not both")
-        if w0 is not None:
-            return finite_scalar(w0, "w0")
-        if operator_state is not None:
-            return float(operator_state.position)
-        return float(self._operator.initial_state(q0).position)
+    def engine(self, state: OscillatorState | None = None, **engine_options: Any) -> Engine:
+        """A fresh engine started from ``state`` (default: :meth:`initial_state`)."""
+        if state is None:
+            state = self.initial_state()
+        if not isinstance(state, OscillatorState):
+            raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
+        return self._engine_cls(self, state, **engine_options)
 
-    def initial_operator_state(self, q0: float = -1.0, w0: float | None = None) -> Any:
-        """Operator state at t = 0: ``initial_state(q0)``, or the play at wagon position w0."""
-        if w0 is not None:
-            if not self.is_play_type:
-                raise ValueError("w0 is only meaningful for play-type operators")
-            return self._operator.state(finite_scalar(w0, "w0"), finite_scalar(q0, "q0"))
-        return self._operator.initial_state(finite_scalar(q0, "q0"))
+    def check_finite(
+        self, engine: Engine, values: np.ndarray, times: np.ndarray | None = None
+    ) -> None:
+        """Raise :class:`DivergenceError` if ``values`` (rows of states just computed, first
+        columns q and v) are not finite or have run away (``|q|`` or ``|v|`` above ``1e12``).
 
-    # -- integration ------------------------------------------------------------------------
+        ``times`` (elapsed, one per row) locate the first bad row in the message.
+        """
+        values = np.asarray(values, dtype=np.float64)
+        good = np.isfinite(values) & (np.abs(values) <= 1e12)
+        if good.all():
+            return
+        rows = good.reshape(values.shape[0], -1).all(axis=1) if values.ndim > 1 else good
+        first = int(np.argmin(rows)) if values.ndim > 1 else 0
+        elapsed = engine.elapsed if times is None else float(np.asarray(times)[first])
+        t = engine.start.t + elapsed
+        raise DivergenceError(
+            f"the motion diverged by t = {t:.6g} (non-finite or |q|, |v| > 1e12) for {self!r}; "
+            "an unbounded operator with C·slope >= 1 is a positive-feedback instability",
+            time=t,
+        )
+
+    # -- derived maps --------------------------------------------------------------------------
     def trajectory(
         self,
         t_end: float,
@@ -152,25 +209,47 @@ class ForcedOscillator:
         sample_dt: float = 0.01,
         phi0: float = 0.0,
         *,
-        w0: float | None = None,
+        engine_options: dict | None = None,
+        progress: bool = False,
     ) -> Trajectory:
-        """Samples every ``sample_dt`` on [0, t_end] and the exact switches / wall events.
+        """Samples every ``sample_dt`` on [0, t_end] (and at ``t_end``) plus every event.
 
-        ``operator_state=None`` means ``operator.initial_state(q0)`` (play: ``w0 = q0 − p/2``
-        unless ``w0`` is given).
+        ``switches`` lists the relay switches (time, q, v, jump) of piecewise-constant
+        operators; ``events`` the wall hits / reversals of play-type engines; ``w`` the sampled
+        wagon position where the engine reports it.
         """
-        phi0 = finite_scalar(phi0, "phi0")
-        kind = self._kind()
-        if kind == "pc":
-            if w0 is not None:
-                raise ValueError("w0 is only meaningful for play-type operators")
-            return pc.pc_trajectory(self, t_end, q0, v0, operator_state, sample_dt, phi0)
-        if kind == "play":
-            from oscillators.play_flow import play_trajectory
-
-            w = self._play_w0(q0, operator_state, w0)
-            return play_trajectory(self, t_end, q0, v0, w, sample_dt, phi0)
-        raise self._unsupported()
+        t_end = _real_parameter(t_end, "t_end")
+        sample_dt = _real_parameter(sample_dt, "sample_dt")
+        if not t_end > 0.0:
+            raise ValueError(f"t_end must be > 0, got {t_end}")
+        if not sample_dt > 0.0:
+            raise ValueError(f"sample_dt must be > 0, got {sample_dt}")
+        n = int(math.floor(t_end / sample_dt * (1.0 + 1e-12))) + 1
+        if n > MAX_SAMPLES:
+            raise ValueError(
+                f"t_end / sample_dt = {t_end / sample_dt:.3g} samples exceeds the limit "
+                f"{MAX_SAMPLES:.0e}; increase sample_dt"
+            )
+        self._check_periods(t_end, "t_end")
+        start = self.initial_state(q0, v0, operator_state, phi0)
+        eng = self.engine(start, **(engine_options or {}))
+        times = np.arange(n) * sample_dt
+        if t_end - times[-1] > 1e-9 * sample_dt:
+            times = np.append(times, t_end)
+        out = self._sample(eng, times, record=True, progress=progress, desc="trajectory")
+        cols = eng.sample_columns
+        rec = eng.records()
+        return Trajectory(
+            t=start.t + times,
+            q=out[:, 0].copy(),
+            v=out[:, 1].copy(),
+            phi=np.mod(start.phi + self._omega * times, 2.0 * math.pi),
+            M=out[:, 2].copy(),
+            switches=rec.get("switches", np.empty(0, dtype=_SWITCH_DTYPE)),
+            final=eng.state(),
+            w=out[:, cols.index("w")].copy() if "w" in cols else None,
+            events=rec.get("events"),
+        )
 
     def poincare_section(
         self,
@@ -180,70 +259,100 @@ class ForcedOscillator:
         v0: float = 0.1,
         operator_state: Any = None,
         *,
-        w0: float | None = None,
+        engine_options: dict | None = None,
+        progress: bool = False,
     ) -> PoincareSection:
-        """Stroboscopic section at φ = 0 mod 2π: points at t = (transient_periods + i)·T.
-
-        Without transient the first point is the initial state.
-        """
-        kind = self._kind()
-        if kind == "pc":
-            if w0 is not None:
-                raise ValueError("w0 is only meaningful for play-type operators")
-            return pc.pc_poincare(self, n_periods, transient_periods, q0, v0, operator_state)
-        if kind == "play":
-            from oscillators.play_flow import play_poincare
-
-            w = self._play_w0(q0, operator_state, w0)
-            return play_poincare(self, n_periods, transient_periods, q0, v0, w)
-        raise self._unsupported()
-
-    def stroboscopic_map(self, state: OscillatorState) -> OscillatorState:
-        """The state one forcing period T after ``state`` (any phase)."""
-        kind = self._kind()
-        if kind == "pc":
-            return pc.pc_stroboscopic_map(self, state)
-        if kind == "play":
-            from oscillators.play_flow import play_trajectory
-
-            w = float(state.operator_state.position)
-            traj = play_trajectory(self, self.period, state.q, state.v, w, self.period, state.phi)
-            f = traj.final
-            return OscillatorState(f.q, f.v, f.phi, f.operator_state, state.t + self.period)
-        raise NotImplementedError(
-            f"stroboscopic_map is not available for {type(self._operator).__name__}"
+        """Stroboscopic section at φ = 0 mod 2π: the states at ``t = (transient_periods + i)·T``,
+        ``i = 0..n_periods-1``, of the orbit started at φ = 0 (so without transient the first
+        point is the initial state)."""
+        n_periods = positive_integer(n_periods, "n_periods")
+        transient_periods = nonnegative_integer(transient_periods, "transient_periods")
+        if n_periods + transient_periods > MAX_PERIODS:
+            raise ValueError(
+                f"n_periods + transient_periods must be <= {MAX_PERIODS:.0e}, got "
+                f"{n_periods + transient_periods}"
+            )
+        self._check_periods((n_periods + transient_periods) * self.period, "n_periods")
+        eng = self.engine(self.initial_state(q0, v0, operator_state), **(engine_options or {}))
+        times = (transient_periods + np.arange(n_periods)) * self.period
+        if transient_periods > 0:
+            self._sample(eng, np.array([transient_periods * self.period]), False, progress, "")
+        out = self._sample(eng, times, record=False, progress=progress, desc="Poincaré section")
+        cols = eng.sample_columns
+        return PoincareSection(
+            q=out[:, 0].copy(),
+            v=out[:, 1].copy(),
+            M=out[:, 2].copy(),
+            final=eng.state(),
+            w=out[:, cols.index("w")].copy() if "w" in cols else None,
+            n_switches=eng.n_events,
         )
 
-    def tangent(
+    def stroboscopic_map(
+        self, state: OscillatorState, *, engine_options: dict | None = None
+    ) -> OscillatorState:
+        """The state one forcing period T after ``state`` (any phase)."""
+        eng = self.engine(state, **(engine_options or {}))
+        self._sample(eng, np.array([self.period]), False, False, "")
+        return eng.state()
+
+    def jacobian(
         self,
-        t_end: float,
-        transient: float = 0.0,
-        q0: float = -1.0,
-        v0: float = 0.1,
-        operator_state: Any = None,
+        duration: float,
+        state: OscillatorState | None = None,
+        include_phase: bool = True,
         *,
-        w0: float | None = None,
-        include_phase: bool = False,
-        progress: bool = True,
-    ) -> TangentResult:
-        """Lyapunov spectrum by the tangent flow with QR, averaged over [transient, t_end].
+        engine_options: dict | None = None,
+    ) -> tuple[np.ndarray, tuple[str, ...]]:
+        """Derivative of the flow map over ``duration`` (tangent flow, no re-orthonormalisation).
 
-        ``exponents`` are descending; ``labels`` names the tangent-space basis in a fixed order
-        (``("q", "v"[, "phi"])`` piecewise-constant, ``("q", "v"[, "phi"], "w")`` play-type),
-        not the direction of each exponent.
+        Returns the matrix (rows: the tangent space at the end, columns: at the start) and the
+        row labels, e.g. ``("q", "v", "phi")`` for relays or ``("q", "v", "phi", "w")`` for the
+        play. A start on a play wall moving outward is a wall hit at t = 0 (one-sided
+        derivative: the ``w`` column is then ``δw := δq``).
         """
-        kind = self._kind()
-        if kind == "pc":
-            if w0 is not None:
-                raise ValueError("w0 is only meaningful for play-type operators")
-            return pc.pc_tangent(
-                self, t_end, transient, q0, v0, operator_state, include_phase, progress
+        duration = _real_parameter(duration, "duration")
+        if not duration > 0.0:
+            raise ValueError(f"duration must be > 0, got {duration}")
+        self._check_periods(duration, "duration")
+        eng = self.engine(state, **(engine_options or {}))
+        eng.start_tangent(bool(include_phase))
+        eng.advance(np.array([duration]))
+        y = eng.deviations()
+        self.check_finite(eng, np.array([eng.state().q, eng.state().v]))
+        if not np.all(np.isfinite(y)):
+            raise DivergenceError(
+                f"the tangent flow is not finite after t = {duration} for {self!r}", duration
             )
-        if kind == "play":
-            from oscillators.play_flow import play_tangent
+        return y, eng.tangent_space
 
-            w = self._play_w0(q0, operator_state, w0)
-            return play_tangent(
-                self, t_end, transient, q0, v0, w, include_phase=include_phase, progress=progress
+    # -- helpers -------------------------------------------------------------------------------
+    def _check_periods(self, duration: float, name: str) -> None:
+        if duration / self.period > MAX_PERIODS:
+            raise ValueError(
+                f"{name} spans {duration / self.period:.3g} forcing periods (T = "
+                f"{self.period:.3g}); at most {MAX_PERIODS:.0e} are allowed"
             )
-        raise self._unsupported()
+
+    def _sample(
+        self, eng: Engine, times: np.ndarray, record: bool, progress: bool, desc: str
+    ) -> np.ndarray:
+        """Advance ``eng`` through ``times`` in chunks, checking every chunk for divergence."""
+        out = np.empty((times.size, len(eng.sample_columns)))
+        n_chunks = max(1, min(200, times.size // 2000))
+        bounds = np.linspace(0, times.size, n_chunks + 1).astype(int)
+        bar = None
+        if progress and desc:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=times.size, desc=desc, unit="pt", leave=False)
+        for i0, i1 in zip(bounds[:-1], bounds[1:], strict=True):
+            if i1 <= i0:
+                continue
+            eng.advance(times[i0:i1], out[i0:i1], record)
+            self.check_finite(eng, out[i0:i1, :2], times[i0:i1])
+            if bar is not None:
+                bar.update(i1 - i0)
+        if bar is not None:
+            bar.close()
+        return out

@@ -13,10 +13,57 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from analysis.lyapunov import lyapunov_spectrum
 from hysteresis.relay import Relay
 from hysteresis.spin_dimers import SpinDimerEnsemble
 from oscillators import ForcedOscillator, OscillatorState
 from oscillators import piecewise_constant as pc
+
+_METHODS = {"auto": "auto", "kernel": "nested", "generic": "generic"}
+
+
+def _options(engine: str = "auto", taylor: bool = True) -> dict:
+    return {"method": _METHODS[engine], "taylor": taylor}
+
+
+def pc_trajectory(
+    sysm,
+    t_end,
+    q0=-1.0,
+    v0=0.1,
+    operator_state=None,
+    sample_dt=0.01,
+    phi0=0.0,
+    engine="auto",
+    taylor=True,
+):
+    """The relay engine's trajectory through the seam (former pc_trajectory)."""
+    return sysm.trajectory(
+        t_end, q0, v0, operator_state, sample_dt, phi0, engine_options=_options(engine, taylor)
+    )
+
+
+def pc_jacobian(
+    sysm,
+    duration,
+    q0=-1.0,
+    v0=0.1,
+    phi0=0.0,
+    operator_state=None,
+    include_phase=True,
+    engine="auto",
+):
+    state = sysm.initial_state(q0, v0, operator_state, phi0)
+    jac, _ = sysm.jacobian(duration, state, include_phase, engine_options=_options(engine))
+    return jac
+
+
+def pc_tangent(sysm, t_end, transient=0.0, include_phase=False, engine="auto", **kw):
+    kw.pop("progress", None)
+    return lyapunov_spectrum(
+        sysm, t_end, transient, include_phase=include_phase, engine_options=_options(engine), **kw
+    )
+
 
 ZETA = 0.05
 OMEGA = 1.0
@@ -127,8 +174,8 @@ def test_generic_engine_matches_kernel():
     """Same dimers through switching()/apply() (Python loop) and the equal-width kernel."""
     ens = SpinDimerEnsemble.random(40, 2.0, 1.0, 2.0, seed=1)
     sysm = ForcedOscillator(ens, 3.0)
-    a = pc.pc_trajectory(sysm, 10 * T, sample_dt=0.1, engine="kernel")
-    b = pc.pc_trajectory(sysm, 10 * T, sample_dt=0.1, engine="generic")
+    a = pc_trajectory(sysm, 10 * T, sample_dt=0.1, engine="kernel")
+    b = pc_trajectory(sysm, 10 * T, sample_dt=0.1, engine="generic")
     assert a.switches.size == b.switches.size > 50
     np.testing.assert_allclose(a.switches["time"], b.switches["time"], atol=1e-11)
     np.testing.assert_allclose(a.q, b.q, atol=1e-10)
@@ -149,8 +196,8 @@ def test_taylor_hops_at_round_off():
     """
     ens = SpinDimerEnsemble.random(4000, 2.0, 1.0, 2.0, seed=0)
     sysm = ForcedOscillator(ens, 4.0)
-    a = pc.pc_trajectory(sysm, 3 * T, sample_dt=T / 16, taylor=True)
-    b = pc.pc_trajectory(sysm, 3 * T, sample_dt=T / 16, taylor=False)
+    a = pc_trajectory(sysm, 3 * T, sample_dt=T / 16, taylor=True)
+    b = pc_trajectory(sysm, 3 * T, sample_dt=T / 16, taylor=False)
     assert a.switches.size == b.switches.size > 2000
     np.testing.assert_allclose(a.switches["time"], b.switches["time"], rtol=0, atol=1e-11)
     np.testing.assert_allclose(a.switches["v"], b.switches["v"], rtol=0, atol=1e-11)
@@ -301,20 +348,6 @@ def test_final_phase_is_wrapped_to_zero_two_pi():
         assert abs(fin.phi - expected) < 1e-12
 
 
-def test_continuous_non_play_operator_is_not_implemented():
-    from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
-
-    sysm = ForcedOscillator(PrandtlIshlinskii([1.0, 2.0], [0.5, 0.5]), 1.0)
-    calls = (
-        lambda: sysm.trajectory(1.0),
-        lambda: sysm.poincare_section(2),
-        lambda: sysm.tangent(10.0, progress=False),
-    )
-    for call in calls:
-        with pytest.raises(NotImplementedError, match="PlayOperator/GeneralizedPlay only"):
-            call()
-
-
 def test_play_dispatch_uses_the_same_section_convention():
     """ForcedOscillator with a play: first section point = initial state, transient shifts."""
     from hysteresis.play import GeneralizedPlay
@@ -325,13 +358,9 @@ def test_play_dispatch_uses_the_same_section_convention():
     assert abs(sec.M[0] - math.erf(-2.0 / math.sqrt(2.0))) < 1e-15
     sec2 = sysm.poincare_section(2, transient_periods=2)
     np.testing.assert_allclose(sec2.q, sec.q[2:], atol=1e-10)
-    state = OscillatorState(-1.0, 0.1, 0.0, sysm.initial_operator_state(-1.0))
+    state = OscillatorState(-1.0, 0.1, 0.0, sysm.operator.initial_state(-1.0))
     nxt = sysm.stroboscopic_map(state)
     assert abs(nxt.q - sec.q[1]) < 1e-10 and abs(nxt.t - T) < 1e-12
-    with pytest.raises(NotImplementedError):
-        from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
-
-        ForcedOscillator(PrandtlIshlinskii([1.0, 2.0], [0.5, 0.5]), 1.0).trajectory(1.0)
 
 
 def test_unequal_widths_generic_engine_matches_brute_force():

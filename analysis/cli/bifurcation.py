@@ -130,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
 
         operator_state = None
         if args.w0 is not None:
-            operator_state = make_system(float(values[0])).initial_operator_state(args.q0, args.w0)
+            operator_state = make_system(float(values[0])).operator.state(args.w0, args.q0)
         diagram = bifurcation_diagram(
             make_system,
             values,

@@ -54,20 +54,20 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from analysis.bifurcation import section_period
-    from analysis.cli.lyapunov import _json_float, build_system, model_parameters, play_w0
+    from analysis.cli.lyapunov import _json_float, build_system, model_parameters, play_state
     from analysis.dimensions import box_counting_dimension
     from analysis.lyapunov import lyapunov_spectrum
 
     try:
         system = build_system(args)
-        w0 = play_w0(args)
+        opstate = play_state(args, system)
         ly = lyapunov_spectrum(
             system,
             args.t_end,
             args.transient,
             args.q0,
             args.v0,
-            w0=w0,
+            operator_state=opstate,
             progress=not (args.quiet or args.json),
         )
         transient_periods = int(np.ceil(args.transient / system.period))
@@ -76,8 +76,7 @@ def run(args: argparse.Namespace) -> int:
             n = int(np.floor(args.t_end / system.period)) - transient_periods
         if n < 2:
             raise ValueError("need at least 2 section points (--points or a longer --t-end)")
-        kw = {"w0": w0} if w0 is not None else {}
-        sec = system.poincare_section(n, transient_periods, args.q0, args.v0, **kw)
+        sec = system.poincare_section(n, transient_periods, args.q0, args.v0, opstate)
         points = np.column_stack([sec.q, sec.v])
         period = section_period(sec.q, sec.v)
         bc, bc_error = None, ""

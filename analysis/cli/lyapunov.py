@@ -129,6 +129,12 @@ def play_w0(args: argparse.Namespace) -> float | None:
     return args.w0 if args.model in ("erf-play", "play") else None
 
 
+def play_state(args: argparse.Namespace, system) -> object | None:
+    """The play's initial state at wagon position ``--w0`` (None: the operator's default)."""
+    w0 = play_w0(args)
+    return None if w0 is None else system.operator.state(w0, args.q0)
+
+
 def _json_float(x: float) -> float | str:
     if math.isnan(x):
         return "nan"
@@ -167,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
             args.transient,
             args.q0,
             args.v0,
-            w0=play_w0(args),
+            operator_state=play_state(args, system),
             include_phase=args.include_phase,
             progress=not args.no_progress and not args.json,
         )

@@ -14,7 +14,7 @@ from analysis.cli.lyapunov import (
     add_model_arguments,
     build_system,
     model_parameters,
-    play_w0,
+    play_state,
 )
 
 
@@ -36,10 +36,7 @@ def register(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     try:
         system = build_system(args)
-        kwargs = {}
-        w0 = play_w0(args)
-        if w0 is not None:
-            kwargs["w0"] = w0
+        kwargs = {"operator_state": play_state(args, system)}
         sec = system.poincare_section(
             args.periods, args.transient_periods, args.q0, args.v0, **kwargs
         )

@@ -14,7 +14,7 @@ from analysis.cli.lyapunov import (
     add_model_arguments,
     build_system,
     model_parameters,
-    play_w0,
+    play_state,
 )
 
 
@@ -36,10 +36,7 @@ def register(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     try:
         system = build_system(args)
-        kwargs = {}
-        w0 = play_w0(args)
-        if w0 is not None:
-            kwargs["w0"] = w0
+        kwargs = {"operator_state": play_state(args, system)}
         traj = system.trajectory(args.t_end, args.q0, args.v0, sample_dt=args.sample_dt, **kwargs)
     except (ValueError, NotImplementedError) as exc:
         print(f"hyst trajectory: error: {exc}", file=sys.stderr)

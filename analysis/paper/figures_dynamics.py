@@ -191,13 +191,14 @@ def dky_task(
     """One Kaplan–Yorke dimension of the erf-play limit (task function, picklable)."""
     from analysis.lyapunov import lyapunov_spectrum
 
+    operator = _erf_play()
     res = lyapunov_spectrum(
-        _system(_erf_play(), coupling),
+        _system(operator, coupling),
         t_end=t_end,
         transient=transient,
         q0=q0,
         v0=v0,
-        w0=w0,
+        operator_state=operator.state(w0, q0),
         progress=False,
     )
     exps = [float(x) for x in res.exponents]

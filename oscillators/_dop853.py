@@ -1,0 +1,105 @@
+"""Dormand–Prince 8(5,3) coefficients: the 12 stages of the 8th-order solution.
+
+Source: E. Hairer, S. P. Nørsett and G. Wanner, *Solving Ordinary Differential Equations I:
+Nonstiff Problems*, 2nd ed., Springer (1993), Sec. II.10, and the authors' Fortran code
+``dop853.f`` (coefficients of J. R. Dormand and P. J. Prince, "Practical Runge–Kutta processes",
+SIAM J. Sci. Stat. Comput. 10 (1989) 977–989). Carried here as plain numbers so that the
+play-limit kernel depends on no private module of another library; the values are the decimal
+representations of the published rational/real coefficients rounded to float64.
+``tests/test_dop853.py`` checks the order conditions up to order 8.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+N_STAGES = 12
+
+#: Nodes c_i.
+C = np.array(
+    [
+        np.float64(0.0),
+        np.float64(0.05260015195876773),
+        np.float64(0.0789002279381516),
+        np.float64(0.1183503419072274),
+        np.float64(0.2816496580927726),
+        np.float64(0.3333333333333333),
+        np.float64(0.25),
+        np.float64(0.3076923076923077),
+        np.float64(0.6512820512820513),
+        np.float64(0.6),
+        np.float64(0.8571428571428571),
+        np.float64(1.0),
+    ]
+)
+
+#: Weights b_i of the 8th-order solution.
+B = np.array(
+    [
+        np.float64(0.054293734116568765),
+        np.float64(0.0),
+        np.float64(0.0),
+        np.float64(0.0),
+        np.float64(0.0),
+        np.float64(4.450312892752409),
+        np.float64(1.8915178993145003),
+        np.float64(-5.801203960010585),
+        np.float64(0.3111643669578199),
+        np.float64(-0.1521609496625161),
+        np.float64(0.20136540080403034),
+        np.float64(0.04471061572777259),
+    ]
+)
+
+#: Runge–Kutta matrix a_ij (lower triangular, 12 x 12).
+A = np.zeros((N_STAGES, N_STAGES))
+A[1, 0] = np.float64(0.05260015195876773)
+A[2, 0] = np.float64(0.0197250569845379)
+A[2, 1] = np.float64(0.0591751709536137)
+A[3, 0] = np.float64(0.02958758547680685)
+A[3, 2] = np.float64(0.08876275643042054)
+A[4, 0] = np.float64(0.2413651341592667)
+A[4, 2] = np.float64(-0.8845494793282861)
+A[4, 3] = np.float64(0.924834003261792)
+A[5, 0] = np.float64(0.037037037037037035)
+A[5, 3] = np.float64(0.17082860872947386)
+A[5, 4] = np.float64(0.12546768756682242)
+A[6, 0] = np.float64(0.037109375)
+A[6, 3] = np.float64(0.17025221101954405)
+A[6, 4] = np.float64(0.06021653898045596)
+A[6, 5] = np.float64(-0.017578125)
+A[7, 0] = np.float64(0.03709200011850479)
+A[7, 3] = np.float64(0.17038392571223998)
+A[7, 4] = np.float64(0.10726203044637328)
+A[7, 5] = np.float64(-0.015319437748624402)
+A[7, 6] = np.float64(0.008273789163814023)
+A[8, 0] = np.float64(0.6241109587160757)
+A[8, 3] = np.float64(-3.3608926294469414)
+A[8, 4] = np.float64(-0.868219346841726)
+A[8, 5] = np.float64(27.59209969944671)
+A[8, 6] = np.float64(20.154067550477894)
+A[8, 7] = np.float64(-43.48988418106996)
+A[9, 0] = np.float64(0.47766253643826434)
+A[9, 3] = np.float64(-2.4881146199716677)
+A[9, 4] = np.float64(-0.590290826836843)
+A[9, 5] = np.float64(21.230051448181193)
+A[9, 6] = np.float64(15.279233632882423)
+A[9, 7] = np.float64(-33.28821096898486)
+A[9, 8] = np.float64(-0.020331201708508627)
+A[10, 0] = np.float64(-0.9371424300859873)
+A[10, 3] = np.float64(5.186372428844064)
+A[10, 4] = np.float64(1.0914373489967295)
+A[10, 5] = np.float64(-8.149787010746927)
+A[10, 6] = np.float64(-18.52006565999696)
+A[10, 7] = np.float64(22.739487099350505)
+A[10, 8] = np.float64(2.4936055526796523)
+A[10, 9] = np.float64(-3.0467644718982196)
+A[11, 0] = np.float64(2.273310147516538)
+A[11, 3] = np.float64(-10.53449546673725)
+A[11, 4] = np.float64(-2.0008720582248625)
+A[11, 5] = np.float64(-17.9589318631188)
+A[11, 6] = np.float64(27.94888452941996)
+A[11, 7] = np.float64(-2.8589982771350235)
+A[11, 8] = np.float64(-8.87285693353063)
+A[11, 9] = np.float64(12.360567175794303)
+A[11, 10] = np.float64(0.6433927460157636)
