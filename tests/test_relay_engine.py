@@ -17,8 +17,8 @@ from scipy.integrate import solve_ivp
 
 from hysteresis import PreisachModel, Relay, SpinDimerEnsemble
 from oscillators import ForcedOscillator
-from oscillators._relay_engine import RelayEngine
 from oscillators.engine import GrazingError
+from oscillators.piecewise_constant import RelayEngine
 from oscillators.results import OscillatorState
 
 ZETA = 0.05
