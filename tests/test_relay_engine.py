@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from analysis.lyapunov import lyapunov_spectrum
 from hysteresis import PreisachModel, Relay, SpinDimerEnsemble
 from oscillators import ForcedOscillator
 from oscillators.engine import GrazingError
@@ -347,3 +348,33 @@ def test_generic_grazing_switch_raises(monkeypatch):
     calls.clear()
     eng, sw = run(sysm, 0.05, "generic", state=start(0.0, 0.0))
     assert sw["v"][0] == 0.0 and sw["jump"][0] == 2.0
+
+
+# -- Lyapunov spectra through the one QR loop ------------------------------------------------------
+@pytest.mark.parametrize("seed, c", [(0, 4.0), (1, 2.9), (2, -3.0)])
+def test_random_width_spectrum_sum_is_phase_space_contraction(seed, c):
+    """λ1 + λ2 = −2ζ in (q, v): Liouville (det of every saltation matrix is 1)."""
+    model = random_width_model(300, seed=seed)
+    sysm = ForcedOscillator(model, c)
+    res = lyapunov_spectrum(sysm, 400.0, 40.0, engine_options={"method": "heap"})
+    assert res.extra["engine"].startswith("relay kernel (heap")
+    assert res.n_switches > 1000
+    assert res.tangent_space == ("q", "v")
+    assert abs(res.exponents.sum() + 2 * ZETA) < 1e-9
+
+
+def test_heap_and_generic_spectra_agree():
+    model = random_width_model(60, seed=11)
+    sysm = ForcedOscillator(model, 3.5)
+    a = lyapunov_spectrum(sysm, 60.0, engine_options={"method": "heap"})
+    b = lyapunov_spectrum(sysm, 60.0, engine_options={"method": "generic"})
+    assert a.n_switches == b.n_switches > 100
+    np.testing.assert_allclose(a.exponents, b.exponents, atol=1e-8)
+
+
+def test_uncoupled_random_width_exponents():
+    """C = 0: the linear oscillator, λ = −ζ twice (underdamped), whatever the relays do."""
+    sysm = ForcedOscillator(random_width_model(100, seed=12), 0.0)
+    res = lyapunov_spectrum(sysm, 600.0, engine_options={"method": "heap"})
+    assert res.n_switches > 50
+    np.testing.assert_allclose(res.exponents, [-ZETA, -ZETA], atol=2e-3)
