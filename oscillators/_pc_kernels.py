@@ -68,9 +68,10 @@ N_PAR = 11
 S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC = range(10)
 N_ST = 10
 # int state layout: k (nested index), n (period), number of switches so far, weight units up and
-# in total (heap table, integer output)
-I_K, I_N, I_NSW, I_UP, I_TOT = range(5)
-N_IST = 5
+# in total (heap table, integer output), heap table: alpha rank of the next up switch and beta
+# rank of the next down switch (-1: none)
+I_K, I_N, I_NSW, I_UP, I_TOT, I_IA, I_IB = range(7)
+N_IST = 7
 
 
 def make_params(
@@ -297,11 +298,16 @@ def _tangent_update(y, ntan, m00, m01, m10, m11, pq, pv):
 
 
 # -- relay tables -------------------------------------------------------------------------------
-# kind 0, nested plan (O(1)): tf = (up, down, mval, -), state k = ist[I_K] groups up.
-# kind 1, bitset heaps (O(log_64 N)): tf = (alpha ascending, beta descending, weight by alpha
-#   rank, weight by beta rank), ti = (beta rank of each alpha rank, alpha rank of each beta rank,
-#   integer units by alpha rank, by beta rank); bits = two hierarchical bitsets, D over the alpha
-#   ranks (bit set = relay down) and U over the beta ranks (bit set = relay up), layout in lay.
+# The table is three flat arrays, tf (float), ti (int), lay (int), plus the mutable bitsets
+# ``bits`` (flat arrays, not tuples: inside the hot loop every array handle costs reference
+# counting, measured at ~100 ns per switch with tuples of arrays).
+# kind 0, nested plan (O(1)): lay = [G]; tf = up (G) | down (G) | mval (G + 1); the state is
+#   k = ist[I_K] groups up.
+# kind 1, bitset heaps (O(log_64 N)): lay = [levels, n, level offsets of D, of U]; tf = alpha
+#   ascending | beta descending | weight by alpha rank | weight by beta rank (n each); ti = beta
+#   rank of each alpha rank | alpha rank of each beta rank | integer weight units by alpha rank |
+#   by beta rank; bits = the two hierarchical bitsets, D over the alpha ranks (set = relay down)
+#   and U over the beta ranks (set = relay up).
 KIND_NESTED = 0
 KIND_HEAP = 1
 
@@ -316,14 +322,14 @@ _U58 = np.uint64(58)
 _U63 = np.uint64(63)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ctz(x):
     """Index of the lowest set bit of a non-zero uint64 (de Bruijn multiplication)."""
     low = x & (_U0 - x)
     return _CTZ_TABLE[(low * _DEBRUIJN) >> _U58]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _bs_first(bits, lay, base, levels):
     """Smallest set index of the bitset whose level offsets are lay[base:base+levels], or -1."""
     idx = 0
@@ -335,7 +341,7 @@ def _bs_first(bits, lay, base, levels):
     return idx
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _bs_set(bits, lay, base, levels, idx):
     for lv in range(levels):
         pos = lay[base + lv] + (idx >> 6)
@@ -346,7 +352,7 @@ def _bs_set(bits, lay, base, levels, idx):
         idx >>= 6
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _bs_clear(bits, lay, base, levels, idx):
     for lv in range(levels):
         pos = lay[base + lv] + (idx >> 6)
@@ -357,21 +363,34 @@ def _bs_clear(bits, lay, base, levels, idx):
         idx >>= 6
 
 
+@njit(cache=True, inline="always")
+def _bs_next(bits, lay, base, levels, i):
+    """Smallest member after removing the former minimum ``i``: the rest of its leaf word if
+    any (one load, the common case), else a search from the top."""
+    w = bits[lay[base] + (i >> 6)]
+    if w != _U0:
+        return (i & ~63) + _ctz(w)
+    return _bs_first(bits, lay, base, levels)
+
+
 @njit(cache=True)
 def _table_refresh(par, kind, tf, ti, bits, lay, st, ist):
-    """Next up / down thresholds and the output of the current table state into st."""
+    """Next up / down thresholds and the output of the current table state into st (ist)."""
     if kind == KIND_NESTED:
-        up_thr = tf[0]
+        g = lay[0]
         k = ist[I_K]
-        st[S_UP] = up_thr[k] if k < up_thr.shape[0] else np.inf
-        st[S_DN] = tf[1][k - 1] if k > 0 else -np.inf
-        st[S_MV] = tf[2][k]
+        st[S_UP] = tf[k] if k < g else np.inf
+        st[S_DN] = tf[g + k - 1] if k > 0 else -np.inf
+        st[S_MV] = tf[2 * g + k]
         return
     levels = lay[0]
-    i = _bs_first(bits, lay, 1, levels)
-    st[S_UP] = tf[0][i] if i >= 0 else np.inf
-    j = _bs_first(bits, lay, 1 + levels, levels)
-    st[S_DN] = tf[1][j] if j >= 0 else -np.inf
+    n = lay[1]
+    i = _bs_first(bits, lay, 2, levels)
+    ist[I_IA] = i
+    st[S_UP] = tf[i] if i >= 0 else np.inf
+    j = _bs_first(bits, lay, 2 + levels, levels)
+    ist[I_IB] = j
+    st[S_DN] = tf[n + j] if j >= 0 else -np.inf
     unit = par[P_UNIT]
     if unit > 0.0:
         st[S_MV] = unit * (2 * ist[I_UP] - ist[I_TOT])
@@ -379,7 +398,7 @@ def _table_refresh(par, kind, tf, ti, bits, lay, st, ist):
         st[S_MV] = st[S_M] + st[S_MC]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _neumaier_add(st, x):
     """st[S_M] + st[S_MC] += x with Neumaier's compensation (no drift over many switches)."""
     s = st[S_M]
@@ -391,44 +410,63 @@ def _neumaier_add(st, x):
     st[S_M] = t
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction):
-    """Switch every relay at the current threshold in ``direction``; returns the jump ΔM."""
+    """Switch every relay at the current threshold in ``direction``; returns the jump ΔM and
+    leaves the next thresholds and the output in st[S_UP], st[S_DN], st[S_MV].
+
+    Heap table: the switched relays leave one queue (their bits are cleared, the next minimum
+    is normally in the same word) and join the other, whose extremum can only move to them
+    (a rank comparison), so a switch costs O(1) word operations unless a word runs empty.
+    """
     if kind == KIND_NESTED:
-        mval = tf[2]
+        g = lay[0]
         k_old = ist[I_K]
-        ist[I_K] = k_old + direction
-        return mval[k_old + direction] - mval[k_old]
+        k = k_old + direction
+        ist[I_K] = k
+        st[S_UP] = tf[k] if k < g else np.inf
+        st[S_DN] = tf[g + k - 1] if k > 0 else -np.inf
+        st[S_MV] = tf[2 * g + k]
+        return tf[2 * g + k] - tf[2 * g + k_old]
     levels = lay[0]
+    n = lay[1]
     unit = par[P_UNIT]
     du = 0
     dw = 0.0
+    ia = ist[I_IA]
+    ib = ist[I_IB]
     if direction > 0:
-        thr = st[S_UP]
-        a = tf[0]
-        while True:
-            i = _bs_first(bits, lay, 1, levels)
-            if i < 0 or a[i] != thr:
-                break
-            _bs_clear(bits, lay, 1, levels, i)
-            _bs_set(bits, lay, 1 + levels, levels, ti[0][i])
-            du += ti[2][i]
-            dw += tf[2][i]
+        thr = tf[ia]
+        while ia >= 0 and tf[ia] == thr:
+            _bs_clear(bits, lay, 2, levels, ia)
+            j = ti[ia]
+            _bs_set(bits, lay, 2 + levels, levels, j)
+            if ib < 0 or j < ib:
+                ib = j
+            du += ti[2 * n + ia]
+            dw += tf[2 * n + ia]
+            ia = _bs_next(bits, lay, 2, levels, ia)
     else:
-        thr = st[S_DN]
-        b = tf[1]
-        while True:
-            j = _bs_first(bits, lay, 1 + levels, levels)
-            if j < 0 or b[j] != thr:
-                break
-            _bs_clear(bits, lay, 1 + levels, levels, j)
-            _bs_set(bits, lay, 1, levels, ti[1][j])
-            du -= ti[3][j]
-            dw -= tf[3][j]
+        thr = tf[n + ib]
+        while ib >= 0 and tf[n + ib] == thr:
+            _bs_clear(bits, lay, 2 + levels, levels, ib)
+            i = ti[n + ib]
+            _bs_set(bits, lay, 2, levels, i)
+            if ia < 0 or i < ia:
+                ia = i
+            du -= ti[3 * n + ib]
+            dw -= tf[3 * n + ib]
+            ib = _bs_next(bits, lay, 2 + levels, levels, ib)
+    ist[I_IA] = ia
+    ist[I_IB] = ib
+    st[S_UP] = tf[ia] if ia >= 0 else np.inf
+    st[S_DN] = tf[n + ib] if ib >= 0 else -np.inf
     if unit > 0.0:
         ist[I_UP] += du
+        st[S_MV] = unit * (2 * ist[I_UP] - ist[I_TOT])
         return 2.0 * unit * du
     _neumaier_add(st, 2.0 * dw)
+    st[S_MV] = st[S_M] + st[S_MC]
     return 2.0 * dw
 
 
@@ -566,10 +604,7 @@ def advance_table(
             q = up if direction > 0 else down
             tau += hh
         # the switch: every relay at this threshold flips at once
-        st[S_UP] = up
-        st[S_DN] = down
         jump = _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction)
-        _table_refresh(par, kind, tf, ti, bits, lay, st, ist)
         up = st[S_UP]
         down = st[S_DN]
         mv = st[S_MV]
@@ -663,10 +698,6 @@ def run_table(
 
 
 # -- building the kernel tables (Python) ----------------------------------------------------------
-_EMPTY_F = np.zeros(1)
-_EMPTY_I = np.zeros(1, dtype=np.int64)
-
-
 def _bitset_layout(n: int) -> list[int]:
     """Word counts per level of a 64-ary hierarchical bitset over n >= 1 items (top: 1 word)."""
     sizes = [max(1, -(-n // 64))]
@@ -677,86 +708,72 @@ def _bitset_layout(n: int) -> list[int]:
 
 def nested_kernel_table(plan) -> tuple:
     """(tf, ti, bits, lay) for a :class:`~hysteresis.relay_table.NestedPlan` (kind 0)."""
-    tf = (
-        np.array(plan.up, dtype=np.float64),
-        np.array(plan.down, dtype=np.float64),
-        np.array(plan.mval, dtype=np.float64),
-        _EMPTY_F,
-    )
-    ti = (_EMPTY_I, _EMPTY_I, _EMPTY_I, _EMPTY_I)
-    return tf, ti, np.zeros(1, dtype=np.uint64), np.zeros(1, dtype=np.int64)
+    tf = np.concatenate([plan.up, plan.down, plan.mval]).astype(np.float64)
+    lay = np.array([plan.up.size], dtype=np.int64)
+    return tf, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.uint64), lay
 
 
 class HeapTable:
-    """The bitset-heap form (kind 1) of the relays of positive weight of a relay table.
+    """The bitset-heap form (kind 1) of relays of positive weight.
 
-    ``active`` are the table indices of those relays; ``rank_a`` / ``rank_b`` map the alpha
-    ranks (ascending) and beta ranks (descending) to table indices. ``unit > 0`` when every
-    active weight is an integer multiple of ``unit`` (then ``M`` is kept as integer units).
+    ``rank_a`` / ``rank_b`` map the alpha ranks (ascending) and beta ranks (descending) to the
+    indices of the given arrays. ``unit > 0`` when every weight is an integer multiple of
+    ``unit`` (then ``M`` is kept as integer units).
     """
 
     def __init__(self, alpha: np.ndarray, beta: np.ndarray, weights: np.ndarray) -> None:
-        active = np.flatnonzero(weights > 0.0)
-        if active.size == 0:
-            raise ValueError("the relay table has no relay of positive weight")
-        a = alpha[active]
-        b = beta[active]
-        w = weights[active]
-        order_a = np.lexsort((-b, a))  # ties in alpha: any order, kept deterministic
-        order_b = np.lexsort((a, -b))
-        inv_b = np.empty(active.size, dtype=np.int64)
-        inv_b[order_b] = np.arange(active.size)
-        inv_a = np.empty(active.size, dtype=np.int64)
-        inv_a[order_a] = np.arange(active.size)
-        unit = float(w.min())
-        units = np.rint(w / unit)
-        if not (np.all(units * unit == w) and units.max() * active.size < 2**52):
+        if not np.all(weights > 0.0):
+            raise ValueError("the heap table takes relays of positive weight only")
+        n = int(alpha.size)
+        order_a = np.lexsort((-beta, alpha))  # ties in alpha: any order, kept deterministic
+        order_b = np.lexsort((alpha, -beta))
+        inv_b = np.empty(n, dtype=np.int64)
+        inv_b[order_b] = np.arange(n)
+        inv_a = np.empty(n, dtype=np.int64)
+        inv_a[order_a] = np.arange(n)
+        unit = float(weights.min())
+        units = np.rint(weights / unit)
+        if not (np.all(units * unit == weights) and units.max() * n < 2**52):
             unit = 0.0
-            units = np.zeros(active.size)
+            units = np.zeros(n)
         units = units.astype(np.int64)
-        self.n = int(active.size)
-        self.active = active
-        self.rank_a = active[order_a]
-        self.rank_b = active[order_b]
+        self.n = n
+        self.rank_a = order_a
+        self.rank_b = order_b
         self.unit = unit
         self.total_units = int(units.sum())
-        self.total_weight = math.fsum(w)
-        self.tf = (
-            np.ascontiguousarray(a[order_a]),
-            np.ascontiguousarray(b[order_b]),
-            np.ascontiguousarray(w[order_a]),
-            np.ascontiguousarray(w[order_b]),
-        )
-        self.ti = (
-            np.ascontiguousarray(inv_b[order_a]),
-            np.ascontiguousarray(inv_a[order_b]),
-            np.ascontiguousarray(units[order_a]),
-            np.ascontiguousarray(units[order_b]),
-        )
-        sizes = _bitset_layout(self.n)
+        self.w_a = weights[order_a]
+        self.units_a = units[order_a]
+        self.tf = np.concatenate(
+            [alpha[order_a], beta[order_b], weights[order_a], weights[order_b]]
+        ).astype(np.float64)
+        self.ti = np.concatenate(
+            [inv_b[order_a], inv_a[order_b], units[order_a], units[order_b]]
+        ).astype(np.int64)
+        sizes = _bitset_layout(n)
         offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         self.n_words = int(offsets[-1])
         levels = len(sizes)
-        self.lay = np.concatenate([[levels], offsets[:-1], offsets[:-1] + self.n_words]).astype(
+        self.lay = np.concatenate([[levels, n], offsets[:-1], offsets[:-1] + self.n_words]).astype(
             np.int64
         )
 
     def bits_from_outputs(self, outputs: np.ndarray) -> np.ndarray:
-        """The two bitsets for relay outputs ``outputs`` (table order, ±1)."""
+        """The two bitsets for relay outputs ``outputs`` (±1, order of the given arrays)."""
         down = np.asarray(outputs)[self.rank_a] < 0
         up = np.asarray(outputs)[self.rank_b] > 0
         bits = np.zeros(2 * self.n_words, dtype=np.uint64)
         levels = int(self.lay[0])
-        for flags, base in ((down, 1), (up, 1 + levels)):
+        for flags, base in ((down, 2), (up, 2 + levels)):
             for idx in np.flatnonzero(flags):
                 _bs_set(bits, self.lay, base, levels, int(idx))
         return bits
 
-    def outputs_from_bits(self, bits: np.ndarray, n_relays: int) -> np.ndarray:
-        """Relay outputs (table order, ±1; relays of zero weight: 0) from the bitsets."""
+    def outputs_from_bits(self, bits: np.ndarray) -> np.ndarray:
+        """Relay outputs (±1, order of the given arrays) from the bitsets."""
         leaf = bits[: -(-self.n // 64)]
         flags = np.unpackbits(leaf.view(np.uint8), bitorder="little")[: self.n].astype(bool)
-        y = np.zeros(n_relays)
+        y = np.empty(self.n)
         y[self.rank_a] = np.where(flags, -1.0, 1.0)
         return y
 
@@ -764,6 +781,33 @@ class HeapTable:
         """(bits, units up, M, compensation) for relay outputs ``outputs``."""
         bits = self.bits_from_outputs(outputs)
         y = np.asarray(outputs)[self.rank_a]
-        units_up = int(self.ti[2][y > 0].sum())
-        m = math.fsum(self.tf[2] * y)
+        units_up = int(self.units_a[y > 0].sum())
+        m = math.fsum(self.w_a * y)
         return bits, units_up, m, 0.0
+
+
+# One compiled entry point per table kind: the kind is a compile-time constant inside each, so
+# LLVM folds the other kind's branches out of the hot loop (measured: a runtime kind costs the
+# nested kernel a factor ~2 in register pressure and code size). Same body, no duplication.
+@njit(cache=True)
+def run_nested(
+    par, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw, sw_count, tan_on, y,
+    ntan, mp,
+):  # fmt: skip
+    """:func:`run_table` for the nested plan (kind 0)."""
+    return run_table(
+        par, KIND_NESTED, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw,
+        sw_count, tan_on, y, ntan, mp,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def run_heap(
+    par, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw, sw_count, tan_on, y,
+    ntan, mp,
+):  # fmt: skip
+    """:func:`run_table` for the bitset heaps (kind 1)."""
+    return run_table(
+        par, KIND_HEAP, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw,
+        sw_count, tan_on, y, ntan, mp,
+    )  # fmt: skip

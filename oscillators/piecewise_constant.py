@@ -224,6 +224,7 @@ class RelayEngine(Engine):
             st[kern.S_MC] = mc
             self.method = "heap"
             self.name = "relay kernel (heap, O(log N))"
+        self._run = kern.run_nested if self._kind == kern.KIND_NESTED else kern.run_heap
         kern._table_refresh(
             self._par, self._kind, self._tf, self._ti, self._bits, self._lay, st, ist
         )
@@ -290,8 +291,8 @@ class RelayEngine(Engine):
         i = 0
         while True:
             cnt[0] = 0
-            status, i = kern.run_table(
-                self._par, self._kind, self._tf, self._ti, self._bits, self._lay, self._st,
+            status, i = self._run(
+                self._par, self._tf, self._ti, self._bits, self._lay, self._st,
                 self._ist, tgt_n, tgt_tau, i, buf, record, sw, cnt, tan_on, self._y, self._ntan,
                 self._mp,
             )  # fmt: skip
@@ -329,7 +330,7 @@ class RelayEngine(Engine):
         if self._kind == kern.KIND_NESTED:
             ya = self._plan.outputs(int(self._ist[kern.I_K]), self._work.n_relays)
         else:
-            ya = self._heap.outputs_from_bits(self._bits, self._work.n_relays)
+            ya = self._heap.outputs_from_bits(self._bits)
         y = np.zeros(n)
         y[self._active] = ya
         return y
