@@ -24,6 +24,7 @@ returned rebuilds them from the staircase).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -54,6 +55,40 @@ def _params(system: Any, phi0: float, t_base: float, taylor: bool) -> np.ndarray
     omega = float(system.frequency)
     amp_a, amp_b = particular_amplitudes(zeta, omega)
     return kern.make_params(zeta, omega, float(system.coupling), phi0, amp_a, amp_b, t_base, taylor)
+
+
+class _Prepared:
+    """What the kernels need from a relay table, built once per table (see :func:`_prepared`):
+    the relays of positive weight (``active``, as the table ``work``) and their heap form."""
+
+    def __init__(self, table: Any) -> None:
+        from hysteresis.relay_table import RelayTable
+
+        self.active = np.flatnonzero(table.weights > 0.0)
+        if self.active.size == 0:
+            raise ValueError("the operator's relay table has no relay of positive weight")
+        if self.active.size < table.n_relays:
+            act = self.active
+            self.work = RelayTable(table.alpha[act], table.beta[act], table.weights[act])
+        else:
+            self.work = table
+        self._heap: kern.HeapTable | None = None
+
+    def heap(self) -> kern.HeapTable:
+        if self._heap is None:
+            w = self.work
+            self._heap = kern.HeapTable(
+                np.asarray(w.alpha), np.asarray(w.beta), np.asarray(w.weights)
+            )
+        return self._heap
+
+
+@functools.lru_cache(maxsize=16)
+def _prepared(table: Any) -> _Prepared:
+    """Per-table preparation, cached: engines are rebuilt often (stroboscopic maps, ensembles,
+    Lyapunov re-initialisations) and the sorting is O(N log N). Tables are immutable and hashed
+    by identity; operators cache their table."""
+    return _Prepared(table)
 
 
 class _Generic:
@@ -182,16 +217,9 @@ class RelayEngine(Engine):
         table = op.relay_table()
         y0 = table.check_outputs(op.relay_outputs(opstate), q0)
         self._table = table
-        self._active = np.flatnonzero(table.weights > 0.0)
-        if self._active.size == 0:
-            raise ValueError("the operator's relay table has no relay of positive weight")
-        if self._active.size < table.n_relays:
-            from hysteresis.relay_table import RelayTable
-
-            act = self._active
-            work = RelayTable(table.alpha[act], table.beta[act], table.weights[act])
-        else:
-            work = table
+        prep = _prepared(table)
+        self._active = prep.active
+        work = prep.work
         self._work = work
         ya = y0[self._active]
         st = np.zeros(kern.N_ST)
@@ -213,7 +241,7 @@ class RelayEngine(Engine):
             self.name = "relay kernel (nested, O(1))"
         else:
             self._kind = kern.KIND_HEAP
-            heap = kern.HeapTable(work.alpha, work.beta, work.weights)
+            heap = prep.heap()
             self._heap = heap
             bits, units_up, m, mc = heap.state_arrays(ya)
             self._par[kern.P_UNIT] = heap.unit
