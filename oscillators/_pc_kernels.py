@@ -433,34 +433,40 @@ def _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction):
     unit = par[P_UNIT]
     du = 0
     dw = 0.0
-    ia = ist[I_IA]
-    ib = ist[I_IB]
+    # one loop for both directions: the switched relays leave queue "src" (D when rising, U
+    # when falling) and join queue "dst"; offsets select the arrays of each side
     if direction > 0:
-        thr = tf[ia]
-        while ia >= 0 and tf[ia] == thr:
-            _bs_clear(bits, lay, 2, levels, ia)
-            j = ti[ia]
-            _bs_set(bits, lay, 2 + levels, levels, j)
-            if ib < 0 or j < ib:
-                ib = j
-            du += ti[2 * n + ia]
-            dw += tf[2 * n + ia]
-            ia = _bs_next(bits, lay, 2, levels, ia)
+        cur = ist[I_IA]
+        oth = ist[I_IB]
+        src = 2
+        dst = 2 + levels
+        side = 0
     else:
-        thr = tf[n + ib]
-        while ib >= 0 and tf[n + ib] == thr:
-            _bs_clear(bits, lay, 2 + levels, levels, ib)
-            i = ti[n + ib]
-            _bs_set(bits, lay, 2, levels, i)
-            if ia < 0 or i < ia:
-                ia = i
-            du -= ti[3 * n + ib]
-            dw -= tf[3 * n + ib]
-            ib = _bs_next(bits, lay, 2 + levels, levels, ib)
-    ist[I_IA] = ia
-    ist[I_IB] = ib
-    st[S_UP] = tf[ia] if ia >= 0 else np.inf
-    st[S_DN] = tf[n + ib] if ib >= 0 else -np.inf
+        cur = ist[I_IB]
+        oth = ist[I_IA]
+        src = 2 + levels
+        dst = 2
+        side = n
+    thr = tf[side + cur]
+    while cur >= 0 and tf[side + cur] == thr:
+        _bs_clear(bits, lay, src, levels, cur)
+        j = ti[side + cur]
+        _bs_set(bits, lay, dst, levels, j)
+        if oth < 0 or j < oth:
+            oth = j
+        du += ti[2 * n + side + cur]
+        dw += tf[2 * n + side + cur]
+        cur = _bs_next(bits, lay, src, levels, cur)
+    if direction > 0:
+        ist[I_IA] = cur
+        ist[I_IB] = oth
+    else:
+        ist[I_IB] = cur
+        ist[I_IA] = oth
+        du = -du
+        dw = -dw
+    st[S_UP] = tf[ist[I_IA]] if ist[I_IA] >= 0 else np.inf
+    st[S_DN] = tf[n + ist[I_IB]] if ist[I_IB] >= 0 else -np.inf
     if unit > 0.0:
         ist[I_UP] += du
         st[S_MV] = unit * (2 * ist[I_UP] - ist[I_TOT])
