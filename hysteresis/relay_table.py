@@ -71,17 +71,13 @@ class NestedPlan:
         """Index ``k`` of a relay configuration (table order), or ``None`` if it is not a
         prefix configuration (first ``k`` groups up, the rest down)."""
         y = np.asarray(outputs)[self.order] > 0
-        k = int(np.count_nonzero(y))
-        counts = np.diff(self.starts)
-        # a prefix configuration has exactly the first relays (in group order) up, whole groups
-        n_up_relays = k
-        if n_up_relays and not np.all(y[:n_up_relays]):
-            return None
-        cum = np.concatenate([[0], np.cumsum(counts)])
-        g = int(np.searchsorted(cum, n_up_relays))
-        if g >= cum.size or cum[g] != n_up_relays:
-            return None
-        return g
+        n_up = int(np.count_nonzero(y))
+        if n_up and not np.all(y[:n_up]):
+            return None  # the up relays are not the first ones in group order
+        k = int(np.searchsorted(self.starts, n_up))  # starts[k] = relays in the first k groups
+        if k >= self.starts.size or self.starts[k] != n_up:
+            return None  # a group is split
+        return k
 
     def outputs(self, k: int, n_relays: int) -> np.ndarray:
         """Relay outputs (table order) with the first ``k`` groups up."""

@@ -16,7 +16,8 @@ grazing convention, short-hop Taylor expansion) and the tangent flow gets the sa
   together; ``M`` in integer weight units when the weights are multiples of one unit, else
   compensated (Neumaier) sums;
 * ``"generic"`` — the Python reference path through ``switching(state)`` / ``apply``;
-* ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``.
+* ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"`` for
+  an operator that implements ``switching()``/``apply()`` but not the relay contract.
 
 Relays of zero weight never change ``M`` and are left out of the kernels (the operator state
 returned rebuilds them from the staircase).
@@ -81,6 +82,14 @@ class _Prepared:
                 np.asarray(w.alpha), np.asarray(w.beta), np.asarray(w.weights)
             )
         return self._heap
+
+
+def _has_relay_table(op: Any) -> bool:
+    """True if the operator implements the relay contract (not the base-class stub)."""
+    from hysteresis.base import PiecewiseConstantHysteron
+
+    impl = getattr(type(op), "relay_table", None)
+    return impl is not None and impl is not PiecewiseConstantHysteron.relay_table
 
 
 @functools.lru_cache(maxsize=16)
@@ -209,6 +218,8 @@ class RelayEngine(Engine):
         self._nosw = np.empty((1, 4))
         self._cnt = np.zeros(1, dtype=np.int64)
         self._generic: _Generic | None = None
+        if method == "auto" and not _has_relay_table(op):
+            method = "generic"  # an operator known through switching()/apply() only
         if method == "generic":
             self._generic = _Generic(op, self._par, q0, v0, opstate)
             self.method = "generic"

@@ -378,3 +378,32 @@ def test_uncoupled_random_width_exponents():
     res = lyapunov_spectrum(sysm, 600.0, engine_options={"method": "heap"})
     assert res.n_switches > 50
     np.testing.assert_allclose(res.exponents, [-ZETA, -ZETA], atol=2e-3)
+
+
+def test_operator_without_relay_contract_runs_on_the_generic_path():
+    """A piecewise-constant operator known only through switching()/apply() still couples."""
+    from hysteresis.base import PiecewiseConstantHysteron
+
+    class Wrapped(PiecewiseConstantHysteron):
+        def __init__(self, inner):
+            self.inner = inner
+
+        def initial_state(self, u0):
+            return self.inner.initial_state(u0)
+
+        def apply(self, inputs, state=None):
+            return self.inner.apply(inputs, state)
+
+        def output(self, state):
+            return self.inner.output(state)
+
+        def switching(self, state):
+            return self.inner.switching(state)
+
+    model = random_width_model(30, seed=13)
+    eng, sw = run(ForcedOscillator(Wrapped(model), 3.0), 5 * T, "auto")
+    assert eng.method == "generic"
+    _, ref = run(ForcedOscillator(model, 3.0), 5 * T, "heap")
+    assert_same_switches(sw, ref, 1e-10)
+    with pytest.raises(NotImplementedError, match="relay_table"):
+        RelayEngine(ForcedOscillator(Wrapped(model), 3.0), start(), method="heap")
