@@ -712,6 +712,19 @@ def _bitset_layout(n: int) -> list[int]:
     return sizes
 
 
+def _bitset_words(flags: np.ndarray) -> np.ndarray:
+    """All levels of the hierarchical bitset of boolean ``flags`` (layout of _bitset_layout)."""
+    levels = []
+    level = flags
+    for size in _bitset_layout(flags.size):
+        padded = np.zeros(64 * size, dtype=bool)
+        padded[: level.size] = level
+        words = np.packbits(padded, bitorder="little").view("<u8").astype(np.uint64)
+        levels.append(words)
+        level = words != 0
+    return np.concatenate(levels)
+
+
 def nested_kernel_table(plan) -> tuple:
     """(tf, ti, bits, lay) for a :class:`~hysteresis.relay_table.NestedPlan` (kind 0)."""
     tf = np.concatenate([plan.up, plan.down, plan.mval]).astype(np.float64)
@@ -768,12 +781,7 @@ class HeapTable:
         """The two bitsets for relay outputs ``outputs`` (±1, order of the given arrays)."""
         down = np.asarray(outputs)[self.rank_a] < 0
         up = np.asarray(outputs)[self.rank_b] > 0
-        bits = np.zeros(2 * self.n_words, dtype=np.uint64)
-        levels = int(self.lay[0])
-        for flags, base in ((down, 2), (up, 2 + levels)):
-            for idx in np.flatnonzero(flags):
-                _bs_set(bits, self.lay, base, levels, int(idx))
-        return bits
+        return np.concatenate([_bitset_words(down), _bitset_words(up)])
 
     def outputs_from_bits(self, bits: np.ndarray) -> np.ndarray:
         """Relay outputs (±1, order of the given arrays) from the bitsets."""
