@@ -54,6 +54,7 @@ from hysteresis.base import (
     PiecewiseConstantHysteron,
     Switching,
 )
+from hysteresis.relay_table import RelayTable
 
 __all__ = [
     "PreisachModel",
@@ -506,6 +507,84 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
                 mask = (self._alpha <= aa[idx]) & (self._beta > bb[idx])
                 out[idx] = float(self._weights[mask].sum())
         return out
+
+    # -- relay contract (oscillators' relay engine) -------------------------------------------
+    def relay_table(self) -> RelayTable:
+        """The model as a :class:`~hysteresis.relay_table.RelayTable` (same relay order; cached)."""
+        table = self.__dict__.get("_relay_table")
+        if table is None:
+            table = RelayTable(self._alpha, self._beta, self._weights)
+            self.__dict__["_relay_table"] = table
+        return table
+
+    def relay_outputs(self, state: PreisachState) -> np.ndarray:
+        """Relay outputs ``±1`` (table order) in ``state``; O(N log depth).
+
+        With the staircase ``M_1, m_1, M_2, ...`` a relay is up iff ``alpha <= M_{j+1}`` where
+        ``j`` is the number of minima below its ``beta`` (its last down event is at ``m_j``, the
+        maxima after it decrease, so only ``M_{j+1}`` can have switched it up since).
+        """
+        self._check_state(state)
+        if state.counts_alpha is None:
+            raise ValueError("state must be a state of a discrete PreisachModel")
+        maxima = state.maxima
+        j = np.searchsorted(state.minima, self._beta, side="left")
+        safe = np.minimum(j, maxima.size - 1)
+        up = (j < maxima.size) & (self._alpha <= maxima[safe])
+        return np.where(up, 1.0, -1.0)
+
+    def state_from_relay_outputs(self, outputs, input: float) -> PreisachState:
+        """The state whose relays output ``outputs`` (table order) with the input at ``input``.
+
+        Relays of zero weight never change the output and are not used (their outputs in the
+        result follow from the rebuilt staircase). The up relays (positive weight) define the
+        threshold function ``g(β) = max{α_i : i up, β_i >= β}``; its steps give the staircase
+        ``M_1 = g(-∞), m_1, M_2, ...`` (minima at the β where ``g`` drops), which is driven into
+        the model, followed by ``input``. ``ValueError`` if the configuration cannot be reached
+        (a down relay with ``α <= g(β)``, an up relay with ``β > input``, a down relay with
+        ``α <= input``).
+        """
+        input = finite_scalar(input, "input")
+        y = np.asarray(outputs, dtype=np.float64)
+        if y.shape != self._alpha.shape:
+            raise ValueError(f"outputs must have length {self.n_relays}, got shape {y.shape}")
+        if not np.all((y == 1.0) | (y == -1.0)):
+            raise ValueError("outputs must be +1 or -1")
+        active = self._weights > 0.0
+        table = self.relay_table()
+        table.check_outputs(np.where(active, y, table.initial_outputs(input)), input)
+        up = active & (y > 0)
+        down = active & (y < 0)
+        c = self._beta[up]
+        order = np.argsort(c, kind="stable")
+        c = c[order]
+        a = self._alpha[up][order]
+        if c.size:
+            smax = np.maximum.accumulate(a[::-1])[::-1]
+            # g on (c_{l-1}, c_l] is the suffix maximum at the first relay with β = c_l (tie
+            # groups of equal β); it drops after group l when the next group's value is
+            # smaller (and to -inf after the last group)
+            first = np.flatnonzero(np.concatenate([[True], c[1:] > c[:-1]]))
+            gval = smax[first]
+            ends = np.flatnonzero(np.append(gval[1:], -np.inf) < gval)
+            minima = c[first[ends]]
+            maxima = np.concatenate([[gval[0]], gval[ends[:-1] + 1]])
+            gb = np.searchsorted(c, self._beta[down], side="left")
+            g = np.where(gb < c.size, smax[np.minimum(gb, c.size - 1)], -np.inf)
+            bad = np.flatnonzero(self._alpha[down] <= g)
+            if bad.size:
+                i = int(np.flatnonzero(down)[bad[0]])
+                raise ValueError(
+                    f"outputs are not a reachable relay configuration: relay {i} "
+                    f"(alpha={self._alpha[i]}, beta={self._beta[i]}) is down although an up "
+                    "relay has a larger alpha and a larger beta"
+                )
+            history = np.empty(2 * minima.size + 1)
+            history[0:-1:2] = maxima
+            history[1:-1:2] = minima
+            history[-1] = input
+            return self.apply(history, self.initial_state(float(history[0])))[1]
+        return self.initial_state(input)
 
 
 # ============================================================================================

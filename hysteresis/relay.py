@@ -17,6 +17,7 @@ import numpy as np
 
 from hysteresis._validation import as_input_sequence, finite_scalar
 from hysteresis.base import PiecewiseConstantHysteron, Switching
+from hysteresis.relay_table import RelayTable
 
 __all__ = ["Relay", "RelayState"]
 
@@ -125,3 +126,21 @@ class Relay(PiecewiseConstantHysteron):
         if state.output > 0:
             return Switching(lower=self._beta, upper=np.inf, jump_down=-2.0, jump_up=0.0)
         return Switching(lower=-np.inf, upper=self._alpha, jump_down=0.0, jump_up=2.0)
+
+    # -- relay contract (oscillators' relay engine) -------------------------------------------
+    def relay_table(self) -> RelayTable:
+        """The relay as a one-row :class:`~hysteresis.relay_table.RelayTable` of weight 1."""
+        return RelayTable([self._alpha], [self._beta], [1.0])
+
+    def relay_outputs(self, state: RelayState) -> np.ndarray:
+        """``[state.output]``."""
+        if not isinstance(state, RelayState):
+            raise ValueError(f"state must be a RelayState, got {type(state).__name__}")
+        return np.array([float(state.output)])
+
+    def state_from_relay_outputs(self, outputs, input: float) -> RelayState:
+        """The state with output ``outputs[0]`` at ``input`` (validated like :meth:`state`)."""
+        y = np.asarray(outputs, dtype=np.float64)
+        if y.shape != (1,):
+            raise ValueError(f"outputs must have length 1 for a Relay, got shape {y.shape}")
+        return self.state(float(y[0]), input)

@@ -256,6 +256,21 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
     def switching(self, state) -> Switching:
         return self.to_preisach().switching(state)
 
+    # -- relay contract (oscillators' relay engine) -------------------------------------------
+    def relay_table(self):
+        """The relays of :meth:`relays` as a :class:`~hysteresis.relay_table.RelayTable`: a
+        paired dimer is one relay of weight ``2/N``, a non-hysteretic one two zero-width relays
+        of weight ``1/N`` (the order of :meth:`to_preisach`)."""
+        return self.to_preisach().relay_table()
+
+    def relay_outputs(self, state) -> np.ndarray:
+        """Outputs of the relays of :meth:`relay_table` in ``state``."""
+        return self.to_preisach().relay_outputs(state)
+
+    def state_from_relay_outputs(self, outputs, input: float):
+        """The state whose relays (order of :meth:`relay_table`) output ``outputs``."""
+        return self.to_preisach().state_from_relay_outputs(outputs, input)
+
     # -- brute force ------------------------------------------------------------------------
     def energy(self, spins, q: float) -> float:
         """Total energy ``H = Σ_k [-J σ1σ2 - σ1(q+b1) - σ2(q+b2)]`` of a spin configuration."""
