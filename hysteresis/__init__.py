@@ -17,6 +17,7 @@ from hysteresis.preisach import (
     PreisachState,
 )
 from hysteresis.relay import Relay, RelayState
+from hysteresis.relay_table import NestedPlan, RelayTable
 from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
 
 __all__ = [
@@ -32,11 +33,13 @@ __all__ = [
     "PiecewiseConstantHysteron",
     "PlayOperator",
     "PlayState",
+    "NestedPlan",
     "PrandtlIshlinskii",
     "PreisachModel",
     "PreisachState",
     "Relay",
     "RelayState",
+    "RelayTable",
     "SpinDimerEnsemble",
     "Switching",
 ]
