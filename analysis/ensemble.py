@@ -136,9 +136,9 @@ def ensemble_task(
     """One disorder realization at one coupling: λ's, D_KY, D_BC and M_T.
 
     ``spins`` = N, ``coupling`` = C, ``seed`` the disorder seed of
-    ``SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed)``. The Lyapunov spectrum
-    (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the section
-    and ``M_T`` use the whole forcing periods in that window (see
+    ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)``. The Lyapunov
+    spectrum (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the
+    section and ``M_T`` use the whole forcing periods in that window (see
     :func:`section_and_magnetization`). ``D_BC`` is 0 for a periodic section, else
     :func:`~analysis.dimensions.box_counting_dimension` with ``max_fill=box_max_fill`` and
     ``min_boxes=box_min_boxes`` (relax them for short runs with few section points), nan if no

@@ -2,7 +2,7 @@
 
 The spin-dimer ensemble *without* dynamic feedback is driven by an external field that is an
 independent and identically distributed sequence, ``u_k ~ N(0, σ²)``. For each disorder
-realization ``SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed)`` the
+realization ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)`` the
 time-averaged magnetization
 
     M_T = (1/T) Σ_{k=1..T} M(u_k)          (= (1/N) Σ_i <σ_i>_time)

@@ -40,7 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     out_dir.mkdir(parents=True, exist_ok=True)
 
     u = decaying_oscillation()
-    dimers = SpinDimerEnsemble.random(2000, width=2.0, spread=1.0, coupling=2.0, seed=1)
+    dimers = SpinDimerEnsemble.random(2000, width=2.0, spread=1.0, spin_coupling=2.0, seed=1)
     pi = PrandtlIshlinskii([0.0, 1.0, 2.0, 4.0], [0.4, 0.3, 0.2, 0.1])
 
     panels: list[tuple[str, np.ndarray, np.ndarray, str]] = []

@@ -57,7 +57,7 @@ def test_regular_realization_single_dimer_above_grazing():
     from analysis.ensemble import section_dimension
     from hysteresis.spin_dimers import SpinDimerEnsemble
 
-    system = _system(SpinDimerEnsemble(fields=[[1.0, -1.0]], coupling=2.0), 9.5)
+    system = _system(SpinDimerEnsemble(fields=[[1.0, -1.0]], spin_coupling=2.0), 9.5)
     q, v, m_t, _ = section_and_magnetization(system, 1500.0, 1000.0)  # e^(-ζ·1000) ~ 1e-22
     assert m_t == pytest.approx(-1.0, abs=1e-12)  # round-off of the chunk sums only
     assert np.allclose(q, -9.5, atol=1e-6) and np.allclose(v, 10.0, atol=1e-6)
