@@ -66,7 +66,7 @@ def test_lyapunov_include_phase_and_fields(capsys):
     rec = json.loads(capsys.readouterr().out)
     assert len(rec["exponents"]) == 3
     assert min(abs(float(x)) for x in rec["exponents"]) < 1e-9
-    assert rec["fields"] == [2.0, 0.0, -0.5, -2.5]
+    assert rec["fields"] == [[2.0, 0.0], [-0.5, -2.5]]
 
 
 def test_lyapunov_relay_and_bad_input(capsys):
@@ -92,7 +92,8 @@ def test_lyapunov_relay_and_bad_input(capsys):
         )
         == 2
     )
-    assert "damping_ratio" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "--damping-ratio" in err and len(err.strip().splitlines()) == 1
 
 
 def test_lyapunov_play_limit_minus_inf(capsys):

@@ -153,7 +153,7 @@ class PaperContext:
         store: str | Path | None = None,
         workers: int | None = None,
         scheduler: str | None = None,
-        progress: bool = True,
+        progress: bool = False,
         seed: int = 0,
     ) -> None:
         self.out = Path(out)

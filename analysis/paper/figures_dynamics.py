@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from analysis.models import build_operator
 from analysis.paper.context import Claim, FigureSpec, PaperContext, verdict
 
 __all__ = ["FIGURES"]
@@ -23,9 +24,10 @@ TABLE_II = {"damping_ratio": 0.05, "frequency": 1.0, "q0": -1.0, "v0": 0.1}
 
 
 def _dimers(fields, coupling_j: float = 2.0):
-    from hysteresis import SpinDimerEnsemble
+    from analysis.models import build_operator
 
-    return SpinDimerEnsemble(np.asarray(fields, dtype=float).reshape(-1, 2), coupling_j)
+    pairs = np.asarray(fields, dtype=float).reshape(-1, 2)
+    return build_operator("dimers", fields=pairs, spin_coupling=coupling_j)
 
 
 def _system(operator, coupling: float):
@@ -35,9 +37,9 @@ def _system(operator, coupling: float):
 
 
 def _erf_play():
-    from hysteresis import GeneralizedPlay
+    from analysis.models import build_operator
 
-    return GeneralizedPlay.erf(width=2.0, spread=1.0)
+    return build_operator("erf-play", width=2.0, spread=1.0)
 
 
 def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
@@ -45,7 +47,7 @@ def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
     import matplotlib.pyplot as plt
 
     periods = max(ctx.size.attractor_periods, 20)
-    system = _system(_dimers([2.0, 0.0]), C_N2_SECTION)
+    system = _system(build_operator("n2", spin_coupling=2.0), C_N2_SECTION)
     sec = system.poincare_section(periods, transient_periods=min(100, periods))
     down = sec.M < 0
     fig, ax = plt.subplots(figsize=(5, 4))
@@ -76,7 +78,7 @@ def fig_n4_traj(ctx: PaperContext) -> list[Claim]:
     """Paper fig:N=4_traj: a trajectory of two dimers coloured by sheet, and its thresholds."""
     import matplotlib.pyplot as plt
 
-    system = _system(_dimers([2.0, 0.0, -0.5, -2.5]), C_SHEETS)
+    system = _system(build_operator("n4", spin_coupling=2.0), C_SHEETS)
     t_end = 40 * system.period if ctx.size.name != "smoke" else 10 * system.period
     traj = system.trajectory(t_end, sample_dt=0.005)
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -132,14 +134,12 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
     """Paper fig:erf_10000: attractors at C = 4.0, limit (a) and N = 20 000 dimers (b)."""
     import matplotlib.pyplot as plt
 
-    from hysteresis import SpinDimerEnsemble
-
     n_spins = ctx.size.bif_spins
     periods = ctx.size.attractor_periods
     transient = 100
     systems = {
         "limit": _system(_erf_play(), 4.0),
-        "dimers": _system(SpinDimerEnsemble.random(n_spins, 2.0, 1.0, 2.0, seed=ctx.seed), 4.0),
+        "dimers": _system(build_operator("dimers", spins=n_spins, seed=ctx.seed), 4.0),
     }
     data: dict[str, np.ndarray] = {}
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharex=True, sharey=True)
