@@ -72,11 +72,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # library and worker errors: one line, no traceback
         if os.environ.get("HYST_DEBUG"):
             raise
-        cause = exc.__cause__ if exc.__cause__ is not None else exc
-        text = str(exc) if str(exc) else type(cause).__name__
-        if type(exc).__name__ not in ("ValueError", "TypeError"):
-            text = f"{type(exc).__name__}: {text}"
-        return fail(prog, text)
+        from analysis.execution import TaskError
+
+        if isinstance(exc, TaskError) and exc.__cause__ is not None:
+            # a worker's error: name the task and the original exception, not the wrapper
+            cause = exc.__cause__
+            return fail(prog, f"task {exc.task} failed: {_describe(cause)}")
+        return fail(prog, _describe(exc))
+
+
+def _describe(exc: BaseException) -> str:
+    text = str(exc) or type(exc).__name__
+    if type(exc).__name__ in ("ValueError", "TypeError"):
+        return text
+    return f"{type(exc).__name__}: {text}"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -469,14 +469,44 @@ def build_operator(args: argparse.Namespace) -> Any:
         raise option_error(exc, "--model") from exc
 
 
+#: bounds on |C|, zeta and Omega beyond which the arithmetic of a run overflows or the run has
+#: no end (a forcing period of 2 pi/Omega > MAX_PERIOD time units)
+MAX_PARAMETER = 1e6
+MAX_PERIOD = 1e6
+
+
+def check_oscillator_values(coupling: float, damping_ratio: float, frequency: float) -> None:
+    """Refuse oscillator parameters whose runs cannot be meaningful, naming the option."""
+    if not all(math.isfinite(x) for x in (coupling, damping_ratio, frequency)):
+        raise CliError("argument --coupling/--damping-ratio/--frequency: must be finite")
+    if damping_ratio < 0:
+        raise CliError(f"argument --damping-ratio: must be >= 0, got {damping_ratio:g}")
+    if frequency <= 0:
+        raise CliError(f"argument --frequency: must be > 0, got {frequency:g}")
+    if abs(coupling) > MAX_PARAMETER:
+        raise CliError(f"argument --coupling: |C| must be <= {MAX_PARAMETER:g}, got {coupling:g}")
+    if damping_ratio > MAX_PARAMETER:
+        raise CliError(
+            f"argument --damping-ratio: must be <= {MAX_PARAMETER:g}, got {damping_ratio:g}"
+        )
+    if frequency > MAX_PARAMETER:
+        raise CliError(f"argument --frequency: must be <= {MAX_PARAMETER:g}, got {frequency:g}")
+    if 2.0 * math.pi / frequency > MAX_PERIOD:
+        raise CliError(
+            f"argument --frequency: the forcing period 2 pi/Omega = {2 * math.pi / frequency:.3g} "
+            f"exceeds {MAX_PERIOD:g} time units (Omega >= {2 * math.pi / MAX_PERIOD:.3g})"
+        )
+
+
 def build_system(
     args: argparse.Namespace, operator: Any = None, coupling: float | None = None
 ) -> Any:
     """``ForcedOscillator(operator, C, zeta, Omega)`` from the options."""
     from oscillators import ForcedOscillator
 
-    op = build_operator(args) if operator is None else operator
     c = args.coupling if coupling is None else coupling
+    check_oscillator_values(c, args.damping_ratio, args.frequency)
+    op = build_operator(args) if operator is None else operator
     try:
         return ForcedOscillator(op, c, args.damping_ratio, args.frequency)
     except (ValueError, TypeError, NotImplementedError) as exc:
