@@ -161,6 +161,8 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         Ferromagnetic spin-spin coupling J > 0 (``coupling=`` is a deprecated alias: in this
         toolkit ``coupling`` means the oscillator's C).
 
+    Notes
+    -----
     ``initial_state``/``apply``/``output``/``switching`` use the equivalent discrete Preisach
     model (:meth:`to_preisach`, built once); the state type is that model's state. The
     brute-force spin dynamics, independent of the relay picture, is :meth:`simulate`.

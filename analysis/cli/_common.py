@@ -469,7 +469,7 @@ def build_operator(args: argparse.Namespace) -> Any:
         raise option_error(exc, "--model") from exc
 
 
-#: bounds on |C|, zeta and Omega beyond which the arithmetic of a run overflows or the run has
+#: bounds on abs(C), zeta and Omega beyond which the arithmetic of a run overflows or the run has
 #: no end (a forcing period of 2 pi/Omega > MAX_PERIOD time units)
 MAX_PARAMETER = 1e6
 MAX_PERIOD = 1e6
