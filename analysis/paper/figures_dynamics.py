@@ -191,13 +191,14 @@ def dky_task(
     """One Kaplan–Yorke dimension of the erf-play limit (task function, picklable)."""
     from analysis.lyapunov import lyapunov_spectrum
 
+    play = _erf_play()
     res = lyapunov_spectrum(
-        _system(_erf_play(), coupling),
+        _system(play, coupling),
         t_end=t_end,
         transient=transient,
         q0=q0,
         v0=v0,
-        w0=w0,
+        operator_state=play.state(position=w0, input=q0),  # the initial memory is the state
         progress=False,
     )
     exps = [float(x) for x in res.exponents]
@@ -223,13 +224,14 @@ def fig_mboa(ctx: PaperContext) -> list[Claim]:
     results = ctx.run("mboa", tasks, dky_task)
     by_key = {(t["coupling"], t["q0"], t["w0"]): r for t, r in zip(tasks, results, strict=True)}
 
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.9))
     data: dict[str, np.ndarray] = {"q0": q0s, "w0": w0s}
-    for ax, key, xs, xlabel in (
-        (axes[0], "a", q0s, "$q_0$ ($w_0=q_0-p/2$)"),
-        (axes[1], "b", w0s, "$w_0$ ($q_0=-1$)"),
-        (axes[2], "c", q0s, "$q_0$ ($w_0=q_0-p/2$)"),
+    for ax, key, xs, xlabel, title in (
+        (axes[0], "a", q0s, "$q_0$ ($w_0=q_0-p/2$)", "start outside the play"),
+        (axes[1], "b", w0s, "$w_0$ ($q_0=-1$)", "start inside the play"),
+        (axes[2], "c", q0s, "$q_0$ ($w_0=q_0-p/2$)", "C = 2.92: regular or chaotic"),
     ):
+        ax.set_title(f"({key}) {title}", fontsize=9, loc="left")
         for c in sorted({c for c, _, _ in panels[key]}):
             d = [by_key[(c, q, w)]["kaplan_yorke"] for cc, q, w in panels[key] if cc == c]
             ax.plot(xs, d, "o-", ms=3, label=f"C={c:g}")
@@ -237,6 +239,12 @@ def fig_mboa(ctx: PaperContext) -> list[Claim]:
         ax.set_xlabel(xlabel)
         ax.set_ylabel("$D_{KY}^\\infty$")
         ax.legend(fontsize=8)
+    fig.suptitle(
+        f"$D_{{KY}}^\\infty$ of the erf-play limit (p = 2, R = 1, ζ = 0.05, Ω = 1, v0 = 0.1) vs "
+        f"initial conditions; t_end = {s.dky_t_end:g}",
+        fontsize=10,
+    )
+    fig.tight_layout()
     lam_d = [by_key[(c, q, w)]["exponents"][0] for c, q, w in panels["d"]]
     data["lmax_d_C1.9"] = np.array(lam_d)
     ctx.save_figure(fig, "fig:mboa", data)

@@ -356,9 +356,23 @@ def fig_bif(ctx: PaperContext) -> list[Claim]:
         ax_l.plot(cs, res["max_exponent"], "o-", ms=2, lw=0.8, color=color)
         ax_l.axhline(0.0, color="grey", lw=0.6)
         ax_l.set_ylabel("$\\lambda_{max}$")
+    # the windows of the paper's claims (checked below), with a legend saying what each claims
+    windows = (
+        (1.7, 1.8, "tab:orange", "paper: N periodic ($\\lambda^N<0$), limit chaotic"),
+        (2.5, 3.0, "tab:orange", None),
+        (3.8, 4.2, "tab:green", "paper: both chaotic ($\\lambda^N, \\lambda^\\infty > 0$)"),
+    )
     for ax in axes:
-        for lo, hi, col in ((2.5, 3.0, "tab:orange"), (3.8, 4.2, "tab:green")):
-            ax.axvspan(lo, hi, color=col, alpha=0.08)
+        for lo, hi, col, label in windows:
+            if lo < c_hi and hi > c_lo:
+                ax.axvspan(lo, hi, color=col, alpha=0.12, label=label if ax is axes[0] else None)
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(fontsize=7, loc="upper left", framealpha=0.9)
+    fig.suptitle(
+        f"fig:bif — dimers p = {WIDTH:g}, R = {SPREAD:g}, J = {SPIN_COUPLING:g} vs the erf-play "
+        f"limit; ζ = {DAMPING_RATIO:g}, Ω = {FREQUENCY:g}",
+        fontsize=9,
+    )
     axes[-1].set_xlabel("C (stepped downward, continuation)")
     ctx.save_figure(
         fig,
