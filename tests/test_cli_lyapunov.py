@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,9 +13,19 @@ import pytest
 from analysis.cli import main
 
 
+@pytest.fixture(autouse=True)
+def _in_tmp(tmp_path, monkeypatch):
+    """Commands write to --out (default hyst-out in the working directory): keep it in tmp."""
+    monkeypatch.chdir(tmp_path)
+
+
 def run_cli(*args):
     proc = subprocess.run(
-        [sys.executable, "-m", "analysis.cli", *args], capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "analysis.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=Path.cwd(),
     )
     assert proc.returncode == 0, proc.stderr
     return proc.stdout
