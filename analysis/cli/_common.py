@@ -22,7 +22,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import re
@@ -30,8 +29,6 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
-
-import numpy as np
 
 __all__ = [
     "DEFAULT_OUT",
@@ -580,30 +577,13 @@ def announce_compilation(args: argparse.Namespace) -> None:
 # -- output -------------------------------------------------------------------------------------
 
 
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [_jsonable(v) for v in x.tolist()]
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float):
-        if math.isnan(x):
-            return "nan"
-        if math.isinf(x):
-            return "inf" if x > 0 else "-inf"
-        return x
-    if isinstance(x, Path):
-        return str(x)
-    return x
-
-
 def to_json(record: Any, indent: int | None = None) -> str:
-    """JSON text of ``record``: numpy values as Python numbers, paths as strings, and the
-    non-finite floats as the strings ``"inf"``, ``"-inf"``, ``"nan"`` (strict JSON)."""
-    return json.dumps(_jsonable(record), indent=indent, allow_nan=False)
+    """JSON text of ``record`` (see :func:`analysis._json.to_json`): numpy values as Python
+    numbers, paths as strings, non-finite floats as the strings ``"inf"``, ``"-inf"``,
+    ``"nan"`` (strict JSON)."""
+    from analysis._json import to_json as encode
+
+    return encode(record, indent=indent)
 
 
 def emit(args: argparse.Namespace, record: dict[str, Any], lines: Sequence[str]) -> None:
