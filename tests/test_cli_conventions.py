@@ -34,8 +34,9 @@ def test_every_command_is_registered():
 
 @pytest.mark.parametrize("command", sorted(_subparsers()))
 def test_help_of_every_command_shows_the_shared_options_defaults_and_help(command, capsys):
-    if command in PENDING:
-        pytest.skip(f"hyst {command} adopts analysis.cli._common in its owner's branch")
+    assert main([command, "--help"]) == 0
+    if command in PENDING and "--quiet" not in capsys.readouterr().out:
+        pytest.xfail(f"hyst {command} adopts analysis.cli._common in its owner's branch")
     assert main([command, "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())  # undo the help formatter's wrapping
     for opt in SHARED_OUTPUT_OPTIONS:

@@ -67,7 +67,9 @@ CASES: list[tuple[list[str], str]] = [
     (["lyapunov", "--coupling", "4", "--t-end", "-5"], "--t-end"),
     (["lyapunov", "--coupling", "4", "--t-end", "10", "--transient", "100"], "--transient"),
     (["lyapunov", "--coupling", "4", "--transient", "-1"], "--transient"),
+    (["lyapunov", "--coupling", "4", "--t-end", "1e300"], "--t-end"),
     # -- hyst trajectory -------------------------------------------------------------------
+    (["trajectory", "--coupling", "4", "--t-end", "1e12", "--sample-dt", "1e6"], "--t-end"),
     (["trajectory", "--coupling", "4", "--sample-dt", "0"], "--sample-dt"),
     (["trajectory", "--coupling", "4", "--sample-dt", "1e-9", "--t-end", "1e6"], "--sample-dt"),
     (["trajectory", "--coupling", "4", "--t-end", "0"], "--t-end"),
@@ -78,6 +80,7 @@ CASES: list[tuple[list[str], str]] = [
     (["poincare", "--coupling", "4", "--periods", "10000000000"], "--periods"),
     (["poincare", "--coupling", "4", "--transient", "-1"], "--transient"),
     (["poincare", "--coupling", "4", "--transient-periods", "2.5"], "--transient"),
+    (["poincare", "--coupling", "4", "--transient", "1000000000000"], "--transient"),
     # -- hyst bifurcation ------------------------------------------------------------------
     (["bifurcation"], "--start"),
     (["bifurcation", "--values", "1", "--start", "2", "--stop", "1"], "--values"),
@@ -91,6 +94,7 @@ CASES: list[tuple[list[str], str]] = [
     (["bifurcation", "--values", "1", "--lyapunov-t", "-1"], "--lyapunov-t"),
     (["bifurcation", "--values", "1", "--parameter", "mass"], "--parameter"),
     (["bifurcation", "--values", "nan"], "--values"),
+    (["bifurcation", "--values", "1", "--lyapunov-t", "1e15"], "--lyapunov-t"),
     # -- hyst dimension --------------------------------------------------------------------
     (["dimension", "--coupling", "4", "--max-fill", "0"], "--max-fill"),
     (["dimension", "--coupling", "4", "--max-fill", "2"], "--max-fill"),
@@ -101,6 +105,10 @@ CASES: list[tuple[list[str], str]] = [
     (["ensemble", "--spins", "101", "--coupling", "4", "--realizations", "2"], "--spins"),
     (["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "0"], "--realizations"),
     (["ensemble", "--spins", "20", "--coupling", "4"], "--realizations"),
+    (
+        ["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "1", "--t-end", "1e20"],
+        "--t-end",
+    ),
     (
         ["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "1", "--workers", "0"],
         "--workers",

@@ -45,6 +45,7 @@ __all__ = [
     "build_operator",
     "build_system",
     "check_model_options",
+    "check_run_length",
     "check_transient",
     "emit",
     "figure_title",
@@ -324,7 +325,7 @@ def add_transient_option(
         "--transient",
         *aliases,
         dest="transient",
-        type=int_at_least(0) if integer else nonnegative_float,
+        type=int_at_least(0, MAX_PERIODS) if integer else nonnegative_float,
         default=default,
         help="transient skipped before measuring, in forcing periods T = 2 pi/Omega",
     )
@@ -527,8 +528,26 @@ def transient_time(args: argparse.Namespace, frequency: float | None = None) -> 
     return float(args.transient) * 2.0 * math.pi / omega
 
 
+#: the longest run a command accepts, in forcing periods (refused up front, not run for days)
+MAX_PERIODS = 10**8
+
+
+def check_run_length(args: argparse.Namespace, t_end: float, option: str = "--t-end") -> None:
+    """Refuse a run longer than :data:`MAX_PERIODS` forcing periods, naming the option."""
+    periods = (
+        t_end * args.frequency / (2.0 * math.pi) if not isinstance(args.frequency, list) else 0
+    )
+    if periods > MAX_PERIODS:
+        raise CliError(
+            f"argument {option}: {t_end:g} time units are {periods:.3g} forcing periods, more "
+            f"than the limit {MAX_PERIODS:.0e}"
+        )
+
+
 def check_transient(args: argparse.Namespace, t_end: float) -> float:
-    """``--transient`` as a time, checked to be shorter than ``t_end``."""
+    """``--transient`` as a time, checked to be shorter than ``t_end`` (and ``t_end`` against
+    :data:`MAX_PERIODS`)."""
+    check_run_length(args, t_end)
     transient = transient_time(args)
     if transient >= t_end:
         raise CliError(
@@ -602,8 +621,9 @@ def figure_title(args: argparse.Namespace, what: str, **extra: Any) -> str:
     pairs: list[tuple[str, Any]] = []
     if getattr(args, "coupling", None) is not None and not isinstance(args.coupling, list):
         pairs.append(("C", float(args.coupling)))
-    pairs.append(("ζ", float(args.damping_ratio)))
-    pairs.append(("Ω", float(args.frequency)))
+    for symbol, name in (("ζ", "damping_ratio"), ("Ω", "frequency")):
+        if getattr(args, name, None) is not None:  # commands without an oscillator omit them
+            pairs.append((symbol, float(getattr(args, name))))
     pairs.extend(extra.items())
     return f"{what}: {describe_model(model_record(args), pairs)}"
 

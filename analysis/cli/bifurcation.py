@@ -29,6 +29,7 @@ from analysis.cli._common import (
     build_operator,
     build_system,
     check_model_options,
+    check_run_length,
     emit,
     figure_title,
     finite_float,
@@ -133,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_model_options(args)
     values = _values(args)
+    check_run_length(args, args.lyapunov_t, "--lyapunov-t")
     if args.parameter != "coupling" and args.coupling is None:
         raise CliError("argument --coupling: required when another parameter is swept")
     if args.parameter == "coupling" and args.coupling is not None:

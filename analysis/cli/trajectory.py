@@ -17,6 +17,7 @@ from analysis.cli._common import (
     announce_compilation,
     build_system,
     check_model_options,
+    check_run_length,
     emit,
     figure_title,
     initial_operator_state,
@@ -55,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from analysis.cli._common import CliError
 
     check_model_options(args)
+    check_run_length(args, args.t_end)
     if args.t_end / args.sample_dt > MAX_SAMPLES:
         raise CliError(
             f"argument --sample-dt: t_end/sample_dt = {args.t_end / args.sample_dt:.3g} samples "
