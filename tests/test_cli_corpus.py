@@ -28,6 +28,7 @@ CASES: list[tuple[list[str], str]] = [
     (["lyapunov", "--coupling", "4", "--spins", "0"], "--spins"),
     (["lyapunov", "--coupling", "4", "--spins", "101"], "--spins"),
     (["lyapunov", "--coupling", "4", "--spins", "1.5"], "--spins"),
+    (["lyapunov", "--coupling", "4", "--spins", "1000000000000"], "--spins"),
     (["lyapunov", "--coupling", "4", "--seed", "-1"], "--seed"),
     (["lyapunov", "--coupling", "4", "--width", "-2"], "--width"),
     (["lyapunov", "--coupling", "4", "--width", "5"], "--width"),

@@ -161,6 +161,9 @@ def int_at_least(minimum: int, maximum: int | None = None) -> Callable[[str], in
 
 # -- shared options -----------------------------------------------------------------------------
 
+#: the largest ensemble a command builds (memory: a few GB of thresholds and state)
+MAX_SPINS = 10**8
+
 
 def add_model_options(
     parser: argparse.ArgumentParser,
@@ -187,14 +190,13 @@ def add_model_options(
         + "; ".join(f"{n}: {MODELS[n].description}" for n in names)
         + " (erf_play is a deprecated spelling of erf-play)",
     )
-    spins_kw: dict[str, Any] = {"nargs": "+", "default": [d.spins]} if multiple_spins else {}
     g.add_argument(
         "--spins",
-        type=int_at_least(1),
-        default=spins_kw.pop("default", d.spins),
+        type=int_at_least(1, MAX_SPINS),
+        nargs="+" if multiple_spins else None,
+        default=[d.spins] if multiple_spins else d.spins,
         help="N, number of spins (dimers: even, N/2 dimers) or relays (preisach)"
         + ("; one or more values" if multiple_spins else ""),
-        **spins_kw,
     )
     g.add_argument("--seed", type=int_at_least(0), default=d.seed, help="disorder seed (>= 0)")
     g.add_argument("--width", type=positive_float, default=d.width, help="p, loop width (> 0)")
@@ -227,7 +229,9 @@ def add_model_options(
     g.add_argument(
         "--beta", type=finite_float, default=None, help="relay: lower threshold (default -p/2)"
     )
-    g.add_argument("--plays", type=int_at_least(1), default=d.plays, help="pi: number K of plays")
+    g.add_argument(
+        "--plays", type=int_at_least(1, 10**5), default=d.plays, help="pi: number K of plays"
+    )
 
 
 def _model_name(names: Sequence[str]) -> Callable[[str], str]:

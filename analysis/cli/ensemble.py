@@ -53,7 +53,7 @@ def register(subparsers: Any) -> None:
     g = p.add_argument_group("ensemble")
     g.add_argument(
         "--realizations",
-        type=int_at_least(1),
+        type=int_at_least(1, 10**7),
         required=True,
         help="realizations per (N, C) (--seed is the base seed of their disorder)",
     )
@@ -76,7 +76,7 @@ def register(subparsers: Any) -> None:
     )
     g.add_argument(
         "--workers",
-        type=int_at_least(1),
+        type=int_at_least(1, 1024),
         default=None,
         help="local worker processes (default: one per core)",
     )

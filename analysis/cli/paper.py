@@ -58,7 +58,7 @@ def register(subparsers: Any) -> None:
     )
     g.add_argument(
         "--workers",
-        type=int_at_least(1),
+        type=int_at_least(1, 1024),
         default=None,
         help="worker processes (default: one per core)",
     )
