@@ -113,4 +113,5 @@ def test_pyproject_uses_an_spdx_license_expression():
     assert meta["project"]["license"] == "MIT"
     assert meta["project"]["license-files"] == ["LICENSE"]
     assert any(r.startswith("setuptools>=77") for r in meta["build-system"]["requires"])
-    assert {"sphinx>=7", "numpydoc>=1.6"} <= set(meta["project"]["optional-dependencies"]["test"])
+    # napoleon (numpydoc-style docstrings) ships with Sphinx: one dependency builds the docs
+    assert "sphinx>=7" in meta["project"]["optional-dependencies"]["test"]
