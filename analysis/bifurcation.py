@@ -154,7 +154,7 @@ def bifurcation_diagram(
     v0: float = 0.1,
     operator_state: Any = None,
     parameter: str = "coupling",
-    progress: bool = True,
+    progress: bool = False,
 ) -> BifurcationDiagram:
     """Sweep a parameter in the given order and record the Poincaré section at each value.
 
@@ -175,6 +175,10 @@ def bifurcation_diagram(
         (from the end of the section); ``max_exponent`` is its largest exponent.
     q0, v0, operator_state:
         Initial condition of the first value (and of all values without continuation).
+    parameter:
+        Name of the swept parameter (labels only).
+    progress:
+        Show a progress bar over the values (off by default; the CLI turns it on).
     """
     from tqdm.auto import tqdm
 

@@ -132,24 +132,40 @@ def ensemble_task(
     box_max_fill: float = 0.1,
     box_min_boxes: float = 8.0,
     keep_section: bool = False,
+    model: str = "dimers",
+    width_spread: float = 0.2,
 ) -> dict:
     """One disorder realization at one coupling: λ's, D_KY, D_BC and M_T.
 
     ``spins`` = N, ``coupling`` = C, ``seed`` the disorder seed of
-    ``SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed)``. The Lyapunov spectrum
-    (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the section
-    and ``M_T`` use the whole forcing periods in that window (see
+    ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)``. The Lyapunov
+    spectrum (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the
+    section and ``M_T`` use the whole forcing periods in that window (see
     :func:`section_and_magnetization`). ``D_BC`` is 0 for a periodic section, else
     :func:`~analysis.dimensions.box_counting_dimension` with ``max_fill=box_max_fill`` and
     ``min_boxes=box_min_boxes`` (relax them for short runs with few section points), nan if no
     scaling region is found. Top-level so that it runs in process pools.
+
+    ``model`` is a name of the model registry (:mod:`analysis.models`) with disorder (``dimers``,
+    the default, or ``preisach``: random relays with half-width spread ``width_spread``);
+    ``spins`` is then its number of spins/relays.
     """
     from analysis.dimensions import kaplan_yorke_dimension
     from analysis.lyapunov import lyapunov_spectrum
-    from hysteresis.spin_dimers import SpinDimerEnsemble
+    from analysis.models import build_operator, canonical_model_name
     from oscillators import ForcedOscillator
 
-    operator = SpinDimerEnsemble.random(spins, width, spread, spin_coupling, seed)
+    model = canonical_model_name(model)
+    params = dict(spins=spins, seed=seed, width=width, spread=spread)
+    if model == "dimers":
+        params["spin_coupling"] = spin_coupling
+    elif model == "preisach":
+        params["width_spread"] = width_spread
+    else:
+        raise ValueError(
+            f"model must be 'dimers' or 'preisach' (models with disorder), got {model!r}"
+        )
+    operator = build_operator(model, **params)
     system = ForcedOscillator(operator, coupling, damping_ratio=damping_ratio, frequency=frequency)
     ly = lyapunov_spectrum(system, t_end, transient, q0, v0, progress=False)
     exponents = np.asarray(ly.exponents, dtype=float)
@@ -310,13 +326,15 @@ def run_ensemble(
     store: ResultStore | str | os.PathLike | None = None,
     workers: int | None = None,
     scheduler: str | None = None,
-    progress: bool = True,
+    progress: bool = False,
     **task_kwargs: Any,
 ) -> list[EnsemblePoint]:
     """Run (or resume) the ensemble and aggregate it per (N, C).
 
     Every (N, C, realization) is one task of :func:`ensemble_task` (experiment
-    ``"ensemble-dimers"``); ``store``/``workers``/``scheduler`` as in :func:`run_tasks`.
+    ``"ensemble-dimers"``); ``store``/``workers``/``scheduler`` as in :func:`run_tasks`;
+    ``progress`` shows a progress bar (off by default). ``task_kwargs`` go to every task (see
+    :func:`ensemble_task`; ``model="preisach"`` runs random-relay ensembles).
     """
     tasks = ensemble_tasks(
         spins_list, couplings, realizations, base_seed, t_end, transient, **task_kwargs

@@ -2,7 +2,7 @@
 
 The spin-dimer ensemble *without* dynamic feedback is driven by an external field that is an
 independent and identically distributed sequence, ``u_k ~ N(0, σ²)``. For each disorder
-realization ``SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed)`` the
+realization ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)`` the
 time-averaged magnetization
 
     M_T = (1/T) Σ_{k=1..T} M(u_k)          (= (1/N) Σ_i <σ_i>_time)
@@ -45,7 +45,7 @@ __all__ = [
 
 DEFAULT_INPUT_STD = 2.0
 #: disorder of the paper (Table I): loop width p, centre spread R, spin coupling J
-PAPER_WIDTH, PAPER_SPREAD, PAPER_COUPLING = 2.0, 1.0, 2.0
+PAPER_WIDTH, PAPER_SPREAD, PAPER_SPIN_COUPLING = 2.0, 1.0, 2.0
 
 
 def iid_inputs(n_steps: int, input_std: float, seed: int) -> np.ndarray:
@@ -65,20 +65,23 @@ def iid_task(
     input_std: float = DEFAULT_INPUT_STD,
     width: float = PAPER_WIDTH,
     spread: float = PAPER_SPREAD,
-    coupling: float = PAPER_COUPLING,
+    spin_coupling: float = PAPER_SPIN_COUPLING,
     transient_steps: int = 0,
 ) -> dict:
-    """One realization: ``M_T`` of ``SpinDimerEnsemble.random(spins, width, spread, coupling,
-    seed)`` driven by ``iid_inputs(transient_steps + n_steps, input_std, input_seed)``.
+    """One realization: ``M_T`` of the registry's ``dimers`` (``SpinDimerEnsemble.random(spins,
+    width, spread, spin_coupling, seed)``) driven by ``iid_inputs(transient_steps + n_steps,
+    input_std, input_seed)``.
 
     The spins start all down and relax at the first input (``initial_state(u_0)``); the first
     ``transient_steps`` outputs are not averaged. Top-level, so it runs in process pools.
     """
-    from hysteresis.spin_dimers import SpinDimerEnsemble
+    from analysis.models import build_operator
 
     if transient_steps < 0:
         raise ValueError(f"transient_steps must be >= 0, got {transient_steps}")
-    ensemble = SpinDimerEnsemble.random(spins, width, spread, coupling, seed)
+    ensemble = build_operator(
+        "dimers", spins=spins, seed=seed, width=width, spread=spread, spin_coupling=spin_coupling
+    )
     u = iid_inputs(int(n_steps) + int(transient_steps), input_std, input_seed)
     outputs, _ = ensemble.apply(u, ensemble.initial_state(float(u[0])))
     outputs = np.asarray(outputs, dtype=float)[int(transient_steps) :]
@@ -96,7 +99,7 @@ def iid_magnetization(
     transient_steps: int = 0,
     width: float = PAPER_WIDTH,
     spread: float = PAPER_SPREAD,
-    coupling: float = PAPER_COUPLING,
+    spin_coupling: float = PAPER_SPIN_COUPLING,
     store: ResultStore | str | os.PathLike | None = None,
     workers: int | None = 1,
     scheduler: str | None = None,
@@ -126,7 +129,7 @@ def iid_magnetization(
             input_std=float(input_std),
             width=float(width),
             spread=float(spread),
-            coupling=float(coupling),
+            spin_coupling=float(spin_coupling),
             transient_steps=int(transient_steps),
         )
         for s, i in zip(disorder_seeds, input_seeds, strict=True)

@@ -1,7 +1,9 @@
 """Figures of identified Preisach densities (paper figure fig:preis_dens).
 
 FORC-diagram conventions: ``r = (α−β)/2`` on the x axis from 0, ``s = (α+β)/2`` on the y axis,
-equal aspect, a diverging colour map centred at 0 (negative masses of noisy data show in blue).
+equal aspect. A density without negative cells is drawn on a sequential colour map from 0
+(``viridis``: the low tails of a ridge stay visible against the blank plane); one with negative
+masses (noisy data) on a diverging map centred at 0, negative cells in blue.
 Cells are drawn as the rotated squares they are in the ``r``-``s`` plane (``pcolormesh`` on the
 quadrilateral mesh of the nodes), coloured by the unsmoothed density ``μ_rs = 2·mass/(ΔαΔβ)`` or,
 if requested and available, the smoothed one.
@@ -46,10 +48,14 @@ def plot_density_rs(
     r_max: float | None = None,
     s_limits: tuple[float, float] | None = None,
     vmax: float | None = None,
-    cmap: str = "RdBu_r",
+    cmap: str | None = None,
 ) -> Any:
-    """Density in the r-s plane on ``ax``; returns the mappable (for a colour bar)."""
-    from matplotlib.colors import TwoSlopeNorm
+    """Density in the r-s plane on ``ax``; returns the mappable (for a colour bar).
+
+    ``cmap=None`` picks ``viridis`` from 0 for a non-negative density and the diverging
+    ``RdBu_r`` centred at 0 when some cell is negative.
+    """
+    from matplotlib.colors import Normalize, TwoSlopeNorm
 
     aa, bb = np.meshgrid(ident.alpha, ident.beta, indexing="ij")
     rr, ss = 0.5 * (aa - bb), 0.5 * (aa + bb)
@@ -70,7 +76,13 @@ def plot_density_rs(
     finite = np.isfinite(c)
     top = vmax if vmax is not None else (float(np.nanmax(np.abs(c))) if finite.any() else 1.0)
     top = top if top > 0 else 1.0
-    norm = TwoSlopeNorm(vmin=-top, vcenter=0.0, vmax=top)
+    positive = not finite.any() or float(np.nanmin(c)) >= 0.0
+    if positive:
+        norm = Normalize(vmin=0.0, vmax=top)
+        cmap = cmap or "viridis"
+    else:
+        norm = TwoSlopeNorm(vmin=-top, vcenter=0.0, vmax=top)
+        cmap = cmap or "RdBu_r"
     mappable = ax.pcolormesh(
         mesh_r,
         mesh_s,
