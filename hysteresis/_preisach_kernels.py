@@ -395,7 +395,7 @@ def _is_simd_mode(mode) -> bool:
     return isinstance(mode, types.Integer) and mode.bitwidth == 8
 
 
-@overload(_lanes_above, inline="always")
+@overload(_lanes_above)
 def _ov_lanes_above(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - compile time
     if _is_simd_mode(mode):
 
@@ -410,7 +410,7 @@ def _ov_lanes_above(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - 
     return scalar
 
 
-@overload(_lanes_at_most, inline="always")
+@overload(_lanes_at_most)
 def _ov_lanes_at_most(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - compile time
     if _is_simd_mode(mode):
 
