@@ -33,8 +33,8 @@ from numba import njit
 from hysteresis._validation import (
     MAX_MAGNITUDE,
     as_generator,
-    bounded_work,
     as_input_sequence,
+    bounded_work,
     finite_array,
     positive_integer,
     positive_scalar,
