@@ -349,7 +349,7 @@ _lane_sums_above = _lane_sums_intrinsic(">")
 _lane_sums_at_most = _lane_sums_intrinsic("<=")
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _scalar_lane_sums_above(keys, weights, a, n_blocks, x):  # pragma: no cover - compiled
     """Plain fallback of ``_lane_sums_above``: the same four accumulators, the same order."""
     s0 = 0.0
@@ -365,7 +365,7 @@ def _scalar_lane_sums_above(keys, weights, a, n_blocks, x):  # pragma: no cover 
     return s0, s1, s2, s3
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _scalar_lane_sums_at_most(keys, weights, a, n_blocks, x):  # pragma: no cover - compiled
     """Plain fallback of ``_lane_sums_at_most``: the same four accumulators, the same order."""
     s0 = 0.0
@@ -395,7 +395,7 @@ def _is_simd_mode(mode) -> bool:
     return isinstance(mode, types.Integer) and mode.bitwidth == 8
 
 
-@overload(_lanes_above)
+@overload(_lanes_above, inline="always")
 def _ov_lanes_above(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - compile time
     if _is_simd_mode(mode):
 
@@ -410,7 +410,7 @@ def _ov_lanes_above(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - 
     return scalar
 
 
-@overload(_lanes_at_most)
+@overload(_lanes_at_most, inline="always")
 def _ov_lanes_at_most(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - compile time
     if _is_simd_mode(mode):
 
