@@ -56,6 +56,11 @@ _ARRAY_TAG = "__ndarray__"
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
+def _release(version: str) -> str:
+    """A code version without the ``-dirty`` mark of its git description."""
+    return version.replace("-dirty)", ")")
+
+
 class StoreError(ValueError):
     """A results file that cannot be used: corrupted, truncated, not a store, or holding
     results of other code versions. The message names the file; the file is left untouched."""
@@ -396,11 +401,15 @@ class ResultStore:
         """Refuse (:class:`StoreError`) to mix results of other code versions into
         ``experiment`` unless ``allow_version_mismatch``; returns the other versions found."""
         current = code_version()
-        others = [v for v in self.code_versions(experiment) if v != current]
-        if others and not allow_version_mismatch:
+        stored = self.code_versions(experiment)
+        others = [v for v in stored if v != current]
+        # a work-tree that is merely dirty on the same commit cannot be told apart from the
+        # clean one by its version string: reported by the caller, not refused
+        conflicting = [v for v in others if _release(v) != _release(current)]
+        if conflicting and not allow_version_mismatch:
             raise StoreError(
                 f"{self.path}: experiment {experiment!r} holds results computed by other code "
-                f"versions {others} (now {current!r}); refusing to mix them. Use a new store, "
+                f"versions {conflicting} (now {current!r}); refusing to mix them. Use a new store, "
                 "or pass allow_version_mismatch=True to reuse them knowingly"
             )
         return others

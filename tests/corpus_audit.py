@@ -7,7 +7,8 @@ Not collected by pytest (the name does not start with ``test_``). Usage::
 
 One worker process runs the cases one after another; a case that kills it (segmentation fault)
 or gives no answer within ``--timeout`` seconds is a *crash* (crash or hang), and a fresh worker
-continues with the next case. Prints one line per case that is not clear, the counts, and as the
+continues with the next case. Cases marked ``isolate`` run in a fresh child each. Prints one
+line per case that is not clear, the counts, and as the
 last line a JSON object with the counts.
 """
 
@@ -31,7 +32,7 @@ import test_bad_input_corpus as corpus  # noqa: E402
 class Worker:
     def __init__(self, ready_timeout: float) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, "-c", corpus.CHILD.format(here=str(HERE))],
+            [sys.executable, "-c", corpus.CHILD.format(here=str(HERE), objects=True)],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.DEVNULL,
@@ -84,6 +85,13 @@ def main() -> None:
     counts = {"clear": 0, "unclear": 0, "silent": 0, "crash": 0}
     worker = Worker(ready_timeout=600.0)
     for case in corpus.CASES:
+        if case.isolate:
+            # hang- or crash-prone: a fresh child of its own, as the pytest corpus runs it
+            verdict, detail = corpus.run_isolated(case, args.timeout)
+            counts[verdict] += 1
+            if verdict != "clear" or args.verbose:
+                print(f"{verdict:8s} {case.id:36s} {detail[:150]}")
+            continue
         answer = worker.ask(case.id, args.timeout)
         if answer is None:
             code = worker.proc.poll()

@@ -168,3 +168,27 @@ def test_worker_exception_reaches_the_caller_as_one_clear_error(tmp_path):
     assert err.remote_traceback is not None and "_odd" in err.remote_traceback
     printed = "".join(traceback.format_exception(err))
     assert "_RemoteTraceback" not in printed and printed.count("Traceback") <= 2
+
+
+def test_version_check_refuses_other_commits_not_a_dirty_tree(tmp_path, monkeypatch):
+    import analysis.store as store_module
+
+    path = tmp_path / "v.sqlite"
+    with ResultStore(path) as store:
+        store.put("e", {"i": 1}, {"v": 1.0})
+    monkeypatch.setattr(store_module, "code_version", lambda: "hysteresis-toolkit 0.1.0 (git abc)")
+    for stored, refused in (
+        ("hysteresis-toolkit 0.1.0 (git abc)", False),
+        ("hysteresis-toolkit 0.1.0 (git abc-dirty)", False),
+        ("hysteresis-toolkit 0.1.0 (git def)", True),
+        ("hysteresis-toolkit 0.0.9 (git abc)", True),
+    ):
+        with sqlite3.connect(path) as conn:
+            conn.execute("UPDATE tasks SET code_version = ?", (stored,))
+        with ResultStore(path) as store:
+            if refused:
+                with pytest.raises(StoreError, match="allow_version_mismatch"):
+                    store.check_versions("e")
+                assert store.check_versions("e", allow_version_mismatch=True) == [stored]
+            else:
+                store.check_versions("e")
