@@ -13,8 +13,8 @@ Layout (schema version 1)::
 
 Robustness: several processes may write one store at once (SQLite locking, ``BEGIN IMMEDIATE``
 transactions and ``INSERT OR IGNORE``: no result is lost or duplicated, the first one wins). A
-file that is not an intact results store (empty, truncated, corrupted, another program's
-database) is refused with :class:`StoreError` (a ``ValueError``) naming the file, before anything
+file that is not an intact results store (truncated, corrupted, another program's database)
+is refused with :class:`StoreError` (a ``ValueError``) naming the file, before anything
 is written to it. Each row records the code version that computed it;
 :meth:`ResultStore.check_versions` refuses to mix versions unless told to.
 
@@ -75,10 +75,9 @@ def _check_store_file(path: Path) -> None:
     with open(path, "rb") as fh:
         head = fh.read(len(_SQLITE_MAGIC))
     if len(head) == 0:
-        raise StoreError(
-            f"{path}: empty file, not a results store (a truncated store?); it was left "
-            "untouched: remove it or choose another path to start a new store"
-        )
+        # nothing to lose, and another process may be creating this very store right now
+        # (SQLite creates the file before it writes the header): a new store
+        return
     if head != _SQLITE_MAGIC:
         raise StoreError(
             f"{path}: not a results store (no SQLite header: corrupted, truncated or another "

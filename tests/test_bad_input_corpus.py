@@ -353,7 +353,6 @@ CASES: list[Case] = [
         "ResultStore(write('garbage.sqlite', bytes(range(256)) * 16))",
         "garbage.sqlite",
     ),
-    C("store-empty-file", "ResultStore(write('empty.sqlite', b''))", "empty.sqlite"),
     C("store-text-file", "ResultStore(write('text.sqlite', b'a,b,c\\n1,2,3\\n'))", "text.sqlite"),
     C(
         "store-truncated",

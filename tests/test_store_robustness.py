@@ -106,7 +106,7 @@ def _full_store(path: Path) -> None:
 
 @pytest.mark.parametrize(
     "damage",
-    ["truncate_half", "truncate_to_header", "garbage_middle", "binary_garbage", "empty", "text"],
+    ["truncate_half", "truncate_to_header", "garbage_middle", "binary_garbage", "text"],
 )
 def test_damaged_store_is_refused_and_left_untouched(tmp_path, damage):
     path = tmp_path / "s.sqlite"
@@ -122,8 +122,6 @@ def test_damaged_store_is_refused_and_left_untouched(tmp_path, damage):
         assert mid > 0
     elif damage == "binary_garbage":
         data = np.random.default_rng(0).bytes(8192)
-    elif damage == "empty":
-        data = b""
     else:
         data = b"reversal_field,field,moment\n1,2,3\n"
     path.write_bytes(data)
@@ -192,3 +190,14 @@ def test_version_check_refuses_other_commits_not_a_dirty_tree(tmp_path, monkeypa
                 assert store.check_versions("e", allow_version_mismatch=True) == [stored]
             else:
                 store.check_versions("e")
+
+
+def test_empty_file_becomes_a_new_store(tmp_path):
+    # an empty file holds nothing to lose, and is what SQLite leaves while another process is
+    # creating the same store: it is initialised, not refused
+    path = tmp_path / "new.sqlite"
+    path.write_bytes(b"")
+    with ResultStore(path) as store:
+        store.put("e", {"i": 1}, {"v": 2.0})
+    with ResultStore(path) as store:
+        assert store.load("e") == [({"i": 1}, {"v": 2.0})]
