@@ -47,7 +47,11 @@ def realization_seeds(base_seed: int, spins: int, realizations: int) -> list[int
     """Disorder seeds of the realizations at N spins: ``spawn_seeds`` from a base derived from
     ``(base_seed, N)``. Different N get independent disorder; different couplings C at the same
     N share it (the same realizations are followed across C)."""
-    base = int(np.random.SeedSequence([int(base_seed), int(spins)]).generate_state(1, np.uint64)[0])
+    from hysteresis._validation import nonnegative_integer, positive_integer
+
+    base_seed = nonnegative_integer(base_seed, "base_seed")
+    spins = positive_integer(spins, "spins")
+    base = int(np.random.SeedSequence([base_seed, spins]).generate_state(1, np.uint64)[0])
     return spawn_seeds(base >> 1, realizations)
 
 

@@ -59,9 +59,10 @@ def spawn_seeds(base_seed: int, n: int) -> list[int]:
     statistically independent streams. The same ``(base_seed, n)`` always gives the same list,
     and the first ``m`` seeds do not depend on ``n``.
     """
-    from hysteresis._validation import nonnegative_integer
+    from hysteresis._validation import bounded_work, nonnegative_integer
 
     n = nonnegative_integer(n, "n")
+    bounded_work(n, "n", 10_000_000, "seeds")
     base_seed = nonnegative_integer(base_seed, "base_seed")
     children = np.random.SeedSequence(int(base_seed)).spawn(n)
     return [int(c.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1)) for c in children]

@@ -86,14 +86,15 @@ def iid_task(
     The spins start all down and relax at the first input (``initial_state(u_0)``); the first
     ``transient_steps`` outputs are not averaged. Top-level, so it runs in process pools.
     """
+    from hysteresis._validation import nonnegative_integer, positive_integer
     from hysteresis.spin_dimers import SpinDimerEnsemble
 
-    if transient_steps < 0:
-        raise ValueError(f"transient_steps must be >= 0, got {transient_steps}")
+    n_steps = positive_integer(n_steps, "n_steps")
+    transient_steps = nonnegative_integer(transient_steps, "transient_steps")
     ensemble = SpinDimerEnsemble.random(spins, width, spread, coupling, seed)
-    u = iid_inputs(int(n_steps) + int(transient_steps), input_std, input_seed)
+    u = iid_inputs(n_steps + transient_steps, input_std, input_seed)
     outputs, _ = ensemble.apply(u, ensemble.initial_state(float(u[0])))
-    outputs = np.asarray(outputs, dtype=float)[int(transient_steps) :]
+    outputs = np.asarray(outputs, dtype=float)[transient_steps:]
     return {"magnetization": float(outputs.mean())}
 
 

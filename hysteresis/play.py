@@ -175,6 +175,7 @@ class _PlayBase(ContinuousHysteron):
     def on_wall(self, state: PlayState, direction: int) -> bool:
         """True if moving the input in ``direction`` drags the wagon (finger on that wall)."""
         direction = direction_sign(direction)
+        check_state_type(state, PlayState, self)  # O(1): integrators call this every step
         return _touches_wall(float(state.position), float(state.input), self.half_width, direction)
 
     def branch(self, state: PlayState, direction: int) -> Branch:

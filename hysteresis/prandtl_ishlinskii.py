@@ -194,11 +194,9 @@ class PrandtlIshlinskii(ContinuousHysteron):
             and np.isfinite(u)
         ):
             raise ValueError("state positions and input must be finite real numbers")
-        tol = (
-            8.0
-            * np.finfo(float).eps
-            * np.maximum(np.maximum(np.abs(w), abs(u)), np.maximum(self._half, 1.0))
-        )
+        # relative 1e-9, not a few ulps: states computed elsewhere (inverse_state sums
+        # weighted positions with cancellation) sit on a wall only up to their rounding
+        tol = 1e-9 * np.maximum(np.maximum(np.abs(w), abs(u)), np.maximum(self._half, 1.0))
         bad = np.abs(u - w) > self._half + tol
         if np.any(bad):
             i = int(np.argmax(bad))
@@ -263,6 +261,7 @@ class PrandtlIshlinskii(ContinuousHysteron):
 
     # -- branch and linearization -----------------------------------------------------------
     def _walls(self, state: PIState, direction: int) -> np.ndarray:
+        check_state_type(state, PIState, self)  # O(1); the size is checked by zip(strict)
         u = float(state.input)
         return np.array(
             [
