@@ -33,9 +33,9 @@ alpha = +inf, so that they are never reported.)
 
 SIMD and its fallback: the packed four-lane sums use a numba ``intrinsic`` (llvmlite IR). Every
 kernel that reaches them takes a last argument ``mode`` whose *type* selects the path at compile
-time: :data:`SIMD_MODE` (an ``int8``) the intrinsic, :data:`SCALAR_MODE` (an ``int64``) a plain
-loop with the same four accumulators in the same order (bit-identical sums). :func:`lane_mode`
-returns the mode to use: scalar if the environment variable ``HYSTERESIS_NO_SIMD`` is set to a
+time: :data:`SIMD_MODE` (``True``, a boolean) the intrinsic, :data:`SCALAR_MODE` (``0``, an
+int) a plain loop with the same four accumulators in the same order (bit-identical sums).
+:func:`lane_mode` returns the mode to use: scalar if the environment variable ``HYSTERESIS_NO_SIMD`` is set to a
 non-empty value other than ``0``, if the module flag :data:`USE_SIMD` is set to ``False``, or if
 the intrinsic fails to compile on this machine (probed once, with a warning).
 
@@ -67,10 +67,11 @@ _WORK_RANGES = 66
 #: inputs per block of the threshold-count pre-pass of :func:`discrete_apply`
 _CHUNK = 256
 
-#: ``mode`` argument selecting the packed SIMD lane sums (its type, int8, is what matters)
-SIMD_MODE = np.int8(1)
-#: ``mode`` argument selecting the plain scalar lane sums (int64)
-SCALAR_MODE = np.int64(0)
+#: ``mode`` argument selecting the packed SIMD lane sums (its numba type, boolean, is what
+#: matters; plain Python bool and int keep the dispatcher's fast argument typing)
+SIMD_MODE = True
+#: ``mode`` argument selecting the plain scalar lane sums (numba type int64)
+SCALAR_MODE = 0
 #: ``False`` forces the scalar path; ``None`` until the intrinsic has been probed
 USE_SIMD: bool | None = (
     False if os.environ.get("HYSTERESIS_NO_SIMD", "").strip() not in ("", "0") else None
@@ -392,7 +393,7 @@ def _lanes_at_most(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - o
 
 
 def _is_simd_mode(mode) -> bool:
-    return isinstance(mode, types.Integer) and mode.bitwidth == 8
+    return isinstance(mode, types.Boolean)
 
 
 @overload(_lanes_above, inline="always")
