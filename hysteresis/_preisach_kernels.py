@@ -35,9 +35,10 @@ SIMD and its fallback: the packed four-lane sums use a numba ``intrinsic`` (llvm
 kernel that reaches them takes a last argument ``mode`` whose *type* selects the path at compile
 time: :data:`SIMD_MODE` (``True``, a boolean) the intrinsic, :data:`SCALAR_MODE` (``0``, an
 int) a plain loop with the same four accumulators in the same order (bit-identical sums).
-:func:`lane_mode` returns the mode to use: scalar if the environment variable ``HYSTERESIS_NO_SIMD`` is set to a
-non-empty value other than ``0``, if the module flag :data:`USE_SIMD` is set to ``False``, or if
-the intrinsic fails to compile on this machine (probed once, with a warning).
+:func:`lane_mode` returns the mode to use: scalar if the environment variable
+``HYSTERESIS_NO_SIMD`` is set to a non-empty value other than ``0``, if the module flag
+:data:`USE_SIMD` is set to ``False``, or if the intrinsic fails to compile on this machine
+(probed once, with a warning).
 
 Bounds safety: whatever the data (NaN, ±inf, counts from a forged state), every index stays in
 range: bucket indices are clamped with NaN-safe comparisons, relay ranges are clamped to
