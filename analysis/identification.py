@@ -492,6 +492,9 @@ def identify_preisach(
         ``|Δr| <= SF_r·Δ`` and ``|Δs| <= SF_s·Δ`` (keep ``SF_r`` small across a ridge and
         ``SF_s`` larger along it); see :func:`local_quadratic_density`.
     """
+    from hysteresis._validation import check_grid_nodes
+
+    check_grid_nodes(step, saturation)  # refuse an unbounded grid (MAX_GRID_NODES) up front
     grid = regular_grid(step, saturation, centre)
     curves = measure_reversal_curves(operator, grid, convention="mayergoyz", progress=progress)
     output_range = tuple(float(x) for x in getattr(operator, "output_range", (-1.0, 1.0)))

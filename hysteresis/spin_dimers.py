@@ -32,8 +32,10 @@ import numpy as np
 from numba import njit
 
 from hysteresis._validation import (
+    MAX_MAGNITUDE,
     as_generator,
     as_input_sequence,
+    bounded_work,
     finite_array,
     positive_integer,
     positive_scalar,
@@ -41,7 +43,10 @@ from hysteresis._validation import (
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
 
-__all__ = ["SpinDimerEnsemble", "DimerThresholds"]
+__all__ = ["SpinDimerEnsemble", "DimerThresholds", "MAX_SPINS"]
+
+#: largest ensemble :meth:`SpinDimerEnsemble.random` builds (memory ~ 100 bytes per spin)
+MAX_SPINS = 100_000_000
 
 
 def _readonly(a) -> np.ndarray:
@@ -172,12 +177,13 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         self, fields, spin_coupling: float | None = None, *, coupling: float | None = None
     ) -> None:
         spin_coupling = _spin_coupling_alias(spin_coupling, coupling)
-        fields = finite_array(fields, "fields")
+        # bounded so that the thresholds J - b1, -J - b2 and the local fields stay finite
+        fields = finite_array(fields, "fields", max_abs=MAX_MAGNITUDE)
         if fields.ndim != 2 or fields.shape[1] != 2 or fields.shape[0] < 1:
             raise ValueError(
                 f"fields must have shape (n_dimers, 2) with n_dimers >= 1, got {fields.shape}"
             )
-        self._spin_coupling = positive_scalar(spin_coupling, "spin_coupling")
+        self._spin_coupling = positive_scalar(spin_coupling, "spin_coupling", MAX_MAGNITUDE)
         self._fields = _readonly(np.sort(fields, axis=1)[:, ::-1])  # b1 >= b2 in every row
         self._preisach = None
 
@@ -206,9 +212,10 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         n_spins = positive_integer(n_spins, "n_spins", minimum=2)
         if n_spins % 2:
             raise ValueError(f"n_spins must be even (pairs of spins), got {n_spins}")
-        spin_coupling = positive_scalar(spin_coupling, "spin_coupling")
+        bounded_work(n_spins, "n_spins", MAX_SPINS, "spins")
+        spin_coupling = positive_scalar(spin_coupling, "spin_coupling", MAX_MAGNITUDE)
         width = scalar_in_open_interval(width, "width", 0.0, 2.0 * spin_coupling)
-        spread = positive_scalar(spread, "spread")
+        spread = positive_scalar(spread, "spread", MAX_MAGNITUDE)
         rng = as_generator(seed)
         centres = rng.normal(0.0, spread, size=n_spins // 2)
         b1 = -centres + spin_coupling - 0.5 * width
@@ -329,6 +336,11 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
 
     def _check_spins(self, spins) -> np.ndarray:
         s = np.asarray(spins)
+        if s.dtype.kind not in "iuf":
+            raise ValueError(
+                f"spins must be an array of {self.n_spins} values in {{-1, +1}}, got dtype "
+                f"{s.dtype}"
+            )
         if s.shape != (self.n_spins,) or not np.all(np.isin(s, (-1, 1))):
             raise ValueError(f"spins must be an array of {self.n_spins} values in {{-1, +1}}")
         return s.astype(np.int8)
