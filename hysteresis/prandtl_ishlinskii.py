@@ -101,6 +101,8 @@ class PrandtlIshlinskii(ContinuousHysteron):
     weights:
         Finite weights a_i (same length).
 
+    Notes
+    -----
     Widths and weights must have magnitude <= 1e300 (larger values overflow ``u ± p/2``);
     an output that still overflows for a given input raises ``ValueError`` in :meth:`apply`.
     """
