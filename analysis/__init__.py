@@ -1,14 +1,20 @@
 """Analyses of systems with hysteresis: Lyapunov spectra, dimensions, bifurcations, ensembles,
 Preisach-plane identification, figures and the ``hyst`` command line.
 
-Public names are imported lazily so that ``import analysis`` stays cheap and a command line
-subcommand only loads what it uses.
+Public names are imported lazily so that a command line subcommand only loads what it uses.
+(The import-name check below imports :mod:`hysteresis`, which every analysis needs anyway.)
 """
 
 from __future__ import annotations
 
 import importlib
 from typing import Any
+
+from hysteresis._distribution import check_import_name as _check_import_name
+from hysteresis._version import __version__ as __version__
+
+# "analysis" is also the import name of an unrelated PyPI distribution: refuse to run mixed
+_check_import_name("analysis")
 
 _LAZY = {
     "lyapunov_spectrum": "analysis.lyapunov",
@@ -27,7 +33,7 @@ _LAZY = {
     "run_tasks": "analysis.execution",
 }
 
-__all__ = sorted(_LAZY)
+__all__ = sorted([*_LAZY, "__version__"])
 
 
 def __getattr__(name: str) -> Any:

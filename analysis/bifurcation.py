@@ -16,6 +16,11 @@ from typing import Any
 
 import numpy as np
 
+#: most parameter values in one sweep
+MAX_VALUES = 1_000_000
+#: most forcing periods one sweep may integrate (values × (n_periods + transient_periods))
+MAX_SWEEP_PERIODS = 1_000_000_000
+
 __all__ = [
     "BifurcationDiagram",
     "bifurcation_diagram",
@@ -23,6 +28,17 @@ __all__ = [
     "orbit_period",
     "section_period",
 ]
+
+
+def _real(x: Any, name: str, size: int | None = None) -> np.ndarray:
+    from hysteresis._validation import real_array
+
+    arr = real_array(x, name).ravel()
+    if size is not None and arr.size != size:
+        raise ValueError(f"{name} must have the length of q ({size}), got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite (a diverged run has no section points)")
+    return arr
 
 
 def distinct_points(q: np.ndarray, v: np.ndarray | None = None, tolerance: float = 1e-6) -> int:
@@ -34,11 +50,11 @@ def distinct_points(q: np.ndarray, v: np.ndarray | None = None, tolerance: float
     within ``tolerance`` in q. A chaotic or quasi-periodic section gives as many groups as
     points (up to near coincidences).
     """
-    qa = np.asarray(q, dtype=float).ravel()
-    pts = qa[:, None] if v is None else np.column_stack([qa, np.asarray(v, dtype=float).ravel()])
+    qa = _real(q, "q")
+    pts = qa[:, None] if v is None else np.column_stack([qa, _real(v, "v", qa.size)])
     if pts.shape[0] == 0:
         return 0
-    if not tolerance >= 0:
+    if not tolerance >= 0 or not np.isfinite(tolerance):
         raise ValueError(f"tolerance must be >= 0, got {tolerance}")
     order = np.argsort(pts[:, 0], kind="stable")
     pts = pts[order]
@@ -61,9 +77,12 @@ def orbit_period(
     """Smallest P with ``|x_{i+P} − x_i| <= tolerance`` for every i (x = q or (q, v)); 0 if no
     P up to ``max_period`` (default: half the number of points) fits — chaos or a longer period.
     """
-    qa = np.asarray(q, dtype=float).ravel()
-    pts = qa[:, None] if v is None else np.column_stack([qa, np.asarray(v, dtype=float).ravel()])
+    qa = _real(q, "q")
+    pts = qa[:, None] if v is None else np.column_stack([qa, _real(v, "v", qa.size)])
     n = pts.shape[0]
+    tolerance = float(tolerance)
+    if not (tolerance >= 0 and np.isfinite(tolerance)):
+        raise ValueError(f"tolerance must be finite and >= 0, got {tolerance}")
     if max_period is None:
         max_period = n // 2
     for p in range(1, min(max_period, n - 1) + 1):
@@ -154,7 +173,7 @@ def bifurcation_diagram(
     v0: float = 0.1,
     operator_state: Any = None,
     parameter: str = "coupling",
-    progress: bool = True,
+    progress: bool = False,
 ) -> BifurcationDiagram:
     """Sweep a parameter in the given order and record the Poincaré section at each value.
 
@@ -175,19 +194,38 @@ def bifurcation_diagram(
         (from the end of the section); ``max_exponent`` is its largest exponent.
     q0, v0, operator_state:
         Initial condition of the first value (and of all values without continuation).
+    parameter:
+        Name of the swept parameter (labels only).
+    progress:
+        Show a progress bar over the values (off by default; the CLI turns it on).
     """
     from tqdm.auto import tqdm
 
     from analysis.lyapunov import lyapunov_spectrum
-    from hysteresis._validation import positive_integer
+    from hysteresis._validation import bounded_work, finite_array, finite_scalar, positive_integer
 
-    values = np.asarray(parameter_values, dtype=float).ravel()
-    if values.size == 0:
-        raise ValueError("parameter_values must not be empty")
+    if not callable(make_system):
+        raise TypeError(f"make_system must be a callable value -> system, got {make_system!r}")
+    values = finite_array(parameter_values, "parameter_values", ndim=1)
     n_periods = positive_integer(n_periods, "n_periods")
     transient_periods = positive_integer(transient_periods, "transient_periods", minimum=0)
+    # refuse up front what cannot finish: the sweep integrates values × periods
+    bounded_work(values.size, "parameter_values", MAX_VALUES, "parameter values")
+    bounded_work(
+        values.size * (n_periods + transient_periods),
+        "n_periods",
+        MAX_SWEEP_PERIODS,
+        "forcing periods in the sweep",
+    )
+    lyapunov_t_end = finite_scalar(lyapunov_t_end, "lyapunov_t_end")
     if lyapunov and not lyapunov_t_end > 0:
         raise ValueError(f"lyapunov_t_end must be > 0, got {lyapunov_t_end}")
+    q0 = finite_scalar(q0, "q0")
+    v0 = finite_scalar(v0, "v0")
+    if not isinstance(parameter, str):
+        raise TypeError(
+            f"parameter must be a string (the swept parameter's name), got {parameter!r}"
+        )
     qs = np.empty((values.size, n_periods))
     vs = np.empty_like(qs)
     ms = np.empty_like(qs)

@@ -7,7 +7,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hysteresis._validation import as_generator
+from hysteresis._validation import (
+    as_generator,
+    bounded_work,
+    finite_scalar,
+    positive_integer,
+    real_array,
+)
+
+#: most box sizes (the scaling-region search costs sizes³ line fits)
+MAX_SIZES = 200
+#: most grid placements per size
+MAX_OFFSETS = 1000
 
 __all__ = ["kaplan_yorke_dimension", "box_counting_dimension", "BoxCountingResult", "box_counts"]
 
@@ -20,7 +31,7 @@ def kaplan_yorke_dimension(exponents: Sequence[float] | np.ndarray) -> float:
     (a regular attractor with all exponents < 0) the dimension is 0; if all partial sums are
     non-negative the dimension is the number of exponents.
     """
-    lam = np.asarray(exponents, dtype=float)
+    lam = real_array(exponents, "exponents")
     if lam.ndim != 1 or lam.size == 0:
         raise ValueError("exponents must be a non-empty 1-D sequence")
     if np.any(np.isnan(lam)) or np.any(lam == np.inf):
@@ -89,7 +100,7 @@ class BoxCountingResult:
 
 
 def _as_points(points: np.ndarray) -> np.ndarray:
-    pts = np.asarray(points, dtype=float)
+    pts = real_array(points, "points")
     if pts.ndim == 1:
         pts = pts[:, None]
     if pts.ndim != 2 or pts.shape[0] < 2 or pts.shape[1] < 1:
@@ -133,11 +144,12 @@ def box_counts(
     nearest to the minimal cover) or the mean (``reduce="mean"``) over that many grids.
     """
     pts = _as_points(points)
-    eps = np.asarray(sizes, dtype=float)
-    if eps.ndim != 1 or eps.size == 0 or np.any(~(eps > 0)):
-        raise ValueError("sizes must be a non-empty 1-D sequence of positive box sizes")
-    if offsets < 1:
-        raise ValueError(f"offsets must be >= 1, got {offsets}")
+    eps = real_array(sizes, "sizes")
+    if eps.ndim != 1 or eps.size == 0 or np.any(~(eps > 0)) or not np.all(np.isfinite(eps)):
+        raise ValueError("sizes must be a non-empty 1-D sequence of finite positive box sizes")
+    bounded_work(eps.size, "sizes", MAX_SIZES, "box sizes")
+    offsets = positive_integer(offsets, "offsets")
+    bounded_work(offsets, "offsets", MAX_OFFSETS, "grid placements per size")
     if reduce not in ("min", "mean"):
         raise ValueError(f"reduce must be 'min' or 'mean', got {reduce!r}")
     rng = as_generator(seed)
@@ -277,6 +289,11 @@ def box_counting_dimension(
     """
     pts = _as_points(points)
     n = pts.shape[0]
+    max_fill = finite_scalar(max_fill, "max_fill")
+    min_boxes = finite_scalar(min_boxes, "min_boxes")
+    min_points = positive_integer(min_points, "min_points")
+    n_sizes = positive_integer(n_sizes, "n_sizes")
+    bounded_work(n_sizes, "n_sizes", MAX_SIZES, "box sizes")
     if not 0.0 < max_fill <= 1.0:
         raise ValueError(f"max_fill must be in (0, 1], got {max_fill}")
     if min_boxes < 1.0:
@@ -296,9 +313,11 @@ def box_counting_dimension(
             raise ValueError("too few distinct points to resolve any scaling region")
         eps = np.geomspace(extent, smallest, n_sizes)
     else:
-        eps = np.sort(np.asarray(sizes, dtype=float))[::-1]
-        if eps.ndim != 1 or eps.size < 2 or np.any(~(eps > 0)):
-            raise ValueError("sizes must be a 1-D sequence of at least 2 positive box sizes")
+        eps = real_array(sizes, "sizes")
+        if eps.ndim != 1 or eps.size < 2 or np.any(~(eps > 0)) or not np.all(np.isfinite(eps)):
+            raise ValueError("sizes must be a 1-D sequence of at least 2 finite positive sizes")
+        bounded_work(eps.size, "sizes", MAX_SIZES, "box sizes")
+        eps = np.sort(eps)[::-1]
     counts = box_counts(pts, eps, offsets=offsets, seed=rng, reduce=reduce)
     x = np.log(1.0 / eps)
     y = np.log(counts)

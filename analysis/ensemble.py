@@ -12,6 +12,7 @@ the empirical PDFs.
 
 from __future__ import annotations
 
+import inspect
 import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
@@ -34,6 +35,7 @@ __all__ = [
     "realization_seeds",
     "section_and_magnetization",
     "section_dimension",
+    "validate_ensemble",
 ]
 
 EXPERIMENT = "ensemble-dimers"
@@ -45,7 +47,11 @@ def realization_seeds(base_seed: int, spins: int, realizations: int) -> list[int
     """Disorder seeds of the realizations at N spins: ``spawn_seeds`` from a base derived from
     ``(base_seed, N)``. Different N get independent disorder; different couplings C at the same
     N share it (the same realizations are followed across C)."""
-    base = int(np.random.SeedSequence([int(base_seed), int(spins)]).generate_state(1, np.uint64)[0])
+    from hysteresis._validation import nonnegative_integer, positive_integer
+
+    base_seed = nonnegative_integer(base_seed, "base_seed")
+    spins = positive_integer(spins, "spins")
+    base = int(np.random.SeedSequence([base_seed, spins]).generate_state(1, np.uint64)[0])
     return spawn_seeds(base >> 1, realizations)
 
 
@@ -132,24 +138,40 @@ def ensemble_task(
     box_max_fill: float = 0.1,
     box_min_boxes: float = 8.0,
     keep_section: bool = False,
+    model: str = "dimers",
+    width_spread: float = 0.2,
 ) -> dict:
     """One disorder realization at one coupling: λ's, D_KY, D_BC and M_T.
 
     ``spins`` = N, ``coupling`` = C, ``seed`` the disorder seed of
-    ``SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed)``. The Lyapunov spectrum
-    (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the section
-    and ``M_T`` use the whole forcing periods in that window (see
+    ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)``. The Lyapunov
+    spectrum (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the
+    section and ``M_T`` use the whole forcing periods in that window (see
     :func:`section_and_magnetization`). ``D_BC`` is 0 for a periodic section, else
     :func:`~analysis.dimensions.box_counting_dimension` with ``max_fill=box_max_fill`` and
     ``min_boxes=box_min_boxes`` (relax them for short runs with few section points), nan if no
     scaling region is found. Top-level so that it runs in process pools.
+
+    ``model`` is a name of the model registry (:mod:`analysis.models`) with disorder (``dimers``,
+    the default, or ``preisach``: random relays with half-width spread ``width_spread``);
+    ``spins`` is then its number of spins/relays.
     """
     from analysis.dimensions import kaplan_yorke_dimension
     from analysis.lyapunov import lyapunov_spectrum
-    from hysteresis.spin_dimers import SpinDimerEnsemble
+    from analysis.models import build_operator, canonical_model_name
     from oscillators import ForcedOscillator
 
-    operator = SpinDimerEnsemble.random(spins, width, spread, spin_coupling, seed)
+    model = canonical_model_name(model)
+    params = dict(spins=spins, seed=seed, width=width, spread=spread)
+    if model == "dimers":
+        params["spin_coupling"] = spin_coupling
+    elif model == "preisach":
+        params["width_spread"] = width_spread
+    else:
+        raise ValueError(
+            f"model must be 'dimers' or 'preisach' (models with disorder), got {model!r}"
+        )
+    operator = build_operator(model, **params)
     system = ForcedOscillator(operator, coupling, damping_ratio=damping_ratio, frequency=frequency)
     ly = lyapunov_spectrum(system, t_end, transient, q0, v0, progress=False)
     exponents = np.asarray(ly.exponents, dtype=float)
@@ -173,6 +195,81 @@ def ensemble_task(
     return out
 
 
+#: most tasks one ensemble may ask for (N values × couplings × realizations)
+MAX_TASKS = 1_000_000
+#: most forcing periods one task may integrate
+MAX_PERIODS = 100_000_000
+
+
+def validate_ensemble(
+    spins_list: Any,
+    couplings: Any,
+    realizations: Any,
+    base_seed: Any,
+    t_end: Any,
+    transient: Any,
+    **task_kwargs: Any,
+) -> tuple[list[int], list[float], int, int, float, float, dict]:
+    """Check every ensemble argument up front, before any task reaches a worker process.
+
+    Returns the converted values; raises ``ValueError``/``TypeError`` naming the parameter: an
+    odd or too small spin count (``spins``), unknown task options, a width outside
+    ``(0, 2 spin_coupling)``, ``t_end <= transient``, or more than :data:`MAX_TASKS` tasks or
+    :data:`MAX_PERIODS` forcing periods per task (refused, not started).
+    """
+    from hysteresis._validation import (
+        MAX_MAGNITUDE,
+        bounded_work,
+        finite_array,
+        finite_scalar,
+        nonnegative_integer,
+        positive_integer,
+        positive_scalar,
+        scalar_in_open_interval,
+    )
+    from hysteresis.spin_dimers import MAX_SPINS
+
+    if isinstance(spins_list, str | bytes) or not isinstance(spins_list, Iterable):
+        raise TypeError(f"spins must be a sequence of even integers, got {spins_list!r}")
+    spins = [positive_integer(n, "spins", minimum=2) for n in spins_list]
+    if not spins:
+        raise ValueError("spins must name at least one ensemble size")
+    for n in spins:
+        if n % 2:
+            raise ValueError(f"spins must be even (the spins come in dimers), got {n}")
+        bounded_work(n, "spins", MAX_SPINS, "spins")
+    cs = finite_array(couplings, "couplings", ndim=1, max_abs=MAX_MAGNITUDE).tolist()
+    realizations = positive_integer(realizations, "realizations")
+    base_seed = nonnegative_integer(base_seed, "base_seed")
+    bounded_work(len(spins) * len(cs) * realizations, "realizations", MAX_TASKS, "tasks")
+    t_end = finite_scalar(t_end, "t_end")
+    transient = finite_scalar(transient, "transient")
+    if transient < 0:
+        raise ValueError(f"transient must be >= 0, got {transient}")
+    if not t_end > transient:
+        raise ValueError(f"t_end must be > transient ({transient}), got {t_end}")
+    allowed = set(inspect.signature(ensemble_task).parameters) - {
+        "spins",
+        "coupling",
+        "seed",
+        "t_end",
+        "transient",
+    }
+    unknown = sorted(set(task_kwargs) - allowed)
+    if unknown:
+        raise TypeError(f"unknown ensemble task options {unknown}; allowed: {sorted(allowed)}")
+    spin_coupling = positive_scalar(
+        task_kwargs.get("spin_coupling", PAPER_SPIN_COUPLING), "spin_coupling", MAX_MAGNITUDE
+    )
+    scalar_in_open_interval(task_kwargs.get("width", PAPER_WIDTH), "width", 0.0, 2 * spin_coupling)
+    positive_scalar(task_kwargs.get("spread", PAPER_SPREAD), "spread", MAX_MAGNITUDE)
+    frequency = positive_scalar(task_kwargs.get("frequency", 1.0), "frequency", MAX_MAGNITUDE)
+    scalar_in_open_interval(task_kwargs.get("damping_ratio", 0.05), "damping_ratio", 0.0, 1.0)
+    periods = t_end * frequency / (2.0 * math.pi)
+    bounded_work(periods, "t_end", MAX_PERIODS, "forcing periods per task")
+    return spins, cs, realizations, base_seed, t_end, transient, task_kwargs
+
+
 def ensemble_tasks(
     spins_list: Sequence[int],
     couplings: Sequence[float],
@@ -182,9 +279,13 @@ def ensemble_tasks(
     transient: float,
     **task_kwargs: Any,
 ) -> list[dict]:
-    """The task dicts of an ensemble, ordered by N, then C, then realization."""
-    if realizations < 1:
-        raise ValueError(f"realizations must be >= 1, got {realizations}")
+    """The task dicts of an ensemble, ordered by N, then C, then realization (every argument
+    checked first by :func:`validate_ensemble`)."""
+    spins_list, couplings, realizations, base_seed, t_end, transient, task_kwargs = (
+        validate_ensemble(
+            spins_list, couplings, realizations, base_seed, t_end, transient, **task_kwargs
+        )
+    )
     tasks = []
     for n in spins_list:
         seeds = realization_seeds(base_seed, int(n), realizations)
@@ -310,13 +411,15 @@ def run_ensemble(
     store: ResultStore | str | os.PathLike | None = None,
     workers: int | None = None,
     scheduler: str | None = None,
-    progress: bool = True,
+    progress: bool = False,
     **task_kwargs: Any,
 ) -> list[EnsemblePoint]:
     """Run (or resume) the ensemble and aggregate it per (N, C).
 
     Every (N, C, realization) is one task of :func:`ensemble_task` (experiment
-    ``"ensemble-dimers"``); ``store``/``workers``/``scheduler`` as in :func:`run_tasks`.
+    ``"ensemble-dimers"``); ``store``/``workers``/``scheduler`` as in :func:`run_tasks`;
+    ``progress`` shows a progress bar (off by default). ``task_kwargs`` go to every task (see
+    :func:`ensemble_task`; ``model="preisach"`` runs random-relay ensembles).
     """
     tasks = ensemble_tasks(
         spins_list, couplings, realizations, base_seed, t_end, transient, **task_kwargs

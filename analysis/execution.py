@@ -18,6 +18,7 @@ import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from numbers import Integral
 from typing import Any
 
 import numpy as np
@@ -28,11 +29,26 @@ __all__ = ["run_tasks", "spawn_seeds", "TaskError"]
 
 
 class TaskError(RuntimeError):
-    """A task raised; carries the task parameters. The original exception is the cause."""
+    """A task raised; carries the task parameters. The original exception is the cause.
+
+    The message is one line naming the experiment, the task and the error. A worker
+    process's remote traceback is kept in :attr:`remote_traceback` (for debugging) rather
+    than chained, so that printing the error shows the task and the cause, not the pool's
+    internals.
+    """
 
     def __init__(self, experiment: str, task: Mapping[str, Any], error: BaseException) -> None:
-        super().__init__(f"{experiment}: task {dict(task)!r} failed: {error!r}")
+        first = str(error).strip().splitlines()[0] if str(error).strip() else ""
+        super().__init__(
+            f"{experiment}: task {dict(task)!r} failed with {type(error).__name__}: {first}"
+        )
         self.task = dict(task)
+        self.error = error
+        remote = error.__cause__
+        self.remote_traceback = str(remote) if remote is not None else None
+        if remote is not None and type(remote).__name__ == "_RemoteTraceback":
+            error.__cause__ = None
+            error.__suppress_context__ = True
 
 
 def spawn_seeds(base_seed: int, n: int) -> list[int]:
@@ -43,10 +59,11 @@ def spawn_seeds(base_seed: int, n: int) -> list[int]:
     statistically independent streams. The same ``(base_seed, n)`` always gives the same list,
     and the first ``m`` seeds do not depend on ``n``.
     """
-    if n < 0:
-        raise ValueError(f"n must be >= 0, got {n}")
-    if int(base_seed) < 0:
-        raise ValueError(f"base_seed must be >= 0, got {base_seed}")
+    from hysteresis._validation import bounded_work, nonnegative_integer
+
+    n = nonnegative_integer(n, "n")
+    bounded_work(n, "n", 10_000_000, "seeds")
+    base_seed = nonnegative_integer(base_seed, "base_seed")
     children = np.random.SeedSequence(int(base_seed)).spawn(n)
     return [int(c.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1)) for c in children]
 
@@ -83,6 +100,7 @@ def run_tasks(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = True,
+    allow_version_mismatch: bool = False,
 ) -> list[dict]:
     """Run ``func(**task)`` for every task and return the results in task order.
 
@@ -107,6 +125,10 @@ def run_tasks(
         to ``Client(scheduler).get_executor()``. Needs the ``distributed`` extra.
     progress:
         Show a tqdm progress bar (counts, rate, ETA).
+    allow_version_mismatch:
+        A store whose ``experiment`` holds results of other code versions is refused
+        (:class:`~analysis.store.StoreError`) unless this is ``True``; then they are reused
+        with a warning.
 
     Returns
     -------
@@ -116,8 +138,17 @@ def run_tasks(
     """
     if sum(x is not None for x in (executor, scheduler)) > 1:
         raise ValueError("give at most one of executor and scheduler")
-    if workers is not None and workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, Integral) or workers < 1
+    ):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if not callable(func):
+        raise TypeError(f"func must be a callable returning a dict, got {type(func).__name__}")
+    if isinstance(tasks, Mapping) or not isinstance(tasks, Sequence):
+        raise TypeError(f"tasks must be a sequence of parameter dicts, got {type(tasks).__name__}")
+    for i, t in enumerate(tasks):
+        if not isinstance(t, Mapping):
+            raise TypeError(f"tasks[{i}] must be a dict of parameters, got {type(t).__name__}")
     task_list = [dict(t) for t in tasks]
     keys = [task_key(experiment, t) for t in task_list]
     own_store = False
@@ -129,6 +160,8 @@ def run_tasks(
         pending: dict[str, dict] = {}
         other_versions: set[str] = set()
         current = code_version() if store is not None else ""
+        if store is not None:
+            store.check_versions(experiment, allow_version_mismatch)
         for key, task in zip(keys, task_list, strict=True):
             if key in results or key in pending:
                 continue

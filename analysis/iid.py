@@ -2,7 +2,7 @@
 
 The spin-dimer ensemble *without* dynamic feedback is driven by an external field that is an
 independent and identically distributed sequence, ``u_k ~ N(0, σ²)``. For each disorder
-realization ``SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed)`` the
+realization ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)`` the
 time-averaged magnetization
 
     M_T = (1/T) Σ_{k=1..T} M(u_k)          (= (1/N) Σ_i <σ_i>_time)
@@ -45,16 +45,28 @@ __all__ = [
 
 DEFAULT_INPUT_STD = 2.0
 #: disorder of the paper (Table I): loop width p, centre spread R, spin coupling J
-PAPER_WIDTH, PAPER_SPREAD, PAPER_COUPLING = 2.0, 1.0, 2.0
+PAPER_WIDTH, PAPER_SPREAD, PAPER_SPIN_COUPLING = 2.0, 1.0, 2.0
+
+
+#: longest input sequence of one realization (8 bytes per step)
+MAX_STEPS = 500_000_000
 
 
 def iid_inputs(n_steps: int, input_std: float, seed: int) -> np.ndarray:
     """The iid field sequence ``u_k ~ N(0, input_std²)``, k = 1..n_steps."""
-    if n_steps < 1:
-        raise ValueError(f"n_steps must be >= 1, got {n_steps}")
-    if not input_std > 0:
-        raise ValueError(f"input_std must be > 0, got {input_std}")
-    return np.random.default_rng(seed).normal(0.0, input_std, size=int(n_steps))
+    from hysteresis._validation import (
+        MAX_MAGNITUDE,
+        bounded_work,
+        nonnegative_integer,
+        positive_integer,
+        positive_scalar,
+    )
+
+    n_steps = positive_integer(n_steps, "n_steps")
+    bounded_work(n_steps, "n_steps", MAX_STEPS, "input steps")
+    input_std = positive_scalar(input_std, "input_std", MAX_MAGNITUDE)
+    seed = nonnegative_integer(seed, "seed")
+    return np.random.default_rng(seed).normal(0.0, input_std, size=n_steps)
 
 
 def iid_task(
@@ -65,23 +77,27 @@ def iid_task(
     input_std: float = DEFAULT_INPUT_STD,
     width: float = PAPER_WIDTH,
     spread: float = PAPER_SPREAD,
-    coupling: float = PAPER_COUPLING,
+    spin_coupling: float = PAPER_SPIN_COUPLING,
     transient_steps: int = 0,
 ) -> dict:
-    """One realization: ``M_T`` of ``SpinDimerEnsemble.random(spins, width, spread, coupling,
-    seed)`` driven by ``iid_inputs(transient_steps + n_steps, input_std, input_seed)``.
+    """One realization: ``M_T`` of the registry's ``dimers`` (``SpinDimerEnsemble.random(spins,
+    width, spread, spin_coupling, seed)``) driven by ``iid_inputs(transient_steps + n_steps,
+    input_std, input_seed)``.
 
     The spins start all down and relax at the first input (``initial_state(u_0)``); the first
     ``transient_steps`` outputs are not averaged. Top-level, so it runs in process pools.
     """
-    from hysteresis.spin_dimers import SpinDimerEnsemble
+    from analysis.models import build_operator
+    from hysteresis._validation import nonnegative_integer, positive_integer
 
-    if transient_steps < 0:
-        raise ValueError(f"transient_steps must be >= 0, got {transient_steps}")
-    ensemble = SpinDimerEnsemble.random(spins, width, spread, coupling, seed)
-    u = iid_inputs(int(n_steps) + int(transient_steps), input_std, input_seed)
+    n_steps = positive_integer(n_steps, "n_steps")
+    transient_steps = nonnegative_integer(transient_steps, "transient_steps")
+    ensemble = build_operator(
+        "dimers", spins=spins, seed=seed, width=width, spread=spread, spin_coupling=spin_coupling
+    )
+    u = iid_inputs(n_steps + transient_steps, input_std, input_seed)
     outputs, _ = ensemble.apply(u, ensemble.initial_state(float(u[0])))
-    outputs = np.asarray(outputs, dtype=float)[int(transient_steps) :]
+    outputs = np.asarray(outputs, dtype=float)[transient_steps:]
     return {"magnetization": float(outputs.mean())}
 
 
@@ -96,7 +112,7 @@ def iid_magnetization(
     transient_steps: int = 0,
     width: float = PAPER_WIDTH,
     spread: float = PAPER_SPREAD,
-    coupling: float = PAPER_COUPLING,
+    spin_coupling: float = PAPER_SPIN_COUPLING,
     store: ResultStore | str | os.PathLike | None = None,
     workers: int | None = 1,
     scheduler: str | None = None,
@@ -109,8 +125,31 @@ def iid_magnetization(
     result is reproducible from ``seed`` alone. Tasks go through :func:`run_tasks` (store,
     workers, scheduler as there; experiment name ``"iid"``).
     """
-    if realizations < 1:
-        raise ValueError(f"realizations must be >= 1, got {realizations}")
+    from hysteresis._validation import (
+        MAX_MAGNITUDE,
+        bounded_work,
+        nonnegative_integer,
+        positive_integer,
+        positive_scalar,
+        scalar_in_open_interval,
+    )
+    from hysteresis.spin_dimers import MAX_SPINS
+
+    # everything checked here, before a task reaches a worker process
+    n_spins = positive_integer(n_spins, "n_spins", minimum=2)
+    if n_spins % 2:
+        raise ValueError(f"n_spins must be even (the spins come in dimers), got {n_spins}")
+    bounded_work(n_spins, "n_spins", MAX_SPINS, "spins")
+    n_steps = positive_integer(n_steps, "n_steps")
+    transient_steps = nonnegative_integer(transient_steps, "transient_steps")
+    bounded_work(n_steps + transient_steps, "n_steps", MAX_STEPS, "input steps")
+    realizations = positive_integer(realizations, "realizations")
+    bounded_work(realizations, "realizations", 1_000_000, "realizations")
+    seed = nonnegative_integer(seed, "seed")
+    input_std = positive_scalar(input_std, "input_std", MAX_MAGNITUDE)
+    spin_coupling = positive_scalar(spin_coupling, "spin_coupling", MAX_MAGNITUDE)
+    width = scalar_in_open_interval(width, "width", 0.0, 2.0 * spin_coupling)
+    spread = positive_scalar(spread, "spread", MAX_MAGNITUDE)
     disorder_seeds = spawn_seeds(seed, realizations)
     # a separate branch of the seed tree for the inputs: never equal to a disorder seed stream
     input_base = int(np.random.SeedSequence([int(seed), 1]).generate_state(1, np.uint64)[0] >> 1)
@@ -126,7 +165,7 @@ def iid_magnetization(
             input_std=float(input_std),
             width=float(width),
             spread=float(spread),
-            coupling=float(coupling),
+            spin_coupling=float(spin_coupling),
             transient_steps=int(transient_steps),
         )
         for s, i in zip(disorder_seeds, input_seeds, strict=True)

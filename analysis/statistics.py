@@ -18,7 +18,9 @@ __all__ = [
 
 
 def _values(values: Sequence[float] | np.ndarray, name: str = "values") -> np.ndarray:
-    x = np.asarray(values, dtype=float)
+    from hysteresis._validation import real_array
+
+    x = real_array(values, name)
     if x.ndim != 1 or x.size == 0:
         raise ValueError(f"{name} must be a non-empty 1-D sequence, got shape {x.shape}")
     if not np.all(np.isfinite(x)):
@@ -75,8 +77,19 @@ def empirical_pdf(
     by the number of values *inside*, so it integrates to 1 over the edges.
     """
     x = _values(values)
-    if isinstance(bins, int | np.integer) and bins < 1:
-        raise ValueError(f"bins must be >= 1, got {bins}")
+    if isinstance(bins, bool):
+        raise TypeError("bins must be an int or a sequence of edges, got a bool")
+    if isinstance(bins, int | np.integer):
+        if bins < 1:
+            raise ValueError(f"bins must be >= 1, got {bins}")
+        if bins > 10_000_000:
+            raise ValueError(f"bins must be <= 10000000 (memory), got {bins}")
+    elif isinstance(bins, str):
+        raise TypeError(f"bins must be an int or a sequence of edges, got {bins!r}")
+    else:
+        edges = _values(bins, "bins")
+        if edges.size < 2 or np.any(np.diff(edges) <= 0):
+            raise ValueError("bins edges must be at least 2 strictly increasing values")
     counts, edges = np.histogram(x, bins=bins, range=range)
     inside = counts.sum()
     if inside == 0:

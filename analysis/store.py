@@ -11,6 +11,13 @@ Layout (schema version 1)::
     arrays(key, name, data BLOB, PRIMARY KEY (key, name))   -- numpy arrays as .npy bytes
     meta(name TEXT PRIMARY KEY, value TEXT)
 
+Robustness: several processes may write one store at once (SQLite locking, ``BEGIN IMMEDIATE``
+transactions and ``INSERT OR IGNORE``: no result is lost or duplicated, the first one wins). A
+file that is not an intact results store (truncated, corrupted, another program's database)
+is refused with :class:`StoreError` (a ``ValueError``) naming the file, before anything
+is written to it. Each row records the code version that computed it;
+:meth:`ResultStore.check_versions` refuses to mix versions unless told to.
+
 Result dictionaries may hold JSON scalars, strings, lists, nested dicts and numpy arrays; the
 arrays are stored losslessly (dtype, shape and every bit) as ``.npy`` bytes and referenced from
 the JSON as ``{"__ndarray__": "<name>"}``.
@@ -24,6 +31,7 @@ import hashlib
 import io
 import json
 import math
+import os
 import sqlite3
 import subprocess
 import threading
@@ -34,10 +42,47 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ResultStore", "StoredTask", "task_key", "canonical_json", "code_version"]
+__all__ = [
+    "ResultStore",
+    "StoredTask",
+    "StoreError",
+    "task_key",
+    "canonical_json",
+    "code_version",
+]
 
 SCHEMA_VERSION = "1"
 _ARRAY_TAG = "__ndarray__"
+_SQLITE_MAGIC = b"SQLite format 3\x00"
+
+
+def _release(version: str) -> str:
+    """A code version without the ``-dirty`` mark of its git description."""
+    return version.replace("-dirty)", ")")
+
+
+class StoreError(ValueError):
+    """A results file that cannot be used: corrupted, truncated, not a store, or holding
+    results of other code versions. The message names the file; the file is left untouched."""
+
+
+def _check_store_file(path: Path) -> None:
+    """Refuse, before SQLite opens it for writing, a file that is not an SQLite database."""
+    if not path.exists():
+        return
+    if path.is_dir():
+        raise StoreError(f"{path}: is a directory, not a results store")
+    with open(path, "rb") as fh:
+        head = fh.read(len(_SQLITE_MAGIC))
+    if len(head) == 0:
+        # nothing to lose, and another process may be creating this very store right now
+        # (SQLite creates the file before it writes the header): a new store
+        return
+    if head != _SQLITE_MAGIC:
+        raise StoreError(
+            f"{path}: not a results store (no SQLite header: corrupted, truncated or another "
+            "kind of file); it was left untouched"
+        )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -204,25 +249,57 @@ class ResultStore:
     """
 
     def __init__(self, path: str | Path, timeout: float = 60.0) -> None:
+        if not isinstance(path, str | os.PathLike):
+            raise TypeError(f"path must be a str or path, got {type(path).__name__}")
         self.path = Path(path)
         if self.path.parent and not self.path.parent.exists():
             self.path.parent.mkdir(parents=True, exist_ok=True)
+        _check_store_file(self.path)
+        existed = self.path.exists()
         self._lock = threading.RLock()
         self._conn = sqlite3.connect(
             str(self.path), timeout=timeout, check_same_thread=False, isolation_level=None
         )
-        with self._lock:
-            self._conn.execute("PRAGMA journal_mode=WAL")
-            # NORMAL is durable against a killed process (not against power loss) in WAL mode
-            self._conn.execute("PRAGMA synchronous=NORMAL")
-            self._conn.execute("PRAGMA foreign_keys=ON")
-            self._conn.execute("BEGIN IMMEDIATE")
-            try:
-                self._create_schema()
-                self._conn.execute("COMMIT")
-            except BaseException:
-                self._conn.execute("ROLLBACK")
-                raise
+        try:
+            with self._lock:
+                if existed:
+                    # read-only integrity check first: a damaged store is refused untouched
+                    problems = self._conn.execute("PRAGMA quick_check").fetchall()
+                    if problems != [("ok",)]:
+                        raise StoreError(
+                            f"{self.path}: corrupted results store ({problems[0][0]}); it was "
+                            "left untouched"
+                        )
+                    tables = {
+                        r[0]
+                        for r in self._conn.execute(
+                            "SELECT name FROM sqlite_master WHERE type = 'table'"
+                        )
+                    }
+                    if tables and not {"meta", "tasks", "arrays"} <= tables:
+                        raise StoreError(
+                            f"{self.path}: an SQLite database that is not a results store "
+                            f"(tables {sorted(tables)}); it was left untouched"
+                        )
+                self._conn.execute("PRAGMA journal_mode=WAL")
+                # NORMAL is durable against a killed process (not power loss) in WAL mode
+                self._conn.execute("PRAGMA synchronous=NORMAL")
+                self._conn.execute("PRAGMA foreign_keys=ON")
+                self._conn.execute("BEGIN IMMEDIATE")
+                try:
+                    self._create_schema()
+                    self._conn.execute("COMMIT")
+                except BaseException:
+                    self._conn.execute("ROLLBACK")
+                    raise
+        except sqlite3.DatabaseError as exc:
+            self._conn.close()
+            raise StoreError(
+                f"{self.path}: not a readable results store ({exc}); it was left untouched"
+            ) from exc
+        except BaseException:
+            self._conn.close()
+            raise
 
     def _create_schema(self) -> None:
         c = self._conn
@@ -241,7 +318,7 @@ class ResultStore:
         if row is None:
             c.execute("INSERT INTO meta VALUES ('schema_version', ?)", (SCHEMA_VERSION,))
         elif row[0] != SCHEMA_VERSION:
-            raise ValueError(
+            raise StoreError(
                 f"{self.path}: results store schema {row[0]}, this code reads {SCHEMA_VERSION}"
             )
 
@@ -305,6 +382,36 @@ class ResultStore:
                 c.execute("ROLLBACK")
                 raise
         return key
+
+    # -- versions ----------------------------------------------------------------------------
+
+    def code_versions(self, experiment: str | None = None) -> list[str]:
+        """Distinct code versions that computed the stored tasks (of one experiment or all)."""
+        with self._lock:
+            if experiment is None:
+                rows = self._conn.execute("SELECT DISTINCT code_version FROM tasks").fetchall()
+            else:
+                rows = self._conn.execute(
+                    "SELECT DISTINCT code_version FROM tasks WHERE experiment = ?", (experiment,)
+                ).fetchall()
+        return sorted(str(r[0]) for r in rows)
+
+    def check_versions(self, experiment: str, allow_version_mismatch: bool = False) -> list[str]:
+        """Refuse (:class:`StoreError`) to mix results of other code versions into
+        ``experiment`` unless ``allow_version_mismatch``; returns the other versions found."""
+        current = code_version()
+        stored = self.code_versions(experiment)
+        others = [v for v in stored if v != current]
+        # a work-tree that is merely dirty on the same commit cannot be told apart from the
+        # clean one by its version string: reported by the caller, not refused
+        conflicting = [v for v in others if _release(v) != _release(current)]
+        if conflicting and not allow_version_mismatch:
+            raise StoreError(
+                f"{self.path}: experiment {experiment!r} holds results computed by other code "
+                f"versions {conflicting} (now {current!r}); refusing to mix them. Use a new store, "
+                "or pass allow_version_mismatch=True to reuse them knowingly"
+            )
+        return others
 
     # -- reading -----------------------------------------------------------------------------
 

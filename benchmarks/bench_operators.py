@@ -4,7 +4,7 @@ Run: ``python benchmarks/bench_operators.py [--steps 1000000] [--repeats 5]``
 
 * 10 000 relays, centres ~ N(0, 1), half-widths ~ U(0, 1) (``numpy.random.default_rng(0)``);
 * the paper's ensemble of 10 000 equal-width dimers,
-  ``SpinDimerEnsemble.random(20000, width=2, spread=1, coupling=2, seed=0).to_preisach()``;
+  ``SpinDimerEnsemble.random(20000, width=2, spread=1, spin_coupling=2, seed=0).to_preisach()``;
 * input: 10^6 steps of a random walk with N(0, 0.05²) increments reflected into [-4, 4].
 
 Baseline: numpy, one array update of all relays per input step
@@ -87,7 +87,9 @@ def main() -> int:
     centres = rng.normal(0.0, 1.0, n)
     half_widths = rng.uniform(0.0, 1.0, n)
     relays = PreisachModel.from_relays(centres + half_widths, centres - half_widths)
-    dimers = SpinDimerEnsemble.random(20000, width=2, spread=1, coupling=2, seed=0).to_preisach()
+    dimers = SpinDimerEnsemble.random(
+        20000, width=2, spread=1, spin_coupling=2, seed=0
+    ).to_preisach()
     inputs = reflected_walk(args.steps, 0.05, 4.0, seed=1)
 
     general = measure(relays, inputs, args.baseline_steps, args.repeats)

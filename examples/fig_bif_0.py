@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.smoke:
         args.couplings, args.periods, args.transient, args.lyapunov_time = 6, 10, 10, 50.0
 
-    dimer = SpinDimerEnsemble(np.array([[1.0, -1.0]]), coupling=2.0)
+    dimer = SpinDimerEnsemble(np.array([[1.0, -1.0]]), spin_coupling=2.0)
     couplings = np.linspace(10.0, 0.5, args.couplings)  # downward, as in the paper
     diagram = bifurcation_diagram(
         lambda c: ForcedOscillator(dimer, c, damping_ratio=0.05, frequency=1.0),

@@ -29,8 +29,10 @@ WIDTH, SPREAD = 2.0, 1.0  # p, R
 
 def spectrum(coupling: float, q0: float, w0: float, t_end: float, transient: float):
     system = ForcedOscillator(GeneralizedPlay.erf(WIDTH, SPREAD), coupling, 0.05, 1.0)
-    state = system.operator.state(w0, q0)  # initial memory is part of the operator state
-    return lyapunov_spectrum(system, t_end, transient, q0=q0, v0=0.1, operator_state=state)
+    state = system.operator.state(position=w0, input=q0)  # the initial memory is the state
+    return lyapunov_spectrum(
+        system, t_end, transient, q0=q0, v0=0.1, operator_state=state, progress=False
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -36,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     periods, transient = (50, 10) if args.smoke else (args.periods, 100)
 
-    dimer = SpinDimerEnsemble(np.array([[2.0, 0.0]]), coupling=2.0)
+    dimer = SpinDimerEnsemble(np.array([[2.0, 0.0]]), spin_coupling=2.0)
     th = dimer.thresholds()
     system = ForcedOscillator(dimer, args.coupling, damping_ratio=0.05, frequency=1.0)
     sec = system.poincare_section(periods, transient_periods=transient, q0=-1.0, v0=0.1)

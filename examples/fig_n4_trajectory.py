@@ -36,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
-    dimers = SpinDimerEnsemble(np.array([[2.0, 0.0], [-0.5, -2.5]]), coupling=2.0)
+    dimers = SpinDimerEnsemble(np.array([[2.0, 0.0], [-0.5, -2.5]]), spin_coupling=2.0)
     th = dimers.thresholds()
     system = ForcedOscillator(dimers, args.coupling, damping_ratio=0.05, frequency=1.0)
     periods = 5.0 if args.smoke else args.periods

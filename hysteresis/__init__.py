@@ -1,5 +1,11 @@
 """Rate-independent hysteresis operators with immutable state and linearization."""
 
+from hysteresis._distribution import check_import_name as _check_import_name
+from hysteresis._version import __version__
+
+# fail early, naming the culprit, if an unrelated distribution also installs "hysteresis"
+_check_import_name("hysteresis")
+
 from hysteresis.base import (
     Branch,
     ContinuousHysteron,
@@ -17,9 +23,11 @@ from hysteresis.preisach import (
     PreisachState,
 )
 from hysteresis.relay import Relay, RelayState
+from hysteresis.relay_table import NestedPlan, RelayTable
 from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
 
 __all__ = [
+    "__version__",
     "Branch",
     "ContinuousHysteron",
     "ContinuousPreisachModel",
@@ -32,11 +40,13 @@ __all__ = [
     "PiecewiseConstantHysteron",
     "PlayOperator",
     "PlayState",
+    "NestedPlan",
     "PrandtlIshlinskii",
     "PreisachModel",
     "PreisachState",
     "Relay",
     "RelayState",
+    "RelayTable",
     "SpinDimerEnsemble",
     "Switching",
 ]

@@ -31,6 +31,19 @@ is much faster than recursing down to single relays. (The callers pass as
 ``beta_by_a``/``alpha_by_b`` search keys in which relays of zero weight carry beta = -inf and
 alpha = +inf, so that they are never reported.)
 
+SIMD and its fallback: the packed four-lane sums use a numba ``intrinsic`` (llvmlite IR). Every
+kernel that reaches them takes a last argument ``mode`` whose *type* selects the path at compile
+time: :data:`SIMD_MODE` (``True``, a boolean) the intrinsic, :data:`SCALAR_MODE` (``0``, an
+int) a plain loop with the same four accumulators in the same order (bit-identical sums).
+:func:`lane_mode` returns the mode to use: scalar if the environment variable
+``HYSTERESIS_NO_SIMD`` is set to a non-empty value other than ``0``, if the module flag
+:data:`USE_SIMD` is set to ``False``, or if the intrinsic fails to compile on this machine
+(probed once, with a warning).
+
+Bounds safety: whatever the data (NaN, ±inf, counts from a forged state), every index stays in
+range: bucket indices are clamped with NaN-safe comparisons, relay ranges are clamped to
+``[0, n]`` and the staircase loops never step past the sentinels.
+
 Pruning (keeps the stack bounded by ``2 n_relays + 6`` entries): a completed maximum with the same
 ``cnt_a`` as the previous maximum separates no relays from it; it is removed together with the
 minimum between them (and symmetrically for minima with equal ``cnt_b``). This leaves every relay
@@ -39,11 +52,14 @@ state unchanged.
 
 from __future__ import annotations
 
+import os
+import warnings
+
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.core import cgutils
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 
 #: ranges of at most this many relays are scanned instead of split by range-extremum queries
 _SHORT = 256
@@ -51,6 +67,16 @@ _SHORT = 256
 _WORK_RANGES = 66
 #: inputs per block of the threshold-count pre-pass of :func:`discrete_apply`
 _CHUNK = 256
+
+#: ``mode`` argument selecting the packed SIMD lane sums (its numba type, boolean, is what
+#: matters; plain Python bool and int keep the dispatcher's fast argument typing)
+SIMD_MODE = True
+#: ``mode`` argument selecting the plain scalar lane sums (numba type int64)
+SCALAR_MODE = 0
+#: ``False`` forces the scalar path; ``None`` until the intrinsic has been probed
+USE_SIMD: bool | None = (
+    False if os.environ.get("HYSTERESIS_NO_SIMD", "").strip() not in ("", "0") else None
+)
 
 # --------------------------------------------------------------------------------------------
 # sparse tables
@@ -152,6 +178,7 @@ def _count_le(sorted_values, pos, x):  # pragma: no cover - compiled
     step away from ``pos`` so the cost is O(log(1 + |answer - pos|)).
     """
     n = sorted_values.size
+    pos = min(max(pos, 0), n)  # a stale or forged start must not index out of range
     if pos < n and sorted_values[pos] <= x:
         # answer > pos: gallop right
         lo = pos + 1  # known: answer >= lo
@@ -194,11 +221,13 @@ def _count_le(sorted_values, pos, x):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _bucket_of(x, lo, inv_h, nb):  # pragma: no cover - compiled
-    """Bucket of ``x`` on a uniform grid; a monotone non-decreasing function of ``x``."""
+    """Bucket of ``x`` on a uniform grid; a monotone non-decreasing function of ``x``, always
+    in ``[0, nb - 1]``: a NaN ``t`` (``inf * 0`` when the grid is degenerate or ``x - lo``
+    overflows) goes to bucket 0, whose search range then covers what it must."""
     t = (x - lo) * inv_h
-    if t <= 0.0:
+    if not (t > 0.0):  # also NaN: int(NaN) would be an arbitrary (out-of-range) index
         return 0
-    if t >= nb - 1:
+    if not (t < nb - 1):
         return nb - 1
     return int(t)
 
@@ -322,14 +351,130 @@ _lane_sums_above = _lane_sums_intrinsic(">")
 _lane_sums_at_most = _lane_sums_intrinsic("<=")
 
 
+@njit(cache=True)
+def _scalar_lane_sums_above(keys, weights, a, n_blocks, x):  # pragma: no cover - compiled
+    """Plain fallback of ``_lane_sums_above``: the same four accumulators, the same order."""
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    for j in range(n_blocks):
+        i = a + 4 * j
+        s0 += weights[i] if keys[i] > x else 0.0
+        s1 += weights[i + 1] if keys[i + 1] > x else 0.0
+        s2 += weights[i + 2] if keys[i + 2] > x else 0.0
+        s3 += weights[i + 3] if keys[i + 3] > x else 0.0
+    return s0, s1, s2, s3
+
+
+@njit(cache=True)
+def _scalar_lane_sums_at_most(keys, weights, a, n_blocks, x):  # pragma: no cover - compiled
+    """Plain fallback of ``_lane_sums_at_most``: the same four accumulators, the same order."""
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    for j in range(n_blocks):
+        i = a + 4 * j
+        s0 += weights[i] if keys[i] <= x else 0.0
+        s1 += weights[i + 1] if keys[i + 1] <= x else 0.0
+        s2 += weights[i + 2] if keys[i + 2] <= x else 0.0
+        s3 += weights[i + 3] if keys[i + 3] <= x else 0.0
+    return s0, s1, s2, s3
+
+
+def _lanes_above(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - typed by overload
+    """Four-lane sums of ``weights`` where ``keys > x``: SIMD or scalar by the type of mode."""
+    raise NotImplementedError("only callable from compiled code")
+
+
+def _lanes_at_most(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - overload
+    """Four-lane sums of ``weights`` where ``keys <= x``: SIMD or scalar by the type of mode."""
+    raise NotImplementedError("only callable from compiled code")
+
+
+def _is_simd_mode(mode) -> bool:
+    return isinstance(mode, types.Boolean)
+
+
+@overload(_lanes_above, inline="always")
+def _ov_lanes_above(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - compile time
+    if _is_simd_mode(mode):
+
+        def simd(keys, weights, a, n_blocks, x, mode):
+            return _lane_sums_above(keys, weights, a, n_blocks, x)
+
+        return simd
+
+    def scalar(keys, weights, a, n_blocks, x, mode):
+        return _scalar_lane_sums_above(keys, weights, a, n_blocks, x)
+
+    return scalar
+
+
+@overload(_lanes_at_most, inline="always")
+def _ov_lanes_at_most(keys, weights, a, n_blocks, x, mode):  # pragma: no cover - compile time
+    if _is_simd_mode(mode):
+
+        def simd(keys, weights, a, n_blocks, x, mode):
+            return _lane_sums_at_most(keys, weights, a, n_blocks, x)
+
+        return simd
+
+    def scalar(keys, weights, a, n_blocks, x, mode):
+        return _scalar_lane_sums_at_most(keys, weights, a, n_blocks, x)
+
+    return scalar
+
+
+@njit(cache=True)
+def _probe_lanes(keys, weights, mode):  # pragma: no cover - compiled
+    return _lanes_above(keys, weights, 0, keys.size >> 2, 0.5, mode)
+
+
+def lane_mode():
+    """The ``mode`` argument for the kernels: :data:`SIMD_MODE` unless disabled (module flag
+    :data:`USE_SIMD` ``= False`` or ``HYSTERESIS_NO_SIMD=1``) or the intrinsic does not compile
+    here (probed once; then a ``RuntimeWarning`` and the scalar path for good)."""
+    global USE_SIMD
+    if USE_SIMD is None:
+        keys = np.arange(8.0)
+        try:
+            got = _probe_lanes(keys, np.ones(8), SIMD_MODE)
+            want = _probe_lanes(keys, np.ones(8), SCALAR_MODE)
+            USE_SIMD = bool(got == want)
+        except Exception as exc:  # any compile/lowering failure of the intrinsic
+            warnings.warn(
+                f"SIMD lane sums unavailable ({type(exc).__name__}: {exc}); using the scalar "
+                "fallback",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            USE_SIMD = False
+    return SIMD_MODE if USE_SIMD else SCALAR_MODE
+
+
+@njit(cache=True)
+def masked_sums(keys, weights, a, b, x, mode):  # pragma: no cover - compiled
+    """``(sum of weights[a:b] where keys > x, sum where keys <= x)`` through the lane sums of
+    ``mode`` (for tests comparing the SIMD and scalar paths)."""
+    a = min(max(a, 0), keys.size)
+    b = min(max(b, a), keys.size)
+    return (
+        _masked_sum_above(keys, weights, a, b, x, mode),
+        _masked_sum_at_most(keys, weights, a, b, x, mode),
+    )
+
+
 @njit(cache=True, inline="always")
-def _masked_sum_above(keys, weights, a, b, m):  # pragma: no cover - compiled
+def _masked_sum_above(keys, weights, a, b, m, mode):  # pragma: no cover - compiled
     """``sum(weights[i] for i in range(a, b) if keys[i] > m)`` (``b >= a``, ``keys`` non-empty)
     with four independent accumulators: lane ``j`` adds the relays ``i = a + j (mod 4)`` in
     order, the tail goes to lane 0, and the result is ``(s0 + s1) + (s2 + s3)``. The lanes are
-    packed in one SIMD register (:func:`_lane_sums_intrinsic`)."""
+    packed in one SIMD register (:func:`_lane_sums_intrinsic`) or, with the scalar ``mode``,
+    summed by a plain loop."""
     n_blocks = (b - a) >> 2
-    s0, s1, s2, s3 = _lane_sums_above(keys, weights, a, n_blocks, m)
+    s0, s1, s2, s3 = _lanes_above(keys, weights, a, n_blocks, m, mode)
     # the 0..3 remaining relays go to lane 0 in order; a fixed three-step branch-free tail
     # (an index past the range reads a clamped, in-bounds entry and adds +0.0, which leaves
     # the non-negative sum s0 unchanged)
@@ -342,10 +487,10 @@ def _masked_sum_above(keys, weights, a, b, m):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _masked_sum_at_most(keys, weights, a, b, big):  # pragma: no cover - compiled
+def _masked_sum_at_most(keys, weights, a, b, big, mode):  # pragma: no cover - compiled
     """``sum(weights[i] for i in range(a, b) if keys[i] <= big)`` (as :func:`_masked_sum_above`)."""
     n_blocks = (b - a) >> 2
-    s0, s1, s2, s3 = _lane_sums_at_most(keys, weights, a, n_blocks, big)
+    s0, s1, s2, s3 = _lanes_at_most(keys, weights, a, n_blocks, big, mode)
     # the 0..3 remaining relays go to lane 0 in order; a fixed three-step branch-free tail
     # (an index past the range reads a clamped, in-bounds entry and adds +0.0, which leaves
     # the non-negative sum s0 unchanged)
@@ -358,7 +503,7 @@ def _masked_sum_at_most(keys, weights, a, b, big):  # pragma: no cover - compile
 
 
 @njit(cache=True, inline="always")
-def _sum_up(table, beta_by_a, w_by_a, lo, hi, m, work):  # pragma: no cover - compiled
+def _sum_up(table, beta_by_a, w_by_a, lo, hi, m, work, mode):  # pragma: no cover - compiled
     """Total weight of the relays with alpha-order index in [lo, hi) and beta > m.
 
     Plain-Python reading::
@@ -370,6 +515,8 @@ def _sum_up(table, beta_by_a, w_by_a, lo, hi, m, work):  # pragma: no cover - co
     holds no relay with beta > m.
     """
     total = 0.0
+    lo = max(lo, 0)  # counts from a forged state must not index out of range
+    hi = min(hi, beta_by_a.size)
     if hi <= lo:
         return total
     top = 0
@@ -383,7 +530,7 @@ def _sum_up(table, beta_by_a, w_by_a, lo, hi, m, work):  # pragma: no cover - co
         if b - a <= _SHORT:
             # a short range is scanned branch-free: bounded O(1) work per visited node, cheaper
             # than recursing (mispredicted branches) and the complexity stays O(1 + k)
-            total += _masked_sum_above(beta_by_a, w_by_a, a, b, m)
+            total += _masked_sum_above(beta_by_a, w_by_a, a, b, m, mode)
             continue
         k = _range_argmax(table, beta_by_a, a, b)
         if beta_by_a[k] > m:
@@ -407,7 +554,7 @@ def _sum_up(table, beta_by_a, w_by_a, lo, hi, m, work):  # pragma: no cover - co
 
 
 @njit(cache=True, inline="always")
-def _sum_down(table, alpha_by_b, w_by_b, lo, hi, big, work):  # pragma: no cover - compiled
+def _sum_down(table, alpha_by_b, w_by_b, lo, hi, big, work, mode):  # pragma: no cover - compiled
     """Total weight of the relays with beta-order index in [lo, hi) and alpha <= big.
 
     Plain-Python reading::
@@ -417,6 +564,8 @@ def _sum_down(table, alpha_by_b, w_by_b, lo, hi, big, work):  # pragma: no cover
     in O(1 + k) with the range-argmin of alpha (mirror of :func:`_sum_up`).
     """
     total = 0.0
+    lo = max(lo, 0)
+    hi = min(hi, alpha_by_b.size)
     if hi <= lo:
         return total
     work[0] = lo
@@ -427,7 +576,7 @@ def _sum_down(table, alpha_by_b, w_by_b, lo, hi, big, work):  # pragma: no cover
         a = work[2 * top]
         b = work[2 * top + 1]
         if b - a <= _SHORT:
-            total += _masked_sum_at_most(alpha_by_b, w_by_b, a, b, big)
+            total += _masked_sum_at_most(alpha_by_b, w_by_b, a, b, big, mode)
             continue
         k = _range_argmin(table, alpha_by_b, a, b)
         if alpha_by_b[k] <= big:
@@ -474,6 +623,7 @@ def discrete_apply(
     cnt_b,
     top,
     output,
+    mode,
 ):  # pragma: no cover - compiled
     """Drive a discrete Preisach model; returns ``(outputs, vals, cnt_a, cnt_b, top, output)``.
 
@@ -530,12 +680,17 @@ def discrete_apply(
                     if top >= vals.size:
                         return outputs[:t], vals, cnt_a, cnt_b, -1, output  # caller: capacity bug
                 lo = pa
-                while v >= vals[top - 2]:
+                # top >= 4: never wipe out the +inf sentinel (only an input of +inf could)
+                while top >= 4 and v >= vals[top - 2]:
                     hi = cnt_a[top - 2]
-                    output += 2.0 * _sum_up(table_a, beta_by_a, w_by_a, lo, hi, vals[top - 1], work)
+                    output += 2.0 * _sum_up(
+                        table_a, beta_by_a, w_by_a, lo, hi, vals[top - 1], work, mode
+                    )
                     lo = hi
                     top -= 2
-                output += 2.0 * _sum_up(table_a, beta_by_a, w_by_a, lo, npa, vals[top - 1], work)
+                output += 2.0 * _sum_up(
+                    table_a, beta_by_a, w_by_a, lo, npa, vals[top - 1], work, mode
+                )
                 vals[top] = v
                 cnt_a[top] = npa
                 cnt_b[top] = npb
@@ -552,14 +707,17 @@ def discrete_apply(
                     if top >= vals.size:
                         return outputs[:t], vals, cnt_a, cnt_b, -1, output  # caller: capacity bug
                 hi = pb
-                while v <= vals[top - 2]:
+                # top >= 5: never wipe out the -inf sentinel
+                while top >= 5 and v <= vals[top - 2]:
                     lo = cnt_b[top - 2]
                     output -= 2.0 * _sum_down(
-                        table_b, alpha_by_b, w_by_b, lo, hi, vals[top - 1], work
+                        table_b, alpha_by_b, w_by_b, lo, hi, vals[top - 1], work, mode
                     )
                     hi = lo
                     top -= 2
-                output -= 2.0 * _sum_down(table_b, alpha_by_b, w_by_b, npb, hi, vals[top - 1], work)
+                output -= 2.0 * _sum_down(
+                    table_b, alpha_by_b, w_by_b, npb, hi, vals[top - 1], work, mode
+                )
                 vals[top] = v
                 cnt_a[top] = npa
                 cnt_b[top] = npb
@@ -577,6 +735,8 @@ def discrete_apply(
 @njit(cache=True)
 def _first_above(table, values, lo, hi, m):  # pragma: no cover - compiled
     """Smallest index i in [lo, hi) with values[i] > m, or -1. O(log n) range-max queries."""
+    lo = max(lo, 0)
+    hi = min(hi, values.size)
     if hi <= lo:
         return -1
     if values[_range_argmax(table, values, lo, hi)] <= m:
@@ -594,6 +754,8 @@ def _first_above(table, values, lo, hi, m):  # pragma: no cover - compiled
 @njit(cache=True)
 def _last_at_most(table, values, lo, hi, big):  # pragma: no cover - compiled
     """Largest index i in [lo, hi) with values[i] <= big, or -1. O(log n) range-min queries."""
+    lo = max(lo, 0)
+    hi = min(hi, values.size)
     if hi <= lo:
         return -1
     if values[_range_argmin(table, values, lo, hi)] > big:
@@ -621,6 +783,7 @@ def discrete_switching(
     cnt_a,
     cnt_b,
     top,
+    mode,
 ):  # pragma: no cover - compiled
     """``(lower, upper, jump_down, jump_up)`` of a discrete model in the staircase state.
 
@@ -656,7 +819,7 @@ def discrete_switching(
         if i >= 0:
             upper = alpha_by_a[i]
             j = _count_le(alpha_by_a, i, upper)
-            jump_up = 2.0 * _sum_up(table_a, beta_by_a, w_by_a, i, j, m, work)
+            jump_up = 2.0 * _sum_up(table_a, beta_by_a, w_by_a, i, j, m, work, mode)
             break
         if ref == 0:
             break
@@ -684,7 +847,7 @@ def discrete_switching(
             lower = beta_by_b[i]
             # relays with beta == lower: indices [count(beta < lower), i]
             j = _count_lt(beta_by_b, lower)
-            jump_down = -2.0 * _sum_down(table_b, alpha_by_b, w_by_b, j, i + 1, big, work)
+            jump_down = -2.0 * _sum_down(table_b, alpha_by_b, w_by_b, j, i + 1, big, work, mode)
             break
         if ref == 1:
             break
@@ -733,12 +896,12 @@ def continuous_staircase(inputs, vals, refs, top):  # pragma: no cover - compile
         if v > u:
             if top & 1:
                 top += 1
-            while v >= vals[top - 2]:
+            while top >= 4 and v >= vals[top - 2]:  # never past the +inf sentinel
                 top -= 2
         elif v < u:
             if not (top & 1):
                 top += 1
-            while v <= vals[top - 2]:
+            while top >= 5 and v <= vals[top - 2]:  # never past the -inf sentinel
                 top -= 2
         vals[top] = v
         refs[top] = t

@@ -1,19 +1,29 @@
 """Argument checks shared by every operator.
 
-Every helper returns the converted value or raises :class:`ValueError` whose message names the
-parameter and states the allowed range, so that bad input never gets clipped silently.
+Every helper returns the converted value or raises :class:`ValueError` (or
+:class:`ParameterTypeError`, a ``TypeError`` that is also a ``ValueError``) whose message names
+the parameter and states the allowed range, so that bad input never gets clipped or cast
+silently: strings (even numeric ones), complex numbers, booleans and ``None`` are refused, not
+converted.
+
+Magnitudes: parameters and inputs are bounded by :data:`MAX_MAGNITUDE` (1e300) where the
+operators do arithmetic with them (centres ``(α+β)/2``, widths ``α−β``, ``u ± p/2``): beyond it
+that arithmetic can overflow to ``inf``, which the compiled kernels must never see.
 """
 
 from __future__ import annotations
 
 import math
-from numbers import Integral
+from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
 
 __all__ = [
+    "MAX_MAGNITUDE",
+    "ParameterTypeError",
     "as_input_sequence",
+    "real_array",
     "finite_scalar",
     "positive_scalar",
     "nonnegative_scalar",
@@ -23,13 +33,108 @@ __all__ = [
     "nonnegative_integer",
     "direction_sign",
     "as_generator",
+    "check_state_type",
+    "bounded_work",
+    "MAX_GRID_NODES",
+    "check_grid_nodes",
 ]
 
+#: largest magnitude accepted for parameters and inputs whose sums/differences are formed
+MAX_MAGNITUDE = 1e300
+#: largest number of nodes of an identification grid (the Everett table holds nodes² values)
+MAX_GRID_NODES = 2001
 
-def as_input_sequence(x: Any, name: str = "inputs") -> np.ndarray:
-    """``x`` as a non-empty 1-D float64 array of finite numbers (a new, writable copy)."""
+
+class ParameterTypeError(TypeError, ValueError):
+    """A parameter of the wrong type (a string, complex number, ``None``, ...).
+
+    Both a ``TypeError`` (what it is) and a ``ValueError`` (what the operators documented for
+    every bad argument before the type checks were tightened), so either ``except`` catches it.
+    """
+
+
+def _describe(x: Any) -> str:
+    text = repr(x)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def real_array(x: Any, name: str) -> np.ndarray:
+    """``x`` as a float64 array (a new copy) of real numbers, without any silent coercion.
+
+    Refused with :class:`ParameterTypeError`: strings and bytes (also numeric ones such as
+    ``'1'``), complex values (even with zero imaginary part), booleans, ``None`` and other
+    non-numbers. Ragged nested sequences raise ``ValueError``. Finiteness is not checked here.
+    """
+    if isinstance(x, str | bytes):
+        raise ParameterTypeError(
+            f"{name} must be real numbers, got a string {_describe(x)} (strings are not converted)"
+        )
+    if x is None:
+        raise ParameterTypeError(f"{name} must be real numbers, got None")
     try:
-        arr = np.array(x, dtype=np.float64)
+        arr = np.asarray(x)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an array of real numbers (got {_describe(x)})") from exc
+    kind = arr.dtype.kind
+    if kind == "O":
+        for item in arr.flat:
+            if isinstance(item, bool | np.bool_) or not isinstance(item, Real | np.number):
+                raise ParameterTypeError(
+                    f"{name} must contain real numbers only, got {type(item).__name__} "
+                    f"{_describe(item)}"
+                )
+            if isinstance(item, complex | np.complexfloating):
+                raise ParameterTypeError(f"{name} must be real, got complex {item!r}")
+    elif kind == "c":
+        raise ParameterTypeError(
+            f"{name} must be real, got complex values (dtype {arr.dtype}); pass the real part "
+            "explicitly if that is what you mean"
+        )
+    elif kind in "USV":
+        raise ParameterTypeError(
+            f"{name} must be real numbers, got strings or raw data (dtype {arr.dtype})"
+        )
+    elif kind == "b":
+        raise ParameterTypeError(f"{name} must be real numbers, got booleans")
+    elif kind not in "iuf":
+        raise ParameterTypeError(f"{name} must be real numbers, got dtype {arr.dtype}")
+    try:
+        return np.array(arr, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be an array of real numbers") from exc
+
+
+def _check_finite_bounded(arr: np.ndarray, name: str, max_abs: float | None) -> None:
+    """Finite entries of magnitude <= ``max_abs`` (if given), in one reduction: NaN and inf
+    propagate through ``max(|x|)``, so the slow diagnosis runs only on bad data. A single
+    value (the integrators drive operators one input at a time) takes a pure-Python path."""
+    if arr.size == 0:
+        return
+    peak = abs(float(arr.flat[0])) if arr.size == 1 else float(np.max(np.abs(arr)))
+    if math.isfinite(peak) and (max_abs is None or peak <= max_abs):
+        return
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite (no NaN or inf)")
+    _check_magnitude(arr, name, max_abs)
+
+
+def _check_magnitude(arr: np.ndarray, name: str, max_abs: float | None) -> None:
+    if max_abs is not None and arr.size and float(np.max(np.abs(arr))) > max_abs:
+        raise ValueError(
+            f"{name} must have magnitude <= {max_abs:g} (larger values overflow the operator's "
+            f"arithmetic), got {float(arr.flat[int(np.argmax(np.abs(arr)))])!r}"
+        )
+
+
+def as_input_sequence(
+    x: Any, name: str = "inputs", max_abs: float | None = MAX_MAGNITUDE
+) -> np.ndarray:
+    """``x`` as a non-empty 1-D float64 array of finite numbers (a new, writable copy), each of
+    magnitude <= ``max_abs`` (default :data:`MAX_MAGNITUDE`; ``None``: no bound)."""
+    try:
+        arr = real_array(x, name)
+    except ParameterTypeError:
+        raise
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} must be a 1-D sequence of finite real numbers") from exc
     if arr.ndim != 1:
@@ -38,38 +143,38 @@ def as_input_sequence(x: Any, name: str = "inputs") -> np.ndarray:
         )
     if arr.size == 0:
         raise ValueError(f"{name} must contain at least one value (got an empty sequence)")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite (no NaN or inf)")
+    _check_finite_bounded(arr, name, max_abs)
     return arr
 
 
-def finite_scalar(x: Any, name: str) -> float:
-    """``x`` as a finite Python float."""
-    if isinstance(x, bool):
-        raise ValueError(f"{name} must be a finite real number, got a bool")
-    try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a finite real number, got {x!r}") from exc
+def finite_scalar(x: Any, name: str, max_abs: float | None = None) -> float:
+    """``x`` as a finite Python float (with ``|x| <= max_abs`` if given).
+
+    Strings (even ``'1'``), complex numbers, booleans and ``None`` raise
+    :class:`ParameterTypeError`."""
+    if isinstance(x, bool | np.bool_):
+        raise ParameterTypeError(f"{name} must be a finite real number, got a bool")
+    arr = real_array(x, name)
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a finite real scalar, got shape {arr.shape}")
     value = float(arr)
     if not math.isfinite(value):
         raise ValueError(f"{name} must be a finite real number, got {value}")
+    _check_magnitude(arr, name, max_abs)
     return value
 
 
-def positive_scalar(x: Any, name: str) -> float:
+def positive_scalar(x: Any, name: str, max_abs: float | None = None) -> float:
     """``x`` as a finite float > 0."""
-    value = finite_scalar(x, name)
+    value = finite_scalar(x, name, max_abs)
     if not value > 0.0:
         raise ValueError(f"{name} must be > 0 (finite), got {value}")
     return value
 
 
-def nonnegative_scalar(x: Any, name: str) -> float:
+def nonnegative_scalar(x: Any, name: str, max_abs: float | None = None) -> float:
     """``x`` as a finite float >= 0."""
-    value = finite_scalar(x, name)
+    value = finite_scalar(x, name, max_abs)
     if not value >= 0.0:
         raise ValueError(f"{name} must be >= 0 (finite), got {value}")
     return value
@@ -83,25 +188,30 @@ def scalar_in_open_interval(x: Any, name: str, low: float, high: float) -> float
     return value
 
 
-def finite_array(x: Any, name: str, ndim: int | None = None, nonempty: bool = True) -> np.ndarray:
-    """``x`` as a float64 array of finite numbers (a new copy), optionally of given ``ndim``."""
-    try:
-        arr = np.array(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an array of finite real numbers") from exc
+def finite_array(
+    x: Any,
+    name: str,
+    ndim: int | None = None,
+    nonempty: bool = True,
+    max_abs: float | None = None,
+) -> np.ndarray:
+    """``x`` as a float64 array of finite numbers (a new copy), optionally of given ``ndim``
+    and with every ``|x_i| <= max_abs``."""
+    arr = real_array(x, name)
     if ndim is not None and arr.ndim != ndim:
         raise ValueError(f"{name} must be a {ndim}-D array, got shape {arr.shape}")
     if nonempty and arr.size == 0:
         raise ValueError(f"{name} must not be empty")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite (no NaN or inf)")
+    _check_finite_bounded(arr, name, max_abs)
     return arr
 
 
 def positive_integer(x: Any, name: str, minimum: int = 1) -> int:
     """``x`` as a Python int >= ``minimum`` (floats with integral value are not accepted)."""
-    if isinstance(x, bool) or not isinstance(x, Integral):
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {x!r}")
+    if isinstance(x, bool | np.bool_) or not isinstance(x, Integral):
+        raise ParameterTypeError(
+            f"{name} must be an integer >= {minimum}, got {type(x).__name__} {_describe(x)}"
+        )
     value = int(x)
     if value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value}")
@@ -136,3 +246,50 @@ def as_generator(seed: Any, name: str = "seed") -> np.random.Generator:
     if isinstance(seed, Integral) and not isinstance(seed, bool) and seed >= 0:
         return np.random.default_rng(seed)
     raise ValueError(f"{name} must be a non-negative int or a numpy.random.Generator, got {seed!r}")
+
+
+def check_state_type(state: Any, expected: type | tuple[type, ...], operator: Any) -> None:
+    """Refuse a state object of the wrong type with a :class:`ParameterTypeError` (a
+    ``TypeError``, also a ``ValueError``) naming ``state``."""
+    if not isinstance(state, expected):
+        names = (
+            expected.__name__
+            if isinstance(expected, type)
+            else " or ".join(t.__name__ for t in expected)
+        )
+        raise ParameterTypeError(
+            f"state must be a {names} of this {type(operator).__name__} (from its "
+            f"initial_state/state/apply), got {type(state).__name__}"
+        )
+
+
+def bounded_work(count: Any, name: str, limit: int, what: str) -> int:
+    """Refuse up front a request whose size ``count`` exceeds ``limit`` (memory/time bound).
+
+    ``what`` says what is counted (e.g. "grid nodes"); the message names ``name`` and the limit.
+    """
+    value = float(count)
+    if not math.isfinite(value) or value > limit:
+        raise ValueError(
+            f"{name} asks for {value:.3g} {what}, more than the limit {limit}: refused up front "
+            "(it would take unbounded memory or time); choose a coarser value"
+        )
+    return int(value)
+
+
+def check_grid_nodes(step: Any, saturation: Any, max_nodes: int = MAX_GRID_NODES) -> int:
+    """Number of nodes ``2 ceil(saturation/step) + 1`` of an identification grid, refusing
+    more than ``max_nodes`` (default :data:`MAX_GRID_NODES`) with a ``ValueError`` naming
+    ``step``: the reversal curves cost ``nodes²/2`` operator steps and the Everett table
+    ``nodes²`` floats."""
+    step = positive_scalar(step, "step")
+    saturation = positive_scalar(saturation, "saturation")
+    ratio = saturation / step
+    nodes = 2.0 * math.ceil(ratio - 1e-9) + 1.0 if math.isfinite(ratio) else math.inf
+    if nodes > max_nodes:
+        raise ValueError(
+            f"step={step!r} with saturation={saturation!r} asks for {nodes:.3g} grid nodes, "
+            f"more than the limit {max_nodes} (memory ~ nodes²): choose step >= "
+            f"{2.0 * saturation / (max_nodes - 1):.3g}"
+        )
+    return int(nodes)

@@ -23,9 +23,10 @@ Two families exist, and the forced-oscillator integrator treats them differently
   the output with respect to the input and to the memory variables, and how each memory variable
   moves with the input (frozen inside the play, slaved ``δw = δu`` at a wall).
 
-Conventions (see docs/architecture.md): a relay with thresholds ``alpha >= beta`` outputs +1 once the input
-has reached ``u >= alpha`` and -1 once it has fallen to ``u < beta``. ``initial_state(u0)`` is the
-state reached by rising monotonically from negative saturation to ``u0``.
+Conventions (see docs/architecture.md): a relay with thresholds ``alpha >= beta`` outputs +1
+once the input has reached ``u >= alpha`` and -1 once it has fallen to ``u < beta``.
+``initial_state(u0)`` is the state reached by rising monotonically from negative saturation to
+``u0``.
 """
 
 from __future__ import annotations

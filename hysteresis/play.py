@@ -24,13 +24,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 from numba import njit
 from scipy.special import erf
 
 from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    ParameterTypeError,
     as_input_sequence,
+    check_state_type,
     direction_sign,
     finite_scalar,
     nonnegative_scalar,
@@ -118,7 +122,8 @@ class _PlayBase(ContinuousHysteron):
     """Shared machinery of the play and the generalized play (memory: wagon position)."""
 
     def __init__(self, width: float) -> None:
-        self._width = nonnegative_scalar(width, "width")
+        # bounded so that u ± p/2 stays finite for every admissible input
+        self._width = nonnegative_scalar(width, "width", MAX_MAGNITUDE)
 
     @property
     def width(self) -> float:
@@ -140,13 +145,13 @@ class _PlayBase(ContinuousHysteron):
     # -- states ---------------------------------------------------------------------------
     def initial_state(self, u0: float) -> PlayState:
         """Rising from −∞ to ``u0`` leaves the wagon at ``w0 = u0 - p/2`` (right wall)."""
-        u0 = finite_scalar(u0, "u0")
+        u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
         return PlayState(u0 - self.half_width, u0)
 
     def state(self, position: float, input: float) -> PlayState:
         """An explicit state; requires ``|input - position| <= width/2``."""
-        position = finite_scalar(position, "position")
-        input = finite_scalar(input, "input")
+        position = finite_scalar(position, "position", MAX_MAGNITUDE)
+        input = finite_scalar(input, "input", MAX_MAGNITUDE)
         half = self.half_width
         if abs(input - position) > half + _wall_tolerance(position, input, half):
             raise ValueError(
@@ -155,11 +160,27 @@ class _PlayBase(ContinuousHysteron):
             )
         return PlayState(position, input)
 
+    def _check_state(self, state: object) -> None:
+        """Type and consistency of a state (O(1)): finite position within p/2 of its input."""
+        check_state_type(state, PlayState, self)
+        w, u = state.position, state.input
+        for value, label in ((w, "state.position"), (u, "state.input")):
+            if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value):
+                raise ValueError(f"{label} must be a finite real number, got {value!r}")
+        half = self.half_width
+        if abs(u - w) > half + _wall_tolerance(w, u, half):
+            raise ValueError(
+                f"state: position {w!r} is out of the input's reach (|input - position| must be "
+                f"<= width/2 = {half}, input {u!r}); the state belongs to another operator"
+            )
+
     def positions(self, inputs, state: PlayState | None = None) -> tuple[np.ndarray, PlayState]:
         """Wagon positions ``w`` for the inputs (the play output) and the final state."""
         u = as_input_sequence(inputs)
         if state is None:
             state = self.initial_state(u[0])
+        else:
+            self._check_state(state)
         w = play_positions(u, self._width, float(state.position))
         return w, PlayState(float(w[-1]), float(u[-1]))
 
@@ -168,12 +189,14 @@ class _PlayBase(ContinuousHysteron):
         return np.asarray(self._f(w), dtype=np.float64), final
 
     def output(self, state: PlayState) -> float:
+        self._check_state(state)
         return float(self._f(float(state.position)))
 
     # -- branch and linearization -----------------------------------------------------------
     def on_wall(self, state: PlayState, direction: int) -> bool:
         """True if moving the input in ``direction`` drags the wagon (finger on that wall)."""
         direction = direction_sign(direction)
+        check_state_type(state, PlayState, self)  # O(1): integrators call this every step
         return _touches_wall(float(state.position), float(state.input), self.half_width, direction)
 
     def branch(self, state: PlayState, direction: int) -> Branch:
@@ -305,6 +328,69 @@ def _erf_shape(spread: float) -> tuple[Callable, Callable]:
     return shape, shape_derivative
 
 
+#: probe points of the shape check: both signs, scales from 1e-3 to 1e3
+_PROBE = np.concatenate([-np.geomspace(1e3, 1e-3, 13), [0.0], np.geomspace(1e-3, 1e3, 13)])
+
+
+def _evaluate(fn: Callable, w: np.ndarray, name: str) -> np.ndarray:
+    try:
+        with np.errstate(all="ignore"):
+            value = fn(w.copy())
+    except Exception as exc:
+        raise ValueError(
+            f"{name} must accept a numpy array of w values (vectorised); calling it on an array "
+            f"raised {type(exc).__name__}: {exc}"
+        ) from exc
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must return real numbers, got {type(value).__name__}") from exc
+    if np.iscomplexobj(value):
+        raise ParameterTypeError(f"{name} must return real numbers, got complex values")
+    if arr.shape != w.shape:
+        raise ValueError(
+            f"{name} must return one value per input (shape {w.shape}), got shape {arr.shape}"
+        )
+    bad = ~np.isfinite(arr)
+    if np.any(bad):
+        raise ValueError(f"{name} must be finite, got {arr[bad][0]} at w = {w[bad][0]!r}")
+    return arr
+
+
+def _check_shape(shape: Callable, derivative: Callable) -> None:
+    """Probe ``shape`` and ``shape_derivative`` on :data:`_PROBE` at construction: finite,
+    one value per input, ``shape`` non-decreasing and not constant, ``shape_derivative >= 0``
+    and consistent with central differences of ``shape`` (at one of two step sizes)."""
+    w = _PROBE
+    f = _evaluate(shape, w, "shape")
+    steps = np.diff(f)
+    if np.any(steps < 0):
+        k = int(np.argmax(steps < 0))
+        raise ValueError(
+            f"shape must be increasing, but shape({w[k + 1]!r}) = {f[k + 1]!r} < "
+            f"shape({w[k]!r}) = {f[k]!r}"
+        )
+    if not f[-1] > f[0]:
+        raise ValueError("shape must be increasing, got a constant function on [-1e3, 1e3]")
+    df = _evaluate(derivative, w, "shape_derivative")
+    if np.any(df < 0):
+        k = int(np.argmax(df < 0))
+        raise ValueError(f"shape_derivative must be >= 0, got {df[k]!r} at w = {w[k]!r}")
+    scale = float(np.max(np.abs(df)))
+    ok = np.zeros(w.size, dtype=bool)
+    fd = np.zeros(w.size)
+    for rel in (1e-4, 1e-6):
+        h = rel * np.maximum(1.0, np.abs(w))
+        fd = (_evaluate(shape, w + h, "shape") - _evaluate(shape, w - h, "shape")) / (2 * h)
+        ok |= np.abs(fd - df) <= 0.05 * np.maximum(np.abs(fd), np.abs(df)) + 1e-7 * scale
+    if not np.all(ok):
+        k = int(np.argmin(ok))
+        raise ValueError(
+            f"shape_derivative is inconsistent with shape: at w = {w[k]!r} it returns "
+            f"{df[k]!r}, central differences of shape give {fd[k]!r}"
+        )
+
+
 class GeneralizedPlay(_PlayBase):
     """Generalized play: output ``shape(w)`` with ``w`` the wagon position of a play of ``width``.
 
@@ -334,11 +420,18 @@ class GeneralizedPlay(_PlayBase):
         shape_derivative: Callable,
         name: str | None = None,
     ) -> None:
+        self._init(width, shape, shape_derivative, name, check=True)
+
+    def _init(self, width, shape, shape_derivative, name, check: bool) -> None:
         super().__init__(width)
         if not callable(shape):
-            raise ValueError("shape must be a callable, strictly increasing function of w")
+            raise ParameterTypeError("shape must be a callable, strictly increasing function of w")
         if not callable(shape_derivative):
-            raise ValueError("shape_derivative must be a callable (derivative of shape)")
+            raise ParameterTypeError("shape_derivative must be a callable (derivative of shape)")
+        if name is not None and not isinstance(name, str):
+            raise ParameterTypeError(f"name must be a string or None, got {type(name).__name__}")
+        if check:
+            _check_shape(shape, shape_derivative)
         self._shape = shape
         self._shape_derivative = shape_derivative
         # read-only after construction (properties below): the play-limit integrator dispatches
@@ -354,9 +447,12 @@ class GeneralizedPlay(_PlayBase):
         It is the Preisach model with density ``N(s; 0, R²) δ(r - p/2)`` in rotated
         coordinates (paper eqs. pdens_sr, prob_mag).
         """
-        spread = positive_scalar(spread, "spread")
+        spread = positive_scalar(spread, "spread", MAX_MAGNITUDE)
         shape, derivative = _erf_shape(spread)
-        op = cls(width, shape, derivative, name=f"erf(w/(sqrt(2)*{spread}))")
+        # the closed form needs no probe check (and a very small R would defeat the finite
+        # differences of the check)
+        op = cls.__new__(cls)
+        op._init(width, shape, derivative, f"erf(w/(sqrt(2)*{spread}))", check=False)
         op._shape_kind = "erf"
         op._spread = spread
         return op
@@ -388,6 +484,18 @@ class GeneralizedPlay(_PlayBase):
 
     def _f(self, w):
         return self._shape(w)
+
+    def apply(self, inputs, state: PlayState | None = None) -> tuple[np.ndarray, PlayState]:
+        w, final = self.positions(inputs, state)
+        with np.errstate(all="ignore"):
+            y = np.asarray(self._f(w), dtype=np.float64)
+        if y.shape != w.shape or not np.all(np.isfinite(y)):
+            bad = np.flatnonzero(~np.isfinite(y)) if y.shape == w.shape else np.array([0])
+            raise ValueError(
+                f"shape returned a non-finite value or the wrong shape at w = {w[bad[0]]!r} "
+                "(outside the probe range checked at construction)"
+            )
+        return y, final
 
     def _df(self, w):
         return self._shape_derivative(w)

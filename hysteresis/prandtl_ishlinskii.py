@@ -28,11 +28,19 @@ initial states (rising from −∞) of an operator and its inverse are consisten
 from __future__ import annotations
 
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 from numba import njit
 
-from hysteresis._validation import as_input_sequence, direction_sign, finite_array, finite_scalar
+from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    as_input_sequence,
+    check_state_type,
+    direction_sign,
+    finite_array,
+    finite_scalar,
+)
 from hysteresis.base import Branch, ContinuousHysteron, Linearization
 from hysteresis.flow import BranchFlow
 from hysteresis.play import _touches_wall, _wall_tolerance
@@ -93,11 +101,16 @@ class PrandtlIshlinskii(ContinuousHysteron):
         linear term.
     weights:
         Finite weights a_i (same length).
+
+    Notes
+    -----
+    Widths and weights must have magnitude <= 1e300 (larger values overflow ``u ± p/2``);
+    an output that still overflows for a given input raises ``ValueError`` in :meth:`apply`.
     """
 
     def __init__(self, widths, weights) -> None:
-        widths = finite_array(widths, "widths", ndim=1)
-        weights = finite_array(weights, "weights", ndim=1)
+        widths = finite_array(widths, "widths", ndim=1, max_abs=MAX_MAGNITUDE)
+        weights = finite_array(weights, "weights", ndim=1, max_abs=MAX_MAGNITUDE)
         if widths.shape != weights.shape:
             raise ValueError(
                 f"weights must have the same length as widths ({widths.size}), got {weights.size}"
@@ -147,13 +160,13 @@ class PrandtlIshlinskii(ContinuousHysteron):
     # -- states ---------------------------------------------------------------------------
     def initial_state(self, u0: float) -> PIState:
         """Rising from −∞: every wagon on its right wall, ``w_i = u0 - p_i/2``."""
-        u0 = finite_scalar(u0, "u0")
+        u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
         return PIState(_readonly(u0 - self._half), u0)
 
     def state(self, positions, input: float) -> PIState:
         """Explicit state; requires ``|input - positions_i| <= widths_i/2`` for every play."""
         positions = finite_array(positions, "positions", ndim=1)
-        input = finite_scalar(input, "input")
+        input = finite_scalar(input, "input", MAX_MAGNITUDE)
         if positions.shape != self._widths.shape:
             raise ValueError(f"positions must have length {self._widths.size}")
         for w, r in zip(positions, self._half, strict=True):
@@ -164,15 +177,55 @@ class PrandtlIshlinskii(ContinuousHysteron):
                 )
         return PIState(_readonly(positions), input)
 
+    def _check_state(self, state: object) -> np.ndarray:
+        """Type, size and consistency of a state (O(n_plays)); returns the positions."""
+        check_state_type(state, PIState, self)
+        try:
+            w = np.asarray(state.positions, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise ValueError("state.positions must be an array of real numbers") from exc
+        if w.shape != self._widths.shape:
+            raise ValueError(
+                f"state has {w.size if w.ndim == 1 else w.shape} play positions, this operator "
+                f"has {self._widths.size} plays: the state belongs to another operator"
+            )
+        u = state.input
+        if not (
+            np.all(np.isfinite(w))
+            and isinstance(u, Real)
+            and not isinstance(u, bool)
+            and np.isfinite(u)
+        ):
+            raise ValueError("state positions and input must be finite real numbers")
+        # relative 1e-9, not a few ulps: states computed elsewhere (inverse_state sums
+        # weighted positions with cancellation) sit on a wall only up to their rounding
+        tol = 1e-9 * np.maximum(np.maximum(np.abs(w), abs(u)), np.maximum(self._half, 1.0))
+        bad = np.abs(u - w) > self._half + tol
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise ValueError(
+                f"state: play {i} position {w[i]!r} is out of the input's reach "
+                f"(|input - position| must be <= width/2 = {self._half[i]}, input {u!r}); "
+                "the state belongs to another operator"
+            )
+        return w
+
     def apply(self, inputs, state: PIState | None = None) -> tuple[np.ndarray, PIState]:
         u = as_input_sequence(inputs)
         if state is None:
             state = self.initial_state(u[0])
-        out, w = _pi_kernel(u, self._half, self._weights, np.array(state.positions, dtype=float))
+        positions = self._check_state(state)
+        out, w = _pi_kernel(u, self._half, self._weights, np.array(positions, dtype=float))
+        if not np.all(np.isfinite(out)):
+            k = int(np.argmax(~np.isfinite(out)))
+            raise ValueError(
+                f"inputs: the output overflows at input {u[k]!r} with these weights "
+                f"(max |weight| {float(np.max(np.abs(self._weights)))!r}); scale them down"
+            )
         return out, PIState(_readonly(w), float(u[-1]))
 
     def output(self, state: PIState) -> float:
-        return float(np.dot(self._weights, state.positions))
+        return float(np.dot(self._weights, self._check_state(state)))
 
     # -- inverse --------------------------------------------------------------------------
     def _check_invertible(self) -> np.ndarray:
@@ -211,6 +264,7 @@ class PrandtlIshlinskii(ContinuousHysteron):
 
     # -- branch and linearization -----------------------------------------------------------
     def _walls(self, state: PIState, direction: int) -> np.ndarray:
+        check_state_type(state, PIState, self)  # O(1); the size is checked by zip(strict)
         u = float(state.input)
         return np.array(
             [

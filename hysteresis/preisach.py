@@ -10,10 +10,10 @@ Memory (Mayergoyz): the alternating sequence of dominant input extrema left afte
 previous maximum (``u >= M_k``) or falls to a previous minimum (``u <= m_k``) wipes out all
 extrema after it. :class:`PreisachState` holds this staircase and the output.
 
-Everett function (docs/architecture.md): ``E(α, β) = (f_α − f_αβ)/2`` — half the output drop when the
-input rises from negative saturation to ``α`` and then falls to ``β``; equivalently the mass
-of the triangle ``{β < β' <= α' <= α}`` of the Preisach plane, and ``μ = −∂²E/∂α∂β``. With the
-staircase ``M_1, m_1, ..., `` (``m_0 = −∞``)::
+Everett function (docs/architecture.md): ``E(α, β) = (f_α − f_αβ)/2`` — half the output drop
+when the input rises from negative saturation to ``α`` and then falls to ``β``; equivalently the
+mass of the triangle ``{β < β' <= α' <= α}`` of the Preisach plane, and ``μ = −∂²E/∂α∂β``.
+With the staircase ``M_1, m_1, ..., `` (``m_0 = −∞``)::
 
     M = −1 + 2 Σ_k [E(M_k, m_{k−1}) − E(M_k, m_k)]
 
@@ -32,6 +32,7 @@ amortised O(1) Everett evaluations per step through cached prefix sums along the
 from __future__ import annotations
 
 import functools
+import hashlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -41,7 +42,11 @@ import numpy as np
 
 from hysteresis import _preisach_kernels as _k
 from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    ParameterTypeError,
     as_input_sequence,
+    bounded_work,
+    check_state_type,
     direction_sign,
     finite_array,
     finite_scalar,
@@ -57,6 +62,7 @@ from hysteresis.base import (
     Switching,
 )
 from hysteresis.flow import BranchFlow
+from hysteresis.relay_table import RelayTable
 
 __all__ = [
     "PreisachModel",
@@ -66,6 +72,16 @@ __all__ = [
 ]
 
 _WEIGHT_TOLERANCE = 1e-9
+#: largest ``resolution`` of :meth:`PreisachModel.from_density` (memory ~ 16·resolution²/2)
+_MAX_RESOLUTION = 4096
+
+
+def _fingerprint(*parts: Any) -> int:
+    """64-bit digest of a model's defining data; states carry it to find their owner."""
+    h = hashlib.blake2b(digest_size=8)
+    for part in parts:
+        h.update(part if isinstance(part, bytes) else np.ascontiguousarray(part).tobytes())
+    return int.from_bytes(h.digest(), "little")
 
 
 def _readonly(a: Any, dtype=np.float64) -> np.ndarray:
@@ -91,6 +107,9 @@ class PreisachState:
         ``beta <= e`` for every extremum ``e``.
     prefix:
         Continuous model only (internal): cached Everett prefix sums along the staircase.
+    model_fingerprint:
+        Fingerprint of the model that made the state (internal): ``apply`` refuses a state of
+        another model in O(1). A state built by hand (``None``) is checked in full instead.
     """
 
     extrema: np.ndarray
@@ -98,6 +117,7 @@ class PreisachState:
     counts_alpha: np.ndarray | None = field(default=None, repr=False)
     counts_beta: np.ndarray | None = field(default=None, repr=False)
     prefix: np.ndarray | None = field(default=None, repr=False)
+    model_fingerprint: int | None = field(default=None, repr=False)
 
     @property
     def input(self) -> float:
@@ -143,7 +163,8 @@ class PreisachModel(Hysteron):
     def from_relays(cls, alpha, beta, weights=None) -> DiscretePreisachModel:
         """Discrete model ``M = Σ_i w_i y_{α_i β_i}``.
 
-        ``alpha``, ``beta``: 1-D arrays of equal length N >= 1 with ``alpha >= beta``;
+        ``alpha``, ``beta``: 1-D arrays of equal length N >= 1 with ``alpha >= beta`` and
+        magnitudes <= 1e300 (so that centres and widths are finite);
         ``weights``: ``>= 0`` summing to 1 (within 1e-9), default ``1/N`` each. Weights are not
         renormalised: a wrong sum raises ``ValueError``.
         """
@@ -187,14 +208,41 @@ class PreisachModel(Hysteron):
         """
         return ContinuousPreisachModel._from_everett(everett, lower, upper, everett_gradient)
 
+    @classmethod
+    def from_identification(
+        cls, result: Any, *, use_measured_only: bool = True
+    ) -> DiscretePreisachModel:
+        """Valid discrete model from an identified (noisy, partly negative) density.
+
+        Non-negative least squares on the cell masses so that the model's Everett function —
+        hence its reversal curves — fits the identified one on the measured nodes; one relay
+        per cell at its upper corner; weights normalised to sum 1 (the measured output is
+        ``offset + K · M[u]`` with ``K`` the fitted total mass). See
+        :func:`hysteresis.fitting.project_identification`, which also returns ``K`` and the
+        residual.
+        """
+        from hysteresis.fitting import project_identification
+
+        return project_identification(result, use_measured_only=use_measured_only).model()
+
     # -- shared -----------------------------------------------------------------------------
     def output(self, state: PreisachState) -> float:
         self._check_state(state)
         return float(state.output)
 
     def _check_state(self, state: Any) -> None:
-        if not isinstance(state, PreisachState):
-            raise ValueError(f"state must be a PreisachState, got {type(state).__name__}")
+        """Type and owner of a state (O(1)); states without a fingerprint are checked in
+        full by the subclasses' ``_unpack``."""
+        check_state_type(state, PreisachState, self)
+        owner = state.model_fingerprint
+        if owner is not None and owner != self._fingerprint:
+            raise ValueError(
+                f"state belongs to another Preisach model (fingerprint {owner:#x}, this model "
+                f"{self._fingerprint:#x}); start from this model's initial_state()"
+            )
+        ext = state.extrema
+        if not isinstance(ext, np.ndarray) or ext.ndim != 1 or ext.size == 0:
+            raise ValueError("state.extrema must be a non-empty 1-D array")
 
     def state_from_extrema(self, extrema, saturation: str = "negative") -> PreisachState:
         """State after the input history ``extrema`` (a sequence of turning points).
@@ -230,8 +278,10 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
     """
 
     def __init__(self, alpha, beta, weights=None) -> None:
-        alpha = finite_array(alpha, "alpha", ndim=1)
-        beta = finite_array(beta, "beta", ndim=1)
+        # magnitudes bounded: the centres (α+β)/2, widths α−β and the bucket grid below must
+        # stay finite (thresholds near ±1e308 made the compiled kernel index out of bounds)
+        alpha = finite_array(alpha, "alpha", ndim=1, max_abs=MAX_MAGNITUDE)
+        beta = finite_array(beta, "beta", ndim=1, max_abs=MAX_MAGNITUDE)
         if alpha.shape != beta.shape:
             raise ValueError(
                 f"alpha and beta must have the same length, got {alpha.size} and {beta.size}"
@@ -260,6 +310,7 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
         self._alpha = _readonly(alpha)
         self._beta = _readonly(beta)
         self._weights = _readonly(weights)
+        self._fingerprint = _fingerprint(b"discrete", alpha, beta, weights)
 
         order_a = np.argsort(alpha, kind="stable")
         order_b = np.argsort(beta, kind="stable")
@@ -366,11 +417,12 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
             output=float(output),
             counts_alpha=_readonly(cnt_a[2 : top + 1], np.int64),
             counts_beta=_readonly(cnt_b[2 : top + 1], np.int64),
+            model_fingerprint=self._fingerprint,
         )
 
     def initial_state(self, u0: float) -> PreisachState:
         """Rise from negative saturation to ``u0``: relays with ``α <= u0`` are up."""
-        u0 = finite_scalar(u0, "u0")
+        u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
         pa = int(np.searchsorted(self._alpha_by_a, u0, side="right"))
         pb = int(np.searchsorted(self._beta_by_b, u0, side="right"))
         output = -1.0 + 2.0 * float(self._cum_w_a[pa])
@@ -379,6 +431,7 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
             output=output,
             counts_alpha=_readonly([pa], np.int64),
             counts_beta=_readonly([pb], np.int64),
+            model_fingerprint=self._fingerprint,
         )
 
     def _unpack(self, state: PreisachState, extra: int = 0):
@@ -386,6 +439,11 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
         if state.counts_alpha is None or state.counts_beta is None:
             raise ValueError("state must be a state of a discrete PreisachModel")
         n = self.n_relays
+        depth = state.extrema.size
+        if np.shape(state.counts_alpha) != (depth,) or np.shape(state.counts_beta) != (depth,):
+            raise ValueError("state is inconsistent: counts and extrema differ in length")
+        if state.model_fingerprint is None:
+            self._check_foreign_state(state)
         size = state.extrema.size + 2
         cap = size + extra
         vals = np.empty(cap)
@@ -399,6 +457,34 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
         if cnt_a[size - 1] > n or cnt_b[size - 1] > n:
             raise ValueError("state does not belong to this PreisachModel (relay counts)")
         return vals, cnt_a, cnt_b, size - 1
+
+    def _check_foreign_state(self, state: PreisachState) -> None:
+        """Full check of a state without fingerprint (built by hand), once: a reduced
+        staircase, relay counts that match this model's thresholds, and the output."""
+        e = np.asarray(state.extrema, dtype=np.float64)
+        if not np.all(np.isfinite(e)) or float(np.max(np.abs(e))) > MAX_MAGNITUDE:
+            raise ValueError("state.extrema must be finite with magnitude <= 1e300")
+        if np.any(np.diff(e[0::2]) >= 0) or np.any(np.diff(e[1::2]) <= 0):
+            raise ValueError(
+                "state.extrema is not a staircase (maxima must decrease, minima increase)"
+            )
+        if e.size > 1 and np.any(e[1::2] >= e[0::2][: e[1::2].size]):
+            raise ValueError("state.extrema is not a staircase (minimum above its maximum)")
+        ca = np.searchsorted(self._alpha_by_a, e, side="right")
+        cb = np.searchsorted(self._beta_by_b, e, side="right")
+        if not (np.array_equal(ca, state.counts_alpha) and np.array_equal(cb, state.counts_beta)):
+            raise ValueError(
+                "state does not belong to this PreisachModel (its relay counts do not match "
+                "this model's thresholds)"
+            )
+        if self.n_relays * e.size <= 10_000_000:
+            up = self.relay_states(state)
+            expected = float(np.sum(np.where(up, self._weights, -self._weights)))
+            if abs(expected - float(state.output)) > 1e-9:
+                raise ValueError(
+                    f"state.output {state.output!r} does not match this model in that staircase "
+                    f"({expected!r}): the state belongs to another model"
+                )
 
     def apply(self, inputs, state: PreisachState | None = None) -> tuple[np.ndarray, PreisachState]:
         """Outputs for ``inputs`` (1-D, finite, non-empty) from ``state`` (default:
@@ -428,6 +514,7 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
             cnt_b,
             top,
             float(state.output),
+            _k.lane_mode(),
         )
         if top < 0:  # pragma: no cover - would be a bug in the capacity bound
             raise RuntimeError("Preisach staircase exceeded its capacity bound")
@@ -454,6 +541,7 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
             cnt_a,
             cnt_b,
             top,
+            _k.lane_mode(),
         )
         return Switching(
             lower=float(lower),
@@ -493,6 +581,84 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron):
                 out[idx] = float(self._weights[mask].sum())
         return out
 
+    # -- relay contract (oscillators' relay engine) -------------------------------------------
+    def relay_table(self) -> RelayTable:
+        """The model as a :class:`~hysteresis.relay_table.RelayTable` (same relay order; cached)."""
+        table = self.__dict__.get("_relay_table")
+        if table is None:
+            table = RelayTable(self._alpha, self._beta, self._weights)
+            self.__dict__["_relay_table"] = table
+        return table
+
+    def relay_outputs(self, state: PreisachState) -> np.ndarray:
+        """Relay outputs ``±1`` (table order) in ``state``; O(N log depth).
+
+        With the staircase ``M_1, m_1, M_2, ...`` a relay is up iff ``alpha <= M_{j+1}`` where
+        ``j`` is the number of minima below its ``beta`` (its last down event is at ``m_j``, the
+        maxima after it decrease, so only ``M_{j+1}`` can have switched it up since).
+        """
+        self._check_state(state)
+        if state.counts_alpha is None:
+            raise ValueError("state must be a state of a discrete PreisachModel")
+        maxima = state.maxima
+        j = np.searchsorted(state.minima, self._beta, side="left")
+        safe = np.minimum(j, maxima.size - 1)
+        up = (j < maxima.size) & (self._alpha <= maxima[safe])
+        return np.where(up, 1.0, -1.0)
+
+    def state_from_relay_outputs(self, outputs, input: float) -> PreisachState:
+        """The state whose relays output ``outputs`` (table order) with the input at ``input``.
+
+        Relays of zero weight never change the output and are not used (their outputs in the
+        result follow from the rebuilt staircase). The up relays (positive weight) define the
+        threshold function ``g(β) = max{α_i : i up, β_i >= β}``; its steps give the staircase
+        ``M_1 = g(-∞), m_1, M_2, ...`` (minima at the β where ``g`` drops), which is driven into
+        the model, followed by ``input``. ``ValueError`` if the configuration cannot be reached
+        (a down relay with ``α <= g(β)``, an up relay with ``β > input``, a down relay with
+        ``α <= input``).
+        """
+        input = finite_scalar(input, "input")
+        y = np.asarray(outputs, dtype=np.float64)
+        if y.shape != self._alpha.shape:
+            raise ValueError(f"outputs must have length {self.n_relays}, got shape {y.shape}")
+        if not np.all((y == 1.0) | (y == -1.0)):
+            raise ValueError("outputs must be +1 or -1")
+        active = self._weights > 0.0
+        table = self.relay_table()
+        table.check_outputs(np.where(active, y, table.initial_outputs(input)), input)
+        up = active & (y > 0)
+        down = active & (y < 0)
+        c = self._beta[up]
+        order = np.argsort(c, kind="stable")
+        c = c[order]
+        a = self._alpha[up][order]
+        if c.size:
+            smax = np.maximum.accumulate(a[::-1])[::-1]
+            # g on (c_{l-1}, c_l] is the suffix maximum at the first relay with β = c_l (tie
+            # groups of equal β); it drops after group l when the next group's value is
+            # smaller (and to -inf after the last group)
+            first = np.flatnonzero(np.concatenate([[True], c[1:] > c[:-1]]))
+            gval = smax[first]
+            ends = np.flatnonzero(np.append(gval[1:], -np.inf) < gval)
+            minima = c[first[ends]]
+            maxima = np.concatenate([[gval[0]], gval[ends[:-1] + 1]])
+            gb = np.searchsorted(c, self._beta[down], side="left")
+            g = np.where(gb < c.size, smax[np.minimum(gb, c.size - 1)], -np.inf)
+            bad = np.flatnonzero(self._alpha[down] <= g)
+            if bad.size:
+                i = int(np.flatnonzero(down)[bad[0]])
+                raise ValueError(
+                    f"outputs are not a reachable relay configuration: relay {i} "
+                    f"(alpha={self._alpha[i]}, beta={self._beta[i]}) is down although an up "
+                    "relay has a larger alpha and a larger beta"
+                )
+            history = np.empty(2 * minima.size + 1)
+            history[0:-1:2] = maxima
+            history[1:-1:2] = minima
+            history[-1] = input
+            return self.apply(history, self.initial_state(float(history[0])))[1]
+        return self.initial_state(input)
+
 
 # ============================================================================================
 # continuous
@@ -515,8 +681,8 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
     """
 
     def __init__(self, lower: float, upper: float) -> None:
-        self._lower = finite_scalar(lower, "lower")
-        self._upper = finite_scalar(upper, "upper")
+        self._lower = finite_scalar(lower, "lower", MAX_MAGNITUDE)
+        self._upper = finite_scalar(upper, "upper", MAX_MAGNITUDE)
         if not self._upper > self._lower:
             raise ValueError(f"upper must be > lower, got lower={lower}, upper={upper}")
         self._everett_fn: Callable = None  # type: ignore[assignment]
@@ -541,9 +707,11 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
     @classmethod
     def _from_density(cls, density, lower, upper, resolution, mass_tolerance):
         if not callable(density):
-            raise ValueError("density must be a vectorised callable density(alpha, beta)")
+            raise ParameterTypeError("density must be a vectorised callable density(alpha, beta)")
         model = cls(lower, upper)
         n = positive_integer(resolution, "resolution", minimum=2)
+        # the quadrature holds 16 resolution²/2 density values: bound the memory up front
+        bounded_work(n, "resolution", _MAX_RESOLUTION, "grid cells per side")
         mass_tolerance = positive_scalar(mass_tolerance, "mass_tolerance")
         lo, up = model._lower, model._upper
         h = (up - lo) / n
@@ -592,17 +760,29 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
         model._density_fn = density
         model._everett_fn = model._everett_from_table
         model._gradient_fn = model._gradient_from_density
+        model._set_fingerprint()
         return model
 
     @classmethod
     def _from_everett(cls, everett, lower, upper, everett_gradient):
         if not callable(everett):
-            raise ValueError("everett must be a vectorised callable everett(alpha, beta)")
+            raise ParameterTypeError("everett must be a vectorised callable everett(alpha, beta)")
         if everett_gradient is not None and not callable(everett_gradient):
-            raise ValueError("everett_gradient must be callable or None")
+            raise ParameterTypeError("everett_gradient must be callable or None")
         model = cls(lower, upper)
         lo, up = model._lower, model._upper
-        total = float(np.asarray(everett(np.array([up]), np.array([lo])))[0])
+        try:
+            total_arr = np.asarray(everett(np.array([up]), np.array([lo])))
+        except Exception as exc:
+            raise ValueError(
+                f"everett must accept numpy arrays (a, b); it raised {type(exc).__name__}: {exc}"
+            ) from exc
+        if total_arr.dtype.kind not in "iuf" or total_arr.shape != (1,):
+            raise ValueError(
+                "everett must return one real value per (a, b) pair, got "
+                f"dtype {total_arr.dtype} shape {total_arr.shape}"
+            )
+        total = float(total_arr[0])
         if abs(total - 1.0) > 1e-6:
             raise ValueError(
                 f"everett must satisfy E(upper, lower) = 1 (total mass), got {total!r}"
@@ -612,7 +792,47 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
             raise ValueError("everett must vanish on the diagonal, E(a, a) = 0")
         model._everett_fn = lambda a, b: np.asarray(everett(a, b), dtype=np.float64)
         model._gradient_fn = everett_gradient
+        model._check_everett_probe()
+        model._set_fingerprint()
         return model
+
+    def _check_everett_probe(self, nodes: int = 65) -> None:
+        """Everett function on a probe grid: finite, one value per pair, and every cell mass
+        ``E(a', b) − E(a, b) − E(a', b') + E(a, b') >= 0`` (non-negative density)."""
+        x = np.linspace(self._lower, self._upper, nodes)
+        a, b = np.meshgrid(x, x, indexing="ij")
+        lower = a > b
+        values = self._everett_fn(a[lower], b[lower])
+        if values.shape != (int(lower.sum()),):
+            raise ValueError(
+                f"everett must return one value per (a, b) pair, got shape {values.shape}"
+            )
+        if not np.all(np.isfinite(values)):
+            i = int(np.argmax(~np.isfinite(values)))
+            raise ValueError(
+                f"everett must be finite on lower <= b <= a <= upper, got {values[i]} at "
+                f"(a, b) = ({a[lower][i]!r}, {b[lower][i]!r})"
+            )
+        table = np.zeros((nodes, nodes))
+        table[lower] = values
+        # cell (a_i, a_{i+1}] x (b_j, b_{j+1}] for j <= i; E = 0 for b >= a
+        mass = table[1:, :-1] - table[:-1, :-1] - table[1:, 1:] + table[:-1, 1:]
+        cells = np.tril(np.ones_like(mass, dtype=bool))
+        tol = 1e-9 * max(1.0, float(np.max(np.abs(values))))
+        if np.any(mass[cells] < -tol):
+            i, j = np.argwhere(cells & (mass < -tol))[0]
+            raise ValueError(
+                "everett must be the Everett function of a non-negative density, but the cell "
+                f"alpha in ({x[i]:.6g}, {x[i + 1]:.6g}], beta in ({x[j]:.6g}, {x[j + 1]:.6g}] "
+                f"has negative mass {mass[i, j]:.3g}"
+            )
+
+    def _set_fingerprint(self) -> None:
+        x = np.linspace(self._lower, self._upper, 9)
+        a, b = np.meshgrid(x, x, indexing="ij")
+        self._fingerprint = _fingerprint(
+            b"continuous", np.array([self._lower, self._upper]), self.everett(a, b)
+        )
 
     # -- Everett function ----------------------------------------------------------------------
     def _clip(self, a, b):
@@ -723,18 +943,32 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
 
     def initial_state(self, u0: float) -> PreisachState:
         """Rise from negative saturation to ``u0``: ``M = −1 + 2 E(u0, lower)``."""
-        u0 = finite_scalar(u0, "u0")
+        u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
         stack = np.array([np.inf, -np.inf, u0])
         prefix = np.cumsum(self._terms(stack))
         return PreisachState(
-            extrema=_readonly([u0]), output=float(-1.0 + 2.0 * prefix[-1]), prefix=_readonly(prefix)
+            extrema=_readonly([u0]),
+            output=float(-1.0 + 2.0 * prefix[-1]),
+            prefix=_readonly(prefix),
+            model_fingerprint=self._fingerprint,
         )
 
     def _unpack(self, state: PreisachState):
         self._check_state(state)
         if state.prefix is None:
             raise ValueError("state must be a state of a continuous PreisachModel")
-        return _stack(state), np.asarray(state.prefix, dtype=np.float64)
+        prefix = np.asarray(state.prefix, dtype=np.float64)
+        if prefix.shape != (state.extrema.size + 2,):
+            raise ValueError("state is inconsistent: prefix and extrema differ in length")
+        if state.model_fingerprint is None:
+            # a state built by hand: its prefix sums must be this model's (O(depth), once)
+            e = np.asarray(state.extrema, dtype=np.float64)
+            if not np.all(np.isfinite(e)) or float(np.max(np.abs(e))) > MAX_MAGNITUDE:
+                raise ValueError("state.extrema must be finite with magnitude <= 1e300")
+            expected = np.cumsum(self._terms(_stack(state)))
+            if not np.allclose(prefix, expected, rtol=0.0, atol=1e-9):
+                raise ValueError("state does not belong to this PreisachModel (prefix sums)")
+        return _stack(state), prefix
 
     def apply(self, inputs, state: PreisachState | None = None) -> tuple[np.ndarray, PreisachState]:
         u = as_input_sequence(inputs)
@@ -759,6 +993,7 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron):
             extrema=_readonly(vals[2 : top + 1]),
             output=float(outputs[-1]),
             prefix=_readonly(final_prefix),
+            model_fingerprint=self._fingerprint,
         )
         return outputs, new_state
 

@@ -11,12 +11,20 @@ Zero width (``alpha == beta``) is allowed and gives a reversible switch: ``+1`` 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 
-from hysteresis._validation import as_input_sequence, finite_scalar
+from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    as_input_sequence,
+    check_state_type,
+    finite_scalar,
+)
 from hysteresis.base import PiecewiseConstantHysteron, Switching
+from hysteresis.relay_table import RelayTable
 
 __all__ = ["Relay", "RelayState"]
 
@@ -38,11 +46,14 @@ class Relay(PiecewiseConstantHysteron):
         Upper switching input α: the output becomes +1 as soon as ``u >= alpha``.
     beta:
         Lower switching input β <= α: the output becomes -1 as soon as ``u < beta``.
+
+    Both thresholds must be finite real numbers (not strings) of magnitude <= 1e300, so that
+    the centre and the width are finite.
     """
 
     def __init__(self, alpha: float, beta: float) -> None:
-        alpha = finite_scalar(alpha, "alpha")
-        beta = finite_scalar(beta, "beta")
+        alpha = finite_scalar(alpha, "alpha", MAX_MAGNITUDE)
+        beta = finite_scalar(beta, "beta", MAX_MAGNITUDE)
         if alpha < beta:
             raise ValueError(f"alpha must be >= beta (got alpha={alpha}, beta={beta})")
         self._alpha = alpha
@@ -79,7 +90,7 @@ class Relay(PiecewiseConstantHysteron):
     # -- states ---------------------------------------------------------------------------
     def initial_state(self, u0: float) -> RelayState:
         """State after rising from −∞ to ``u0``: +1 iff ``u0 >= alpha``."""
-        u0 = finite_scalar(u0, "u0")
+        u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
         return RelayState(1.0 if u0 >= self._alpha else -1.0, u0)
 
     def state(self, output: float, input: float) -> RelayState:
@@ -88,7 +99,7 @@ class Relay(PiecewiseConstantHysteron):
         +1 needs ``input >= beta``, -1 needs ``input < alpha``.
         """
         output = finite_scalar(output, "output")
-        input = finite_scalar(input, "input")
+        input = finite_scalar(input, "input", MAX_MAGNITUDE)
         if output not in (1.0, -1.0):
             raise ValueError(f"output must be +1 or -1, got {output}")
         if output == 1.0 and input < self._beta:
@@ -98,7 +109,22 @@ class Relay(PiecewiseConstantHysteron):
         return RelayState(output, input)
 
     def output(self, state: RelayState) -> float:
+        self._check_state(state)
         return float(state.output)
+
+    def _check_state(self, state: object) -> None:
+        """Type and consistency of a state (O(1)): output ±1, reachable at its input."""
+        check_state_type(state, RelayState, self)
+        out, inp = state.output, state.input
+        if out not in (1.0, -1.0):
+            raise ValueError(f"state.output must be +1 or -1, got {out!r}")
+        if isinstance(inp, bool) or not isinstance(inp, Real) or not math.isfinite(inp):
+            raise ValueError(f"state.input must be a finite number, got {inp!r}")
+        if (out == 1.0 and inp < self._beta) or (out == -1.0 and inp >= self._alpha):
+            raise ValueError(
+                f"state (output {out:+g} at input {inp!r}) is not reachable for this relay "
+                f"(alpha={self._alpha}, beta={self._beta}): it belongs to another relay"
+            )
 
     # -- driving ----------------------------------------------------------------------------
     def apply(self, inputs, state: RelayState | None = None) -> tuple[np.ndarray, RelayState]:
@@ -112,6 +138,8 @@ class Relay(PiecewiseConstantHysteron):
         u = as_input_sequence(inputs)
         if state is None:
             state = self.initial_state(u[0])
+        else:
+            self._check_state(state)
         marks = np.zeros(u.size, dtype=np.float64)
         marks[u < self._beta] = -1.0
         marks[u >= self._alpha] = 1.0  # alpha >= beta, so never both
@@ -122,6 +150,25 @@ class Relay(PiecewiseConstantHysteron):
 
     def switching(self, state: RelayState) -> Switching:
         """From -1 the relay jumps by +2 when the input reaches α; from +1 by -2 below β."""
+        self._check_state(state)
         if state.output > 0:
             return Switching(lower=self._beta, upper=np.inf, jump_down=-2.0, jump_up=0.0)
         return Switching(lower=-np.inf, upper=self._alpha, jump_down=0.0, jump_up=2.0)
+
+    # -- relay contract (oscillators' relay engine) -------------------------------------------
+    def relay_table(self) -> RelayTable:
+        """The relay as a one-row :class:`~hysteresis.relay_table.RelayTable` of weight 1."""
+        return RelayTable([self._alpha], [self._beta], [1.0])
+
+    def relay_outputs(self, state: RelayState) -> np.ndarray:
+        """``[state.output]``."""
+        if not isinstance(state, RelayState):
+            raise ValueError(f"state must be a RelayState, got {type(state).__name__}")
+        return np.array([float(state.output)])
+
+    def state_from_relay_outputs(self, outputs, input: float) -> RelayState:
+        """The state with output ``outputs[0]`` at ``input`` (validated like :meth:`state`)."""
+        y = np.asarray(outputs, dtype=np.float64)
+        if y.shape != (1,):
+            raise ValueError(f"outputs must have length 1 for a Relay, got shape {y.shape}")
+        return self.state(float(y[0]), input)

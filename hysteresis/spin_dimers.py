@@ -4,7 +4,7 @@ Each dimer ``k`` has two Ising spins ``σ1, σ2 ∈ {-1, +1}`` with local fields
 columns of ``fields`` are swapped where needed so that the first spin has the larger field, as the
 paper assumes "without loss of generality") and the Hamiltonian
 
-    H_k = -J σ1 σ2 - σ1 (q + b1) - σ2 (q + b2),    J = coupling > 0.
+    H_k = -J σ1 σ2 - σ1 (q + b1) - σ2 (q + b2),    J = spin_coupling > 0.
 
 Single-spin-flip dynamics: a spin is stable when it points along its local field
 ``F_i = J σ_partner + q + b_i``; a spin with ``F_i = 0`` counts as pointing up (ties go up), which
@@ -25,14 +25,17 @@ The state ``(σ1, σ2) = (↓, ↑)`` is never metastable for ``b1 >= b2``. The 
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 from hysteresis._validation import (
+    MAX_MAGNITUDE,
     as_generator,
     as_input_sequence,
+    bounded_work,
     finite_array,
     positive_integer,
     positive_scalar,
@@ -40,7 +43,10 @@ from hysteresis._validation import (
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
 
-__all__ = ["SpinDimerEnsemble", "DimerThresholds"]
+__all__ = ["SpinDimerEnsemble", "DimerThresholds", "MAX_SPINS"]
+
+#: largest ensemble :meth:`SpinDimerEnsemble.random` builds (memory ~ 100 bytes per spin)
+MAX_SPINS = 100_000_000
 
 
 def _readonly(a) -> np.ndarray:
@@ -128,6 +134,26 @@ def _spin_flip_kernel(inputs, fields, coupling, spins):  # pragma: no cover - co
     return out
 
 
+#: marks a required argument that follows an optional one (the deprecated alias made J optional)
+_REQUIRED: object = object()
+
+
+def _spin_coupling_alias(spin_coupling: float | None, coupling: float | None) -> float:
+    """Resolve the deprecated ``coupling=`` keyword of the spin interaction J."""
+    if coupling is not None:
+        if spin_coupling is not None:
+            raise TypeError("give spin_coupling (J) only; coupling= is its deprecated alias")
+        warnings.warn(
+            "SpinDimerEnsemble(spin_coupling=...) is deprecated; use spin_coupling= (J)",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+        return coupling
+    if spin_coupling is None:
+        raise TypeError("missing required argument spin_coupling (J > 0)")
+    return spin_coupling
+
+
 class SpinDimerEnsemble(PiecewiseConstantHysteron):
     """Independent spin dimers: the magnetization ``M[q]`` as a hysteresis operator.
 
@@ -136,21 +162,28 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
     fields:
         Local fields, shape ``(n_dimers, 2)``: row ``k`` is ``(b_{2k-1}, b_{2k})``. Each row is
         ordered so that ``b1 >= b2`` (columns swapped where needed).
-    coupling:
-        Ferromagnetic coupling J > 0.
+    spin_coupling:
+        Ferromagnetic spin-spin coupling J > 0 (``coupling=`` is a deprecated alias: in this
+        toolkit ``coupling`` means the oscillator's C).
 
+    Notes
+    -----
     ``initial_state``/``apply``/``output``/``switching`` use the equivalent discrete Preisach
     model (:meth:`to_preisach`, built once); the state type is that model's state. The
     brute-force spin dynamics, independent of the relay picture, is :meth:`simulate`.
     """
 
-    def __init__(self, fields, coupling: float) -> None:
-        fields = finite_array(fields, "fields")
+    def __init__(
+        self, fields, spin_coupling: float | None = None, *, coupling: float | None = None
+    ) -> None:
+        spin_coupling = _spin_coupling_alias(spin_coupling, coupling)
+        # bounded so that the thresholds J - b1, -J - b2 and the local fields stay finite
+        fields = finite_array(fields, "fields", max_abs=MAX_MAGNITUDE)
         if fields.ndim != 2 or fields.shape[1] != 2 or fields.shape[0] < 1:
             raise ValueError(
                 f"fields must have shape (n_dimers, 2) with n_dimers >= 1, got {fields.shape}"
             )
-        self._coupling = positive_scalar(coupling, "coupling")
+        self._spin_coupling = positive_scalar(spin_coupling, "spin_coupling", MAX_MAGNITUDE)
         self._fields = _readonly(np.sort(fields, axis=1)[:, ::-1])  # b1 >= b2 in every row
         self._preisach = None
 
@@ -160,27 +193,34 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         n_spins: int,
         width: float,
         spread: float,
-        coupling: float,
-        seed: int | np.random.Generator,
+        spin_coupling: float | None = None,
+        seed: int | np.random.Generator | None = _REQUIRED,  # type: ignore[assignment]
+        *,
+        coupling: float | None = None,
     ) -> SpinDimerEnsemble:
         """The paper's disorder: loop width ``p`` fixed, centres ``s_k ~ N(0, R²)``,
         ``b_{2k-1} = -s_k + J - p/2``, ``b_{2k} = -s_k - J + p/2``.
 
         ``n_spins`` = N (even, >= 2), ``width`` = p with ``0 < p < 2J``, ``spread`` = R > 0,
-        ``coupling`` = J > 0, ``seed`` (required) a non-negative int or a
-        ``numpy.random.Generator``; ``None`` raises ``ValueError`` (no irreproducible default).
+        ``spin_coupling`` = J > 0 (``coupling=`` is a deprecated alias), ``seed`` (required) a
+        non-negative int or a ``numpy.random.Generator``; ``None`` raises ``ValueError`` (no
+        irreproducible default).
         """
+        spin_coupling = _spin_coupling_alias(spin_coupling, coupling)
+        if seed is _REQUIRED:
+            raise TypeError("missing required argument seed (int >= 0 or numpy Generator)")
         n_spins = positive_integer(n_spins, "n_spins", minimum=2)
         if n_spins % 2:
             raise ValueError(f"n_spins must be even (pairs of spins), got {n_spins}")
-        coupling = positive_scalar(coupling, "coupling")
-        width = scalar_in_open_interval(width, "width", 0.0, 2.0 * coupling)
-        spread = positive_scalar(spread, "spread")
+        bounded_work(n_spins, "n_spins", MAX_SPINS, "spins")
+        spin_coupling = positive_scalar(spin_coupling, "spin_coupling", MAX_MAGNITUDE)
+        width = scalar_in_open_interval(width, "width", 0.0, 2.0 * spin_coupling)
+        spread = positive_scalar(spread, "spread", MAX_MAGNITUDE)
         rng = as_generator(seed)
         centres = rng.normal(0.0, spread, size=n_spins // 2)
-        b1 = -centres + coupling - 0.5 * width
-        b2 = -centres - coupling + 0.5 * width
-        return cls(np.column_stack([b1, b2]), coupling)
+        b1 = -centres + spin_coupling - 0.5 * width
+        b2 = -centres - spin_coupling + 0.5 * width
+        return cls(np.column_stack([b1, b2]), spin_coupling)
 
     # -- parameters -------------------------------------------------------------------------
     @property
@@ -189,9 +229,19 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         return self._fields
 
     @property
+    def spin_coupling(self) -> float:
+        """J, the spin-spin coupling."""
+        return self._spin_coupling
+
+    @property
     def coupling(self) -> float:
-        """J."""
-        return self._coupling
+        """Deprecated alias of :attr:`spin_coupling` (``coupling`` means C elsewhere)."""
+        warnings.warn(
+            "SpinDimerEnsemble.coupling is deprecated; use spin_coupling (J)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self._spin_coupling
 
     @property
     def n_dimers(self) -> int:
@@ -203,14 +253,14 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         return 2 * self._fields.shape[0]
 
     def __repr__(self) -> str:
-        return f"SpinDimerEnsemble(n_dimers={self.n_dimers}, coupling={self._coupling!r})"
+        return f"SpinDimerEnsemble(n_dimers={self.n_dimers}, spin_coupling={self._spin_coupling!r})"
 
     # -- relay picture ----------------------------------------------------------------------
     def thresholds(self) -> DimerThresholds:
         """Per-dimer ``alpha = J - b1``, ``beta = -J - b2`` and the classification."""
         b1, b2 = self._fields[:, 0], self._fields[:, 1]
-        alpha = self._coupling - b1
-        beta = -self._coupling - b2
+        alpha = self._spin_coupling - b1
+        beta = -self._spin_coupling - b2
         return DimerThresholds(
             alpha=_readonly(alpha),
             beta=_readonly(beta),
@@ -256,6 +306,21 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
     def switching(self, state) -> Switching:
         return self.to_preisach().switching(state)
 
+    # -- relay contract (oscillators' relay engine) -------------------------------------------
+    def relay_table(self):
+        """The relays of :meth:`relays` as a :class:`~hysteresis.relay_table.RelayTable`: a
+        paired dimer is one relay of weight ``2/N``, a non-hysteretic one two zero-width relays
+        of weight ``1/N`` (the order of :meth:`to_preisach`)."""
+        return self.to_preisach().relay_table()
+
+    def relay_outputs(self, state) -> np.ndarray:
+        """Outputs of the relays of :meth:`relay_table` in ``state``."""
+        return self.to_preisach().relay_outputs(state)
+
+    def state_from_relay_outputs(self, outputs, input: float):
+        """The state whose relays (order of :meth:`relay_table`) output ``outputs``."""
+        return self.to_preisach().state_from_relay_outputs(outputs, input)
+
     # -- brute force ------------------------------------------------------------------------
     def energy(self, spins, q: float) -> float:
         """Total energy ``H = Σ_k [-J σ1σ2 - σ1(q+b1) - σ2(q+b2)]`` of a spin configuration."""
@@ -263,7 +328,7 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         b = self._fields
         return float(
             np.sum(
-                -self._coupling * s[:, 0] * s[:, 1]
+                -self._spin_coupling * s[:, 0] * s[:, 1]
                 - s[:, 0] * (q + b[:, 0])
                 - s[:, 1] * (q + b[:, 1])
             )
@@ -271,6 +336,11 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
 
     def _check_spins(self, spins) -> np.ndarray:
         s = np.asarray(spins)
+        if s.dtype.kind not in "iuf":
+            raise ValueError(
+                f"spins must be an array of {self.n_spins} values in {{-1, +1}}, got dtype "
+                f"{s.dtype}"
+            )
         if s.shape != (self.n_spins,) or not np.all(np.isin(s, (-1, 1))):
             raise ValueError(f"spins must be an array of {self.n_spins} values in {{-1, +1}}")
         return s.astype(np.int8)
@@ -298,5 +368,5 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
             else self._check_spins(spins).copy()
         )
         flat_fields = np.ascontiguousarray(self._fields.reshape(-1))
-        magnetization = _spin_flip_kernel(u, flat_fields, self._coupling, start)
+        magnetization = _spin_flip_kernel(u, flat_fields, self._spin_coupling, start)
         return magnetization, start

@@ -1,11 +1,17 @@
 """Forced oscillators coupled to hysteresis operators: q'' + 2ζq' + q = cos(Ωt) + C·M[q](t)."""
 
-from oscillators.engine import DivergenceError, Engine, GrazingError, select_engine
+from hysteresis._distribution import check_import_name as _check_import_name
+from hysteresis._version import __version__
+
+_check_import_name("oscillators")
+
+from oscillators.engine import DivergenceError, Engine, GrazingError, select_engine  # noqa: E402
 from oscillators.linear import forced_response, homogeneous_propagator, propagate, segment_jacobian
 from oscillators.results import OscillatorState, PoincareSection, Trajectory
 from oscillators.system import ForcedOscillator
 
 __all__ = [
+    "__version__",
     "DivergenceError",
     "Engine",
     "GrazingError",

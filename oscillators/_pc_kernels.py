@@ -4,14 +4,29 @@ The system is ``q'' + 2ζq' + q = cos φ + C·M``, ``φ' = Ω``, with ``M`` cons
 Time is kept as (period index ``n``, time ``τ`` since the start of the period, ``0 <= τ < T``,
 ``T = 2π/Ω``) so that the forcing phase ``φ = φ_0 + Ωτ`` never loses digits on long runs.
 
-Equal-width discrete Preisach models (all relays of one width, e.g. the paper's spin dimers) are
-handled in O(1) per switch: the relays are grouped by equal thresholds and sorted by centre; the
-state is one index ``k`` = number of up groups; the next up threshold is ``up[k]`` (switch when
-``q >= up[k]``), the next down threshold ``down[k-1]`` (switch when ``q < down[k-1]``).
+The relays come as a *table* of one of two kinds, and one event loop (:func:`advance_table`)
+serves both; the kind only decides how the next thresholds are found and how a switch updates
+the relays and ``M`` (:func:`_table_refresh`, :func:`_table_switch`):
 
-Plain-Python reading of one hop (``_advance``)::
+* kind 0, **nested plan** (O(1) per switch): relays whose upper and lower thresholds increase
+  together (:meth:`hysteresis.relay_table.RelayTable.nested_plan`, every equal-width model, the
+  paper's spin dimers), grouped by equal thresholds; the state is one index ``k`` = number of up
+  groups; the next up threshold is ``up[k]`` (switch when ``q >= up[k]``), the next down
+  threshold ``down[k-1]`` (switch when ``q < down[k-1]``), the output ``mval[k]``.
+* kind 1, **heap** (any relays): a down relay has ``alpha > q`` and an up relay ``beta <= q``,
+  so the next up switch is the smallest ``alpha`` among the down relays and the next down switch
+  the largest ``beta`` among the up relays. The two priority queues are hierarchical 64-ary
+  bitsets over the presorted thresholds (alpha ascending, beta descending): a set bit is a
+  member; the minimum is one "lowest set bit" lookup (de Bruijn multiplication) per level, insert
+  and delete touch one word per level (3 levels up to 262 144 relays): O(log₆₄ N) per switched
+  relay, with no key comparisons and no unpredictable sift branches of a binary heap.
+  All relays at the current threshold switch together (their weights form the jump). ``M`` is
+  kept in integer weight units when all weights are multiples of one unit (dimers: 1/N and
+  2/N), else as a Neumaier-compensated sum, so it does not drift over 10⁹ switches.
 
-    F = C*M[k]; derivatives d_n of q at the current point from the equation of motion
+Plain-Python reading of one hop (``advance_table``)::
+
+    F = C*M; derivatives d_n of q at the current point from the equation of motion
     if the next threshold in the direction of v is predicted within h_T (linear estimate) :
         Newton on the Taylor polynomial  sum d_n h^n/n! = threshold  -> h
         if |sum_{n>=2} d_n h^(n-1)/(n-1)!| < |v|/2 (q provably monotone on [0, h]):
@@ -21,7 +36,7 @@ Plain-Python reading of one hop (``_advance``)::
         the zero of q'' and at the zero of v, so q is monotone between checkpoints; the first
         checkpoint at or past a threshold brackets the crossing, found by safeguarded Newton
         on the exact solution.
-    at a switch: q := threshold exactly, k += ±1, tangent vectors get the saltation
+    at a switch: q := threshold exactly, the table switches, tangent vectors get the saltation
         δv += C·ΔM/v* · δq  (paper eq. salt_matrix)
 
 Grazing: crossings are decided on the computed extrema. A maximum that reaches ``up`` (``>=``)
@@ -45,13 +60,18 @@ from oscillators.linear import exact_step, hom_matrix, phase_column
 ORDER = 8
 _IFAC = np.array([1.0 / math.factorial(n) for n in range(ORDER + 2)])
 
-# parameter vector layout
-P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE = range(10)
-N_PAR = 10
-# float state layout: q, v, tau, cos(phi), sin(phi)
-S_Q, S_V, S_TAU, S_COS, S_SIN = range(5)
-# int state layout: k (index), n (period), number of switches so far
-I_K, I_N, I_NSW = range(3)
+# parameter vector layout (P_UNIT: weight unit of the heap table's integer output, 0 = float)
+P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE, P_UNIT = range(11)
+N_PAR = 11
+# float state layout: q, v, tau, cos(phi), sin(phi), next up / down threshold, output M now,
+# compensated output (heap table, float weights: value and Neumaier compensation)
+S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC = range(10)
+N_ST = 10
+# int state layout: k (nested index), n (period), number of switches so far, weight units up and
+# in total (heap table, integer output), heap table: alpha rank of the next up switch and beta
+# rank of the next down switch (-1: none)
+I_K, I_N, I_NSW, I_UP, I_TOT, I_IA, I_IB = range(7)
+N_IST = 7
 
 
 def make_params(
@@ -277,15 +297,198 @@ def _tangent_update(y, ntan, m00, m01, m10, m11, pq, pv):
         y[1, j] = m10 * dq + m11 * dv + pv * dphi
 
 
-@njit(cache=True)
-def advance(
-    par, up_thr, down_thr, mval, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
-):
-    """Advance the equal-width kernel state (st, ist) to period time ``tau_stop``.
+# -- relay tables -------------------------------------------------------------------------------
+# The table is three flat arrays, tf (float), ti (int), lay (int), plus the mutable bitsets
+# ``bits`` (flat arrays, not tuples: inside the hot loop every array handle costs reference
+# counting, measured at ~100 ns per switch with tuples of arrays).
+# kind 0, nested plan (O(1)): lay = [G]; tf = up (G) | down (G) | mval (G + 1); the state is
+#   k = ist[I_K] groups up.
+# kind 1, bitset heaps (O(log_64 N)): lay = [levels, n, level offsets of D, of U]; tf = alpha
+#   ascending | beta descending | weight by alpha rank | weight by beta rank (n each); ti = beta
+#   rank of each alpha rank | alpha rank of each beta rank | integer weight units by alpha rank |
+#   by beta rank; bits = the two hierarchical bitsets, D over the alpha ranks (set = relay down)
+#   and U over the beta ranks (set = relay up).
+KIND_NESTED = 0
+KIND_HEAP = 1
 
-    Switch records go to ``sw`` (rows: time, q, v, ΔM) while ``rec_on``; returns 1 if that buffer
-    filled up (state left right after the last recorded switch, call again to continue), else 0.
-    Tangent vectors (columns of ``y``, rows δq, δv, δφ) are propagated while ``tan_on``.
+_DEBRUIJN = np.uint64(0x03F79D71B4CB0A89)
+_CTZ_TABLE = np.zeros(64, dtype=np.int64)
+for _i in range(64):
+    _CTZ_TABLE[int(((1 << _i) * 0x03F79D71B4CB0A89 % (1 << 64)) >> 58)] = _i
+_U0 = np.uint64(0)
+_U1 = np.uint64(1)
+_U6 = np.uint64(6)
+_U58 = np.uint64(58)
+_U63 = np.uint64(63)
+
+
+@njit(cache=True, inline="always")
+def _ctz(x):
+    """Index of the lowest set bit of a non-zero uint64 (de Bruijn multiplication)."""
+    low = x & (_U0 - x)
+    return _CTZ_TABLE[(low * _DEBRUIJN) >> _U58]
+
+
+@njit(cache=True, inline="always")
+def _bs_first(bits, lay, base, levels):
+    """Smallest set index of the bitset whose level offsets are lay[base:base+levels], or -1."""
+    idx = 0
+    for lv in range(levels - 1, -1, -1):
+        w = bits[lay[base + lv] + idx]
+        if w == _U0:
+            return -1
+        idx = idx * 64 + _ctz(w)
+    return idx
+
+
+@njit(cache=True, inline="always")
+def _bs_set(bits, lay, base, levels, idx):
+    for lv in range(levels):
+        pos = lay[base + lv] + (idx >> 6)
+        w = bits[pos]
+        bits[pos] = w | (_U1 << np.uint64(idx & 63))
+        if w != _U0:
+            return  # the summary bits above are set already
+        idx >>= 6
+
+
+@njit(cache=True, inline="always")
+def _bs_clear(bits, lay, base, levels, idx):
+    for lv in range(levels):
+        pos = lay[base + lv] + (idx >> 6)
+        w = bits[pos] & ~(_U1 << np.uint64(idx & 63))
+        bits[pos] = w
+        if w != _U0:
+            return  # the word still holds a set bit: the summary bit above stays
+        idx >>= 6
+
+
+@njit(cache=True, inline="always")
+def _bs_next(bits, lay, base, levels, i):
+    """Smallest member after removing the former minimum ``i``: the rest of its leaf word if
+    any (one load, the common case), else a search from the top."""
+    w = bits[lay[base] + (i >> 6)]
+    if w != _U0:
+        return (i & ~63) + _ctz(w)
+    return _bs_first(bits, lay, base, levels)
+
+
+@njit(cache=True)
+def _table_refresh(par, kind, tf, ti, bits, lay, st, ist):
+    """Next up / down thresholds and the output of the current table state into st (ist)."""
+    if kind == KIND_NESTED:
+        g = lay[0]
+        k = ist[I_K]
+        st[S_UP] = tf[k] if k < g else np.inf
+        st[S_DN] = tf[g + k - 1] if k > 0 else -np.inf
+        st[S_MV] = tf[2 * g + k]
+        return
+    levels = lay[0]
+    n = lay[1]
+    i = _bs_first(bits, lay, 2, levels)
+    ist[I_IA] = i
+    st[S_UP] = tf[i] if i >= 0 else np.inf
+    j = _bs_first(bits, lay, 2 + levels, levels)
+    ist[I_IB] = j
+    st[S_DN] = tf[n + j] if j >= 0 else -np.inf
+    unit = par[P_UNIT]
+    if unit > 0.0:
+        st[S_MV] = unit * (2 * ist[I_UP] - ist[I_TOT])
+    else:
+        st[S_MV] = st[S_M] + st[S_MC]
+
+
+@njit(cache=True, inline="always")
+def _neumaier_add(st, x):
+    """st[S_M] + st[S_MC] += x with Neumaier's compensation (no drift over many switches)."""
+    s = st[S_M]
+    t = s + x
+    if abs(s) >= abs(x):
+        st[S_MC] += (s - t) + x
+    else:
+        st[S_MC] += (x - t) + s
+    st[S_M] = t
+
+
+@njit(cache=True, inline="always")
+def _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction):
+    """Switch every relay at the current threshold in ``direction``; returns the jump ΔM and
+    leaves the next thresholds and the output in st[S_UP], st[S_DN], st[S_MV].
+
+    Heap table: the switched relays leave one queue (their bits are cleared, the next minimum
+    is normally in the same word) and join the other, whose extremum can only move to them
+    (a rank comparison), so a switch costs O(1) word operations unless a word runs empty.
+    """
+    if kind == KIND_NESTED:
+        g = lay[0]
+        k_old = ist[I_K]
+        k = k_old + direction
+        ist[I_K] = k
+        st[S_UP] = tf[k] if k < g else np.inf
+        st[S_DN] = tf[g + k - 1] if k > 0 else -np.inf
+        st[S_MV] = tf[2 * g + k]
+        return tf[2 * g + k] - tf[2 * g + k_old]
+    levels = lay[0]
+    n = lay[1]
+    unit = par[P_UNIT]
+    du = 0
+    dw = 0.0
+    # one loop for both directions: the switched relays leave queue "src" (D when rising, U
+    # when falling) and join queue "dst"; offsets select the arrays of each side
+    if direction > 0:
+        cur = ist[I_IA]
+        oth = ist[I_IB]
+        src = 2
+        dst = 2 + levels
+        side = 0
+    else:
+        cur = ist[I_IB]
+        oth = ist[I_IA]
+        src = 2 + levels
+        dst = 2
+        side = n
+    thr = tf[side + cur]
+    while cur >= 0 and tf[side + cur] == thr:
+        _bs_clear(bits, lay, src, levels, cur)
+        j = ti[side + cur]
+        _bs_set(bits, lay, dst, levels, j)
+        if oth < 0 or j < oth:
+            oth = j
+        du += ti[2 * n + side + cur]
+        dw += tf[2 * n + side + cur]
+        cur = _bs_next(bits, lay, src, levels, cur)
+    if direction > 0:
+        ist[I_IA] = cur
+        ist[I_IB] = oth
+    else:
+        ist[I_IB] = cur
+        ist[I_IA] = oth
+        du = -du
+        dw = -dw
+    st[S_UP] = tf[ist[I_IA]] if ist[I_IA] >= 0 else np.inf
+    st[S_DN] = tf[n + ist[I_IB]] if ist[I_IB] >= 0 else -np.inf
+    if unit > 0.0:
+        ist[I_UP] += du
+        st[S_MV] = unit * (2 * ist[I_UP] - ist[I_TOT])
+        return 2.0 * unit * du
+    _neumaier_add(st, 2.0 * dw)
+    st[S_MV] = st[S_M] + st[S_MC]
+    return 2.0 * dw
+
+
+# -- the event loop (one body for every table kind) ----------------------------------------------
+@njit(cache=True)
+def advance_table(
+    par, kind, tf, ti, bits, lay, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
+):
+    """Advance the kernel state (st, ist, table state) to period time ``tau_stop``.
+
+    Switch records go to ``sw`` (rows: time, q, v, ΔM) while ``rec_on``. Returns 0 when
+    ``tau_stop`` was reached, 1 if the record buffer filled up (state left right after the last
+    recorded switch; call again to continue), 2 at a grazing switch (v* = 0) while ``tan_on``
+    (state left right after that switch, tangent not updated by it). Tangent vectors (columns of
+    ``y``, rows δq, δv, δφ) are propagated while ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and
+    ``st[S_MV]`` must be current (:func:`_table_refresh`).
     """
     zeta = par[P_ZETA]
     omega = par[P_OMEGA]
@@ -295,23 +498,22 @@ def advance(
     amp_b = par[P_B]
     period = par[P_T]
     h_taylor = par[P_HT]
-    n_groups = up_thr.shape[0]
     cap = sw.shape[0]
     q = st[S_Q]
     v = st[S_V]
     tau = st[S_TAU]
     c = st[S_COS]
     s = st[S_SIN]
-    k = ist[I_K]
+    up = st[S_UP]
+    down = st[S_DN]
+    mv = st[S_MV]
     nsw = ist[I_NSW]
     status = 0
     while True:
         horizon = tau_stop - tau
         if horizon <= 0.0:
             break
-        force = coupling * mval[k]
-        up = up_thr[k] if k < n_groups else np.inf
-        down = down_thr[k - 1] if k > 0 else -np.inf
+        force = coupling * mv
         mode = 0  # 1 Taylor hop to a switch, 2 Taylor hop to the stop, 0 exact flight
         h = 0.0
         theta = 0.0
@@ -407,16 +609,20 @@ def advance(
                 break
             q = up if direction > 0 else down
             tau += hh
-        # the switch: every relay of the group flips at once
-        k_old = k
-        k += direction
-        jump = mval[k] - mval[k_old]
-        if tan_on:
+        # the switch: every relay at this threshold flips at once
+        jump = _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction)
+        up = st[S_UP]
+        down = st[S_DN]
+        mv = st[S_MV]
+        nsw += 1
+        if tan_on and coupling * jump != 0.0:
+            if v == 0.0:
+                status = 2  # grazing: infinite saltation, the caller raises GrazingError
+                break
             # saltation X = [[1,0,0],[C ΔM / v*, 1, 0],[0,0,1]]
-            sal = coupling * jump / v if v != 0.0 else np.inf
+            sal = coupling * jump / v
             for j in range(ntan):
                 y[1, j] += sal * y[0, j]
-        nsw += 1
         if rec_on:
             i = sw_count[0]
             sw[i, 0] = par[P_TBASE] + ist[I_N] * period + tau
@@ -432,7 +638,6 @@ def advance(
     st[S_TAU] = tau
     st[S_COS] = c
     st[S_SIN] = s
-    ist[I_K] = k
     ist[I_NSW] = nsw
     return status
 
@@ -446,11 +651,13 @@ def _wrap(par, st, ist):
 
 
 @njit(cache=True)
-def run_targets(
+def run_table(
     par,
-    up_thr,
-    down_thr,
-    mval,
+    kind,
+    tf,
+    ti,
+    bits,
+    lay,
     st,
     ist,
     tgt_n,
@@ -460,122 +667,161 @@ def run_targets(
     rec_on,
     sw,
     sw_count,
-):
-    """Advance through the targets (period index, period time); row i of ``out`` = (q, v, M).
-
-    Returns (status, next target index); status 1 means the switch buffer is full.
-    """
-    e = np.empty(ORDER + 1)
-    y = np.zeros((3, 3))
-    mp = np.zeros((ORDER + 1, 4))
-    period = par[P_T]
-    for i in range(i_start, tgt_n.shape[0]):
-        while ist[I_N] < tgt_n[i]:
-            status = advance(
-                par,
-                up_thr,
-                down_thr,
-                mval,
-                st,
-                ist,
-                period,
-                False,
-                y,
-                0,
-                e,
-                mp,
-                rec_on,
-                sw,
-                sw_count,
-            )
-            if status != 0:
-                return status, i
-            _wrap(par, st, ist)
-        status = advance(
-            par,
-            up_thr,
-            down_thr,
-            mval,
-            st,
-            ist,
-            tgt_tau[i],
-            False,
-            y,
-            0,
-            e,
-            mp,
-            rec_on,
-            sw,
-            sw_count,
-        )
-        if status != 0:
-            return status, i
-        out[i, 0] = st[S_Q]
-        out[i, 1] = st[S_V]
-        out[i, 2] = mval[ist[I_K]]
-    return 0, tgt_n.shape[0]
-
-
-@njit(cache=True)
-def _gram_schmidt(y, ntan, lsum):
-    """Modified Gram-Schmidt on the first ntan columns; adds log of the R diagonal to lsum."""
-    for j in range(ntan):
-        for i in range(j):
-            d = y[0, i] * y[0, j] + y[1, i] * y[1, j] + y[2, i] * y[2, j]
-            y[0, j] -= d * y[0, i]
-            y[1, j] -= d * y[1, i]
-            y[2, j] -= d * y[2, i]
-        nrm = math.sqrt(y[0, j] ** 2 + y[1, j] ** 2 + y[2, j] ** 2)
-        lsum[j] += math.log(nrm) if nrm > 0.0 else -np.inf
-        if nrm > 0.0:
-            y[0, j] /= nrm
-            y[1, j] /= nrm
-            y[2, j] /= nrm
-
-
-@njit(cache=True)
-def run_tangent(
-    par,
-    up_thr,
-    down_thr,
-    mval,
-    st,
-    ist,
-    tgt_n,
-    tgt_tau,
-    tgt_elapsed,
-    hist_flag,
-    i_start,
+    tan_on,
     y,
     ntan,
     mp,
-    lsum,
-    hist,
-    hist_count,
-    do_qr,
 ):
-    """Tangent flow through the targets; at each target QR (if do_qr) and optional history row.
+    """Advance through the targets (period index, period time) from target ``i_start``.
 
-    ``hist`` rows receive lsum/elapsed at targets with ``hist_flag``. Returns next target index.
+    Row i of ``out`` (if ``out`` has rows) receives (q, v, M) at target i. Returns (status,
+    next target index); status as :func:`advance_table` (0 done, 1 record buffer full, 2
+    grazing switch with the tangent flow on).
     """
     e = np.empty(ORDER + 1)
-    sw = np.zeros((1, 4))
-    swc = np.zeros(1, dtype=np.int64)
     period = par[P_T]
+    sample = out.shape[0] > 0
     for i in range(i_start, tgt_n.shape[0]):
         while ist[I_N] < tgt_n[i]:
-            advance(
-                par, up_thr, down_thr, mval, st, ist, period, True, y, ntan, e, mp, False, sw, swc
-            )
+            status = advance_table(
+                par, kind, tf, ti, bits, lay, st, ist, period, tan_on, y, ntan, e, mp, rec_on,
+                sw, sw_count,
+            )  # fmt: skip
+            if status != 0:
+                return status, i
             _wrap(par, st, ist)
-        advance(
-            par, up_thr, down_thr, mval, st, ist, tgt_tau[i], True, y, ntan, e, mp, False, sw, swc
+        status = advance_table(
+            par, kind, tf, ti, bits, lay, st, ist, tgt_tau[i], tan_on, y, ntan, e, mp, rec_on,
+            sw, sw_count,
+        )  # fmt: skip
+        if status != 0:
+            return status, i
+        if sample:
+            out[i, 0] = st[S_Q]
+            out[i, 1] = st[S_V]
+            out[i, 2] = st[S_MV]
+    return 0, tgt_n.shape[0]
+
+
+# -- building the kernel tables (Python) ----------------------------------------------------------
+def _bitset_layout(n: int) -> list[int]:
+    """Word counts per level of a 64-ary hierarchical bitset over n >= 1 items (top: 1 word)."""
+    sizes = [max(1, -(-n // 64))]
+    while sizes[-1] > 1:
+        sizes.append(-(-sizes[-1] // 64))
+    return sizes
+
+
+def _bitset_words(flags: np.ndarray) -> np.ndarray:
+    """All levels of the hierarchical bitset of boolean ``flags`` (layout of _bitset_layout)."""
+    levels = []
+    level = flags
+    for size in _bitset_layout(flags.size):
+        padded = np.zeros(64 * size, dtype=bool)
+        padded[: level.size] = level
+        words = np.packbits(padded, bitorder="little").view("<u8").astype(np.uint64)
+        levels.append(words)
+        level = words != 0
+    return np.concatenate(levels)
+
+
+def nested_kernel_table(plan) -> tuple:
+    """(tf, ti, bits, lay) for a :class:`~hysteresis.relay_table.NestedPlan` (kind 0)."""
+    tf = np.concatenate([plan.up, plan.down, plan.mval]).astype(np.float64)
+    lay = np.array([plan.up.size], dtype=np.int64)
+    return tf, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.uint64), lay
+
+
+class HeapTable:
+    """The bitset-heap form (kind 1) of relays of positive weight.
+
+    ``rank_a`` / ``rank_b`` map the alpha ranks (ascending) and beta ranks (descending) to the
+    indices of the given arrays. ``unit > 0`` when every weight is an integer multiple of
+    ``unit`` (then ``M`` is kept as integer units).
+    """
+
+    def __init__(self, alpha: np.ndarray, beta: np.ndarray, weights: np.ndarray) -> None:
+        if not np.all(weights > 0.0):
+            raise ValueError("the heap table takes relays of positive weight only")
+        n = int(alpha.size)
+        order_a = np.lexsort((-beta, alpha))  # ties in alpha: any order, kept deterministic
+        order_b = np.lexsort((alpha, -beta))
+        inv_b = np.empty(n, dtype=np.int64)
+        inv_b[order_b] = np.arange(n)
+        inv_a = np.empty(n, dtype=np.int64)
+        inv_a[order_a] = np.arange(n)
+        unit = float(weights.min())
+        units = np.rint(weights / unit)
+        if not (np.all(units * unit == weights) and units.max() * n < 2**52):
+            unit = 0.0
+            units = np.zeros(n)
+        units = units.astype(np.int64)
+        self.n = n
+        self.rank_a = order_a
+        self.rank_b = order_b
+        self.unit = unit
+        self.total_units = int(units.sum())
+        self.w_a = weights[order_a]
+        self.units_a = units[order_a]
+        self.tf = np.concatenate(
+            [alpha[order_a], beta[order_b], weights[order_a], weights[order_b]]
+        ).astype(np.float64)
+        self.ti = np.concatenate(
+            [inv_b[order_a], inv_a[order_b], units[order_a], units[order_b]]
+        ).astype(np.int64)
+        sizes = _bitset_layout(n)
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self.n_words = int(offsets[-1])
+        levels = len(sizes)
+        self.lay = np.concatenate([[levels, n], offsets[:-1], offsets[:-1] + self.n_words]).astype(
+            np.int64
         )
-        if do_qr:
-            _gram_schmidt(y, ntan, lsum)
-        if hist_flag[i]:
-            r = hist_count[0]
-            for j in range(ntan):
-                hist[r, j] = lsum[j] / tgt_elapsed[i]
-            hist_count[0] = r + 1
-    return tgt_n.shape[0]
+
+    def bits_from_outputs(self, outputs: np.ndarray) -> np.ndarray:
+        """The two bitsets for relay outputs ``outputs`` (±1, order of the given arrays)."""
+        down = np.asarray(outputs)[self.rank_a] < 0
+        up = np.asarray(outputs)[self.rank_b] > 0
+        return np.concatenate([_bitset_words(down), _bitset_words(up)])
+
+    def outputs_from_bits(self, bits: np.ndarray) -> np.ndarray:
+        """Relay outputs (±1, order of the given arrays) from the bitsets."""
+        leaf = bits[: -(-self.n // 64)]
+        flags = np.unpackbits(leaf.view(np.uint8), bitorder="little")[: self.n].astype(bool)
+        y = np.empty(self.n)
+        y[self.rank_a] = np.where(flags, -1.0, 1.0)
+        return y
+
+    def state_arrays(self, outputs: np.ndarray) -> tuple[np.ndarray, int, float, float]:
+        """(bits, units up, M, compensation) for relay outputs ``outputs``."""
+        bits = self.bits_from_outputs(outputs)
+        y = np.asarray(outputs)[self.rank_a]
+        units_up = int(self.units_a[y > 0].sum())
+        m = math.fsum(self.w_a * y)
+        return bits, units_up, m, 0.0
+
+
+# One compiled entry point per table kind: the kind is a compile-time constant inside each, so
+# LLVM folds the other kind's branches out of the hot loop (measured: a runtime kind costs the
+# nested kernel a factor ~2 in register pressure and code size). Same body, no duplication.
+@njit(cache=True)
+def run_nested(
+    par, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw, sw_count, tan_on, y,
+    ntan, mp,
+):  # fmt: skip
+    """:func:`run_table` for the nested plan (kind 0)."""
+    return run_table(
+        par, KIND_NESTED, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw,
+        sw_count, tan_on, y, ntan, mp,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def run_heap(
+    par, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw, sw_count, tan_on, y,
+    ntan, mp,
+):  # fmt: skip
+    """:func:`run_table` for the bitset heaps (kind 1)."""
+    return run_table(
+        par, KIND_HEAP, tf, ti, bits, lay, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw,
+        sw_count, tan_on, y, ntan, mp,
+    )  # fmt: skip

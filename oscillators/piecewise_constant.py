@@ -1,25 +1,32 @@
-"""Event-driven, exact integration of the oscillator with a piecewise-constant operator.
+"""The relay engine: exact event-driven integration of the oscillator with relay operators.
 
-Between switches the equation ``q'' + 2ζq' + q = cos φ + C·M_k`` is linear and solved in closed
-form (:mod:`oscillators.linear`); every threshold crossing is located on that solution (see
-:mod:`oscillators._pc_kernels` for the algorithm, the grazing convention and the short-hop Taylor
-expansion). Two engines:
+The operator hands over its relays through the contract of :mod:`hysteresis.base`
+(``relay_table()``, ``relay_outputs(state)``, ``state_from_relay_outputs(outputs, input)``);
+between switches ``q'' + 2ζq' + q = cos φ + C·M`` is linear and solved in closed form, every
+threshold crossing is located on that solution (:mod:`oscillators._pc_kernels`: algorithm,
+grazing convention, short-hop Taylor expansion) and the tangent flow gets the saltation
+``δv += C·ΔM/v*·δq`` at each switch. Methods (``engine_options={"method": ...}``):
 
-* **equal-width kernel** (numba, O(1) per switch): discrete Preisach models whose relays can be
-  ordered so that the upper and the lower thresholds increase together — every equal-width model,
-  in particular the paper's spin dimers (``SpinDimerEnsemble.to_preisach()`` with all dimers
-  hysteretic) and a single :class:`~hysteresis.relay.Relay`. The reachable relay states are then
-  prefixes of that order and the state is one index ``k``.
-* **generic** (Python): any :class:`~hysteresis.base.PiecewiseConstantHysteron`, driven through
-  ``switching(state)`` and ``apply([u], state)``; same exact crossing search.
+* ``"nested"`` — O(1) per switch, when the table's thresholds nest
+  (:meth:`hysteresis.relay_table.RelayTable.nested_plan`: equal widths, the paper's dimers);
+* ``"heap"`` — any relays (random widths, identified densities, ties, zero widths, weights):
+  the next up switch is the smallest ``alpha`` of the down relays, the next down switch the
+  largest ``beta`` of the up relays, each kept in a priority queue over the presorted thresholds
+  (a 64-ary bitset tree: O(log₆₄ N) per switched relay); relays at one threshold switch
+  together; ``M`` in integer weight units when the weights are multiples of one unit, else
+  compensated (Neumaier) sums;
+* ``"generic"`` — the Python reference path through ``switching(state)`` / ``apply``;
+* ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"`` for
+  an operator that implements ``switching()``/``apply()`` but not the relay contract.
 
-Time is kept as (period index, time within the period) so the forcing phase stays exact.
+Relays of zero weight never change ``M`` and are left out of the kernels (the operator state
+returned rebuilds them from the staircase).
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -29,15 +36,10 @@ from oscillators.engine import Engine, GrazingError, split_times, wrap_phase
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
 from oscillators.results import OscillatorState
 
-__all__ = [
-    "GrazingError",
-    "EqualWidthPlan",
-    "RelayEngine",
-    "equal_width_plan",
-    "SWITCH_DTYPE",
-]
+__all__ = ["GrazingError", "METHODS", "RelayEngine", "SWITCH_DTYPE"]
 
 SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8")])
+METHODS = ("auto", "nested", "heap", "generic")
 
 
 def _grazing_message(t: float | None = None) -> str:
@@ -49,128 +51,63 @@ def _grazing_message(t: float | None = None) -> str:
     )
 
 
-# -- equal-width plan -------------------------------------------------------------------------
-@dataclass(frozen=True)
-class EqualWidthPlan:
-    """Relays grouped by identical thresholds, sorted; ``mval[k]`` = output with k groups up."""
-
-    up: np.ndarray
-    down: np.ndarray
-    mval: np.ndarray
-
-    @property
-    def n_groups(self) -> int:
-        return int(self.up.size)
-
-    def index_at(self, q: float) -> int:
-        """Index reached by rising from negative saturation to ``q`` (groups with up <= q)."""
-        return int(np.searchsorted(self.up, q, side="right"))
-
-
-def _relay_arrays(operator: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(alpha, beta, weights) of a discrete relay system, or None."""
-    from hysteresis.relay import Relay
-
-    if isinstance(operator, Relay):
-        return np.array([operator.alpha]), np.array([operator.beta]), np.array([1.0])
-    model = operator
-    to_preisach = getattr(operator, "to_preisach", None)
-    if to_preisach is not None:
-        model = to_preisach()
-    alpha = getattr(model, "alpha", None)
-    beta = getattr(model, "beta", None)
-    weights = getattr(model, "weights", None)
-    if alpha is None or beta is None or weights is None:
-        return None
-    alpha = np.asarray(alpha, dtype=float)
-    beta = np.asarray(beta, dtype=float)
-    weights = np.asarray(weights, dtype=float)
-    if alpha.ndim != 1 or alpha.shape != beta.shape or alpha.shape != weights.shape:
-        return None
-    return alpha, beta, weights
-
-
-def equal_width_plan(operator: Any) -> EqualWidthPlan | None:
-    """The O(1)-per-switch plan of a relay system, or None if its thresholds do not nest.
-
-    Eligible: after grouping relays with identical (alpha, beta), both the upper and the lower
-    thresholds increase strictly along the order (true for equal widths).
-    """
-    arrays = _relay_arrays(operator)
-    if arrays is None:
-        return None
-    alpha, beta, weights = arrays
-    order = np.lexsort((beta, alpha))
-    a = alpha[order]
-    b = beta[order]
-    w = weights[order]
-    new_group = np.ones(a.size, dtype=bool)
-    new_group[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1])
-    starts = np.flatnonzero(new_group)
-    up = a[starts]
-    down = b[starts]
-    gw = np.add.reduceat(w, starts)
-    if up.size > 1 and (np.any(np.diff(up) <= 0.0) or np.any(np.diff(down) <= 0.0)):
-        return None
-    # output with the first k groups up, the rest down: M = sum(up w) - sum(down w)
-    total = float(np.sum(w))
-    if np.all(w == w[0]):
-        # equal weights (dimers: M_k = 4k/N - 1 for Σw = 1): exact integer counting, no
-        # summation drift; scaled by Σw like the unequal-weight branch
-        counts = np.concatenate([[0], np.cumsum(np.diff(np.append(starts, a.size)))])
-        mval = (2.0 * counts - a.size) / a.size * total
-    else:
-        cum = np.concatenate([[0.0], np.cumsum(gw)])
-        mval = 2.0 * cum - total
-    return EqualWidthPlan(up=up, down=down, mval=mval)
-
-
-def _state_from_index(operator: Any, plan: EqualWidthPlan, k: int, q: float) -> Any:
-    """An operator state with the first k groups up, current input q (built by an input path)."""
-    if k == 0:
-        return operator.initial_state(q)
-    u1 = float(plan.up[k - 1])
-    state = operator.initial_state(u1)
-    _, state = operator.apply(np.array([u1, q]), state)
-    return state
-
-
-def _index_from_state(operator: Any, plan: EqualWidthPlan, q0: float, state: Any) -> int | None:
-    """Index k of an operator state at input q0, or None if the state is not a prefix state."""
-    if state is None:
-        return plan.index_at(q0)
-    _, state = operator.apply(np.array([q0]), state)
-    m = float(operator.output(state))
-    k = int(np.argmin(np.abs(plan.mval - m)))
-    if abs(plan.mval[k] - m) > 1e-9:
-        return None
-    rebuilt = _state_from_index(operator, plan, k, q0)
-    relay_states = getattr(operator, "relay_states", None)
-    if relay_states is None and hasattr(operator, "to_preisach"):
-        relay_states = getattr(operator.to_preisach(), "relay_states", None)
-    if relay_states is not None:
-        if not np.array_equal(np.asarray(relay_states(state)), np.asarray(relay_states(rebuilt))):
-            return None
-    return k
-
-
-# -- targets (period index, time in period) ---------------------------------------------------
-def _params(system: Any, phi0: float, t_base: float, taylor: bool = True) -> np.ndarray:
+def _params(system: Any, phi0: float, t_base: float, taylor: bool) -> np.ndarray:
     zeta = float(system.damping_ratio)
     omega = float(system.frequency)
     amp_a, amp_b = particular_amplitudes(zeta, omega)
     return kern.make_params(zeta, omega, float(system.coupling), phi0, amp_a, amp_b, t_base, taylor)
 
 
-# -- generic engine (Python, any piecewise-constant operator) -----------------------------------
-class _GenericEngine:
-    """Same event loop as the kernel, thresholds from ``operator.switching(state)``."""
+class _Prepared:
+    """What the kernels need from a relay table, built once per table (see :func:`_prepared`):
+    the relays of positive weight (``active``, as the table ``work``) and their heap form."""
 
-    def __init__(self, system: Any, par: np.ndarray, q: float, v: float, opstate: Any) -> None:
-        self.op = system.operator
+    def __init__(self, table: Any) -> None:
+        from hysteresis.relay_table import RelayTable
+
+        self.active = np.flatnonzero(table.weights > 0.0)
+        if self.active.size == 0:
+            raise ValueError("the operator's relay table has no relay of positive weight")
+        if self.active.size < table.n_relays:
+            act = self.active
+            self.work = RelayTable(table.alpha[act], table.beta[act], table.weights[act])
+        else:
+            self.work = table
+        self._heap: kern.HeapTable | None = None
+
+    def heap(self) -> kern.HeapTable:
+        if self._heap is None:
+            w = self.work
+            self._heap = kern.HeapTable(
+                np.asarray(w.alpha), np.asarray(w.beta), np.asarray(w.weights)
+            )
+        return self._heap
+
+
+def _has_relay_table(op: Any) -> bool:
+    """True if the operator implements the relay contract (not the base-class stub)."""
+    from hysteresis.base import PiecewiseConstantHysteron
+
+    impl = getattr(type(op), "relay_table", None)
+    return impl is not None and impl is not PiecewiseConstantHysteron.relay_table
+
+
+@functools.lru_cache(maxsize=16)
+def _prepared(table: Any) -> _Prepared:
+    """Per-table preparation, cached: engines are rebuilt often (stroboscopic maps, ensembles,
+    Lyapunov re-initialisations) and the sorting is O(N log N). Tables are immutable and hashed
+    by identity; operators cache their table."""
+    return _Prepared(table)
+
+
+class _Generic:
+    """The Python reference loop: thresholds from ``operator.switching(state)``."""
+
+    def __init__(self, op: Any, par: np.ndarray, q: float, v: float, opstate: Any) -> None:
+        self.op = op
         self.par = par
-        self.q = float(q)
-        self.v = float(v)
+        self.q = q
+        self.v = v
         self.tau = 0.0
         self.n = 0
         self.opstate = opstate
@@ -181,9 +118,7 @@ class _GenericEngine:
     def output(self) -> float:
         return float(self.op.output(self.opstate))
 
-    def advance(
-        self, tau_stop: float, y: np.ndarray | None = None, ntan: int = 0, record: bool = False
-    ) -> None:
+    def advance(self, tau_stop: float, y: np.ndarray | None, ntan: int, record: bool) -> None:
         par = self.par
         zeta, omega, coupling = par[kern.P_ZETA], par[kern.P_OMEGA], par[kern.P_C]
         amp_a, amp_b, phi0 = par[kern.P_A], par[kern.P_B], par[kern.P_PHI0]
@@ -196,17 +131,9 @@ class _GenericEngine:
             force = coupling * m_old
             ph = phi0 + omega * self.tau
             c, s = math.cos(ph), math.sin(ph)
+            up, down = float(sw.upper), float(sw.lower)
             hc, direction = kern.scan_crossing(
-                par,
-                force,
-                self.q,
-                self.v,
-                c,
-                s,
-                self.tau,
-                horizon,
-                float(sw.upper),
-                float(sw.lower),
+                par, force, self.q, self.v, c, s, self.tau, horizon, up, down
             )
             hh = hc if direction != 0 else horizon
             ph1 = phi0 + omega * (self.tau + hh)
@@ -225,284 +152,271 @@ class _GenericEngine:
                 return
             self.tau += hh
             if direction > 0:
-                self.q = float(sw.upper)
+                self.q = up
                 _, self.opstate = self.op.apply(np.array([self.q]), self.opstate)
             else:
-                self.q = float(sw.lower)
+                self.q = down
                 below = np.nextafter(self.q, -np.inf)
                 _, self.opstate = self.op.apply(np.array([below]), self.opstate)
             jump = self.output - m_old
+            self.n_switches += 1
+            t = par[kern.P_TBASE] + self.n * par[kern.P_T] + self.tau
+            if record:
+                self.switches.append((t, self.q, self.v, jump))
             if y is not None:
                 if self.v == 0.0 and coupling * jump != 0.0:
-                    t = par[kern.P_TBASE] + self.n * par[kern.P_T] + self.tau
                     raise GrazingError(_grazing_message(float(t)))
                 sal = coupling * jump / self.v if coupling * jump != 0.0 else 0.0
                 y[1, :ntan] += sal * y[0, :ntan]
-            self.n_switches += 1
-            if record:
-                t = par[kern.P_TBASE] + self.n * par[kern.P_T] + self.tau
-                self.switches.append((t, self.q, self.v, jump))
-
-    def wrap(self) -> None:
-        self.tau = 0.0
-        self.n += 1
-
-    def run_targets(self, tgt_n, tgt_tau, out, record, y=None, ntan=0, on_target=None):
-        period = self.par[kern.P_T]
-        for i in range(tgt_n.size):
-            while self.n < tgt_n[i]:
-                self.advance(period, y, ntan, record)
-                self.wrap()
-            self.advance(float(tgt_tau[i]), y, ntan, record)
-            if out is not None:
-                out[i] = (self.q, self.v, self.output)
-            if on_target is not None:
-                on_target(i)
 
 
-# -- shared preparation -----------------------------------------------------------------------
-@dataclass
-class _Run:
-    plan: EqualWidthPlan | None
-    par: np.ndarray
-    st: np.ndarray | None
-    ist: np.ndarray | None
-    engine: _GenericEngine | None
-
-    def final(self, system: Any) -> tuple[float, float, float, Any, int]:
-        """(q, v, tau, operator state, n_switches)."""
-        if self.engine is not None:
-            e = self.engine
-            return e.q, e.v, e.tau, e.opstate, e.n_switches
-        q = float(self.st[kern.S_Q])
-        state = _state_from_index(system.operator, self.plan, int(self.ist[kern.I_K]), q)
-        return (
-            q,
-            float(self.st[kern.S_V]),
-            float(self.st[kern.S_TAU]),
-            state,
-            int(self.ist[kern.I_NSW]),
-        )
-
-    def final_state(self, system: Any) -> OscillatorState:
-        q, v, tau, opstate, _ = self.final(system)
-        n = self.engine.n if self.engine is not None else int(self.ist[kern.I_N])
-        period = float(self.par[kern.P_T])
-        phi0 = float(self.par[kern.P_PHI0])
-        # wrap to [0, 2π) like the play path (math.fmod keeps the sign: φ < 0 for phi0 < 0)
-        phi = wrap_phase(phi0 + float(system.frequency) * tau)
-        return OscillatorState(
-            q=q,
-            v=v,
-            phi=phi,
-            operator_state=opstate,
-            t=float(self.par[kern.P_TBASE]) + n * period + tau,
-        )
-
-
-def _prepare(
-    system: Any,
-    q0: float,
-    v0: float,
-    phi0: float,
-    operator_state: Any,
-    t_base: float,
-    engine: str,
-    taylor: bool = True,
-) -> _Run:
-    if engine not in ("auto", "kernel", "generic"):
-        raise ValueError(f"engine must be 'auto', 'kernel' or 'generic', got {engine!r}")
-    q0 = float(q0)
-    v0 = float(v0)
-    if not (math.isfinite(q0) and math.isfinite(v0) and math.isfinite(phi0)):
-        raise ValueError("q0, v0 and phi0 must be finite")
-    par = _params(system, phi0, t_base, taylor)
-    op = system.operator
-    plan = equal_width_plan(op) if engine != "generic" else None
-    k = None
-    if plan is not None:
-        k = _index_from_state(op, plan, q0, operator_state)
-    if plan is None or k is None:
-        if engine == "kernel":
-            raise ValueError("engine='kernel' needs an equal-width relay system in a prefix state")
-        opstate = op.initial_state(q0) if operator_state is None else operator_state
-        _, opstate = op.apply(np.array([q0]), opstate)
-        return _Run(None, par, None, None, _GenericEngine(system, par, q0, v0, opstate))
-    st = np.array([q0, v0, 0.0, math.cos(phi0), math.sin(phi0)])
-    ist = np.array([k, 0, 0], dtype=np.int64)
-    return _Run(plan, par, st, ist, None)
-
-
-def _run_targets(run: _Run, tgt_n, tgt_tau, record: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Drive either engine through the targets; returns samples (q, v, M) and switches."""
-    out = np.empty((tgt_n.size, 3))
-    if run.engine is not None:
-        run.engine.run_targets(tgt_n, tgt_tau, out, record)
-        sw = np.array(run.engine.switches, dtype=float).reshape(-1, 4)
-        return out, sw
-    plan = run.plan
-    chunks = []
-    cap = 1 << 16 if record else 1
-    i = 0
-    while True:
-        sw = np.empty((cap, 4))
-        cnt = np.zeros(1, dtype=np.int64)
-        status, i = kern.run_targets(
-            run.par,
-            plan.up,
-            plan.down,
-            plan.mval,
-            run.st,
-            run.ist,
-            tgt_n,
-            tgt_tau,
-            i,
-            out,
-            record,
-            sw,
-            cnt,
-        )
-        if record:
-            chunks.append(sw[: cnt[0]].copy())
-        if status == 0:
-            break
-        cap = min(cap * 2, 1 << 22)
-    swa = np.concatenate(chunks) if chunks else np.empty((0, 4))
-    return out, swa
-
-
-def _switch_array(sw: np.ndarray) -> np.ndarray:
-    rec = np.empty(sw.shape[0], dtype=SWITCH_DTYPE)
-    rec["time"], rec["q"], rec["v"], rec["jump"] = sw.T if sw.size else ([],) * 4
-    return rec
-
-
-# -- the engine ------------------------------------------------------------------------------
 class RelayEngine(Engine):
     """Event-driven engine for piecewise-constant operators (see the module docstring).
 
-    ``method``: ``"auto"`` (the compiled kernel when the thresholds nest, else the generic
-    path), ``"nested"`` (require the kernel) or ``"generic"`` (the Python reference path through
-    ``switching()``/``apply()``). ``taylor=False`` disables the short-hop Taylor expansion
-    (exact propagator everywhere; a cross-check).
+    Parameters
+    ----------
+    system:
+        The :class:`~oscillators.system.ForcedOscillator`.
+    state:
+        Start state; ``state.operator_state=None`` means ``operator.initial_state(q)``.
+    method:
+        ``"auto"``, ``"nested"``, ``"heap"`` or ``"generic"`` (module docstring).
+    taylor:
+        Use the short-hop Taylor expansion (default); ``False`` locates every switch by the
+        exact scan (slower; for checks).
     """
-
-    name = "relay"
 
     def __init__(
         self, system: Any, state: OscillatorState, method: str = "auto", taylor: bool = True
     ) -> None:
         super().__init__(system, state)
-        methods = {"auto": "auto", "nested": "kernel", "kernel": "kernel", "generic": "generic"}
-        if method not in methods:
-            raise ValueError(f"method must be one of {sorted(methods)}, got {method!r}")
-        self._run = _prepare(
-            system,
-            state.q,
-            state.v,
-            float(state.phi),
-            state.operator_state,
-            float(state.t),
-            methods[method],
-            taylor,
-        )
-        self.name = "relay generic" if self._run.engine is not None else "relay kernel"
-        self._period = float(self._run.par[kern.P_T])
-        self._chunks: list[np.ndarray] = []
-        self._y: np.ndarray | None = None
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        q0, v0, phi0 = float(state.q), float(state.v), float(state.phi)
+        t0 = float(state.t)
+        if not all(math.isfinite(x) for x in (q0, v0, phi0, t0)):
+            raise ValueError("the start state (q, v, phi, t) must be finite")
+        op = system.operator
+        self._op = op
+        opstate = state.operator_state
+        if opstate is None:
+            opstate = op.initial_state(q0)
+        _, opstate = op.apply(np.array([q0]), opstate)
+        self._par = _params(system, phi0, t0, taylor)
+        self._period = float(self._par[kern.P_T])
+        self._omega = float(system.frequency)
+        self._phi0 = phi0
+        self._t0 = t0
         self._ntan = 0
+        self._y = np.zeros((3, 3))
         self._mp = kern.taylor_matrix_coefficients(float(system.damping_ratio))
+        self._chunks: list[np.ndarray] = []
+        self._state_cache: OscillatorState | None = None
+        self._tn1 = np.zeros(1, dtype=np.int64)
+        self._tt1 = np.zeros(1)
+        self._nobuf = np.empty((0, 3))
+        self._nosw = np.empty((1, 4))
+        self._cnt = np.zeros(1, dtype=np.int64)
+        self._generic: _Generic | None = None
+        if method == "auto" and not _has_relay_table(op):
+            method = "generic"  # an operator known through switching()/apply() only
+        if method == "generic":
+            self._generic = _Generic(op, self._par, q0, v0, opstate)
+            self.method = "generic"
+            self.name = "relay generic (Python)"
+            return
+        table = op.relay_table()
+        y0 = table.check_outputs(op.relay_outputs(opstate), q0)
+        self._table = table
+        prep = _prepared(table)
+        self._active = prep.active
+        work = prep.work
+        self._work = work
+        ya = y0[self._active]
+        st = np.zeros(kern.N_ST)
+        st[: kern.S_SIN + 1] = (q0, v0, 0.0, math.cos(phi0), math.sin(phi0))
+        ist = np.zeros(kern.N_IST, dtype=np.int64)
+        plan = work.nested_plan() if method in ("auto", "nested") else None
+        k = plan.index_of(ya) if plan is not None else None
+        if method == "nested" and k is None:
+            raise ValueError(
+                "method='nested' needs relays whose upper and lower thresholds increase together "
+                "(RelayTable.nested_plan() is None for this operator)"
+            )
+        if k is not None:
+            self._kind = kern.KIND_NESTED
+            self._plan = plan
+            self._tf, self._ti, self._bits, self._lay = kern.nested_kernel_table(plan)
+            ist[kern.I_K] = k
+            self.method = "nested"
+            self.name = "relay kernel (nested, O(1))"
+        else:
+            self._kind = kern.KIND_HEAP
+            heap = prep.heap()
+            self._heap = heap
+            bits, units_up, m, mc = heap.state_arrays(ya)
+            self._par[kern.P_UNIT] = heap.unit
+            self._tf, self._ti, self._bits, self._lay = heap.tf, heap.ti, bits, heap.lay
+            ist[kern.I_UP] = units_up
+            ist[kern.I_TOT] = heap.total_units
+            st[kern.S_M] = m
+            st[kern.S_MC] = mc
+            self.method = "heap"
+            self.name = "relay kernel (heap, O(log N))"
+        self._run = kern.run_nested if self._kind == kern.KIND_NESTED else kern.run_heap
+        kern._table_refresh(
+            self._par, self._kind, self._tf, self._ti, self._bits, self._lay, st, ist
+        )
+        self._st = st
+        self._ist = ist
 
-    # -- motion
+    # -- motion --------------------------------------------------------------------------------
     @property
     def elapsed(self) -> float:
-        run = self._run
-        if run.engine is not None:
-            return run.engine.n * self._period + run.engine.tau
-        return int(run.ist[kern.I_N]) * self._period + float(run.st[kern.S_TAU])
+        if self._generic is not None:
+            return self._generic.n * self._period + self._generic.tau
+        return int(self._ist[kern.I_N]) * self._period + float(self._st[kern.S_TAU])
 
-    def _output(self) -> float:
-        run = self._run
-        if run.engine is not None:
-            return run.engine.output
-        return float(run.plan.mval[int(run.ist[kern.I_K])])
-
-    def _qv(self) -> tuple[float, float]:
-        run = self._run
-        if run.engine is not None:
-            return run.engine.q, run.engine.v
-        return float(run.st[kern.S_Q]), float(run.st[kern.S_V])
+    @property
+    def output(self) -> float:
+        """Operator output ``M`` now."""
+        if self._generic is not None:
+            return self._generic.output
+        return float(self._st[kern.S_MV])
 
     def advance(
         self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
     ) -> None:
-        times = np.atleast_1d(np.asarray(times, dtype=np.float64))
-        tgt_n, tgt_tau = split_times(times, self._period)
-        run = self._run
-        if self._y is None:
-            o, sw = _run_targets(run, tgt_n, tgt_tau, record)
-            if out is not None:
-                out[:, :3] = o
-            if record and sw.size:
-                self._chunks.append(sw)
+        if isinstance(times, (float, int)) or np.size(times) == 1:
+            # one target (the Lyapunov stepper's case): no array bookkeeping on the way in
+            if np.ndim(times) > 1:
+                raise ValueError("times must be a scalar or a 1-D array")
+            t = float(np.reshape(times, -1)[0]) if np.ndim(times) else float(times)
+            if not math.isfinite(t):
+                raise ValueError("times must be finite")
+            tgt_n, tgt_tau = self._tn1, self._tt1
+            n = math.floor(t / self._period)
+            tau = t - n * self._period
+            if tau >= self._period:
+                n, tau = n + 1, 0.0
+            tgt_n[0], tgt_tau[0] = n, max(tau, 0.0)
+            first = t
+        else:
+            times = np.asarray(times, dtype=np.float64)
+            if times.ndim != 1:
+                raise ValueError("times must be a scalar or a 1-D array")
+            if times.size == 0:
+                return
+            if not np.all(np.isfinite(times)):
+                raise ValueError("times must be finite")
+            if np.any(np.diff(times) < 0.0):
+                raise ValueError("times must be sorted")
+            tgt_n, tgt_tau = split_times(times, self._period)
+            first = float(times[0])
+        now = self.elapsed
+        if first < now - 1e-12 * max(1.0, abs(now)):
+            raise ValueError(f"times must be >= the current elapsed time {now!r}, got {first!r}")
+        if out is not None and (out.ndim != 2 or out.shape[0] != tgt_n.size or out.shape[1] < 3):
+            raise ValueError(f"out must have shape ({tgt_n.size}, >= 3), got {out.shape}")
+        self._state_cache = None
+        if self._generic is not None:
+            self._advance_generic(tgt_n, tgt_tau, out, record)
             return
-        if record:
-            raise ValueError("record=True with the tangent flow on is not supported")
-        y, ntan = self._y, self._ntan
+        buf = np.empty((tgt_n.size, 3)) if out is not None else self._nobuf
+        tan_on = self._ntan > 0
+        cap = 1 << 12 if record else 1
+        sw = np.empty((cap, 4)) if record else self._nosw
+        cnt = self._cnt
+        i = 0
+        while True:
+            cnt[0] = 0
+            status, i = self._run(
+                self._par, self._tf, self._ti, self._bits, self._lay, self._st,
+                self._ist, tgt_n, tgt_tau, i, buf, record, sw, cnt, tan_on, self._y, self._ntan,
+                self._mp,
+            )  # fmt: skip
+            if record and cnt[0]:
+                self._chunks.append(sw[: cnt[0]].copy())
+            if status == 2:
+                raise GrazingError(_grazing_message(self._t0 + self.elapsed))
+            if status == 0:
+                break
+            cap = min(cap * 4, 1 << 20)
+            sw = np.empty((cap, 4))
+        if out is not None:
+            out[:, :3] = buf
+
+    def _advance_generic(self, tgt_n, tgt_tau, out, record) -> None:
+        g = self._generic
+        y = self._y if self._ntan else None
         for i in range(tgt_n.size):
-            n1, t1 = tgt_n[i : i + 1], tgt_tau[i : i + 1]
-            if run.engine is not None:
-                run.engine.run_targets(n1, t1, None, False, y, ntan)
-            else:
-                kern.run_tangent(
-                    run.par,
-                    run.plan.up,
-                    run.plan.down,
-                    run.plan.mval,
-                    run.st,
-                    run.ist,
-                    n1,
-                    t1,
-                    np.zeros(1),
-                    np.zeros(1, dtype=np.bool_),
-                    0,
-                    y,
-                    ntan,
-                    self._mp,
-                    np.zeros(3),
-                    np.zeros((0, 3)),
-                    np.zeros(1, dtype=np.int64),
-                    False,
-                )
-                if not np.all(np.isfinite(y)):
-                    # the kernel applies sal = inf at v* = 0; report it instead of NaN
-                    raise GrazingError(_grazing_message())
+            while g.n < tgt_n[i]:
+                g.advance(self._period, y, self._ntan, record)
+                g.tau = 0.0
+                g.n += 1
+            g.advance(float(tgt_tau[i]), y, self._ntan, record)
             if out is not None:
-                q, v = self._qv()
-                out[i, :3] = (q, v, self._output())
+                out[i, :3] = (g.q, g.v, g.output)
+        if record and g.switches:
+            self._chunks.append(np.array(g.switches, dtype=float).reshape(-1, 4))
+            g.switches.clear()
+
+    def relay_outputs(self) -> np.ndarray:
+        """Relay outputs now (order of the operator's relay table; zero-weight relays: 0)."""
+        if self._generic is not None:
+            return self._op.relay_outputs(self._generic.opstate)
+        n = self._table.n_relays
+        if self._kind == kern.KIND_NESTED:
+            ya = self._plan.outputs(int(self._ist[kern.I_K]), self._work.n_relays)
+        else:
+            ya = self._heap.outputs_from_bits(self._bits)
+        y = np.zeros(n)
+        y[self._active] = ya
+        return y
 
     def state(self) -> OscillatorState:
-        return self._run.final_state(self.system)
+        if self._state_cache is not None:
+            return self._state_cache
+        if self._generic is not None:
+            g = self._generic
+            q, v, tau, opstate = g.q, g.v, g.tau, g.opstate
+        else:
+            q = float(self._st[kern.S_Q])
+            v = float(self._st[kern.S_V])
+            tau = float(self._st[kern.S_TAU])
+            y = self.relay_outputs()
+            table = self._table
+            zero = y == 0.0
+            u = q
+            # right after a down switch q sits on the threshold that the input has just left
+            # below: a zero-width relay there is down although alpha <= q
+            if np.any(~zero & (table.alpha <= u) & (y < 0.0)):
+                u = float(np.nextafter(q, -np.inf))
+            y[zero] = table.initial_outputs(u)[zero]
+            opstate = self._op.state_from_relay_outputs(y, u)
+        phi = wrap_phase(self._phi0 + self._omega * tau)
+        self._state_cache = OscillatorState(
+            q=q, v=v, phi=phi, operator_state=opstate, t=self._t0 + self.elapsed
+        )
+        return self._state_cache
 
     def records(self) -> dict[str, np.ndarray]:
-        run = self._run
-        if run.engine is not None:
-            sw = np.array(run.engine.switches, dtype=float).reshape(-1, 4)
-        else:
-            sw = np.concatenate(self._chunks) if self._chunks else np.empty((0, 4))
-        return {"switches": _switch_array(sw)}
+        sw = np.concatenate(self._chunks) if self._chunks else np.empty((0, 4))
+        rec = np.empty(sw.shape[0], dtype=SWITCH_DTYPE)
+        for j, name in enumerate(SWITCH_DTYPE.names):
+            rec[name] = sw[:, j]
+        return {"switches": rec}
 
     @property
     def n_events(self) -> int:
-        run = self._run
-        if run.engine is not None:
-            return int(run.engine.n_switches)
-        return int(run.ist[kern.I_NSW])
+        if self._generic is not None:
+            return self._generic.n_switches
+        return int(self._ist[kern.I_NSW])
 
-    # -- tangent flow
+    # -- tangent flow --------------------------------------------------------------------------
     def start_tangent(self, include_phase: bool = False) -> None:
         self._ntan = 3 if include_phase else 2
-        self._y = np.zeros((3, 3))
+        self._y[:, :] = 0.0
         for j in range(self._ntan):
             self._y[j, j] = 1.0
 
@@ -511,13 +425,11 @@ class RelayEngine(Engine):
         return ("q", "v", "phi")[: self._ntan]
 
     def deviations(self) -> np.ndarray:
-        if self._y is None:
-            raise RuntimeError("start_tangent() first")
+        self._need_tangent()
         return self._y[: self._ntan, : self._ntan].copy()
 
     def set_deviations(self, y: np.ndarray) -> None:
-        if self._y is None:
-            raise RuntimeError("start_tangent() first")
+        self._need_tangent()
         y = np.asarray(y, dtype=np.float64)
         if y.shape != (self._ntan, self._ntan):
             raise ValueError(
@@ -526,5 +438,9 @@ class RelayEngine(Engine):
         self._y[: self._ntan, : self._ntan] = y
 
     def rank_bound(self) -> int:
-        # relay systems carry no memory directions; the saltation has determinant 1
+        # relays have no memory directions and every saltation matrix is invertible
         return self._ntan
+
+    def _need_tangent(self) -> None:
+        if self._ntan == 0:
+            raise ValueError("the tangent flow is off: call start_tangent() first")

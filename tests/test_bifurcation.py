@@ -24,7 +24,7 @@ def _diagram(couplings, n_periods, transient, lyapunov_t_end):
     from hysteresis.spin_dimers import SpinDimerEnsemble
     from oscillators import ForcedOscillator
 
-    dimer = SpinDimerEnsemble(fields=[[1.0, -1.0]], coupling=2.0)
+    dimer = SpinDimerEnsemble(fields=[[1.0, -1.0]], spin_coupling=2.0)
     return bifurcation_diagram(
         lambda c: ForcedOscillator(dimer, c, damping_ratio=ZETA, frequency=1.0),
         couplings,
@@ -127,7 +127,7 @@ def test_continuation_passes_the_state_on():
     from hysteresis.spin_dimers import SpinDimerEnsemble
     from oscillators import ForcedOscillator
 
-    dimer = SpinDimerEnsemble(fields=[[1.0, -1.0]], coupling=2.0)
+    dimer = SpinDimerEnsemble(fields=[[1.0, -1.0]], spin_coupling=2.0)
     kw = dict(n_periods=5, transient_periods=0, lyapunov=False, progress=False)
     cont = bifurcation_diagram(lambda c: ForcedOscillator(dimer, c), [9.5, 9.4], **kw)
     assert cont.q[1, 0] == cont.final_states[0].q and cont.v[1, 0] == cont.final_states[0].v

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,9 +13,19 @@ import pytest
 from analysis.cli import main
 
 
+@pytest.fixture(autouse=True)
+def _in_tmp(tmp_path, monkeypatch):
+    """Commands write to --out (default hyst-out in the working directory): keep it in tmp."""
+    monkeypatch.chdir(tmp_path)
+
+
 def run_cli(*args):
     proc = subprocess.run(
-        [sys.executable, "-m", "analysis.cli", *args], capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "analysis.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=Path.cwd(),
     )
     assert proc.returncode == 0, proc.stderr
     return proc.stdout
@@ -66,7 +77,7 @@ def test_lyapunov_include_phase_and_fields(capsys):
     rec = json.loads(capsys.readouterr().out)
     assert len(rec["exponents"]) == 3
     assert min(abs(float(x)) for x in rec["exponents"]) < 1e-9
-    assert rec["fields"] == [2.0, 0.0, -0.5, -2.5]
+    assert rec["fields"] == [[2.0, 0.0], [-0.5, -2.5]]
 
 
 def test_lyapunov_relay_and_bad_input(capsys):
@@ -92,7 +103,8 @@ def test_lyapunov_relay_and_bad_input(capsys):
         )
         == 2
     )
-    assert "damping_ratio" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "--damping-ratio" in err and len(err.strip().splitlines()) == 1
 
 
 def test_lyapunov_play_limit_minus_inf(capsys):

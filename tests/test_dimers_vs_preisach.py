@@ -33,7 +33,7 @@ def test_spin_flip_dynamics_equals_preisach(ensemble, inputs):
 
 def test_disorder_classes_are_covered():
     # one hysteretic (2J > b1 - b2), one border (2J = b1 - b2), one reversible (2J < b1 - b2)
-    ensemble = SpinDimerEnsemble([[0.5, 0.0], [1.0, -1.0], [2.0, -1.0]], coupling=1.0)
+    ensemble = SpinDimerEnsemble([[0.5, 0.0], [1.0, -1.0], [2.0, -1.0]], spin_coupling=1.0)
     alpha, beta, weights = ensemble.relays()
     assert weights.sum() == pytest.approx(1.0)
     model = ensemble.to_preisach()
@@ -46,7 +46,7 @@ def test_disorder_classes_are_covered():
 
 
 def test_paper_ensemble_long_walk():
-    ensemble = SpinDimerEnsemble.random(2000, width=2.0, spread=1.0, coupling=2.0, seed=3)
+    ensemble = SpinDimerEnsemble.random(2000, width=2.0, spread=1.0, spin_coupling=2.0, seed=3)
     rng = np.random.default_rng(1)
     walk = np.clip(np.cumsum(rng.normal(0, 0.1, 3000)), -4, 4)
     spins_m, _ = ensemble.simulate(walk)

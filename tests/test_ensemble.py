@@ -57,7 +57,7 @@ def test_regular_realization_single_dimer_above_grazing():
     from analysis.ensemble import section_dimension
     from hysteresis.spin_dimers import SpinDimerEnsemble
 
-    system = _system(SpinDimerEnsemble(fields=[[1.0, -1.0]], coupling=2.0), 9.5)
+    system = _system(SpinDimerEnsemble(fields=[[1.0, -1.0]], spin_coupling=2.0), 9.5)
     q, v, m_t, _ = section_and_magnetization(system, 1500.0, 1000.0)  # e^(-ζ·1000) ~ 1e-22
     assert m_t == pytest.approx(-1.0, abs=1e-12)  # round-off of the chunk sums only
     assert np.allclose(q, -9.5, atol=1e-6) and np.allclose(v, 10.0, atol=1e-6)
@@ -67,7 +67,13 @@ def test_regular_realization_single_dimer_above_grazing():
 
 def test_ensemble_task_chaotic_realization_invariants():
     res = ensemble_task(
-        2000, 4.0, seed=3, t_end=3000.0, transient=300.0, box_max_fill=0.3, box_min_boxes=4.0
+        2000,
+        4.0,
+        seed=3,
+        t_end=3000.0,
+        transient=48 * 2 * np.pi,  # --transient counts forcing periods T = 2 pi
+        box_max_fill=0.3,
+        box_min_boxes=4.0,
     )
     lam = res["exponents"]
     assert lam.shape == (2,)
@@ -171,7 +177,7 @@ def test_cli_ensemble_json(tmp_path, capsys):
     code = main(
         [
             "ensemble", "--model", "dimers", "--spins", "20", "--coupling", "4.0", "2.9",
-            "--realizations", "2", "--t-end", "300", "--transient", "50", "--workers", "1",
+            "--realizations", "2", "--t-end", "300", "--transient", "8", "--workers", "1",
             "--store", str(tmp_path / "s.sqlite"), "--out", str(tmp_path / "out"), "--json",
             "--box-max-fill", "0.3", "--box-min-boxes", "4",
         ]
@@ -212,14 +218,20 @@ def test_cli_bifurcation_and_dimension(tmp_path, capsys):
     code = main(
         [
             "dimension", "--model", "dimers", "--spins", "2000", "--seed", "3", "--coupling",
-            "4.0", "--t-end", "3000", "--transient", "300", "--max-fill", "0.3",
+            "4.0", "--t-end", "3000", "--transient", "48", "--max-fill", "0.3",
             "--min-boxes", "4", "--out", str(tmp_path / "dim"), "--json", "--quiet",
         ]
     )  # fmt: skip
     assert code == 0
     rec = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     task = ensemble_task(
-        2000, 4.0, seed=3, t_end=3000.0, transient=300.0, box_max_fill=0.3, box_min_boxes=4.0
+        2000,
+        4.0,
+        seed=3,
+        t_end=3000.0,
+        transient=48 * 2 * np.pi,  # --transient counts forcing periods T = 2 pi
+        box_max_fill=0.3,
+        box_min_boxes=4.0,
     )
     assert rec["kaplan_yorke"] == pytest.approx(task["kaplan_yorke"], rel=1e-12)
     # the section points are a different (chaotically diverged) sample of the same attractor

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from analysis.execution import TaskError, run_tasks, spawn_seeds
-from analysis.store import ResultStore
+from analysis.store import ResultStore, StoreError
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -227,15 +227,28 @@ def test_duplicate_tasks_run_once_and_wall_time_recorded(tmp_path, helpers):
     assert len(walls) == 3 and all(w is not None and w >= 0 for w in walls)
 
 
-def test_resume_across_code_versions_warns(tmp_path, helpers):
+def test_resume_across_code_versions_refused_unless_allowed(tmp_path, helpers):
     path = tmp_path / "s.sqlite"
     tasks = _tasks(2)
     first = run_tasks("sweep", tasks, helpers.task, store=path, workers=1, progress=False)
     with sqlite3.connect(path) as conn:
         conn.execute("UPDATE tasks SET code_version = 'hysteresis-toolkit 0.0.1'")
     helpers.CALLS.clear()
+    before = path.read_bytes()
+    with pytest.raises(StoreError, match="allow_version_mismatch"):
+        run_tasks("sweep", _tasks(3), helpers.task, store=path, workers=1, progress=False)
+    assert helpers.CALLS == [] and _count_rows(path) == 2  # nothing run, nothing added
+    assert path.read_bytes() == before
     with pytest.warns(UserWarning, match="other code versions"):
-        again = run_tasks("sweep", tasks, helpers.task, store=path, workers=1, progress=False)
+        again = run_tasks(
+            "sweep",
+            tasks,
+            helpers.task,
+            store=path,
+            workers=1,
+            progress=False,
+            allow_version_mismatch=True,
+        )
     assert helpers.CALLS == [] and all(_equal(a, b) for a, b in zip(first, again, strict=True))
 
 

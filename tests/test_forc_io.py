@@ -96,22 +96,36 @@ def test_micromag_round_trip_and_drift_correction(tmp_path):
     np.testing.assert_array_equal(
         identify_from_curves(back).cell_mass, identify_from_curves(curves).cell_mass
     )
-    # multiplicative drift: curve c measured with gain g_c, calibration point sees the same gain
-    gains = 1.0 + 0.01 * np.arange(curves.n_curves)
-    drifted = type(curves)(
-        curves.reversal_field,
-        curves.fields,
-        tuple(m * g for m, g in zip(curves.moments, gains, strict=True)),
-        "pike",
-    )
+    # drift linear in time (file line t): every data line, calibration points included, is
+    # distorted; a final calibration point closes the last curve, so the correction is exact
+    cal = float(op.apply(np.array([5.0]), op.initial_state(5.0))[0][0])
     path = write_micromag(
-        tmp_path / "d.txt", drifted, calibration_field=5.0, calibration_moments=0.9 * gains
+        tmp_path / "d.txt",
+        curves,
+        calibration_field=5.0,
+        calibration_moments=[cal] * curves.n_curves,
     )
-    corrected = read_micromag(path, drift_correction=True).curves
-    for m0, m1 in zip(curves.moments, corrected.moments, strict=True):
-        np.testing.assert_allclose(m1, m0 * gains[0], rtol=1e-14)
-    raw = read_micromag(path).curves
-    np.testing.assert_allclose(raw.moments[-1], drifted.moments[-1], rtol=0)
+    text = path.read_text().splitlines()
+    end = text.index("MicroMag 2900/3900 Data File ends")
+    text[end:end] = [f"{5.0:+.16E},{cal:+.16E}", ""]
+    first_cal = None
+    for mode, distort in (
+        ("multiplicative", lambda m, t: m * (1.0 + 1e-3 * t)),
+        ("additive", lambda m, t: m + 1e-3 * t),
+    ):
+        lines = list(text)
+        for k, line in enumerate(lines):
+            if line[:1] in "+-" and "," in line:
+                h, m = (float(x) for x in line.split(","))
+                first_cal = k + 1 if first_cal is None else first_cal
+                lines[k] = f"{h:+.16E},{distort(m, k + 1):+.16E}"
+        (tmp_path / f"{mode}.txt").write_text("\n".join(lines) + "\n")
+        data = read_micromag(tmp_path / f"{mode}.txt", drift_correction=mode)
+        assert data.calibration_moments.size == curves.n_curves + 1
+        for m0, m1 in zip(curves.moments, data.curves.moments, strict=True):
+            np.testing.assert_allclose(m1, distort(m0, first_cal), rtol=1e-12, atol=1e-12)
+        raw = read_micromag(tmp_path / f"{mode}.txt").curves
+        assert np.max(np.abs(raw.moments[-1] - curves.moments[-1])) > 1e-2
 
 
 def test_micromag_writer_needs_pike_curves(tmp_path):
@@ -215,16 +229,16 @@ def test_good_micromag_parses(tmp_path):
     "line, replacement, pattern",
     [
         (4, "", r"line 10: missing header field NCrv"),
-        (5, "Remark = none", r"line 10: missing header field NData"),
-        (4, "NCrv = 4", r"header NCrv = 4 but the file holds 3 curves"),
-        (5, "NData = 7", r"line 5: header NData = 7"),
+        (4, "NCrv = 2", r"line 21: the header announces 2 curves but the file holds more"),
+        (5, "NData = 5", r"line 5: header NData = 5 but the file holds 6 curve points"),
         (5, "NData = six", r"line 5: header field NData must be a non-negative integer"),
         (16, "+1.0,+zz", r"line 16: moment '\+zz' is not a number"),
         (17, "+1.0,nan", r"line 17: moment must be finite"),
         (21, "+1.5", r"line 21: expected 'field,moment'"),
         (22, "+0.9,+1.0", r"line 22: fields must strictly increase"),
-        (14, "+0.5,+0.0", r"line 14: calibration point field 0.5 differs from HCal"),
-        (15, "+0.5,+0.0", r"line 14: expected a one-point calibration block"),
+        # a one-point block away from HCal is a curve: one curve too many
+        (14, "+0.5,+0.0", r"line 21: the header announces 3 curves but the file holds more"),
+        (15, "+0.5,+0.0", r"line 15: fields must strictly increase along a pike curve"),
     ],
 )
 def test_malformed_micromag(tmp_path, line, replacement, pattern):
@@ -236,10 +250,32 @@ def test_malformed_micromag(tmp_path, line, replacement, pattern):
 
 def test_micromag_ragged_calibration_block(tmp_path):
     text = GOOD_MM.replace("+2.0,+1.0\n\n-1.0,-1.0", "+2.0,+1.0\n+2.0,+1.0\n\n-1.0,-1.0", 1)
-    with pytest.raises(ValueError, match=r"line 10: expected a one-point calibration block"):
+    with pytest.raises(ValueError, match=r"line 11: fields must strictly increase"):
         read_micromag(_mm(tmp_path, text))
+    with pytest.raises(ValueError, match="drift_correction must be"):
+        read_micromag(_mm(tmp_path, GOOD_MM), drift_correction="linear")
+
+
+def test_micromag_optional_ndata_and_aborted_measurement(tmp_path):
+    lines = GOOD_MM.splitlines()
+    lines[4] = "Remark = none"  # no NData: optional
+    data = read_micromag(_mm(tmp_path, "\n".join(lines) + "\n"))
+    assert data.complete and data.curves.n_points == 6
+    lines[3] = "NCrv = 4"  # one curve more announced than measured: an aborted run
+    data = read_micromag(_mm(tmp_path, "\n".join(lines) + "\n"))
+    assert not data.complete and data.curves.n_curves == 3
+    assert "announces 4 curves" in data.notes[0]
 
 
 def test_micromag_without_data(tmp_path):
     with pytest.raises(ValueError, match="no data lines"):
         read_micromag(_mm(tmp_path, "MicroMag\nNCrv = 1\nNData = 1\n"))
+
+
+def test_csv_with_crlf_and_cp1252_comment(tmp_path):
+    text = "# sample: Fe3O4, 20 °C, moments in µAm²\r\n" + GOOD_CSV.replace("\n", "\r\n")
+    p = tmp_path / "w.csv"
+    p.write_bytes(text.encode("cp1252"))
+    curves = read_csv(p)
+    assert curves.n_curves == 3 and curves.n_points == 6
+    np.testing.assert_array_equal(curves.moments[2], [1.0, 0.5, -1.0])

@@ -186,7 +186,7 @@ def test_irregular_curves_without_shared_fields_telescope():
         y, _ = op.apply(pts, op.initial_state(a))
         fields.append(pts)
         moments.append(y)
-    ident = identify_from_curves(ReversalCurves(rev, tuple(fields), tuple(moments)))
+    ident = identify_from_curves(ReversalCurves(rev, tuple(fields), tuple(moments)), grid="native")
     assert ident.step is None
 
     def everett(a, b):  # P(b + p/2 < s <= a - p/2)
@@ -351,7 +351,7 @@ def test_smoothing_quadratic_surface_exact(convention, irregular):
         # Mayergoyz: M(alpha = r, beta = h); Pike: M(H_r = r, H = h)
         moments.append(_quadratic(r, h, g))
     curves = ReversalCurves(rev, tuple(fields), tuple(moments), convention)
-    ident = identify_from_curves(curves, smoothing=(2.0, 3.0), extend=False)
+    ident = identify_from_curves(curves, smoothing=(2.0, 3.0), extend=False, grid="native")
     dens = ident.density_alpha_beta
     finite = np.isfinite(dens)
     assert finite.sum() > 20
@@ -489,5 +489,14 @@ def test_cli_identify_from_file(tmp_path, capsys):
     )
     rep = json.loads(capsys.readouterr().out)
     assert rep["convention"] == "pike"
-    assert rep["total_mass"] == pytest.approx(1.0, abs=1e-6)
-    assert rep["s_cdf_distance_gaussian"] < 1e-6
+    assert rep["n_curves"] == 31 and rep["n_points"] == 496
+    # data-driven summaries only: no paper overlay over user data
+    for key in ("total_mass", "r_centre", "s_cdf_distance_gaussian", "width", "spread"):
+        assert key not in rep
+    # the erf play (p = 2, R = 1): every relay has B_c = 1, B_u ~ N(0, 1); all mass irreversible
+    assert rep["irreversible_mass"] == pytest.approx(1.0, abs=1e-6)
+    assert rep["reversible_mass"] == pytest.approx(0.0, abs=1e-12)
+    assert rep["peak_bc_mT"] == pytest.approx(1.0, abs=rep["grid_step_mT"])
+    assert abs(rep["peak_bu_mT"]) <= rep["grid_step_mT"]
+    for p in rep["figures"]:
+        assert Path(p).exists()

@@ -17,7 +17,6 @@ from analysis.lyapunov import lyapunov_spectrum
 from hysteresis.relay import Relay
 from hysteresis.spin_dimers import SpinDimerEnsemble
 from oscillators import ForcedOscillator, OscillatorState
-from oscillators import piecewise_constant as pc
 
 _METHODS = {"auto": "auto", "kernel": "nested", "generic": "generic"}
 
@@ -372,7 +371,7 @@ def test_unequal_widths_generic_engine_matches_brute_force():
     j = 2.0
     fields = np.column_stack([j - alpha, -j - beta])  # alpha = J - b1, beta = -J - b2
     ens = SpinDimerEnsemble(fields, j)
-    assert pc.equal_width_plan(ens) is None
+    assert ens.relay_table().nested_plan() is None
     t_end = 10 * T
     traj = ForcedOscillator(ens, 3.0).trajectory(t_end, sample_dt=0.5)
     ref = brute_force_dimers(fields, j, 3.0, t_end)

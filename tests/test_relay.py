@@ -60,7 +60,8 @@ def test_initial_state_is_rising_from_minus_infinity():
 def test_matches_reference_from_any_valid_state(inputs, thresholds, y0):
     beta, alpha = thresholds
     r = Relay(alpha, beta)
-    state = RelayState(y0, 0.0)
+    # a reachable state: +1 needs input >= beta, -1 needs input < alpha (apply checks it)
+    state = RelayState(y0, alpha if y0 > 0 else float(np.nextafter(beta, -np.inf)))
     out, final = r.apply(inputs, state)
     expected = reference_relay(alpha, beta, inputs, y0)
     np.testing.assert_array_equal(out, expected)

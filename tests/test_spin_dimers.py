@@ -29,7 +29,7 @@ def relaxed_path(ens, inputs):
 
 def test_table_one_hysteretic_dimer():
     """J = 2, b = (2, 1): alpha = 0, beta = -3, width 3 (paper Fig. elem_hys_ex)."""
-    ens = SpinDimerEnsemble([[2.0, 1.0]], coupling=2.0)
+    ens = SpinDimerEnsemble([[2.0, 1.0]], spin_coupling=2.0)
     th = ens.thresholds()
     assert th.alpha.tolist() == [0.0] and th.beta.tolist() == [-3.0]
     assert th.width.tolist() == [3.0] and th.hysteretic.tolist() == [True]
@@ -48,7 +48,7 @@ def test_table_one_hysteretic_dimer():
 def test_table_one_non_hysteretic_dimer():
     """b1 - b2 > 2J: reversible single flips, first spin at J - b1, second at -J - b2."""
     J, b1, b2 = 1.0, 2.0, -1.5
-    ens = SpinDimerEnsemble([[b1, b2]], coupling=J)
+    ens = SpinDimerEnsemble([[b1, b2]], spin_coupling=J)
     th = ens.thresholds()
     assert (th.alpha[0], th.beta[0]) == (J - b1, -J - b2) == (-1.0, 0.5)
     assert not th.hysteretic[0] and not th.paired[0]
@@ -74,7 +74,7 @@ def test_table_one_non_hysteretic_dimer():
 
 
 def test_border_case_single_jump():
-    ens = SpinDimerEnsemble([[2.0, -2.0]], coupling=2.0)  # b1 - b2 = 2J
+    ens = SpinDimerEnsemble([[2.0, -2.0]], spin_coupling=2.0)  # b1 - b2 = 2J
     th = ens.thresholds()
     assert th.alpha[0] == th.beta[0] == 0.0 and th.paired[0] and not th.hysteretic[0]
     m, _ = ens.simulate([-1.0, 0.0, -1e-12, 0.0])
@@ -83,7 +83,7 @@ def test_border_case_single_jump():
 
 
 def test_paper_example_four_spins():
-    ens = SpinDimerEnsemble([[2.0, 0.0], [-0.5, -2.5]], coupling=2.0)
+    ens = SpinDimerEnsemble([[2.0, 0.0], [-0.5, -2.5]], spin_coupling=2.0)
     th = ens.thresholds()
     np.testing.assert_array_equal(th.alpha, [0.0, 2.5])
     np.testing.assert_array_equal(th.beta, [-2.0, 0.5])
@@ -93,16 +93,16 @@ def test_paper_example_four_spins():
 
 
 def test_fields_are_ordered_larger_first():
-    ens = SpinDimerEnsemble([[1.0, 2.0], [0.0, -1.0]], coupling=2.0)
+    ens = SpinDimerEnsemble([[1.0, 2.0], [0.0, -1.0]], spin_coupling=2.0)
     np.testing.assert_array_equal(ens.fields, [[2.0, 1.0], [0.0, -1.0]])
-    assert ens.n_dimers == 2 and ens.n_spins == 4 and ens.coupling == 2.0
+    assert ens.n_dimers == 2 and ens.n_spins == 4 and ens.spin_coupling == 2.0
 
 
 @st.composite
 def ensembles(draw):
     n = draw(st.integers(1, 6))
     fields = draw(st.lists(st.tuples(st.floats(-4, 4), st.floats(-4, 4)), min_size=n, max_size=n))
-    return SpinDimerEnsemble(fields, coupling=draw(st.floats(0.1, 3.0)))
+    return SpinDimerEnsemble(fields, spin_coupling=draw(st.floats(0.1, 3.0)))
 
 
 inputs = st.lists(st.floats(-8, 8), min_size=1, max_size=40)
@@ -114,12 +114,12 @@ def test_metastable_states_are_local_energy_minima(ens, q):
     """After relaxation no single spin flip lowers H (checked from H directly), and the state
     (↓, ↑) never occurs for b1 >= b2."""
     for qq, spins in zip(q, relaxed_path(ens, q), strict=True):
-        e0 = hamiltonian(spins, qq, ens.fields, ens.coupling)
+        e0 = hamiltonian(spins, qq, ens.fields, ens.spin_coupling)
         assert ens.energy(spins, qq) == pytest.approx(e0)
         for i in range(spins.size):
             flipped = spins.copy()
             flipped[i] *= -1
-            assert hamiltonian(flipped, qq, ens.fields, ens.coupling) >= e0 - 1e-9
+            assert hamiltonian(flipped, qq, ens.fields, ens.spin_coupling) >= e0 - 1e-9
         pairs = spins.reshape(-1, 2)
         assert not np.any((pairs[:, 0] == -1) & (pairs[:, 1] == 1))
 
@@ -141,7 +141,7 @@ def test_simulation_equals_relay_superposition(ens, q):
 
 def test_random_ensemble_follows_the_paper_disorder():
     J, p, R, N = 2.0, 1.5, 0.8, 20_000
-    ens = SpinDimerEnsemble.random(N, width=p, spread=R, coupling=J, seed=7)
+    ens = SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed=7)
     th = ens.thresholds()
     np.testing.assert_allclose(th.width, p, atol=1e-12)  # every loop has width p
     assert th.hysteretic.all() and ens.n_spins == N
@@ -159,7 +159,7 @@ def test_random_ensemble_follows_the_paper_disorder():
 
 
 def test_simulate_respects_given_spins_and_returns_final_state():
-    ens = SpinDimerEnsemble([[2.0, 1.0]], coupling=2.0)
+    ens = SpinDimerEnsemble([[2.0, 1.0]], spin_coupling=2.0)
     m, spins = ens.simulate([-1.0], spins=[1, 1])  # inside the loop, starting up: stays up
     assert m.tolist() == [1.0] and spins.tolist() == [1, 1]
     m, spins = ens.simulate([-1.0], spins=[-1, 1])  # not metastable: relaxes
@@ -168,7 +168,7 @@ def test_simulate_respects_given_spins_and_returns_final_state():
 
 
 def test_preisach_delegation_when_available():
-    ens = SpinDimerEnsemble([[2.0, 0.0], [-0.5, -2.5], [3.0, -2.0]], coupling=2.0)
+    ens = SpinDimerEnsemble([[2.0, 0.0], [-0.5, -2.5], [3.0, -2.0]], spin_coupling=2.0)
     try:
         model = ens.to_preisach()
     except NotImplementedError:
@@ -188,12 +188,12 @@ def test_preisach_delegation_when_available():
 @pytest.mark.parametrize(
     "factory,name",
     [
-        (lambda: SpinDimerEnsemble([[1.0, 0.0]], coupling=0.0), "coupling"),
-        (lambda: SpinDimerEnsemble([[1.0, 0.0]], coupling=-1.0), "coupling"),
-        (lambda: SpinDimerEnsemble([[1.0, np.nan]], coupling=1.0), "fields"),
-        (lambda: SpinDimerEnsemble([1.0, 0.0], coupling=1.0), "fields"),
-        (lambda: SpinDimerEnsemble(np.zeros((2, 3)), coupling=1.0), "fields"),
-        (lambda: SpinDimerEnsemble(np.zeros((0, 2)), coupling=1.0), "fields"),
+        (lambda: SpinDimerEnsemble([[1.0, 0.0]], spin_coupling=0.0), "coupling"),
+        (lambda: SpinDimerEnsemble([[1.0, 0.0]], spin_coupling=-1.0), "coupling"),
+        (lambda: SpinDimerEnsemble([[1.0, np.nan]], spin_coupling=1.0), "fields"),
+        (lambda: SpinDimerEnsemble([1.0, 0.0], spin_coupling=1.0), "fields"),
+        (lambda: SpinDimerEnsemble(np.zeros((2, 3)), spin_coupling=1.0), "fields"),
+        (lambda: SpinDimerEnsemble(np.zeros((0, 2)), spin_coupling=1.0), "fields"),
         (lambda: SpinDimerEnsemble.random(5, 1.0, 1.0, 2.0, seed=0), "n_spins"),
         (lambda: SpinDimerEnsemble.random(0, 1.0, 1.0, 2.0, seed=0), "n_spins"),
         (lambda: SpinDimerEnsemble.random(4, 4.0, 1.0, 2.0, seed=0), "width"),

@@ -3,34 +3,37 @@
 Every subcommand lives in its own module of this package and exposes
 ``register(subparsers) -> None``, which adds an ``argparse`` sub-parser whose ``func`` default
 is called with the parsed arguments and returns the process exit code. Modules are discovered
-automatically, so adding a subcommand never touches this file.
+automatically, so adding a subcommand never touches this file. The conventions every command
+follows (shared options, units, ``--json``, ``--quiet``, errors) live in
+:mod:`analysis.cli._common`.
 """
 
 from __future__ import annotations
 
-import argparse
 import importlib
+import os
 import pkgutil
 import sys
 from collections.abc import Sequence
+
+from analysis.cli._common import EXIT_USAGE, CliError, HelpFormatter, HystArgumentParser, fail
 
 __all__ = ["main", "build_parser"]
 
 
 def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
+    from analysis import __version__
 
-    try:
-        return version("hysteresis-toolkit")
-    except PackageNotFoundError:  # running from a source tree without installation
-        return "0+unknown"
+    return __version__
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def build_parser() -> HystArgumentParser:
+    """The ``hyst`` parser with every subcommand registered."""
+    parser = HystArgumentParser(
         prog="hyst",
         description="Hysteresis operators and forced oscillators with hysteresis "
         "(reproduces Zech, Otto & Radons, spin dimers and the generalized play).",
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"hyst {_version()}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -45,12 +48,44 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``hyst``; returns the exit status (0 success, 2 any error, 130 interrupted).
+
+    Errors — bad options, and errors raised later inside the library or a worker process — are
+    reported as one line on stderr without a traceback; ``HYST_DEBUG=1`` re-raises them.
+    """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, usage errors (already printed)
+        return int(exc.code or 0) if not isinstance(exc.code, str) else EXIT_USAGE
     if getattr(args, "func", None) is None:
         parser.print_help()
         return 0
-    return int(args.func(args) or 0)
+    prog = f"hyst {args.command}"
+    try:
+        return int(args.func(args) or 0)
+    except CliError as exc:
+        return fail(prog, str(exc))
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # library and worker errors: one line, no traceback
+        if os.environ.get("HYST_DEBUG"):
+            raise
+        from analysis.execution import TaskError
+
+        if isinstance(exc, TaskError) and exc.__cause__ is not None:
+            # a worker's error: name the task and the original exception, not the wrapper
+            cause = exc.__cause__
+            return fail(prog, f"task {exc.task} failed: {_describe(cause)}")
+        return fail(prog, _describe(exc))
+
+
+def _describe(exc: BaseException) -> str:
+    text = str(exc) or type(exc).__name__
+    if type(exc).__name__ in ("ValueError", "TypeError"):
+        return text
+    return f"{type(exc).__name__}: {text}"
 
 
 if __name__ == "__main__":  # pragma: no cover

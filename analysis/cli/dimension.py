@@ -8,94 +8,139 @@ from the section points (q, v) with the automatic scaling region. Writes DIR/dim
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from analysis.cli._common import (
+    CliError,
+    add_initial_options,
+    add_model_options,
+    add_oscillator_options,
+    add_output_options,
+    add_subcommand,
+    add_transient_option,
+    announce_compilation,
+    build_system,
+    check_model_options,
+    check_transient,
+    emit,
+    figure_title,
+    initial_operator_state,
+    initial_record,
+    int_at_least,
+    model_record,
+    positive_float,
+    prepare_out,
+    progress_enabled,
+)
+
+__all__ = ["register", "run"]
+
+
+def _fraction(text: str) -> float:
+    value = positive_float(text)
+    if value > 1:
+        raise argparse.ArgumentTypeError(f"must lie in (0, 1], got {text!r}")
+    return value
+
+
+def _at_least_one(text: str) -> float:
+    value = positive_float(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text!r}")
+    return value
+
 
 def register(subparsers: Any) -> None:
-    from analysis.cli.lyapunov import add_initial_arguments, add_model_arguments
-
-    p = subparsers.add_parser(
+    p = add_subcommand(
+        subparsers,
         "dimension",
         help="Kaplan-Yorke and box-counting dimension of an attractor",
         description="D_KY from the Lyapunov spectrum and D_BC of the Poincare section (q, v).",
     )
-    add_model_arguments(p)
-    add_initial_arguments(p)
-    p.add_argument("--t-end", type=float, default=20000.0, help="end time of the Lyapunov run")
-    p.add_argument("--transient", type=float, default=1000.0, help="transient time")
-    p.add_argument(
+    add_model_options(p)
+    add_oscillator_options(p)
+    add_initial_options(p)
+    g = p.add_argument_group("run")
+    g.add_argument(
+        "--t-end", type=positive_float, default=20000.0, help="end time of the Lyapunov run"
+    )
+    add_transient_option(g, 160.0)
+    g.add_argument(
         "--points",
-        type=int,
+        type=int_at_least(2, 10**8),
         default=None,
-        help="section points for D_BC (default: the periods in [transient, t_end])",
+        help="section points for D_BC (default: the whole periods in [transient, t_end])",
     )
-    p.add_argument(
+    g.add_argument(
         "--max-fill",
-        type=float,
+        type=_fraction,
         default=0.1,
-        help="box counting: largest count used, as a fraction of the points",
+        help="box counting: largest count used, as a fraction of the points, in (0, 1]",
     )
-    p.add_argument(
+    g.add_argument(
         "--min-boxes",
-        type=float,
+        type=_at_least_one,
         default=8.0,
-        help="box counting: smallest number of boxes across the attractor",
+        help="box counting: smallest number of boxes across the attractor (>= 1)",
     )
-    p.add_argument("--out", default=None, help="output directory (PNG and npz)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_output_options(p, writes="dimension.npz, dimension.png")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from analysis.bifurcation import section_period
-    from analysis.cli.lyapunov import _json_float, build_system, model_parameters, play_state
     from analysis.dimensions import box_counting_dimension
     from analysis.lyapunov import lyapunov_spectrum
 
-    try:
-        system = build_system(args)
-        opstate = play_state(args, system)
-        ly = lyapunov_spectrum(
-            system,
-            args.t_end,
-            args.transient,
-            args.q0,
-            args.v0,
-            operator_state=opstate,
-            progress=not (args.quiet or args.json),
-        )
-        transient_periods = int(np.ceil(args.transient / system.period))
-        n = args.points
-        if n is None:
-            n = int(np.floor(args.t_end / system.period)) - transient_periods
+    check_model_options(args)
+    transient = check_transient(args, args.t_end)
+    system = build_system(args)
+    transient_periods = int(np.ceil(args.transient - 1e-12))
+    n = args.points
+    if n is None:
+        n = int(np.floor(args.t_end / system.period)) - transient_periods
         if n < 2:
-            raise ValueError("need at least 2 section points (--points or a longer --t-end)")
-        sec = system.poincare_section(n, transient_periods, args.q0, args.v0, opstate)
-        points = np.column_stack([sec.q, sec.v])
-        period = section_period(sec.q, sec.v)
-        bc, bc_error = None, ""
-        if period > 0:
-            bc_error = f"periodic section (period {period}): D_BC = 0"
-        else:
-            try:
-                bc = box_counting_dimension(
-                    points, max_fill=args.max_fill, min_boxes=args.min_boxes
-                )
-            except ValueError as exc:
-                bc_error = str(exc)
-    except (ValueError, NotImplementedError) as exc:
-        print(f"hyst dimension: error: {exc}", file=sys.stderr)
-        return 2
-    record = dict(model_parameters(args))
+            raise CliError(
+                "argument --t-end: [transient, t_end] holds fewer than 2 forcing periods; "
+                "lengthen --t-end or give --points"
+            )
+    state = initial_operator_state(args, system.operator)
+    out = prepare_out(args)
+    announce_compilation(args)
+    ly = lyapunov_spectrum(
+        system,
+        t_end=args.t_end,
+        transient=transient,
+        q0=args.q0,
+        v0=args.v0,
+        operator_state=state,
+        progress=progress_enabled(args),
+    )
+    sec = system.poincare_section(n, transient_periods, args.q0, args.v0, operator_state=state)
+    points = np.column_stack([sec.q, sec.v])
+    period = section_period(sec.q, sec.v)
+    bc, bc_error = None, ""
+    if period > 0:
+        bc_error = f"periodic section (period {period}): D_BC = 0"
+    else:
+        try:
+            bc = box_counting_dimension(points, max_fill=args.max_fill, min_boxes=args.min_boxes)
+        except ValueError as exc:
+            bc_error = str(exc)
+    record = model_record(args)
     record.update(
-        exponents=[_json_float(x) for x in ly.exponents],
-        kaplan_yorke=_json_float(ly.kaplan_yorke),
+        coupling=args.coupling,
+        damping_ratio=args.damping_ratio,
+        frequency=args.frequency,
+        **initial_record(args),
+        t_end=args.t_end,
+        transient=transient,
+        transient_periods=args.transient,
+        exponents=list(ly.exponents),
+        kaplan_yorke=ly.kaplan_yorke,
         section_points=int(n),
         section_period=int(period),
         box_counting=(0.0 if period > 0 else None) if bc is None else float(bc.dimension),
@@ -106,41 +151,36 @@ def run(args: argparse.Namespace) -> int:
     )
     if bc is None:
         record["box_counting_error"] = bc_error
-    if args.out is not None:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        arrays = dict(q=sec.q, v=sec.v, exponents=ly.exponents)
-        if bc is not None:
-            arrays.update(sizes=bc.sizes, counts=bc.counts, region=np.array(bc.region))
-        np.savez_compressed(out / "dimension.npz", **arrays)
-        _plot(sec, bc, out / "dimension.png")
-        record["npz"] = str(out / "dimension.npz")
-        record["png"] = str(out / "dimension.png")
-    if args.json:
-        print(json.dumps(record))
-    else:
-        print(
-            f"D_KY = {ly.kaplan_yorke:.4f} from exponents "
-            + ", ".join(f"{x:.5f}" for x in ly.exponents)
-        )
-        if bc is None:
-            print(f"D_BC: no scaling region ({bc_error})")
-        else:
-            print(f"D_BC = {bc.dimension:.4f} +- {bc.stderr:.4f} from {n} section points")
+    arrays = dict(q=sec.q, v=sec.v, exponents=ly.exponents)
+    if bc is not None:
+        arrays.update(sizes=bc.sizes, counts=bc.counts, region=np.array(bc.region))
+    npz, png = out / "dimension.npz", out / "dimension.png"
+    np.savez_compressed(npz, **arrays)
+    _plot(sec, bc, figure_title(args, "dimension"), png)
+    record.update(npz=npz, png=png)
+    lines = [
+        f"D_KY = {ly.kaplan_yorke:.4f} from exponents "
+        + ", ".join(f"{x:.5f}" for x in ly.exponents),
+        f"D_BC: no scaling region ({bc_error})"
+        if bc is None
+        else f"D_BC = {bc.dimension:.4f} +- {bc.stderr:.4f} from {n} section points",
+        f"wrote {npz} and {png}",
+    ]
+    emit(args, record, lines)
     return 0
 
 
-def _plot(sec: Any, bc: Any, path: Path) -> None:
+def _plot(sec: Any, bc: Any, title: str, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(9, 4))
+    fig, axes = plt.subplots(1, 2, figsize=(9, 4.3))
     axes[0].plot(sec.q, sec.v, ".k", ms=1.0)
     axes[0].set_xlabel("q")
     axes[0].set_ylabel("v")
-    axes[0].set_title(r"Poincaré section $\phi = 0$")
+    axes[0].set_title(r"Poincaré section $\phi = 0$", fontsize=9)
     if bc is not None:
         x = np.log(1.0 / bc.sizes)
         y = np.log(bc.counts)
@@ -155,6 +195,9 @@ def _plot(sec: Any, bc: Any, path: Path) -> None:
         axes[1].set_xlabel(r"$\log(1/\epsilon)$")
         axes[1].set_ylabel(r"$\log N(\epsilon)$")
         axes[1].legend()
+    else:
+        axes[1].set_axis_off()
+    fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=150)
     plt.close(fig)

@@ -10,121 +10,168 @@ per-realization values of every point).
 from __future__ import annotations
 
 import argparse
-import json
-import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from analysis.cli._common import (
+    CliError,
+    add_model_options,
+    add_oscillator_options,
+    add_output_options,
+    add_subcommand,
+    add_transient_option,
+    announce_compilation,
+    build_system,
+    check_model_options,
+    check_transient,
+    emit,
+    int_at_least,
+    positive_float,
+    prepare_out,
+    progress_enabled,
+    to_json,
+)
+
+__all__ = ["register", "run"]
+
+#: models with disorder realizations
+ENSEMBLE_MODELS = ("dimers", "preisach")
+
 
 def register(subparsers: Any) -> None:
-    p = subparsers.add_parser(
+    p = add_subcommand(
+        subparsers,
         "ensemble",
         help="disorder ensemble: mean and SAP of D_KY and D_BC, VAR[M]",
         description="Run (or resume) an ensemble over disorder realizations and aggregate it "
         "per (N, C): means and self-averaging parameters of D_KY and D_BC, VAR[M_T], the "
         "number of regular realizations (D_KY = 0).",
     )
-    p.add_argument(
-        "--model",
-        choices=("dimers",),
-        default="dimers",
-        help="operator (spin dimers with the paper's disorder)",
+    add_model_options(p, models=ENSEMBLE_MODELS, multiple_spins=True)
+    add_oscillator_options(p, coupling="multiple")
+    g = p.add_argument_group("ensemble")
+    g.add_argument(
+        "--realizations",
+        type=int_at_least(1, 10**7),
+        required=True,
+        help="realizations per (N, C) (--seed is the base seed of their disorder)",
     )
-    p.add_argument("--spins", type=int, nargs="+", required=True, help="N values")
-    p.add_argument("--coupling", type=float, nargs="+", required=True, help="C values")
-    p.add_argument("--realizations", type=int, required=True, help="realizations per (N, C)")
-    p.add_argument("--t-end", type=float, default=20000.0, help="end time per realization")
-    p.add_argument("--transient", type=float, default=1000.0, help="transient time")
-    p.add_argument("--seed", type=int, default=0, help="base seed of the disorder")
-    p.add_argument("--width", type=float, default=2.0, help="p, loop width")
-    p.add_argument("--spread", type=float, default=1.0, help="R, spread of loop centres")
-    p.add_argument("--spin-coupling", type=float, default=2.0, help="J")
-    p.add_argument("--damping-ratio", type=float, default=0.05, help="zeta")
-    p.add_argument("--frequency", type=float, default=1.0, help="Omega")
-    p.add_argument(
+    g.add_argument("--t-end", type=positive_float, default=20000.0, help="end time per realization")
+    add_transient_option(g, 160.0)
+    g.add_argument(
         "--box-max-fill",
-        type=float,
+        type=float_fraction,
         default=0.1,
-        help="box counting: largest count used, as a fraction of the section points",
+        help="box counting: largest count used, as a fraction of the section points, in (0, 1]",
     )
-    p.add_argument(
+    g.add_argument(
         "--box-min-boxes",
-        type=float,
+        type=positive_float,
         default=8.0,
-        help="box counting: smallest number of boxes across the attractor",
+        help="box counting: smallest number of boxes across the attractor (>= 1)",
     )
-    p.add_argument("--store", default=None, help="SQLite results file (default DIR/results.sqlite)")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes")
-    p.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
-    p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    g.add_argument(
+        "--store", default=None, help="SQLite results file (default: DIR/results.sqlite)"
+    )
+    g.add_argument(
+        "--workers",
+        type=int_at_least(1, 1024),
+        default=None,
+        help="local worker processes (default: one per core)",
+    )
+    g.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
+    add_output_options(p, writes="ensemble.json, ensemble.npz, results.sqlite")
     p.set_defaults(func=run)
+
+
+def float_fraction(text: str) -> float:
+    value = positive_float(text)
+    if value > 1:
+        raise argparse.ArgumentTypeError(f"must lie in (0, 1], got {text!r}")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
     from analysis.ensemble import run_ensemble
 
-    out = Path(args.out)
-    try:
-        if args.realizations < 1:
-            raise ValueError(f"--realizations must be >= 1, got {args.realizations}")
-        if args.workers is not None and args.workers < 1:
-            raise ValueError(f"--workers must be >= 1, got {args.workers}")
-        out.mkdir(parents=True, exist_ok=True)
-        store = args.store if args.store is not None else out / "results.sqlite"
-        points = run_ensemble(
-            args.spins,
-            args.coupling,
-            args.realizations,
-            args.seed,
-            args.t_end,
-            args.transient,
-            store=store,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            progress=not (args.quiet or args.json),
-            width=args.width,
-            spread=args.spread,
-            spin_coupling=args.spin_coupling,
-            damping_ratio=args.damping_ratio,
-            frequency=args.frequency,
-            box_max_fill=args.box_max_fill,
-            box_min_boxes=args.box_min_boxes,
-        )
-    except (ValueError, ImportError) as exc:
-        print(f"hyst ensemble: error: {exc}", file=sys.stderr)
-        return 2
+    check_model_options(args)
+    if args.fields is not None:
+        raise CliError("argument --fields: an ensemble draws its disorder (no explicit fields)")
+    if args.box_min_boxes < 1:
+        raise CliError(f"argument --box-min-boxes: must be >= 1, got {args.box_min_boxes:g}")
+    transient = check_transient(args, args.t_end)
+    # every (N, C) must give a valid system: build one of each before any task runs
+    for n in args.spins:
+        for c in args.coupling:
+            ns = argparse.Namespace(**{**vars(args), "spins": [n], "coupling": c})
+            build_system(ns)
+    if args.scheduler is not None and args.workers is not None:
+        raise CliError("argument --workers: give --workers or --scheduler, not both")
+    if args.scheduler is not None:
+        try:
+            import distributed  # noqa: F401
+        except ImportError as exc:
+            raise CliError(
+                "argument --scheduler: needs dask.distributed "
+                "(pip install 'hysteresis-toolkit[distributed]')"
+            ) from exc
+    out = prepare_out(args)
+    store = args.store if args.store is not None else out / "results.sqlite"
+    model_kw: dict[str, Any] = {"width": args.width, "spread": args.spread}
+    if args.model == "dimers":
+        model_kw["spin_coupling"] = args.spin_coupling
+    else:  # non-default models are part of the task key; dimers keep the historical keys
+        model_kw.update(model=args.model, width_spread=args.width_spread)
+    announce_compilation(args)
+    points = run_ensemble(
+        args.spins,
+        args.coupling,
+        args.realizations,
+        args.seed,
+        args.t_end,
+        transient,
+        store=store,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=progress_enabled(args),
+        damping_ratio=args.damping_ratio,
+        frequency=args.frequency,
+        box_max_fill=args.box_max_fill,
+        box_min_boxes=args.box_min_boxes,
+        **model_kw,
+    )
     record = {
         "model": args.model,
+        **{k: v for k, v in model_kw.items() if k != "model"},
+        "damping_ratio": args.damping_ratio,
+        "frequency": args.frequency,
         "t_end": args.t_end,
-        "transient": args.transient,
+        "transient": transient,
+        "transient_periods": args.transient,
         "seed": args.seed,
         "store": str(store),
-        "points": [pt.to_json() for pt in points],
+        # the summary fields of EnsemblePoint.to_json, non-finite values kept for to_json
+        "points": [{k: getattr(pt, k) for k in pt.to_json()} for pt in points],
     }
-    (out / "ensemble.json").write_text(json.dumps(record, indent=2))
+    (out / "ensemble.json").write_text(to_json(record, indent=2) + "\n")
     arrays = {}
     for pt in points:
         tag = f"N{pt.spins}_C{pt.coupling:g}"
         for field in ("kaplan_yorke", "box_counting", "magnetization", "max_exponent"):
             arrays[f"{tag}_{field}"] = getattr(pt, field)
     np.savez_compressed(out / "ensemble.npz", **arrays)
-    if args.json:
-        print(json.dumps(record))
-    else:
-        print(
-            f"{'N':>7} {'C':>6} {'K':>5} {'<D_KY>':>8} {'SAP_KY':>8} {'<D_BC>':>8} "
-            f"{'SAP_BC':>8} {'VAR[M]':>10} {'regular':>7}"
+    lines = [
+        f"{'N':>7} {'C':>6} {'K':>5} {'<D_KY>':>8} {'SAP_KY':>8} {'<D_BC>':>8} "
+        f"{'SAP_BC':>8} {'VAR[M]':>10} {'regular':>7}"
+    ]
+    for pt in points:
+        lines.append(
+            f"{pt.spins:7d} {pt.coupling:6.3g} {pt.realizations:5d} "
+            f"{pt.mean_kaplan_yorke:8.4f} {pt.sap_kaplan_yorke:8.4f} "
+            f"{pt.mean_box_counting:8.4f} {pt.sap_box_counting:8.4f} "
+            f"{pt.var_magnetization:10.3e} {pt.regular_count:7d}"
         )
-        for pt in points:
-            print(
-                f"{pt.spins:7d} {pt.coupling:6.3g} {pt.realizations:5d} "
-                f"{pt.mean_kaplan_yorke:8.4f} {pt.sap_kaplan_yorke:8.4f} "
-                f"{pt.mean_box_counting:8.4f} {pt.sap_box_counting:8.4f} "
-                f"{pt.var_magnetization:10.3e} {pt.regular_count:7d}"
-            )
-        print(f"wrote {out / 'ensemble.json'} and {out / 'ensemble.npz'}")
+    lines.append(f"wrote {out / 'ensemble.json'} and {out / 'ensemble.npz'}")
+    emit(args, record, lines)
     return 0

@@ -3,14 +3,31 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
+
+from analysis.cli._common import (
+    CliError,
+    add_output_options,
+    add_subcommand,
+    announce_compilation,
+    emit,
+    int_at_least,
+    prepare_out,
+    progress_enabled,
+)
+
+__all__ = ["register", "run"]
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser(
+def register(subparsers: Any) -> None:
+    p = add_subcommand(
+        subparsers,
         "paper",
         help="reproduce the paper's figures and claims (report.md, report.json)",
         description="Regenerate every computational figure of the paper as PNG, PDF and .npz "
-        "and write DIR/report.md and DIR/report.json comparing each claim with the measurement.",
+        "and write DIR/report.md and DIR/report.json comparing each claim with the measurement. "
+        "The models and parameters are the paper's (Tables I and II); the run size sets the "
+        "lengths (transients in forcing periods).",
     )
     size = p.add_mutually_exclusive_group()
     size.add_argument(
@@ -18,7 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         dest="size",
         action="store_const",
         const="quick",
-        help="reduced ensembles and run lengths, ~10 min on 2 cores (default)",
+        help="reduced ensembles and run lengths, ~10 min on 2 cores (the default size)",
     )
     size.add_argument(
         "--full",
@@ -35,33 +52,60 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="tiny sizes: checks that every figure and claim is produced",
     )
     p.set_defaults(size="quick", func=run)
-    p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--store", default=None, help="SQLite results file (default DIR/results.sqlite)")
-    p.add_argument("--workers", type=int, default=None, help="worker processes (default: cores)")
-    p.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
-    p.add_argument(
+    g = p.add_argument_group("run")
+    g.add_argument(
+        "--store", default=None, help="SQLite results file (default: DIR/results.sqlite)"
+    )
+    g.add_argument(
+        "--workers",
+        type=int_at_least(1, 1024),
+        default=None,
+        help="worker processes (default: one per core)",
+    )
+    g.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
+    g.add_argument(
         "--only",
         nargs="+",
         default=None,
         metavar="LABEL",
-        help="build only these figures (LaTeX labels, e.g. fig:play)",
+        help="build only these figures (LaTeX labels, e.g. fig:play; default: all)",
     )
-    p.add_argument("--quiet", action="store_true", help="no progress output")
+    add_output_options(p, writes="report.md, report.json, figures, results.sqlite")
 
 
 def run(args: argparse.Namespace) -> int:
     from analysis.paper import run_paper
+    from analysis.paper.runner import check_only
 
+    try:
+        check_only(args.only)
+    except ValueError as exc:
+        raise CliError(f"argument --only: {str(exc).removeprefix('only: ')}") from exc
+    if args.scheduler is not None and args.workers is not None:
+        raise CliError("argument --workers: give --workers or --scheduler, not both")
+    out = prepare_out(args)
+    announce_compilation(args)
     report = run_paper(
-        args.out,
+        out,
         size=args.size,
         store=args.store,
         workers=args.workers,
         scheduler=args.scheduler,
         only=args.only,
-        progress=not args.quiet,
+        progress=progress_enabled(args),
     )
     n = len(report["claims"])
     agree = sum(c["verdict"] == "agree" for c in report["claims"])
-    print(f"{agree}/{n} claims agree; report: {args.out}/report.md")
-    return 1 if report["errors"] else 0
+    record = {
+        "size": args.size,
+        "claims": n,
+        "agree": agree,
+        "figures": [f["label"] for f in report["figures"]],
+        "errors": [{"figure": e["figure"], "error": e["error"]} for e in report["errors"]],
+        "report": out / "report.md",
+    }
+    emit(args, record, [f"{agree}/{n} claims agree; report: {out / 'report.md'}"])
+    if report["errors"]:
+        failed = ", ".join(e["figure"] for e in report["errors"])
+        raise RuntimeError(f"figure(s) failed: {failed} (tracebacks in {out / 'report.md'})")
+    return 0

@@ -3,72 +3,93 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from analysis.cli.lyapunov import (
-    add_initial_arguments,
-    add_model_arguments,
+from analysis.cli._common import (
+    add_initial_options,
+    add_model_options,
+    add_oscillator_options,
+    add_output_options,
+    add_subcommand,
+    add_transient_option,
+    announce_compilation,
     build_system,
-    model_parameters,
-    play_state,
+    check_model_options,
+    emit,
+    figure_title,
+    initial_operator_state,
+    initial_record,
+    int_at_least,
+    model_record,
+    prepare_out,
 )
+
+__all__ = ["register", "run"]
 
 
 def register(subparsers: Any) -> None:
-    p = subparsers.add_parser(
+    p = add_subcommand(
+        subparsers,
         "poincare",
         help="Poincare (stroboscopic) section, write .npz data and a PNG",
         description="Points (q, v, M[, w]) at t = (transient + i) T, i = 0..periods-1, saved to "
         "DIR/poincare.npz and a scatter plot in the q-v plane.",
     )
-    add_model_arguments(p)
-    add_initial_arguments(p)
-    p.add_argument("--periods", type=int, default=2000, help="number of section points")
-    p.add_argument("--transient-periods", type=int, default=100, help="periods skipped first")
-    p.add_argument("--out", type=Path, default=Path("."), help="output directory")
+    add_model_options(p)
+    add_oscillator_options(p)
+    add_initial_options(p)
+    g = p.add_argument_group("run")
+    g.add_argument(
+        "--periods", type=int_at_least(1, 10**8), default=2000, help="number of section points"
+    )
+    add_transient_option(g, 100, "--transient-periods", integer=True)
+    add_output_options(p, writes="poincare.npz, poincare.png")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    try:
-        system = build_system(args)
-        kwargs = {"operator_state": play_state(args, system)}
-        sec = system.poincare_section(
-            args.periods, args.transient_periods, args.q0, args.v0, **kwargs
-        )
-    except (ValueError, NotImplementedError) as exc:
-        print(f"hyst poincare: error: {exc}", file=sys.stderr)
-        return 2
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    check_model_options(args)
+    system = build_system(args)
+    state = initial_operator_state(args, system.operator)
+    out = prepare_out(args)
+    announce_compilation(args)
+    sec = system.poincare_section(
+        args.periods, args.transient, args.q0, args.v0, operator_state=state
+    )
     data = {"q": sec.q, "v": sec.v, "M": sec.M}
     if sec.w is not None:
         data["w"] = sec.w
-    params = model_parameters(args)
-    np.savez_compressed(out / "poincare.npz", **data, parameters=np.array(repr(params)))
-    _plot(sec, params, out / "poincare.png")
-    print(f"wrote {out / 'poincare.npz'} and {out / 'poincare.png'} ({sec.q.size} points)")
+    record = model_record(args)
+    record.update(
+        coupling=args.coupling,
+        damping_ratio=args.damping_ratio,
+        frequency=args.frequency,
+        **initial_record(args),
+        periods=args.periods,
+        transient_periods=args.transient,
+    )
+    npz, png = out / "poincare.npz", out / "poincare.png"
+    np.savez_compressed(npz, **data, parameters=np.array(repr(record)))
+    _plot(sec, figure_title(args, "Poincaré section φ = 0"), png)
+    record.update(points=int(sec.q.size), npz=npz, png=png)
+    emit(args, record, [f"wrote {npz} and {png} ({sec.q.size} points)"])
     return 0
 
 
-def _plot(sec: Any, params: dict, path: Path) -> None:
+def _plot(sec: Any, title: str, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6, 5))
+    fig, ax = plt.subplots(figsize=(6.5, 5))
     sc = ax.scatter(sec.q, sec.v, c=sec.M, s=2, cmap="coolwarm", lw=0)
     fig.colorbar(sc, ax=ax, label="M")
-    ax.set(
-        xlabel="q",
-        ylabel="v",
-        title=f"Poincare section, {params['model']}, C = {params['coupling']}",
-    )
+    ax.set(xlabel="q", ylabel="v")
+    ax.set_title(title, fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -3,46 +3,72 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from analysis.cli.lyapunov import (
-    add_initial_arguments,
-    add_model_arguments,
+from analysis.cli._common import (
+    add_initial_options,
+    add_model_options,
+    add_oscillator_options,
+    add_output_options,
+    add_subcommand,
+    announce_compilation,
     build_system,
-    model_parameters,
-    play_state,
+    check_model_options,
+    check_run_length,
+    emit,
+    figure_title,
+    initial_operator_state,
+    initial_record,
+    model_record,
+    positive_float,
+    prepare_out,
 )
+
+__all__ = ["register", "run"]
 
 
 def register(subparsers: Any) -> None:
-    p = subparsers.add_parser(
+    p = add_subcommand(
+        subparsers,
         "trajectory",
         help="integrate a trajectory, write .npz data and a PNG",
         description="Trajectory of the forced oscillator with hysteresis: samples (t, q, v, phi, "
         "M[, w]) plus the exact switch list, saved to DIR/trajectory.npz and a figure.",
     )
-    add_model_arguments(p)
-    add_initial_arguments(p)
-    p.add_argument("--t-end", type=float, default=200.0, help="end time")
-    p.add_argument("--sample-dt", type=float, default=0.01, help="sampling interval")
-    p.add_argument("--out", type=Path, default=Path("."), help="output directory")
+    add_model_options(p)
+    add_oscillator_options(p)
+    add_initial_options(p)
+    g = p.add_argument_group("run")
+    g.add_argument("--t-end", type=positive_float, default=200.0, help="end time")
+    g.add_argument("--sample-dt", type=positive_float, default=0.01, help="sampling interval")
+    add_output_options(p, writes="trajectory.npz, trajectory.png")
     p.set_defaults(func=run)
 
 
+#: refuse runs whose sample arrays alone would exceed this many points (memory)
+MAX_SAMPLES = 50_000_000
+
+
 def run(args: argparse.Namespace) -> int:
-    try:
-        system = build_system(args)
-        kwargs = {"operator_state": play_state(args, system)}
-        traj = system.trajectory(args.t_end, args.q0, args.v0, sample_dt=args.sample_dt, **kwargs)
-    except (ValueError, NotImplementedError) as exc:
-        print(f"hyst trajectory: error: {exc}", file=sys.stderr)
-        return 2
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    from analysis.cli._common import CliError
+
+    check_model_options(args)
+    check_run_length(args, args.t_end)
+    if args.t_end / args.sample_dt > MAX_SAMPLES:
+        raise CliError(
+            f"argument --sample-dt: t_end/sample_dt = {args.t_end / args.sample_dt:.3g} samples "
+            f"exceeds the limit {MAX_SAMPLES:.0e}; raise --sample-dt"
+        )
+    system = build_system(args)
+    state = initial_operator_state(args, system.operator)
+    out = prepare_out(args)
+    announce_compilation(args)
+    traj = system.trajectory(
+        args.t_end, args.q0, args.v0, operator_state=state, sample_dt=args.sample_dt
+    )
     data = {"t": traj.t, "q": traj.q, "v": traj.v, "phi": traj.phi, "M": traj.M}
     if traj.w is not None:
         data["w"] = traj.w
@@ -51,17 +77,28 @@ def run(args: argparse.Namespace) -> int:
     if traj.events is not None:
         for name in traj.events.dtype.names or ():
             data[f"event_{name}"] = traj.events[name]
-    params = model_parameters(args)
-    np.savez_compressed(out / "trajectory.npz", **data, parameters=np.array(repr(params)))
-    _plot(traj, params, out / "trajectory.png")
-    print(
-        f"wrote {out / 'trajectory.npz'} and {out / 'trajectory.png'} "
-        f"({traj.t.size} samples, {traj.switches.size} switches)"
+    record = model_record(args)
+    record.update(
+        coupling=args.coupling,
+        damping_ratio=args.damping_ratio,
+        frequency=args.frequency,
+        **initial_record(args),
+        t_end=args.t_end,
+        sample_dt=args.sample_dt,
+    )
+    npz, png = out / "trajectory.npz", out / "trajectory.png"
+    np.savez_compressed(npz, **data, parameters=np.array(repr(record)))
+    _plot(traj, figure_title(args, "trajectory"), png)
+    record.update(samples=int(traj.t.size), switches=int(traj.switches.size), npz=npz, png=png)
+    emit(
+        args,
+        record,
+        [f"wrote {npz} and {png} ({traj.t.size} samples, {traj.switches.size} switches)"],
     )
     return 0
 
 
-def _plot(traj: Any, params: dict, path: Path) -> None:
+def _plot(traj: Any, title: str, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -74,7 +111,7 @@ def _plot(traj: Any, params: dict, path: Path) -> None:
     ax[1].set(xlabel="q", ylabel="v", title="phase portrait")
     ax[2].plot(traj.q, traj.M, lw=0.6, color="tab:red")
     ax[2].set(xlabel="q", ylabel="M", title="hysteresis")
-    fig.suptitle(f"{params['model']}, C = {params['coupling']}")
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -153,7 +152,7 @@ class PaperContext:
         store: str | Path | None = None,
         workers: int | None = None,
         scheduler: str | None = None,
-        progress: bool = True,
+        progress: bool = False,
         seed: int = 0,
     ) -> None:
         self.out = Path(out)
@@ -184,7 +183,10 @@ class PaperContext:
 
     def write_json(self, name: str, payload: Any) -> Path:
         path = self.out / name
-        path.write_text(json.dumps(payload, indent=2, default=_json_default))
+        from analysis._json import to_json
+
+        # strict JSON: non-finite numbers as "inf"/"-inf"/"nan", as the CLI's --json
+        path.write_text(to_json(payload, indent=2))
         return path
 
     @property
@@ -210,13 +212,3 @@ class PaperContext:
 
     def describe(self) -> dict[str, Any]:
         return asdict(self.size)
-
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj)!r}")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from analysis.models import build_operator
 from analysis.paper.context import Claim, FigureSpec, PaperContext, verdict
 
 __all__ = ["FIGURES"]
@@ -23,9 +24,10 @@ TABLE_II = {"damping_ratio": 0.05, "frequency": 1.0, "q0": -1.0, "v0": 0.1}
 
 
 def _dimers(fields, coupling_j: float = 2.0):
-    from hysteresis import SpinDimerEnsemble
+    from analysis.models import build_operator
 
-    return SpinDimerEnsemble(np.asarray(fields, dtype=float).reshape(-1, 2), coupling_j)
+    pairs = np.asarray(fields, dtype=float).reshape(-1, 2)
+    return build_operator("dimers", fields=pairs, spin_coupling=coupling_j)
 
 
 def _system(operator, coupling: float):
@@ -35,9 +37,9 @@ def _system(operator, coupling: float):
 
 
 def _erf_play():
-    from hysteresis import GeneralizedPlay
+    from analysis.models import build_operator
 
-    return GeneralizedPlay.erf(width=2.0, spread=1.0)
+    return build_operator("erf-play", width=2.0, spread=1.0)
 
 
 def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
@@ -45,7 +47,7 @@ def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
     import matplotlib.pyplot as plt
 
     periods = max(ctx.size.attractor_periods, 20)
-    system = _system(_dimers([2.0, 0.0]), C_N2_SECTION)
+    system = _system(build_operator("n2", spin_coupling=2.0), C_N2_SECTION)
     sec = system.poincare_section(periods, transient_periods=min(100, periods))
     down = sec.M < 0
     fig, ax = plt.subplots(figsize=(5, 4))
@@ -76,7 +78,7 @@ def fig_n4_traj(ctx: PaperContext) -> list[Claim]:
     """Paper fig:N=4_traj: a trajectory of two dimers coloured by sheet, and its thresholds."""
     import matplotlib.pyplot as plt
 
-    system = _system(_dimers([2.0, 0.0, -0.5, -2.5]), C_SHEETS)
+    system = _system(build_operator("n4", spin_coupling=2.0), C_SHEETS)
     t_end = 40 * system.period if ctx.size.name != "smoke" else 10 * system.period
     traj = system.trajectory(t_end, sample_dt=0.005)
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -132,14 +134,12 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
     """Paper fig:erf_10000: attractors at C = 4.0, limit (a) and N = 20 000 dimers (b)."""
     import matplotlib.pyplot as plt
 
-    from hysteresis import SpinDimerEnsemble
-
     n_spins = ctx.size.bif_spins
     periods = ctx.size.attractor_periods
     transient = 100
     systems = {
         "limit": _system(_erf_play(), 4.0),
-        "dimers": _system(SpinDimerEnsemble.random(n_spins, 2.0, 1.0, 2.0, seed=ctx.seed), 4.0),
+        "dimers": _system(build_operator("dimers", spins=n_spins, seed=ctx.seed), 4.0),
     }
     data: dict[str, np.ndarray] = {}
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharex=True, sharey=True)
@@ -191,14 +191,14 @@ def dky_task(
     """One Kaplan–Yorke dimension of the erf-play limit (task function, picklable)."""
     from analysis.lyapunov import lyapunov_spectrum
 
-    operator = _erf_play()
+    play = _erf_play()
     res = lyapunov_spectrum(
-        _system(operator, coupling),
+        _system(play, coupling),
         t_end=t_end,
         transient=transient,
         q0=q0,
         v0=v0,
-        operator_state=operator.state(w0, q0),
+        operator_state=play.state(position=w0, input=q0),  # the initial memory is the state
         progress=False,
     )
     exps = [float(x) for x in res.exponents]
@@ -224,13 +224,14 @@ def fig_mboa(ctx: PaperContext) -> list[Claim]:
     results = ctx.run("mboa", tasks, dky_task)
     by_key = {(t["coupling"], t["q0"], t["w0"]): r for t, r in zip(tasks, results, strict=True)}
 
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.9))
     data: dict[str, np.ndarray] = {"q0": q0s, "w0": w0s}
-    for ax, key, xs, xlabel in (
-        (axes[0], "a", q0s, "$q_0$ ($w_0=q_0-p/2$)"),
-        (axes[1], "b", w0s, "$w_0$ ($q_0=-1$)"),
-        (axes[2], "c", q0s, "$q_0$ ($w_0=q_0-p/2$)"),
+    for ax, key, xs, xlabel, title in (
+        (axes[0], "a", q0s, "$q_0$ ($w_0=q_0-p/2$)", "start outside the play"),
+        (axes[1], "b", w0s, "$w_0$ ($q_0=-1$)", "start inside the play"),
+        (axes[2], "c", q0s, "$q_0$ ($w_0=q_0-p/2$)", "C = 2.92: regular or chaotic"),
     ):
+        ax.set_title(f"({key}) {title}", fontsize=9, loc="left")
         for c in sorted({c for c, _, _ in panels[key]}):
             d = [by_key[(c, q, w)]["kaplan_yorke"] for cc, q, w in panels[key] if cc == c]
             ax.plot(xs, d, "o-", ms=3, label=f"C={c:g}")
@@ -238,6 +239,12 @@ def fig_mboa(ctx: PaperContext) -> list[Claim]:
         ax.set_xlabel(xlabel)
         ax.set_ylabel("$D_{KY}^\\infty$")
         ax.legend(fontsize=8)
+    fig.suptitle(
+        f"$D_{{KY}}^\\infty$ of the erf-play limit (p = 2, R = 1, ζ = 0.05, Ω = 1, v0 = 0.1) vs "
+        f"initial conditions; t_end = {s.dky_t_end:g}",
+        fontsize=10,
+    )
+    fig.tight_layout()
     lam_d = [by_key[(c, q, w)]["exponents"][0] for c, q, w in panels["d"]]
     data["lmax_d_C1.9"] = np.array(lam_d)
     ctx.save_figure(fig, "fig:mboa", data)

@@ -46,15 +46,21 @@ CASCADE_ZOOM = (9.3, 7.0)
 
 
 def _make_operator(kind: str, spins: int, seed: int):
-    from hysteresis import GeneralizedPlay, SpinDimerEnsemble
+    """The operator of a task ``kind``: ``"dimer_pair"`` (fig:bif_0's dimer b = (1, -1)) or a
+    model name of :mod:`analysis.models` (``"dimers"``, ``"erf-play"``) at the paper's
+    parameters."""
+    from analysis.models import MODELS, build_operator, canonical_model_name
 
+    params = dict(width=WIDTH, spread=SPREAD, spin_coupling=SPIN_COUPLING)
     if kind == "dimer_pair":  # fig:bif_0: one dimer, b = (1, -1), J = 2
-        return SpinDimerEnsemble(np.array([[1.0, -1.0]]), SPIN_COUPLING)
+        return build_operator("dimers", fields=[[1.0, -1.0]], **params)
+    if kind == "erf_play" or kind in MODELS:
+        kind = canonical_model_name(kind)
     if kind == "dimers":
-        return SpinDimerEnsemble.random(spins, WIDTH, SPREAD, SPIN_COUPLING, seed)
-    if kind == "erf_play":
-        return GeneralizedPlay.erf(WIDTH, SPREAD)
-    raise ValueError(f"kind must be 'dimer_pair', 'dimers' or 'erf_play', got {kind!r}")
+        return build_operator("dimers", spins=spins, seed=seed, **params)
+    if kind == "erf-play":
+        return build_operator("erf-play", **params)
+    raise ValueError(f"kind must be 'dimer_pair', 'dimers' or 'erf-play', got {kind!r}")
 
 
 def bifurcation_task(
@@ -71,7 +77,7 @@ def bifurcation_task(
     """One continuation sweep ``C = linspace(c_start, c_stop, n_values)`` (in that order).
 
     ``kind``: ``"dimer_pair"`` (b = (1, −1), J = 2), ``"dimers"`` (``SpinDimerEnsemble.random
-    (spins, 2, 1, 2, seed)``) or ``"erf_play"`` (the limit). Returns the Poincaré points q, v
+    (spins, 2, 1, 2, seed)``) or ``"erf-play"`` (the limit). Returns the Poincaré points q, v
     (n_values × n_periods), the spectra, λ_max and the orbit period per C (0: none found).
     """
     from analysis.bifurcation import bifurcation_diagram, section_period
@@ -112,7 +118,7 @@ def limit_dimension_task(
     from analysis.lyapunov import lyapunov_spectrum
     from oscillators import ForcedOscillator
 
-    system = ForcedOscillator(_make_operator("erf_play", 0, 0), coupling, DAMPING_RATIO, FREQUENCY)
+    system = ForcedOscillator(_make_operator("erf-play", 0, 0), coupling, DAMPING_RATIO, FREQUENCY)
     ly = lyapunov_spectrum(system, t_end, transient, Q0, V0, progress=False)
     sec = system.poincare_section(int(section_periods), int(section_transient), Q0, V0)
     try:
@@ -331,7 +337,7 @@ def fig_bif(ctx: PaperContext) -> list[Claim]:
     }
     tasks = [
         {"kind": "dimers", "spins": int(s.bif_spins), "seed": int(ctx.seed), **common},
-        {"kind": "erf_play", "spins": 0, "seed": 0, **common},
+        {"kind": "erf-play", "spins": 0, "seed": 0, **common},
     ]
     dimers, limit = ctx.run("paper-bif", tasks, bifurcation_task)
     cs = np.asarray(dimers["couplings"])
@@ -350,9 +356,23 @@ def fig_bif(ctx: PaperContext) -> list[Claim]:
         ax_l.plot(cs, res["max_exponent"], "o-", ms=2, lw=0.8, color=color)
         ax_l.axhline(0.0, color="grey", lw=0.6)
         ax_l.set_ylabel("$\\lambda_{max}$")
+    # the windows of the paper's claims (checked below), with a legend saying what each claims
+    windows = (
+        (1.7, 1.8, "tab:orange", "paper: N periodic ($\\lambda^N<0$), limit chaotic"),
+        (2.5, 3.0, "tab:orange", None),
+        (3.8, 4.2, "tab:green", "paper: both chaotic ($\\lambda^N, \\lambda^\\infty > 0$)"),
+    )
     for ax in axes:
-        for lo, hi, col in ((2.5, 3.0, "tab:orange"), (3.8, 4.2, "tab:green")):
-            ax.axvspan(lo, hi, color=col, alpha=0.08)
+        for lo, hi, col, label in windows:
+            if lo < c_hi and hi > c_lo:
+                ax.axvspan(lo, hi, color=col, alpha=0.12, label=label if ax is axes[0] else None)
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(fontsize=7, loc="upper left", framealpha=0.9)
+    fig.suptitle(
+        f"fig:bif — dimers p = {WIDTH:g}, R = {SPREAD:g}, J = {SPIN_COUPLING:g} vs the erf-play "
+        f"limit; ζ = {DAMPING_RATIO:g}, Ω = {FREQUENCY:g}",
+        fontsize=9,
+    )
     axes[-1].set_xlabel("C (stepped downward, continuation)")
     ctx.save_figure(
         fig,

@@ -66,7 +66,9 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
         mappable = plot_density_rs(
             ax, ident, r_max=WIDTH, s_limits=(-4 * SPREAD, 4 * SPREAD), vmax=vmax
         )
-        ax.axvline(0.5 * WIDTH, color="0.5", lw=0.5, ls=":")
+        # mark r = p/2 above the panel, not over the ridge it would hide
+        top = ax.get_xaxis_transform()
+        ax.plot([0.5 * WIDTH], [1.0], "v", color="0.3", transform=top, clip_on=False)
         ax.set_title(title)
     fig.colorbar(mappable, ax=axes[1:], label="μ_rs (cell mass / r-s area)", shrink=0.85)
     fig.suptitle(f"Preisach density, p = {WIDTH:g}, R = {SPREAD:g}, Δ = {step:g}", fontsize=10)

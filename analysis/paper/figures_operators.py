@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from analysis.models import build_operator
 from analysis.paper.context import Claim, FigureSpec, PaperContext, verdict
 
 __all__ = ["FIGURES"]
@@ -138,9 +139,7 @@ def fig_elem_hys_ex(ctx: PaperContext) -> list[Claim]:
 
 def fig_n4_thresholds(ctx: PaperContext) -> list[Claim]:
     """The N = 4 example's thresholds (text of Sec. III.A); no figure of its own."""
-    from hysteresis import SpinDimerEnsemble
-
-    ens = SpinDimerEnsemble(np.array([[2.0, 0.0], [-0.5, -2.5]]), 2.0)
+    ens = build_operator("n4", spin_coupling=2.0)
     th = ens.thresholds()
     ok = np.allclose(th.alpha, [0.0, 2.5]) and np.allclose(th.beta, [-2.0, 0.5])
     return [
@@ -159,9 +158,7 @@ def fig_play(ctx: PaperContext) -> list[Claim]:
     """Paper fig:play: the generalized play M = erf(w/(√2 R)), p = 2, R = 1, with inner loops."""
     import matplotlib.pyplot as plt
 
-    from hysteresis import GeneralizedPlay
-
-    op = GeneralizedPlay.erf(width=2.0, spread=1.0)
+    op = build_operator("erf-play", width=2.0, spread=1.0)
     u = np.concatenate(
         [
             np.linspace(-5, 5, 1001),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 import traceback
 from collections.abc import Sequence
@@ -11,7 +12,7 @@ from pathlib import Path
 
 from analysis.paper.context import SIZES, Claim, FigureSpec, PaperContext
 
-__all__ = ["FigureSpec", "FIGURES", "run_paper", "write_report"]
+__all__ = ["FigureSpec", "FIGURES", "check_only", "figure_labels", "run_paper", "write_report"]
 
 
 def _figures() -> list[FigureSpec]:
@@ -34,6 +35,26 @@ class _LazyFigures(Sequence):
 FIGURES: Sequence[FigureSpec] = _LazyFigures()
 
 
+def figure_labels() -> list[str]:
+    """The LaTeX labels of every figure ``hyst paper`` builds, in build order."""
+    return [spec.label for spec in _figures()]
+
+
+def check_only(only: Sequence[str] | None) -> None:
+    """``ValueError`` naming ``only`` unless every label is a known figure label."""
+    if only is None:
+        return
+    if isinstance(only, str) or len(only) == 0:
+        raise ValueError(f"only must be a non-empty list of figure labels, got {only!r}")
+    labels = figure_labels()
+    unknown = [x for x in only if x not in labels]
+    if unknown:
+        raise ValueError(
+            f"only: unknown figure label(s) {', '.join(map(repr, unknown))}; "
+            f"choose from {', '.join(labels)}"
+        )
+
+
 def run_paper(
     out: str | Path,
     size: str = "quick",
@@ -41,15 +62,23 @@ def run_paper(
     workers: int | None = None,
     scheduler: str | None = None,
     only: Sequence[str] | None = None,
-    progress: bool = True,
+    progress: bool = False,
 ) -> dict:
     """Build every figure (or those whose label is in ``only``) and write the report.
 
     Returns the report dictionary ``{"claims": [...], "figures": [...], "size": ...}``. A figure
     whose builder raises is recorded with its traceback in ``errors`` and the others still run.
+    Every argument is checked before any figure is built (an unknown label in ``only`` or
+    ``workers < 1`` raises ``ValueError``); ``progress`` prints one line per figure (off by
+    default).
     """
     if size not in SIZES:
         raise ValueError(f"size must be one of {sorted(SIZES)}, got {size!r}")
+    check_only(only)
+    if workers is not None and (
+        isinstance(workers, bool) or int(workers) != workers or workers < 1
+    ):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     ctx = PaperContext(
         out, SIZES[size], store=store, workers=workers, scheduler=scheduler, progress=progress
     )
@@ -61,7 +90,7 @@ def run_paper(
             continue
         start = time.perf_counter()
         if progress:
-            print(f"[hyst paper] {spec.label}: {spec.title} ...", flush=True)
+            print(f"[hyst paper] {spec.label}: {spec.title} ...", file=sys.stderr, flush=True)
         try:
             new = spec.build(ctx)
         except Exception as exc:  # keep going: one failing figure must not hide the others
@@ -69,14 +98,14 @@ def run_paper(
                 {"figure": spec.label, "error": repr(exc), "traceback": traceback.format_exc()}
             )
             if progress:
-                print(f"[hyst paper] {spec.label} FAILED: {exc!r}", flush=True)
+                print(f"[hyst paper] {spec.label} FAILED: {exc!r}", file=sys.stderr, flush=True)
             continue
         for c in new:
             claims.append(c if c.figure else Claim(**{**asdict(c), "figure": spec.label}))
         seconds = time.perf_counter() - start
         figures.append({"label": spec.label, "title": spec.title, "seconds": round(seconds, 2)})
         if progress:
-            print(f"[hyst paper] {spec.label} done in {seconds:.1f} s", flush=True)
+            print(f"[hyst paper] {spec.label} done in {seconds:.1f} s", file=sys.stderr, flush=True)
     report = {
         "size": ctx.describe(),
         "claims": [asdict(c) for c in claims],

@@ -8,8 +8,25 @@
   on an irregular lattice shared by reversal fields and fields, with a calibration point at
   HCal = 6 before every curve (MicroMag text format).
 
-The tests compare identifications from these files with identifications made directly from the
-operator (:func:`curves_csv`, :func:`curves_micromag` rebuild the same curves).
+Instrument-style exports of a synthetic *sample* (:func:`sample`: 20 000 relays with coercivity
+``B_c ~ N(30, 6²)`` mT and interaction field ``B_u ~ N(0, 5²)`` mT, plus a reversible part
+``0.15 tanh(B/60 mT)``, moment scale 5·10⁻⁶ A·m²), measured like an instrument does
+(:func:`measure`): regular protocol of step 2 mT, measured fields jittered by 0.05 mT,
+calibration point at HCal (its field drifting by up to 2 mT) before every curve, moment noise
+0.1 % of the saturation moment, and a slow multiplicative drift of the instrument gain. Layouts
+follow the MicroMag and Lake Shore file descriptions (see :mod:`analysis.forc_io`):
+
+* ``forc_micromag_0015_cgs.frc``: Series 0015 header (short keys ``NForc``, ``NData``,
+  ``HCal``, ``HSat`` with ``=``), ``Units of measure = cgs`` (Oe, emu), LF line ends.
+* ``forc_micromag_0016_hybrid_si.frc``: Series 0016 header (date/time line after the title,
+  sections, long keys ``Number of FORCs`` …), ``Hybrid SI`` (T, A·m²), cp1252 text with
+  ``Am²``, ``µ``, ``°`` in unit lines, CRLF line ends, column-title lines, end marker.
+* ``forc_micromag_0016_si_aborted.frc``: Series 0016, ``SI``, measurement aborted in the middle
+  of a curve (fewer curves and points than announced, no end marker).
+* ``forc_micromag_irregular.frc``: a "Direct moment vs. field; Multiple segments" export
+  (refused by the reader).
+* ``forc_lakeshore_8600.csv``: Lake Shore 8600-style CSV (time, field in T, moment in A·m²),
+  one row per point, calibration points in the stream.
 """
 
 from __future__ import annotations
@@ -21,11 +38,27 @@ import numpy as np
 from analysis.forc_io import write_csv, write_micromag
 from analysis.identification import measure_reversal_curves, regular_grid
 from hysteresis.play import GeneralizedPlay
+from hysteresis.preisach import PreisachModel
 
 HERE = Path(__file__).resolve().parent
 WIDTH, SPREAD, SATURATION = 2.0, 1.0, 6.0
 CSV_FILE = HERE / "forc_erf_play_mayergoyz.csv"
 MICROMAG_FILE = HERE / "forc_erf_play_pike.micromag"
+
+# the synthetic sample (fields in mT)
+BC_MEAN, BC_SD, BU_SD = 30.0, 6.0, 5.0
+REV_FRACTION, REV_FIELD = 0.15, 60.0
+MOMENT = 5e-6  # A·m²
+STEP, H_SAT, H_CAL = 2.0, 150.0, 150.0
+HR_MIN, HR_MAX, H_MAX = -70.0, 20.0, 90.0
+NOISE, JITTER, CAL_DRIFT, GAIN_DRIFT = 1e-3, 0.05, 2.0, 1e-5
+SAMPLE_FILES = {
+    "0015": HERE / "forc_micromag_0015_cgs.frc",
+    "0016": HERE / "forc_micromag_0016_hybrid_si.frc",
+    "aborted": HERE / "forc_micromag_0016_si_aborted.frc",
+    "irregular": HERE / "forc_micromag_irregular.frc",
+    "lakeshore": HERE / "forc_lakeshore_8600.csv",
+}
 
 
 def operator() -> GeneralizedPlay:
@@ -56,6 +89,166 @@ def calibration_moments(n_curves: int) -> np.ndarray:
     return np.full(n_curves, float(y[0]))
 
 
+# ----------------------------------------------------------------------------------------------
+# the synthetic sample and its measurement
+# ----------------------------------------------------------------------------------------------
+def sample(n_relays: int = 20000, seed: int = 1):
+    """Irreversible part: a discrete Preisach model in mT (weights 1/n)."""
+    rng = np.random.default_rng(seed)
+    bc = np.abs(rng.normal(BC_MEAN, BC_SD, n_relays))
+    bu = rng.normal(0.0, BU_SD, n_relays)
+    return PreisachModel.from_relays(bu + bc, bu - bc)
+
+
+def reversible(h: np.ndarray) -> np.ndarray:
+    return REV_FRACTION * np.tanh(np.asarray(h) / REV_FIELD)
+
+
+def true_moment(model, fields: np.ndarray, reversal: float) -> np.ndarray:
+    """Noise-free moment (A·m²) along a Pike curve at the given (actual) fields."""
+    y, _ = model.apply(np.concatenate([[reversal], fields]), model.initial_state(H_SAT))
+    return MOMENT * ((1.0 - REV_FRACTION) * y[1:] + reversible(fields))
+
+
+def measure(
+    model=None,
+    step: float = STEP,
+    hr_min: float = HR_MIN,
+    hr_max: float = HR_MAX,
+    h_max: float = H_MAX,
+    seed: int = 2,
+    noise: float = NOISE,
+    jitter: float = JITTER,
+    gain_drift: float = GAIN_DRIFT,
+):
+    """Measured FORC sequence in mT and A·m²: list of (kind, fields, moments) in time order.
+
+    ``kind`` is ``"cal"`` (one point near HCal) or ``"curve"``; curves from the highest reversal
+    field down (the MicroMag order). The gain drifts as ``1 + gain_drift·t`` with ``t`` the
+    number of points measured so far.
+    """
+    model = sample() if model is None else model
+    rng = np.random.default_rng(seed)
+    reversals = np.arange(hr_max, hr_min - 1e-9, -step)
+    seq = []
+    t = 0
+    for hr in reversals:
+        h_cal = H_CAL + rng.uniform(-CAL_DRIFT, CAL_DRIFT)
+        m_cal = MOMENT * ((1.0 - REV_FRACTION) + reversible(h_cal))
+        seq.append(("cal", np.array([h_cal]), np.array([m_cal * (1 + gain_drift * t)])))
+        t += 1
+        nominal = np.arange(hr, h_max + 1e-9, step)
+        fields = nominal + rng.normal(0.0, jitter, nominal.size)
+        m = true_moment(model, fields, fields[0])
+        gain = 1.0 + gain_drift * (t + np.arange(m.size))
+        m = m * gain + rng.normal(0.0, noise * MOMENT, m.size)
+        t += m.size
+        seq.append(("curve", fields, m))
+    return seq
+
+
+def _fmt(x: float) -> str:
+    return f"{x:+.6E}"
+
+
+def _blocks(seq, f_fac: float, m_fac: float, eol: str) -> list[str]:
+    out = []
+    for _, h, m in seq:
+        for hh, mm in zip(h, m, strict=True):
+            out.append(_fmt(hh * f_fac) + "," + _fmt(mm * m_fac))
+        out.append("")
+    return out
+
+
+def micromag_0015(seq) -> str:
+    n_curves = sum(k == "curve" for k, _, _ in seq)
+    n_data = sum(h.size for k, h, _ in seq if k == "curve")
+    lines = [
+        "MicroMag 2900/3900 Data File (Series 0015)",
+        "First-order reversal curves",
+        "07/15/2011  14:32",
+        "Configuration  = AGM",
+        "Units of measure = cgs",
+        "Averaging time = +1.000000E-01",
+        f"HCal           = {_fmt(H_CAL * 10)}",
+        f"HSat           = {_fmt(H_SAT * 10)}",
+        f"NForc          = {n_curves}",
+        f"NData          = {n_data}",
+        "",
+        "  Field     Moment",
+        "",
+    ]
+    lines += _blocks(seq, 10.0, 1e3, "\n")  # Oe, emu
+    lines.append("MicroMag 2900/3900 Data File ends")
+    return "\n".join(lines) + "\n"
+
+
+def micromag_0016(seq, units: str = "Hybrid SI", end: bool = True, announce=None) -> str:
+    n_curves = sum(k == "curve" for k, _, _ in seq)
+    n_data = sum(h.size for k, h, _ in seq if k == "curve")
+    if announce is not None:
+        n_curves, n_data = announce
+    lines = [
+        "MicroMag 2900/3900 Data File (Series 0016.002)",
+        "First-order reversal curves",
+        "11/23/2015  09:41",
+        "",
+        "INSTRUMENT",
+        "Configuration                   VSM",
+        "Temperature control             None",
+        "Hardware version                0004",
+        f"Units of measure                {units}",
+        "Temperature in                  °C",
+        "",
+        "SAMPLE",
+        "Mass                            N/A",
+        "",
+        "SETTINGS",
+        "Field range                    +1.000000E+00",
+        "Moment range                   +10.00000E-06 Am²",
+        "Averaging time                 +100.0000E-03 s",
+        "Lock-in sensitivity            1 µV",
+        "",
+        "SCRIPT",
+        f"Calibration field              {_fmt(H_CAL * 1e-3)}",
+        f"Saturation field               {_fmt(H_SAT * 1e-3)}",
+        f"Number of FORCs                {n_curves:+d}",
+        f"Number of data                 {n_data:+d}",
+        "",
+        "      Field         Moment",
+        "       (T)          (Am²)",
+        "",
+    ]
+    lines += _blocks(seq, 1e-3, 1.0, "\r\n")  # T, A·m²
+    if end:
+        lines.append("MicroMag 2900/3900 Data File ends")
+    return "\r\n".join(lines) + "\r\n"
+
+
+def micromag_irregular() -> str:
+    return (
+        "MicroMag 2900/3900 Data File (Series 0016.002)\r\n"
+        "Direct moment vs. field; Multiple segments\r\n"
+        "11/23/2015  09:41\r\n\r\nNumber of segments             +3\r\n\r\n"
+        "+1.000000E-01,+4.000000E-06\r\n+5.000000E-02,+3.000000E-06\r\n"
+    )
+
+
+def lakeshore(seq) -> str:
+    lines = [
+        "Lake Shore 8600 Series VSM,FORC export",
+        "Sample,synthetic (hysteresis-toolkit)",
+        f"Calibration field [T],{H_CAL * 1e-3:.6E}",
+        "Time Stamp [s],Field (µ0H) [T],Moment (m) [A·m²]",
+    ]
+    t = 0.0
+    for _, h, m in seq:
+        for hh, mm in zip(h, m, strict=True):
+            lines.append(f"{t:.3f},{hh * 1e-3:.8E},{mm:.8E}")
+            t += 0.1
+    return "\n".join(lines) + "\n"
+
+
 def main() -> None:
     write_csv(CSV_FILE, curves_csv())
     mm = curves_micromag()
@@ -66,7 +259,20 @@ def main() -> None:
         calibration_moments=calibration_moments(mm.n_curves),
         saturation_field=SATURATION,
     )
-    print(f"wrote {CSV_FILE} and {MICROMAG_FILE}")
+    seq = measure()
+    SAMPLE_FILES["0015"].write_text(micromag_0015(seq))
+    SAMPLE_FILES["0016"].write_bytes(micromag_0016(seq).encode("cp1252"))
+    # aborted: stop in the middle of the 30th curve (calibration + curve blocks)
+    cut = seq[:59] + [("curve", seq[59][1][:7], seq[59][2][:7])]
+    n_curves = sum(k == "curve" for k, _, _ in seq)
+    n_data = sum(h.size for k, h, _ in seq if k == "curve")
+    text = micromag_0016(cut, units="SI", end=False, announce=(n_curves, n_data))
+    SAMPLE_FILES["aborted"].write_bytes(text.encode("cp1252"))
+    SAMPLE_FILES["irregular"].write_bytes(micromag_irregular().encode("cp1252"))
+    SAMPLE_FILES["lakeshore"].write_text(lakeshore(seq), encoding="utf-8")
+    print(
+        "wrote", ", ".join(str(p.name) for p in [CSV_FILE, MICROMAG_FILE, *SAMPLE_FILES.values()])
+    )
 
 
 if __name__ == "__main__":

@@ -1,0 +1,397 @@
+"""The model registry: one name -> operator builder table for the CLI, ``hyst paper`` and the
+ensembles.
+
+Every model is built from one :class:`ModelParameters` record whose defaults are the paper's
+Table I/II values (loop width ``p = 2``, centre spread ``R = 1``, spin coupling ``J = 2``,
+``N = 20 000`` spins, seed 0). A model only reads the parameters it lists in
+:attr:`ModelSpec.parameters`; :func:`model_record` reports exactly those, so a JSON record or a
+figure title names what defines the operator and nothing else.
+
+========================  =====================================================================
+name                      operator
+========================  =====================================================================
+``dimers``                ``SpinDimerEnsemble.random(N, p, R, J, seed)`` (or explicit fields)
+``erf-play``              ``GeneralizedPlay.erf(p, R)``: the dimers' N -> infinity limit
+``play``                  ``PlayOperator(p)``
+``relay``                 ``Relay(alpha, beta)``, default ``(p/2, -p/2)``
+``n2``                    one dimer, ``b = (2, 0)``, J (paper fig:N=2_schema)
+``n4``                    two dimers, ``b = (2, 0), (-0.5, -2.5)``, J (paper fig:N=4_traj)
+``preisach``              N random relays: centres ``s ~ N(0, R²)``, half-widths
+                          ``r ~ N(p/2, σ_r²)`` restricted to ``r >= 0`` (discrete sample of
+                          ``preisach-gauss``; ``σ_r = 0``: the paper's equal widths)
+``preisach-gauss``        continuous Preisach model, density ``N(s; 0, R²)·N(r; p/2, σ_r²)``
+                          on ``r >= 0``, renormalised (``σ_r > 0``)
+``pi``                    Prandtl–Ishlinskii: K plays, widths evenly spaced on
+                          ``[p/2, 3p/2]``, equal weights ``1/K``
+========================  =====================================================================
+
+Here ``s = (α + β)/2`` is a relay's centre and ``r = (α − β)/2`` its half-width, so the paper's
+ridge ``δ(r − p/2)`` is the limit ``σ_r -> 0``. The old spelling ``erf_play`` is accepted with a
+:class:`DeprecationWarning`.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "ALIASES",
+    "MODELS",
+    "ModelParameters",
+    "ModelSpec",
+    "build_operator",
+    "canonical_model_name",
+    "describe_model",
+    "model_names",
+    "model_record",
+]
+
+
+@dataclass(frozen=True)
+class ModelParameters:
+    """Parameters shared by the models (defaults: the paper's Tables I and II).
+
+    Attributes
+    ----------
+    spins:
+        N, number of spins (``dimers``; even, >= 2) or of relays (``preisach``; >= 1).
+    seed:
+        Seed of the disorder (``dimers``, ``preisach``), an int >= 0.
+    width:
+        p, the loop width (``2 × half-width`` of a relay), > 0.
+    spread:
+        R, standard deviation of the loop centres, > 0.
+    spin_coupling:
+        J, the spin-spin coupling of the dimers, > 0 (``dimers`` need ``0 < p < 2J``).
+    width_spread:
+        σ_r, standard deviation of the relay half-widths (``preisach`` >= 0,
+        ``preisach-gauss`` > 0).
+    fields:
+        Explicit local fields ``(n_dimers, 2)`` for ``dimers`` (overrides N, p, R, seed).
+    alpha, beta:
+        Relay thresholds (``relay``; default ``±p/2``).
+    plays:
+        K, number of plays of ``pi``, >= 1.
+    resolution:
+        Everett-table resolution of ``preisach-gauss`` (grid points per axis).
+    """
+
+    spins: int = 20000
+    seed: int = 0
+    width: float = 2.0
+    spread: float = 1.0
+    spin_coupling: float = 2.0
+    width_spread: float = 0.2
+    fields: tuple[tuple[float, float], ...] | None = None
+    alpha: float | None = None
+    beta: float | None = None
+    plays: int = 10
+    resolution: int = 512
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """One registry entry.
+
+    Attributes
+    ----------
+    name:
+        Canonical name (lower case, words joined by ``-``).
+    description:
+        One line for ``--help`` and the docs.
+    parameters:
+        Names of the :class:`ModelParameters` fields the builder reads.
+    builder:
+        ``builder(params) -> operator``.
+    play_type:
+        True when the operator's memory is one wagon position (``--w0`` applies).
+    """
+
+    name: str
+    description: str
+    parameters: tuple[str, ...]
+    builder: Callable[[ModelParameters], Any]
+    play_type: bool = False
+
+
+# -- builders -------------------------------------------------------------------------------
+
+
+def _dimers(p: ModelParameters) -> Any:
+    from hysteresis.spin_dimers import SpinDimerEnsemble
+
+    if p.fields is not None:
+        return SpinDimerEnsemble(np.asarray(p.fields, dtype=float), p.spin_coupling)
+    return SpinDimerEnsemble.random(p.spins, p.width, p.spread, p.spin_coupling, p.seed)
+
+
+def _erf_play(p: ModelParameters) -> Any:
+    from hysteresis.play import GeneralizedPlay
+
+    return GeneralizedPlay.erf(p.width, p.spread)
+
+
+def _play(p: ModelParameters) -> Any:
+    from hysteresis.play import PlayOperator
+
+    return PlayOperator(p.width)
+
+
+def _relay(p: ModelParameters) -> Any:
+    from hysteresis.relay import Relay
+
+    alpha = 0.5 * p.width if p.alpha is None else p.alpha
+    beta = -0.5 * p.width if p.beta is None else p.beta
+    return Relay(alpha, beta)
+
+
+def _n2(p: ModelParameters) -> Any:
+    from hysteresis.spin_dimers import SpinDimerEnsemble
+
+    return SpinDimerEnsemble(np.array([[2.0, 0.0]]), p.spin_coupling)
+
+
+def _n4(p: ModelParameters) -> Any:
+    from hysteresis.spin_dimers import SpinDimerEnsemble
+
+    return SpinDimerEnsemble(np.array([[2.0, 0.0], [-0.5, -2.5]]), p.spin_coupling)
+
+
+def _check_width_spread(p: ModelParameters, strictly_positive: bool) -> float:
+    sr = p.width_spread
+    ok = isinstance(sr, (int, float)) and math.isfinite(sr) and (sr > 0 or not strictly_positive)
+    if not ok or sr < 0:
+        bound = "> 0" if strictly_positive else ">= 0"
+        raise ValueError(f"width_spread must be a finite number {bound}, got {sr!r}")
+    return float(sr)
+
+
+def _check_positive(value: Any, name: str) -> float:
+    if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def _preisach(p: ModelParameters) -> Any:
+    from hysteresis._validation import as_generator, positive_integer
+    from hysteresis.preisach import PreisachModel
+
+    n = positive_integer(p.spins, "spins")
+    width = _check_positive(p.width, "width")
+    spread = _check_positive(p.spread, "spread")
+    sr = _check_width_spread(p, strictly_positive=False)
+    rng = as_generator(p.seed)
+    centres = rng.normal(0.0, spread, size=n)
+    half = np.full(n, 0.5 * width)
+    if sr > 0:
+        # truncated normal on r >= 0 by redrawing the negative draws (exact, and cheap: the
+        # fraction redrawn is Φ(-p/(2σ_r)))
+        half = rng.normal(0.5 * width, sr, size=n)
+        bad = half < 0
+        while np.any(bad):
+            half[bad] = rng.normal(0.5 * width, sr, size=int(np.count_nonzero(bad)))
+            bad = half < 0
+    return PreisachModel.from_relays(centres + half, centres - half)
+
+
+def _preisach_gauss(p: ModelParameters) -> Any:
+    from scipy.special import ndtr
+
+    from hysteresis.preisach import PreisachModel
+
+    width = _check_positive(p.width, "width")
+    spread = _check_positive(p.spread, "spread")
+    sr = _check_width_spread(p, strictly_positive=True)
+    mean_r = 0.5 * width
+    # mass of N(r; p/2, σ_r²) on r >= 0: divide it out so the density is normalised
+    norm_r = float(ndtr(mean_r / sr))
+    c_s = 1.0 / (spread * math.sqrt(2.0 * math.pi))
+    c_r = 1.0 / (sr * math.sqrt(2.0 * math.pi) * norm_r)
+
+    def density(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+        s = 0.5 * (alpha + beta)
+        r = 0.5 * (alpha - beta)
+        f = c_s * np.exp(-0.5 * (s / spread) ** 2) * c_r * np.exp(-0.5 * ((r - mean_r) / sr) ** 2)
+        # dα dβ = 2 ds dr: the density in (α, β) is half the one in (s, r)
+        return np.where(r >= 0.0, 0.5 * f, 0.0)
+
+    # the triangle must hold 5 standard deviations of both factors
+    half_extent = 5.0 * spread + mean_r + 5.0 * sr
+    return PreisachModel.from_density(density, -half_extent, half_extent, int(p.resolution))
+
+
+def _pi(p: ModelParameters) -> Any:
+    from hysteresis._validation import positive_integer
+    from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
+
+    k = positive_integer(p.plays, "plays")
+    width = _check_positive(p.width, "width")
+    widths = width * np.linspace(0.5, 1.5, k) if k > 1 else np.array([width])
+    return PrandtlIshlinskii(widths, np.full(k, 1.0 / k))
+
+
+_SPECS = (
+    ModelSpec(
+        "dimers",
+        "spin dimers with the paper's disorder (N, p, R, J, seed) or explicit fields",
+        ("spins", "seed", "width", "spread", "spin_coupling"),
+        _dimers,
+    ),
+    ModelSpec(
+        "erf-play",
+        "erf generalized play, the dimers' N -> infinity limit (p, R)",
+        ("width", "spread"),
+        _erf_play,
+        play_type=True,
+    ),
+    ModelSpec("play", "classical play of width p", ("width",), _play, play_type=True),
+    ModelSpec("relay", "one relay, thresholds (alpha, beta) = (p/2, -p/2)", ("width",), _relay),
+    ModelSpec("n2", "one dimer b = (2, 0) (paper fig:N=2_schema)", ("spin_coupling",), _n2),
+    ModelSpec(
+        "n4", "two dimers b = (2, 0), (-0.5, -2.5) (paper fig:N=4_traj)", ("spin_coupling",), _n4
+    ),
+    ModelSpec(
+        "preisach",
+        "N random relays: centres N(0, R^2), half-widths N(p/2, sigma_r^2) on r >= 0",
+        ("spins", "seed", "width", "spread", "width_spread"),
+        _preisach,
+    ),
+    ModelSpec(
+        "preisach-gauss",
+        "continuous Preisach density N(s; 0, R^2) N(r; p/2, sigma_r^2), r >= 0",
+        ("width", "spread", "width_spread"),
+        _preisach_gauss,
+    ),
+    ModelSpec(
+        "pi",
+        "Prandtl-Ishlinskii: K plays, widths evenly on [p/2, 3p/2], weights 1/K",
+        ("width", "plays"),
+        _pi,
+    ),
+)
+
+#: canonical name -> :class:`ModelSpec`, in the order shown by ``--help``
+MODELS: Mapping[str, ModelSpec] = {spec.name: spec for spec in _SPECS}
+#: deprecated spelling -> canonical name
+ALIASES: Mapping[str, str] = {"erf_play": "erf-play"}
+
+
+def model_names() -> tuple[str, ...]:
+    """The canonical model names."""
+    return tuple(MODELS)
+
+
+def canonical_model_name(name: str) -> str:
+    """The canonical spelling of ``name``.
+
+    Deprecated spellings (``erf_play``) are mapped with a :class:`DeprecationWarning`; an
+    unknown name raises ``ValueError`` listing the choices.
+    """
+    if not isinstance(name, str):
+        raise TypeError(f"model must be a str, got {type(name).__name__}")
+    if name in MODELS:
+        return name
+    if name in ALIASES:
+        new = ALIASES[name]
+        warnings.warn(
+            f"model name {name!r} is deprecated; use {new!r}", DeprecationWarning, stacklevel=2
+        )
+        return new
+    raise ValueError(f"model must be one of {', '.join(MODELS)}; got {name!r}")
+
+
+def _parameters(params: ModelParameters | None, overrides: Mapping[str, Any]) -> ModelParameters:
+    base = ModelParameters() if params is None else params
+    known = {f.name for f in fields(ModelParameters)}
+    unknown = sorted(set(overrides) - known)
+    if unknown:
+        raise TypeError(f"unknown model parameter(s) {unknown}; known: {sorted(known)}")
+    if overrides.get("fields") is not None:
+        overrides = dict(overrides)
+        overrides["fields"] = tuple(
+            (float(a), float(b)) for a, b in np.asarray(overrides["fields"], dtype=float)
+        )
+    return replace(base, **overrides)
+
+
+def build_operator(name: str, params: ModelParameters | None = None, **overrides: Any) -> Any:
+    """Build the operator registered as ``name``.
+
+    Parameters
+    ----------
+    name:
+        A name of :data:`MODELS` (or a deprecated alias).
+    params:
+        Base parameters (default: :class:`ModelParameters`, the paper's values).
+    **overrides:
+        Fields of :class:`ModelParameters` to replace, e.g. ``spins=200, seed=3``.
+
+    Returns
+    -------
+    The hysteresis operator (a :class:`~hysteresis.base.Hysteron`).
+
+    Raises
+    ------
+    ValueError
+        Unknown model name, or a parameter outside its range (named in the message).
+    """
+    spec = MODELS[canonical_model_name(name)]
+    return spec.builder(_parameters(params, overrides))
+
+
+def model_record(
+    name: str, params: ModelParameters | None = None, **overrides: Any
+) -> dict[str, Any]:
+    """``{"model": name, <the parameters the model reads>}``, JSON-ready."""
+    spec = MODELS[canonical_model_name(name)]
+    p = _parameters(params, overrides)
+    out: dict[str, Any] = {"model": spec.name}
+    names = spec.parameters
+    if spec.name == "dimers" and p.fields is not None:
+        names = ("fields", "spin_coupling")
+    if spec.name == "relay":
+        out["alpha"] = 0.5 * p.width if p.alpha is None else p.alpha
+        out["beta"] = -0.5 * p.width if p.beta is None else p.beta
+        return out
+    for n in names:
+        v = getattr(p, n)
+        out[n] = [list(row) for row in v] if n == "fields" else v
+    return out
+
+
+_SYMBOLS = {
+    "spins": "N",
+    "seed": "seed",
+    "width": "p",
+    "spread": "R",
+    "spin_coupling": "J",
+    "width_spread": "σ_r",
+    "plays": "K",
+    "alpha": "α",
+    "beta": "β",
+    "fields": "b",
+}
+
+
+def describe_model(record: Mapping[str, Any], extra: Sequence[tuple[str, Any]] = ()) -> str:
+    """A one-line title, e.g. ``"dimers N=20000 p=2 R=1 J=2 seed=0, C=4"``, from a
+    :func:`model_record` (plus ``extra`` ``(symbol, value)`` pairs such as the coupling)."""
+    parts = []
+    for key, value in record.items():
+        if key == "model":
+            continue
+        sym = _SYMBOLS.get(key, key)
+        if key == "fields":
+            value = ",".join(f"({a:g},{b:g})" for a, b in value)
+        elif isinstance(value, float):
+            value = f"{value:g}"
+        parts.append(f"{sym}={value}")
+    text = f"{record['model']} " + " ".join(parts)
+    tail = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in extra)
+    return f"{text.strip()}, {tail}" if tail else text.strip()

@@ -1,0 +1,160 @@
+"""Benchmark: read + identify + FORC figure of a 300-curve, ~84 000-point measurement.
+
+    python benchmarks/bench_identification.py [--repeats 3] [--keep DIR]
+
+The measurement is synthetic but instrument-shaped (tests/data/make_forc_data.py: a 20 000-relay
+sample plus a reversible part, 0.5 mT protocol step, jittered fields, noise, gain drift,
+calibration points), written as a MicroMag Series 0016 file (Hybrid SI, cp1252, CRLF). Timed
+(median of ``--repeats`` runs, one core): ``read_micromag`` with drift correction,
+``identify_from_curves`` (protocol grid, smoothing factor 3) and ``figure_forc`` (PNG + PDF).
+
+Baseline, in the same run: the plain per-node least-squares smoother
+(:func:`analysis.identification.local_quadratic_density`, one ``lstsq`` per node over the same
+gridded data and window) in place of the FFT normal-equation smoother; the two densities are
+compared (max difference relative to the peak). Target: total <= 10 s. Last line: JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core, as the target says
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from analysis.forc_io import read_micromag  # noqa: E402
+from analysis.identification import (  # noqa: E402
+    _protocol_table,
+    identify_from_curves,
+    local_quadratic_density,
+)
+from analysis.preisach_plots import figure_forc  # noqa: E402
+
+STEP = 0.5  # mT
+N_CURVES = 300
+HR_MAX = 20.0
+H_MAX = HR_MAX + 130 * STEP  # 300 × 131 + Σc = 84 150 points
+SMOOTHING = 3.0
+
+
+def _maker():
+    path = ROOT / "tests" / "data" / "make_forc_data.py"
+    spec = importlib.util.spec_from_file_location("make_forc_data", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def write_measurement(path: Path) -> tuple[int, int]:
+    mk = _maker()
+    seq = mk.measure(
+        step=STEP,
+        hr_max=HR_MAX,
+        hr_min=HR_MAX - (N_CURVES - 1) * STEP,
+        h_max=H_MAX,
+        jitter=0.0125,
+    )
+    path.write_bytes(mk.micromag_0016(seq).encode("cp1252"))
+    n_curves = sum(k == "curve" for k, _, _ in seq)
+    n_points = sum(h.size for k, h, _ in seq if k == "curve")
+    return n_curves, n_points
+
+
+def pipeline(path: Path, out: Path) -> dict[str, float]:
+    t0 = time.perf_counter()
+    data = read_micromag(path, drift_correction="multiplicative")
+    t1 = time.perf_counter()
+    ident = identify_from_curves(data.curves, smoothing=SMOOTHING, extend=False)
+    t2 = time.perf_counter()
+    figure_forc(ident, out, "bench_forc", field_unit="mT", moment_unit="A·m²")
+    t3 = time.perf_counter()
+    return {"read": t1 - t0, "identify": t2 - t1, "figure": t3 - t2, "total": t3 - t0}
+
+
+def baseline_smoothing(path: Path) -> tuple[float, float, float]:
+    """Per-node lstsq on the same lattice data; returns (seconds, fast seconds, max rel diff)."""
+    data = read_micromag(path, drift_correction="multiplicative")
+    nodes, E, measured, step = _protocol_table(data.curves, None)
+    aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
+    where = measured & (bb <= aa)
+    t0 = time.perf_counter()
+    base = np.full(E.shape, np.nan)
+    base[where] = local_quadratic_density(
+        aa[measured],
+        bb[measured],
+        E[measured],
+        aa[where],
+        bb[where],
+        SMOOTHING * step,
+        SMOOTHING * step,
+    )
+    t_base = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    fast = identify_from_curves(data.curves, smoothing=SMOOTHING, extend=False)
+    t_fast = time.perf_counter() - t0
+    both = np.isfinite(base) & np.isfinite(fast.density_alpha_beta)
+    peak = float(np.nanmax(fast.density_alpha_beta))
+    diff = float(np.max(np.abs(base[both] - fast.density_alpha_beta[both]))) / peak
+    return t_base, t_fast, diff
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--keep", default=None, help="keep the data file and figure here")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(args.keep) if args.keep else Path(tmp)
+        out.mkdir(parents=True, exist_ok=True)
+        path = out / "bench_forc.frc"
+        n_curves, n_points = write_measurement(path)
+        print(f"measurement: {n_curves} curves, {n_points} points, {path.stat().st_size} bytes")
+        pipeline(path, out)  # warm-up: imports, caches
+        runs = [pipeline(path, out) for _ in range(args.repeats)]
+        med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
+        for k, v in med.items():
+            print(f"{k:9s} {v:7.3f} s (median of {args.repeats})")
+        t_base, t_fast, diff = baseline_smoothing(path)
+        print(
+            f"smoothing: per-node lstsq baseline {t_base:.2f} s, FFT normal equations "
+            f"(identify incl. gridding) {t_fast:.2f} s, ratio {t_base / t_fast:.1f}x, "
+            f"max |difference| {diff:.1e} of the peak"
+        )
+        pdf = out / "bench_forc.pdf"
+        result = {
+            "benchmark": "identification",
+            "n_curves": n_curves,
+            "n_points": n_points,
+            "read_s": med["read"],
+            "identify_s": med["identify"],
+            "figure_s": med["figure"],
+            "total_s": med["total"],
+            "target_s": 10.0,
+            "meets_target": med["total"] <= 10.0,
+            "baseline_per_node_smoothing_s": t_base,
+            "identify_s_same_run": t_fast,
+            "speedup_vs_baseline": t_base / t_fast,
+            "max_rel_difference_to_baseline": diff,
+            "pdf_bytes": pdf.stat().st_size,
+        }
+        print(json.dumps(result))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,201 @@
+"""Projection of an identified (noisy, partly negative) Preisach density onto a valid model.
+
+An identification from measured reversal curves gives the Everett function ``E(α_k, β_l)`` on
+a lattice of nodes and the cell masses ``m_ij`` as its mixed second differences. Noise makes
+some masses negative, so they are not the weights of a Preisach model. The projection used
+here is the non-negative least-squares problem on the cell masses
+
+    minimise  Σ_{(k, l) measured} ( Σ_{cells (i, j) ⊂ {β_l < β' <= α' <= α_k}} m_ij − E_kl )²
+    subject to m_ij >= 0,
+
+i.e. the non-negative masses whose Everett function (hence whose reversal curves, since
+``E = ½ (output change after the reversal)``) is closest to the measured one. The residual is a
+sum over measured nodes only: where the lattice has no data, nothing is imposed. Each cell's
+mass becomes one relay at the cell's upper corner ``(α_hi, min(β_hi, α_hi))``: for inputs on the
+lattice nodes a relay anywhere in the half-open cell ``(α_lo, α_hi] × (β_lo, β_hi]`` switches
+exactly like that corner relay, so the model reproduces every node-input history of the cell
+masses exactly; between nodes it is the lattice's staircase. Cells touching the diagonal give
+zero-width relays (the reversible part of a measured sample).
+
+The model is normalised: weights ``w = m / K`` with the scale ``K = Σ m`` (half the output
+swing between the saturations), so that ``output ≈ offset + K · M[u]`` with ``M`` the model's
+output in ``[−1, 1]``.
+
+This module must not import :mod:`analysis`: the identification result is duck-typed (it needs
+``alpha``, ``beta``, ``everett`` and optionally ``measured``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["PreisachProjection", "project_identification"]
+
+_DENSE_LIMIT = 2500  # cells; above, the iterative bounded solver on the cumulative-sum operator
+
+
+@dataclass(frozen=True, eq=False)
+class PreisachProjection:
+    """Result of :func:`project_identification`.
+
+    Attributes
+    ----------
+    alpha, beta:
+        Thresholds of the relays with positive mass (``alpha >= beta``).
+    weights:
+        Their normalised weights (``>= 0``, sum 1).
+    scale:
+        ``K = Σ m``: outputs are ``offset + K · M[u]``.
+    masses:
+        The fitted non-negative cell masses, shape of the identification's ``cell_mass`` (0 for
+        unphysical cells).
+    residual_rms:
+        Root-mean-square misfit of the Everett function over the fitted nodes.
+    n_nodes:
+        Number of nodes fitted.
+    """
+
+    alpha: np.ndarray
+    beta: np.ndarray
+    weights: np.ndarray
+    scale: float
+    masses: np.ndarray
+    residual_rms: float
+    n_nodes: int
+
+    def model(self) -> Any:
+        """The :class:`~hysteresis.preisach.DiscretePreisachModel` of the relays."""
+        from hysteresis.preisach import DiscretePreisachModel
+
+        return DiscretePreisachModel(self.alpha, self.beta, self.weights)
+
+
+def _everett_apply(masses: np.ndarray) -> np.ndarray:
+    """``E[k, l] = Σ_{i < k, j >= l} M[i, j]`` on the (n_a + 1) × (n_b + 1) nodes."""
+    n_a, n_b = masses.shape
+    out = np.zeros((n_a + 1, n_b + 1))
+    suffix = np.cumsum(masses[:, ::-1], axis=1)[:, ::-1]  # Σ_{j >= l}
+    out[1:, :n_b] = np.cumsum(suffix, axis=0)
+    return out
+
+
+def _everett_adjoint(resid: np.ndarray) -> np.ndarray:
+    """Adjoint of :func:`_everett_apply`: ``G[i, j] = Σ_{k > i, l <= j} R[k, l]``."""
+    r = resid[1:, :-1]
+    rev = np.cumsum(r[::-1, :], axis=0)[::-1, :]  # Σ_{k > i}
+    return np.cumsum(rev, axis=1)  # Σ_{l <= j}
+
+
+def project_identification(
+    result: Any,
+    *,
+    use_measured_only: bool = True,
+    max_iter: int | None = None,
+) -> PreisachProjection:
+    """Non-negative least-squares projection of an identification onto a discrete model.
+
+    Parameters
+    ----------
+    result:
+        Any object with ``alpha`` (n_a + 1 ascending nodes), ``beta`` (n_b + 1), ``everett``
+        (shape (n_a + 1, n_b + 1)) and optionally ``measured`` (boolean mask of the nodes backed
+        by data) — e.g. :class:`analysis.identification.PreisachIdentification`.
+    use_measured_only:
+        Fit only the nodes of ``measured`` (when present); otherwise every node with
+        ``β < α``.
+    max_iter:
+        Iteration limit of the iterative solver used above 2500 cells (default: its own).
+
+    Returns
+    -------
+    PreisachProjection
+
+    Raises
+    ------
+    ValueError
+        If the arrays are inconsistent, non-finite on fitted nodes, or the fit has no mass.
+    """
+    from scipy.optimize import lsq_linear, nnls
+    from scipy.sparse.linalg import LinearOperator
+
+    alpha = np.asarray(getattr(result, "alpha", None), dtype=float)
+    beta = np.asarray(getattr(result, "beta", None), dtype=float)
+    E = np.asarray(getattr(result, "everett", None), dtype=float)
+    if alpha.ndim != 1 or beta.ndim != 1 or alpha.size < 2 or beta.size < 2:
+        raise ValueError("result.alpha and result.beta must be 1-D with at least two nodes")
+    if E.shape != (alpha.size, beta.size):
+        raise ValueError(f"result.everett must have shape {(alpha.size, beta.size)}, got {E.shape}")
+    if np.any(np.diff(alpha) <= 0) or np.any(np.diff(beta) <= 0):
+        raise ValueError("result.alpha and result.beta must be strictly increasing")
+    aa, bb = np.meshgrid(alpha, beta, indexing="ij")
+    rows = bb < aa
+    measured = getattr(result, "measured", None)
+    if use_measured_only and measured is not None:
+        measured = np.asarray(measured, dtype=bool)
+        if measured.shape != E.shape:
+            raise ValueError("result.measured must have the shape of result.everett")
+        rows &= measured
+    if not np.all(np.isfinite(E[rows])):
+        raise ValueError("result.everett must be finite on the fitted nodes")
+    n_rows = int(rows.sum())
+    if n_rows == 0:
+        raise ValueError("no node with β < α to fit")
+    a_hi = alpha[1:, None] + 0.0 * beta[None, :-1]
+    b_lo = beta[None, :-1] + 0.0 * alpha[1:, None]
+    cells = a_hi > b_lo  # cells with a physical part β <= α
+    n_cells = int(cells.sum())
+    target = E[rows]
+
+    def forward(x: np.ndarray) -> np.ndarray:
+        m = np.zeros(cells.shape)
+        m[cells] = np.ravel(x)
+        return _everett_apply(m)[rows]
+
+    def adjoint(r: np.ndarray) -> np.ndarray:
+        full = np.zeros(E.shape)
+        full[rows] = np.ravel(r)
+        return _everett_adjoint(full)[cells]
+
+    if n_cells <= _DENSE_LIMIT:
+        mat = np.empty((n_rows, n_cells))
+        unit = np.zeros(n_cells)
+        for c in range(n_cells):
+            unit[c] = 1.0
+            mat[:, c] = forward(unit)
+            unit[c] = 0.0
+        x, _ = nnls(mat, target, maxiter=50 * n_cells)
+    else:
+        op = LinearOperator(
+            (n_rows, n_cells),
+            matvec=forward,
+            rmatvec=adjoint,
+            dtype=float,
+        )
+        sol = lsq_linear(
+            op, target, bounds=(0.0, np.inf), method="trf", lsmr_tol="auto", max_iter=max_iter
+        )
+        x = np.maximum(sol.x, 0.0)
+    masses = np.zeros(cells.shape)
+    masses[cells] = x
+    resid = forward(x) - target
+    total = float(x.sum())
+    if not total > 0:
+        raise ValueError("the projection has no positive mass (is the Everett function flat?)")
+    keep = masses > 0
+    a_rel = (alpha[1:, None] + 0.0 * beta[None, 1:])[keep]
+    b_rel = np.minimum((beta[None, 1:] + 0.0 * alpha[1:, None])[keep], a_rel)
+    w = masses[keep] / total
+    w = w / w.sum()  # exact normalisation against round-off
+    masses.setflags(write=False)
+    return PreisachProjection(
+        alpha=a_rel,
+        beta=b_rel,
+        weights=w,
+        scale=total,
+        masses=masses,
+        residual_rms=float(np.sqrt(np.mean(resid**2))),
+        n_nodes=n_rows,
+    )

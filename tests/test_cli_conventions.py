@@ -1,0 +1,120 @@
+"""Every ``hyst`` command follows one convention (issue 12, "One command line")."""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import math
+
+import pytest
+
+from analysis.cli import build_parser, main
+from analysis.cli._common import DEFAULT_OUT, HelpFormatter, progress_enabled, to_json
+
+#: commands that build a model (the shared model options must be there)
+MODEL_COMMANDS = ("lyapunov", "trajectory", "poincare", "bifurcation", "dimension", "ensemble")
+SHARED_MODEL_OPTIONS = (
+    "--model", "--spins", "--seed", "--width", "--spread", "--spin-coupling", "--width-spread",
+)  # fmt: skip
+SHARED_OUTPUT_OPTIONS = ("--out", "--json", "--quiet")
+#: the identification command is adopting the convention in its own branch (see its owner)
+PENDING = {"identify"}
+
+
+def _subparsers() -> dict[str, argparse.ArgumentParser]:
+    parser = build_parser()
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return dict(action.choices)
+
+
+def test_every_command_is_registered():
+    assert set(_subparsers()) >= {*MODEL_COMMANDS, "paper", "identify"}
+
+
+@pytest.mark.parametrize("command", sorted(_subparsers()))
+def test_help_of_every_command_shows_the_shared_options_defaults_and_help(command, capsys):
+    assert main([command, "--help"]) == 0
+    if command in PENDING and "--quiet" not in capsys.readouterr().out:
+        pytest.xfail(f"hyst {command} adopts analysis.cli._common in its owner's branch")
+    assert main([command, "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())  # undo the help formatter's wrapping
+    for opt in SHARED_OUTPUT_OPTIONS:
+        assert opt in text, f"hyst {command} --help lacks {opt}"
+    assert f"(default: {DEFAULT_OUT})" in text  # one --out default everywhere
+    if command in MODEL_COMMANDS:
+        for opt in SHARED_MODEL_OPTIONS:
+            assert opt in text, f"hyst {command} --help lacks {opt}"
+    parser = _subparsers()[command]
+    assert parser.formatter_class is HelpFormatter
+    for action in parser._actions:
+        assert action.help, f"hyst {command}: {action.option_strings} has no help text"
+        if "--transient" in action.option_strings:
+            assert "forcing periods" in action.help
+    # every option with a default value shows it
+    for action in parser._actions:
+        if action.default not in (None, False, argparse.SUPPRESS) and action.option_strings:
+            assert "default" in parser.formatter_class("x")._get_help_string(action)
+
+
+def test_json_encodes_non_finite_numbers_as_strings():
+    text = to_json({"a": math.inf, "b": -math.inf, "c": math.nan, "d": [1.5, float("nan")]})
+    assert json.loads(text) == {"a": "inf", "b": "-inf", "c": "nan", "d": [1.5, "nan"]}
+    assert "Infinity" not in text and "NaN" not in text
+
+
+def test_progress_is_off_when_not_a_tty_and_with_quiet(monkeypatch):
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    monkeypatch.setattr("sys.stderr", io.StringIO())
+    assert progress_enabled(argparse.Namespace(quiet=False)) is False
+    monkeypatch.setattr("sys.stderr", Tty())
+    assert progress_enabled(argparse.Namespace(quiet=False)) is True
+    assert progress_enabled(argparse.Namespace(quiet=True)) is False
+
+
+def test_library_functions_are_quiet_by_default():
+    import inspect
+
+    from analysis.bifurcation import bifurcation_diagram
+    from analysis.ensemble import run_ensemble
+    from analysis.paper import run_paper
+
+    for fn in (bifurcation_diagram, run_ensemble, run_paper):
+        assert inspect.signature(fn).parameters["progress"].default is False, fn.__name__
+
+
+def test_json_output_is_one_object_and_the_figure_title_names_model_and_parameters(
+    tmp_path, capsys
+):
+    out = tmp_path / "o"
+    argv = ["poincare", "--model", "n4", "--coupling", "4", "--periods", "20", "--transient",
+            "2", "--out", str(out), "--json"]  # fmt: skip
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    record = json.loads(captured.out)  # exactly one JSON document on stdout
+    assert record["model"] == "n4" and record["spin_coupling"] == 2.0
+    assert record["points"] == 20 and record["transient_periods"] == 2
+    assert (out / "poincare.png").stat().st_size > 1000
+    from analysis.cli._common import figure_title
+
+    ns = build_parser().parse_args(argv)
+    title = figure_title(ns, "Poincaré section φ = 0")
+    assert "n4" in title and "J=2" in title and "C=4" in title and "ζ=0.05" in title
+
+
+def test_compilation_is_announced_only_without_a_cache(tmp_path, monkeypatch, capsys):
+    import analysis.cli._common as common
+
+    ns = argparse.Namespace(quiet=False)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(common.Path, "rglob", lambda self, pattern: iter(()))
+    common.announce_compilation(ns)
+    assert "compiling" in capsys.readouterr().err
+    common.announce_compilation(argparse.Namespace(quiet=True))
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(common.Path, "rglob", lambda self, pattern: iter([self / "x.nbi"]))
+    common.announce_compilation(ns)
+    assert capsys.readouterr().err == ""

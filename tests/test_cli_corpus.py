@@ -1,0 +1,282 @@
+"""Bad-input corpus of the ``hyst`` command line (issue 12).
+
+Every case gives one command an invalid value for one option (NaN, inf, text, out of range,
+wrong kind, inconsistent with another option, missing). Each must end at once with exit status
+2 and exactly one line on stderr that names the option — no traceback, no output files, no
+work done. The table covers every command and every kind of option.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+
+import pytest
+
+from analysis.cli import main
+
+#: (argv, text the one stderr line must contain)
+CASES: list[tuple[list[str], str]] = [
+    # -- hyst lyapunov: model options ------------------------------------------------------
+    (["lyapunov", "--coupling", "nan"], "--coupling"),
+    (["lyapunov", "--coupling", "inf"], "--coupling"),
+    (["lyapunov", "--coupling", "four"], "--coupling"),
+    (["lyapunov", "--coupling", "1+2j"], "--coupling"),
+    (["lyapunov"], "--coupling"),
+    (["lyapunov", "--coupling", "4", "--model", "bogus"], "--model"),
+    (["lyapunov", "--coupling", "4", "--spins", "0"], "--spins"),
+    (["lyapunov", "--coupling", "4", "--spins", "101"], "--spins"),
+    (["lyapunov", "--coupling", "4", "--spins", "1.5"], "--spins"),
+    (["lyapunov", "--coupling", "4", "--spins", "1000000000000"], "--spins"),
+    (["lyapunov", "--coupling", "4", "--seed", "-1"], "--seed"),
+    (["lyapunov", "--coupling", "4", "--width", "-2"], "--width"),
+    (["lyapunov", "--coupling", "4", "--width", "5"], "--width"),
+    (["lyapunov", "--coupling", "4", "--spread", "0"], "--spread"),
+    (["lyapunov", "--coupling", "4", "--spin-coupling", "0"], "--spin-coupling"),
+    (["lyapunov", "--coupling", "4", "--width-spread", "-0.1"], "--width-spread"),
+    (
+        ["lyapunov", "--coupling", "4", "--model", "preisach-gauss", "--width-spread", "0"],
+        "--width-spread",
+    ),
+    (["lyapunov", "--coupling", "4", "--fields", "1", "2", "3"], "--fields"),
+    (["lyapunov", "--coupling", "4", "--model", "play", "--fields", "1", "-1"], "--fields"),
+    (
+        ["lyapunov", "--coupling", "4", "--model", "relay", "--alpha", "-1", "--beta", "1"],
+        "--alpha",
+    ),
+    (["lyapunov", "--coupling", "4", "--model", "pi", "--plays", "0"], "--plays"),
+    (["lyapunov", "--coupling", "4", "--alpha", "1"], "--alpha"),
+    # oscillator options
+    (["lyapunov", "--coupling", "4", "--damping-ratio", "-1"], "--damping-ratio"),
+    (
+        ["lyapunov", "--coupling", "4", "--model", "erf-play", "--damping-ratio", "1.5"],
+        "--damping-ratio",
+    ),
+    (
+        ["lyapunov", "--coupling", "4", "--damping-ratio", "0", "--frequency", "1"],
+        "--damping-ratio",
+    ),
+    (["lyapunov", "--coupling", "4", "--frequency", "0"], "--frequency"),
+    (["lyapunov", "--coupling", "4", "--frequency", "1e-300"], "--frequency"),
+    # initial condition
+    (["lyapunov", "--coupling", "4", "--q0", "nan"], "--q0"),
+    (["lyapunov", "--coupling", "4", "--v0", "-inf"], "--v0"),
+    (["lyapunov", "--coupling", "4", "--model", "play", "--w0", "5"], "--w0"),
+    (["lyapunov", "--coupling", "4", "--w0", "0"], "--w0"),
+    # run options
+    (["lyapunov", "--coupling", "4", "--t-end", "-5"], "--t-end"),
+    (["lyapunov", "--coupling", "4", "--t-end", "10", "--transient", "100"], "--transient"),
+    (["lyapunov", "--coupling", "4", "--transient", "-1"], "--transient"),
+    (["lyapunov", "--coupling", "4", "--t-end", "1e300"], "--t-end"),
+    # -- hyst trajectory -------------------------------------------------------------------
+    (["trajectory", "--coupling", "4", "--t-end", "1e12", "--sample-dt", "1e6"], "--t-end"),
+    (["trajectory", "--coupling", "4", "--sample-dt", "0"], "--sample-dt"),
+    (["trajectory", "--coupling", "4", "--sample-dt", "1e-9", "--t-end", "1e6"], "--sample-dt"),
+    (["trajectory", "--coupling", "4", "--t-end", "0"], "--t-end"),
+    (["trajectory", "--coupling", "4", "--model", "erf_pla"], "--model"),
+    # -- hyst poincare ---------------------------------------------------------------------
+    (["poincare", "--coupling", "4", "--periods", "0"], "--periods"),
+    (["poincare", "--coupling", "4", "--periods", "1e3"], "--periods"),
+    (["poincare", "--coupling", "4", "--periods", "10000000000"], "--periods"),
+    (["poincare", "--coupling", "4", "--transient", "-1"], "--transient"),
+    (["poincare", "--coupling", "4", "--transient-periods", "2.5"], "--transient"),
+    (["poincare", "--coupling", "4", "--transient", "1000000000000"], "--transient"),
+    # -- hyst bifurcation ------------------------------------------------------------------
+    (["bifurcation"], "--start"),
+    (["bifurcation", "--values", "1", "--start", "2", "--stop", "1"], "--values"),
+    (["bifurcation", "--start", "2", "--stop", "1", "--steps", "0"], "--steps"),
+    (["bifurcation", "--parameter", "frequency", "--values", "1", "2"], "--coupling"),
+    (["bifurcation", "--coupling", "2", "--values", "1", "2"], "--coupling"),
+    (
+        ["bifurcation", "--parameter", "frequency", "--coupling", "2", "--values", "1", "0"],
+        "--values",
+    ),
+    (["bifurcation", "--values", "1", "--lyapunov-t", "-1"], "--lyapunov-t"),
+    (["bifurcation", "--values", "1", "--parameter", "mass"], "--parameter"),
+    (["bifurcation", "--values", "nan"], "--values"),
+    (["bifurcation", "--values", "1", "--lyapunov-t", "1e15"], "--lyapunov-t"),
+    # -- hyst dimension --------------------------------------------------------------------
+    (["dimension", "--coupling", "4", "--max-fill", "0"], "--max-fill"),
+    (["dimension", "--coupling", "4", "--max-fill", "2"], "--max-fill"),
+    (["dimension", "--coupling", "4", "--min-boxes", "0.5"], "--min-boxes"),
+    (["dimension", "--coupling", "4", "--points", "1"], "--points"),
+    (["dimension", "--coupling", "4", "--transient", "0", "--t-end", "5"], "--t-end"),
+    # -- hyst ensemble ---------------------------------------------------------------------
+    (["ensemble", "--spins", "101", "--coupling", "4", "--realizations", "2"], "--spins"),
+    (["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "0"], "--realizations"),
+    (["ensemble", "--spins", "20", "--coupling", "4"], "--realizations"),
+    (
+        ["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "1", "--t-end", "1e20"],
+        "--t-end",
+    ),
+    (
+        ["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "1", "--workers", "0"],
+        "--workers",
+    ),
+    (
+        ["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "1", "--model", "play"],
+        "--model",
+    ),
+    (["ensemble", "--spins", "20", "--coupling", "4", "nan", "--realizations", "1"], "--coupling"),
+    (
+        [
+            "ensemble",
+            "--spins",
+            "20",
+            "--coupling",
+            "4",
+            "--realizations",
+            "1",
+            "--box-max-fill",
+            "1.5",
+        ],
+        "--box-max-fill",
+    ),  # fmt: skip
+    (
+        [
+            "ensemble",
+            "--spins",
+            "20",
+            "--coupling",
+            "4",
+            "--realizations",
+            "1",
+            "--fields",
+            "1",
+            "-1",
+        ],
+        "--fields",
+    ),  # fmt: skip
+    (
+        [
+            "ensemble",
+            "--spins",
+            "20",
+            "--coupling",
+            "4",
+            "--realizations",
+            "1",
+            "--workers",
+            "1",
+            "--scheduler",
+            "tcp://127.0.0.1:1",
+        ],
+        "--workers",
+    ),  # fmt: skip
+    # -- hyst paper ------------------------------------------------------------------------
+    (["paper", "--only", "fig:nonexistent"], "--only"),
+    (["paper", "--workers", "0"], "--workers"),
+    (["paper", "--workers", "two"], "--workers"),
+    (["paper", "--smoke", "--full"], "--full"),
+    # -- hyst identify (owner: identification; reached through the shared error handling) --
+    (["identify", "--model", "bogus"], "--model"),
+    (["identify", "--spins", "x"], "--spins"),
+    (["identify", "--format", "xml"], "--format"),
+    # -- hyst ------------------------------------------------------------------------------
+    (["bogus"], "invalid choice"),
+]
+
+
+def _ids() -> list[str]:
+    return [f"{i:02d}-{' '.join(argv)[:60]}" for i, (argv, _) in enumerate(CASES)]
+
+
+@pytest.mark.parametrize(("argv", "needle"), CASES, ids=_ids())
+def test_bad_option_is_one_line_exit_2_before_any_work(argv, needle, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the default --out (hyst-out) would land here
+    start = time.perf_counter()
+    code = main(argv)
+    elapsed = time.perf_counter() - start
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert code == 2, captured.err
+    assert len(lines) == 1, captured.err
+    assert needle in lines[0], lines[0]
+    assert lines[0].startswith("hyst"), lines[0]
+    assert "Traceback" not in captured.err
+    assert captured.out == ""
+    # validation happens before any work: nothing written, and fast
+    assert not (tmp_path / "hyst-out").exists() or argv[0] == "identify"
+    assert elapsed < 20.0
+
+
+def test_corpus_size_and_coverage():
+    commands = {argv[0] for argv, _ in CASES}
+    assert len(CASES) >= 30
+    assert commands >= {
+        "lyapunov", "trajectory", "poincare", "bifurcation", "dimension", "ensemble", "paper",
+        "identify",
+    }  # fmt: skip
+
+
+def test_out_that_is_a_file_is_refused(tmp_path, capsys):
+    target = tmp_path / "afile"
+    target.write_text("x")
+    code = main(["lyapunov", "--coupling", "4", "--spins", "20", "--out", str(target)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--out" in err[0]
+    assert target.read_text() == "x"
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["ensemble", "--spins", "101", "--coupling", "4", "--realizations", "2"], "--spins"),
+        (["paper", "--only", "fig:nonexistent"], "--only"),
+        (["paper", "--workers", "0"], "--workers"),
+    ],
+)
+def test_real_process_one_line_exit_2(argv, needle, tmp_path):
+    """The installed entry point, as a user runs it (issue 12's examples)."""
+    start = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-m", "analysis.cli", *argv],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
+    elapsed = time.perf_counter() - start
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, proc.stderr
+    assert len(lines) == 1 and needle in lines[0], proc.stderr
+    assert elapsed < 30.0
+    assert not (tmp_path / "hyst-out").exists()
+
+
+def _failing_task(x: int) -> dict:
+    raise ValueError(f"spins must be even, got {x}\n(second line of the message)")
+
+
+def test_error_inside_a_worker_process_is_one_line(monkeypatch, tmp_path, capsys):
+    """An exception raised in a worker process of an ensemble reaches the user as one line."""
+    import analysis.ensemble
+    from analysis.execution import run_tasks
+
+    def fake_run_ensemble(*args, **kwargs):
+        return run_tasks(
+            "corpus-fail", [{"x": 101}, {"x": 103}], _failing_task, workers=2, progress=False
+        )
+
+    monkeypatch.setattr(analysis.ensemble, "run_ensemble", fake_run_ensemble)
+    code = main(
+        ["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "1",
+         "--out", str(tmp_path), "--quiet"]
+    )  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and "spins must be even" in err[0] and "Traceback" not in err[0]
+
+
+def test_unexpected_library_error_is_one_line(monkeypatch, capsys):
+    import analysis.lyapunov
+
+    def boom(*args, **kwargs):
+        raise RuntimeError("tangent integrator returned unsorted exponents\n[1, 2]")
+
+    monkeypatch.setattr(analysis.lyapunov, "lyapunov_spectrum", boom)
+    code = main(["lyapunov", "--coupling", "4", "--spins", "20", "--quiet", "--out", "/tmp"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert err[0].startswith("hyst lyapunov: error: RuntimeError: tangent integrator")
