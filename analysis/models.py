@@ -78,8 +78,6 @@ class ModelParameters:
         Relay thresholds (``relay``; default ``±p/2``).
     plays:
         K, number of plays of ``pi``, >= 1.
-    resolution:
-        Everett-table resolution of ``preisach-gauss`` (grid points per axis).
     """
 
     spins: int = 20000
@@ -92,7 +90,6 @@ class ModelParameters:
     alpha: float | None = None
     beta: float | None = None
     plays: int = 10
-    resolution: int = 512
 
 
 @dataclass(frozen=True)
@@ -201,29 +198,15 @@ def _preisach(p: ModelParameters) -> Any:
 
 
 def _preisach_gauss(p: ModelParameters) -> Any:
-    from scipy.special import ndtr
-
-    from hysteresis.preisach import PreisachModel
+    from hysteresis.preisach import ContinuousPreisachModel
 
     width = _check_positive(p.width, "width")
     spread = _check_positive(p.spread, "spread")
     sr = _check_width_spread(p, strictly_positive=True)
-    mean_r = 0.5 * width
-    # mass of N(r; p/2, σ_r²) on r >= 0: divide it out so the density is normalised
-    norm_r = float(ndtr(mean_r / sr))
-    c_s = 1.0 / (spread * math.sqrt(2.0 * math.pi))
-    c_r = 1.0 / (sr * math.sqrt(2.0 * math.pi) * norm_r)
-
-    def density(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
-        s = 0.5 * (alpha + beta)
-        r = 0.5 * (alpha - beta)
-        f = c_s * np.exp(-0.5 * (s / spread) ** 2) * c_r * np.exp(-0.5 * ((r - mean_r) / sr) ** 2)
-        # dα dβ = 2 ds dr: the density in (α, β) is half the one in (s, r)
-        return np.where(r >= 0.0, 0.5 * f, 0.0)
-
-    # the triangle must hold 5 standard deviations of both factors
-    half_extent = 5.0 * spread + mean_r + 5.0 * sr
-    return PreisachModel.from_density(density, -half_extent, half_extent, int(p.resolution))
+    # smooth Everett function by 1-D quadrature (N(r; p/2, σ_r²) cut at r >= 0 and
+    # renormalised): no table kinks, so the continuous engine takes large steps (a tabulated
+    # from_density model of the same law is ~20x slower to integrate)
+    return ContinuousPreisachModel.gaussian(width, spread, sr)
 
 
 def _pi(p: ModelParameters) -> Any:

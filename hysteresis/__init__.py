@@ -14,6 +14,7 @@ from hysteresis.base import (
     PiecewiseConstantHysteron,
     Switching,
 )
+from hysteresis.flow import BranchFlow
 from hysteresis.play import GeneralizedPlay, PlayOperator, PlayState
 from hysteresis.prandtl_ishlinskii import PIState, PrandtlIshlinskii
 from hysteresis.preisach import (
@@ -27,6 +28,7 @@ from hysteresis.relay_table import NestedPlan, RelayTable
 from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
 
 __all__ = [
+    "BranchFlow",
     "__version__",
     "Branch",
     "ContinuousHysteron",
