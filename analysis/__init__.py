@@ -18,6 +18,7 @@ _check_import_name("analysis")
 
 _LAZY = {
     "lyapunov_spectrum": "analysis.lyapunov",
+    "TangentStepper": "analysis.lyapunov",
     "LyapunovResult": "analysis.lyapunov",
     "kaplan_yorke_dimension": "analysis.dimensions",
     "box_counting_dimension": "analysis.dimensions",
