@@ -95,6 +95,7 @@ class ForcedOscillator:
         check = getattr(self._engine_cls, "check_system", None)
         if check is not None:
             check(self)
+        self._probe_engine()
         lo, hi = operator.output_range
         if (math.isinf(lo) or math.isinf(hi)) and coupling >= 1.0:
             warnings.warn(
@@ -105,6 +106,24 @@ class ForcedOscillator:
                 RuntimeWarning,
                 stacklevel=2,
             )
+
+    def _probe_engine(self) -> None:
+        """Refuse, at construction, an operator whose contract the engine cannot use.
+
+        A short step from ``q = 0`` exercises everything the engine asks of the operator
+        (relay table or switching inputs; branch flow and linearization), so an operator that
+        does not honour the contract fails here with the reason, not first at integration time.
+        """
+        try:
+            probe = self._engine_cls(self, self.initial_state(0.0, 0.0))
+            probe.advance(np.array([1e-6 * self.period]))
+        except NotImplementedError as exc:
+            raise TypeError(
+                f"operator {self._operator!r} cannot be coupled to the oscillator: its contract "
+                f"is incomplete ({exc or 'a contract method is not implemented'}); a "
+                "piecewise-constant operator needs switching() and relay_table(), a continuous "
+                "one branch_flow() (see hysteresis.base)"
+            ) from None
 
     # -- parameters --------------------------------------------------------------------------
     @property

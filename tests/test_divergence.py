@@ -101,3 +101,46 @@ def test_unbounded_work_is_refused_up_front():
         system.trajectory("10")
     with pytest.raises(TypeError, match="operator"):
         ForcedOscillator("play", 1.0)
+
+
+def test_operators_that_cannot_be_integrated_are_refused_at_construction():
+    from hysteresis.base import Branch, ContinuousHysteron, PiecewiseConstantHysteron
+
+    class NoFlow(ContinuousHysteron):
+        """Continuous operator without branch_flow (the engine's contract)."""
+
+        def initial_state(self, u0):
+            return float(u0)
+
+        def apply(self, inputs, state=None):
+            u = np.asarray(inputs, dtype=float)
+            return np.tanh(u), float(u[-1])
+
+        def output(self, state):
+            return float(np.tanh(state))
+
+        def branch(self, state, direction):
+            return Branch(float(np.tanh(state)), 0.0, np.inf)
+
+        def linearize(self, state, direction):
+            raise NotImplementedError
+
+    class NoSwitching(PiecewiseConstantHysteron):
+        """Piecewise-constant operator without switching()/relay_table()."""
+
+        def initial_state(self, u0):
+            return float(u0)
+
+        def apply(self, inputs, state=None):
+            u = np.asarray(inputs, dtype=float)
+            return np.sign(u), float(u[-1])
+
+        def output(self, state):
+            return 1.0
+
+        def switching(self, state):
+            raise NotImplementedError
+
+    for op in (NoFlow(), NoSwitching()):
+        with pytest.raises(TypeError, match="cannot be coupled"):
+            ForcedOscillator(op, coupling=1.0)
