@@ -11,10 +11,13 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
 from analysis.cli import main
+
+DATA = Path(__file__).parent / "data"
 
 #: (argv, text the one stderr line must contain)
 CASES: list[tuple[list[str], str]] = [
@@ -169,10 +172,55 @@ CASES: list[tuple[list[str], str]] = [
     (["paper", "--workers", "0"], "--workers"),
     (["paper", "--workers", "two"], "--workers"),
     (["paper", "--smoke", "--full"], "--full"),
-    # -- hyst identify (owner: identification; reached through the shared error handling) --
+    # -- hyst identify: model options, grid, smoothing, measured files -----------------------
     (["identify", "--model", "bogus"], "--model"),
+    (["identify", "--model", "relay"], "--model"),
     (["identify", "--spins", "x"], "--spins"),
+    (["identify", "--spins", "101"], "--spins"),
+    (["identify", "--seed", "-1"], "--seed"),
+    (["identify", "--width", "nan"], "--width"),
+    (["identify", "--width", "5"], "--width"),
+    (["identify", "--spread", "-1"], "--spread"),
+    (["identify", "--spin-coupling", "0"], "--spin-coupling"),
+    (["identify", "--model", "play", "--fields", "1", "-1"], "--fields"),
+    (["identify", "--step", "0"], "--step"),
+    (["identify", "--step", "-0.1"], "--step"),
+    (["identify", "--step", "inf"], "--step"),
+    (["identify", "--step", "1e-5"], "--step"),
+    (["identify", "--model", "play", "--step", "1e-5"], "--step"),
+    (["identify", "--saturation", "0"], "--saturation"),
+    (["identify", "--saturation", "1e300", "--model", "erf-play"], "--step"),
+    (["identify", "--model", "preisach-uniform", "--saturation", "nan"], "--saturation"),
+    (["identify", "--smoothing", "0"], "--smoothing"),
+    (["identify", "--smoothing", "nan"], "--smoothing"),
+    (["identify", "--smoothing", "1", "2", "3"], "--smoothing"),
+    (["identify", "--input", "no-such-file.frc"], "--input"),
+    (["identify", "--input", "."], "--input"),
+    (["identify", "--input", str(DATA / "make_forc_data.py")], "--input"),
+    (["identify", "--input", str(DATA / "forc_micromag_irregular.frc")], "--input"),
+    (
+        ["identify", "--input", str(DATA / "forc_lakeshore_8600.csv"), "--format", "micromag"],
+        "--input",
+    ),  # fmt: skip
     (["identify", "--format", "xml"], "--format"),
+    (["identify", "--format", "csv"], "--format"),
+    (["identify", "--window", "hann"], "--window"),
+    (["identify", "--drift-correction", "cubic"], "--drift-correction"),
+    (["identify", "--drift-correction", "additive"], "--drift-correction"),
+    (
+        [
+            "identify",
+            "--input",
+            str(DATA / "forc_erf_play_mayergoyz.csv"),
+            "--drift-correction",
+            "additive",
+        ],
+        "--drift-correction",
+    ),  # fmt: skip
+    (["identify", "--grid-step", "0"], "--grid-step"),
+    (["identify", "--grid-step", "0.1"], "--grid-step"),
+    (["identify", "--reversible-ridge"], "--reversible-ridge"),
+    (["identify", "--out", "x", "--json", "--quiet", "--bogus"], "--bogus"),
     # -- hyst ------------------------------------------------------------------------------
     (["bogus"], "invalid choice"),
 ]
@@ -197,7 +245,7 @@ def test_bad_option_is_one_line_exit_2_before_any_work(argv, needle, capsys, tmp
     assert "Traceback" not in captured.err
     assert captured.out == ""
     # validation happens before any work: nothing written, and fast
-    assert not (tmp_path / "hyst-out").exists() or argv[0] == "identify"
+    assert not (tmp_path / "hyst-out").exists() and not (tmp_path / "x").exists()
     assert elapsed < 20.0
 
 
