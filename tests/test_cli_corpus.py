@@ -219,7 +219,39 @@ CASES: list[tuple[list[str], str]] = [
         "--drift-correction",
     ),  # fmt: skip
     (["identify", "--grid-step", "0"], "--grid-step"),
+    (
+        ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--grid-step", "0.1"],
+        "--grid-step",
+    ),  # fmt: skip
+    (
+        ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--step", "0.1"],
+        "--step",
+    ),  # fmt: skip
+    (
+        ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--saturation", "3"],
+        "--saturation",
+    ),  # fmt: skip
     (["identify", "--grid-step", "0.1"], "--grid-step"),
+    (
+        [
+            "identify",
+            "--input",
+            str(DATA / "forc_micromag_0016_hybrid_si.frc"),
+            "--grid-step",
+            "1e-9",
+        ],
+        "--grid-step",
+    ),
+    (
+        [
+            "identify",
+            "--input",
+            str(DATA / "forc_micromag_0016_hybrid_si.frc"),
+            "--grid-step",
+            "1e9",
+        ],
+        "--grid-step",
+    ),
     (["identify", "--reversible-ridge"], "--reversible-ridge"),
     (["identify", "--out", "x", "--json", "--quiet", "--bogus"], "--bogus"),
     # -- hyst ------------------------------------------------------------------------------

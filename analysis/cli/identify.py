@@ -22,6 +22,7 @@ from analysis.cli._common import (
     add_model_options,
     add_output_options,
     add_subcommand,
+    announce_compilation,
     check_model_options,
     emit,
     figure_title,
@@ -41,6 +42,8 @@ IDENTIFY_MODELS = ("dimers", "erf-play", "play", "preisach-uniform")
 #: models whose density the paper states (N(s; 0, R²) δ(r − p/2)): only these get its metrics
 PAPER_MODELS = ("dimers", "erf-play")
 FORMATS = ("auto", "csv", "micromag", "lakeshore")
+#: the grid step of a model's identification (the paper's fig:preis_dens)
+DEFAULT_STEP = 0.1
 
 
 def register(subparsers: Any) -> None:
@@ -60,7 +63,12 @@ def register(subparsers: Any) -> None:
     )
     add_model_options(p, models=IDENTIFY_MODELS, default="dimers")
     g = p.add_argument_group("identification")
-    g.add_argument("--step", type=positive_float, default=0.1, help="models: grid step Delta (> 0)")
+    g.add_argument(
+        "--step",
+        type=positive_float,
+        default=None,
+        help=f"models: grid step Delta (> 0; default {DEFAULT_STEP:g})",
+    )
     g.add_argument(
         "--saturation",
         type=positive_float,
@@ -134,6 +142,12 @@ def run(args: argparse.Namespace) -> int:
     """Validate every option (and read ``--input`` or build the model), then identify."""
     t0 = time.perf_counter()
     if args.input is not None:
+        for option, given in (("--step", args.step), ("--saturation", args.saturation)):
+            if given is not None:
+                raise CliError(
+                    f"argument {option}: only for models; with --input the lattice comes from "
+                    "the measurement (--grid-step)"
+                )
         measured = _prepare_measured(args)
         out = prepare_out(args)
         return _run_measured(args, out, t0, *measured)
@@ -145,8 +159,11 @@ def run(args: argparse.Namespace) -> int:
     ):
         if given:
             raise CliError(f"argument {option}: only with --input (a measured FORC file)")
+    if args.step is None:
+        args.step = DEFAULT_STEP
     model = _prepare_model(args)
     out = prepare_out(args)
+    announce_compilation(args)
     return _run_model(args, out, t0, *model)
 
 
@@ -304,7 +321,31 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
     except (ValueError, OSError) as exc:
         # a user's file: one line naming the problem (and its line), not a traceback
         raise CliError(f"argument --input: {path}: {exc}") from exc
+    if args.grid_step is not None:
+        _check_grid_step(args, data.curves)
     return fmt, data, smoothing  # type: ignore[return-value]
+
+
+def _check_grid_step(args: argparse.Namespace, curves: Any) -> None:
+    """``--grid-step`` applies to the protocol lattice only (fields that differ from curve to
+    curve); refuse it on data whose fields share one grid (it would be ignored) and refuse a
+    lattice too fine or too coarse for the data, before any output is written."""
+    import numpy as np
+
+    from analysis.identification import protocol_lattice
+
+    # the rule of identify_from_curves(grid="auto"): measured fields -> protocol lattice
+    n_union = np.unique(np.concatenate(curves.fields)).size
+    longest = max(h.size for h in curves.fields)
+    if n_union <= 2 * (longest + curves.n_curves):
+        raise CliError(
+            f"argument --grid-step: {args.input} has its fields on one shared grid (identified "
+            "on that grid); --grid-step applies to measured fields that differ curve by curve"
+        )
+    try:
+        protocol_lattice(curves, args.grid_step)
+    except ValueError as exc:
+        raise CliError(f"argument --grid-step: {args.input}: {exc}") from exc
 
 
 def _run_measured(
