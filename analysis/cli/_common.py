@@ -447,6 +447,8 @@ def model_parameters(args: argparse.Namespace) -> Any:
         alpha=args.alpha,
         beta=args.beta,
         plays=args.plays,
+        # set by commands that give preisach-uniform its half-extent (hyst identify --saturation)
+        half_extent=getattr(args, "half_extent", None),
     )
 
 

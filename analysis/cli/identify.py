@@ -13,7 +13,6 @@ import argparse
 import math
 import os
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -179,9 +178,9 @@ def _prepare_model(args: argparse.Namespace) -> tuple[Any, Any, float, Any]:
 
     check_model_options(args)
     smoothing = _smoothing(args, None)
+    # preisach-uniform: the triangle is the grid (--saturation), so records and titles name it
+    args.half_extent = args.saturation if args.model == "preisach-uniform" else None
     params = model_parameters(args)
-    if args.model == "preisach-uniform":
-        params = replace(params, half_extent=args.saturation)
     try:
         operator = build_operator(args.model, params)
     except (ValueError, TypeError) as exc:
@@ -224,7 +223,9 @@ def _run_model(
     # the paper's ridge metrics: only for the paper's models (dimers, erf play), never over
     # user data or other operators
     cmp = None
-    if args.model in PAPER_MODELS:
+    # explicit --fields are the user's dimers, not the paper's disorder N(s; 0, R²)
+    paper = args.model in PAPER_MODELS and args.fields is None
+    if paper:
         cmp = compare_with_ridge(ident, args.width, args.spread, centres=centres)
         report.update(cmp.as_dict())
     else:
@@ -236,7 +237,7 @@ def _run_model(
     report["mass_outside_grid"] = ident.mass_outside_grid
     report["smoothing"] = list(smoothing) if smoothing else None
     title = figure_title(args, "Preisach density", **{"Δ": float(args.step)})
-    if args.model == "dimers":
+    if paper and args.model == "dimers":
         # the paper's figure: the erf play (N -> infinity) next to the finite ensemble
         limit = identify_preisach(
             build_operator("erf-play", width=args.width, spread=args.spread),
@@ -250,7 +251,7 @@ def _run_model(
             args.width,
             args.spread,
             out,
-            finite_label=f"N = {args.spins}",
+            finite_label=f"N = {operator.n_spins}",
             extra_data={"centres": centres},
             title=title,
         )
@@ -261,7 +262,7 @@ def _run_model(
             f"identify_{args.model}".replace(".", "_"),
             title=title,
             smoothed=smoothing is not None,
-            spread=args.spread if args.model in PAPER_MODELS else None,
+            spread=args.spread if paper else None,
         )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
