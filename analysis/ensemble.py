@@ -412,13 +412,15 @@ def run_ensemble(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = False,
+    allow_version_mismatch: bool = False,
     **task_kwargs: Any,
 ) -> list[EnsemblePoint]:
     """Run (or resume) the ensemble and aggregate it per (N, C).
 
     Every (N, C, realization) is one task of :func:`ensemble_task` (experiment
     ``"ensemble-dimers"``); ``store``/``workers``/``scheduler`` as in :func:`run_tasks`;
-    ``progress`` shows a progress bar (off by default). ``task_kwargs`` go to every task (see
+    ``progress`` shows a progress bar (off by default); ``allow_version_mismatch`` as in
+    :func:`run_tasks`. ``task_kwargs`` go to every task (see
     :func:`ensemble_task`; ``model="preisach"`` runs random-relay ensembles).
     """
     tasks = ensemble_tasks(
@@ -432,5 +434,6 @@ def run_ensemble(
         workers=workers,
         scheduler=scheduler,
         progress=progress,
+        allow_version_mismatch=allow_version_mismatch,
     )
     return aggregate_ensemble(zip(tasks, results, strict=True))

@@ -23,6 +23,9 @@ name                      operator
                           on ``r >= 0``, renormalised (``σ_r > 0``)
 ``pi``                    Prandtl–Ishlinskii: K plays, widths evenly spaced on
                           ``[p/2, 3p/2]``, equal weights ``1/K``
+``preisach-uniform``      continuous Preisach model, uniform density on the triangle
+                          ``-H <= β <= α <= H``, ``H = 5R + p/2`` unless given (a reference
+                          density for the identification)
 ========================  =====================================================================
 
 Here ``s = (α + β)/2`` is a relay's centre and ``r = (α − β)/2`` its half-width, so the paper's
@@ -50,6 +53,7 @@ __all__ = [
     "describe_model",
     "model_names",
     "model_record",
+    "uniform_half_extent",
 ]
 
 
@@ -78,6 +82,10 @@ class ModelParameters:
         Relay thresholds (``relay``; default ``±p/2``).
     plays:
         K, number of plays of ``pi``, >= 1.
+    resolution:
+        Everett-table resolution of ``preisach-uniform`` (grid points per axis).
+    half_extent:
+        H, half-extent of the ``preisach-uniform`` triangle, > 0 (default ``5R + p/2``).
     """
 
     spins: int = 20000
@@ -90,6 +98,8 @@ class ModelParameters:
     alpha: float | None = None
     beta: float | None = None
     plays: int = 10
+    resolution: int = 512
+    half_extent: float | None = None
 
 
 @dataclass(frozen=True)
@@ -219,6 +229,30 @@ def _pi(p: ModelParameters) -> Any:
     return PrandtlIshlinskii(widths, np.full(k, 1.0 / k))
 
 
+def uniform_half_extent(p: ModelParameters) -> float:
+    """H of ``preisach-uniform``: ``half_extent`` if given, else ``5R + p/2``."""
+    if p.half_extent is not None:
+        return _check_positive(p.half_extent, "half_extent")
+    spread = _check_positive(p.spread, "spread")
+    width = _check_positive(p.width, "width")
+    return 5.0 * spread + 0.5 * width
+
+
+def _preisach_uniform(p: ModelParameters) -> Any:
+    from hysteresis.preisach import PreisachModel
+
+    h = uniform_half_extent(p)
+    area = 2.0 * h**2  # the triangle β <= α inside [-H, H]²
+
+    def density(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+        a = np.asarray(alpha, dtype=float)
+        b = np.asarray(beta, dtype=float)
+        inside = (b <= a) & (a <= h) & (b >= -h)
+        return np.where(inside, 1.0 / area, 0.0)
+
+    return PreisachModel.from_density(density, -h, h, int(p.resolution))
+
+
 _SPECS = (
     ModelSpec(
         "dimers",
@@ -256,6 +290,13 @@ _SPECS = (
         "Prandtl-Ishlinskii: K plays, widths evenly on [p/2, 3p/2], weights 1/K",
         ("width", "plays"),
         _pi,
+    ),
+    ModelSpec(
+        "preisach-uniform",
+        "continuous Preisach model, uniform density on -H <= beta <= alpha <= H "
+        "(H = 5R + p/2 unless given)",
+        ("width", "spread", "half_extent"),
+        _preisach_uniform,
     ),
 )
 
@@ -338,6 +379,8 @@ def model_record(
     names = spec.parameters
     if spec.name == "dimers" and p.fields is not None:
         names = ("fields", "spin_coupling")
+    if spec.name == "preisach-uniform":
+        return {**out, "half_extent": uniform_half_extent(p)}
     if spec.name == "relay":
         out["alpha"] = 0.5 * p.width if p.alpha is None else p.alpha
         out["beta"] = -0.5 * p.width if p.beta is None else p.beta
@@ -359,6 +402,7 @@ _SYMBOLS = {
     "alpha": "α",
     "beta": "β",
     "fields": "b",
+    "half_extent": "H",
 }
 
 

@@ -132,11 +132,13 @@ def figure_preisach_density(
     stem: str = "fig_preis_dens",
     finite_label: str = "N = 20 000",
     extra_data: dict[str, Any] | None = None,
+    title: str | None = None,
 ) -> list[Path]:
     """Paper figure fig:preis_dens: (a) μ(s) numerical vs theory, (b) N → ∞, (c) finite N.
 
     Writes ``stem.png``, ``stem.pdf`` and ``stem.npz`` (grids, Everett functions, cell masses,
-    marginals) into ``out_dir``; returns the paths.
+    marginals) into ``out_dir``; returns the paths. ``title`` replaces the default
+    ``"Preisach density, p = .., R = .."``.
     """
     import matplotlib.pyplot as plt
 
@@ -159,7 +161,9 @@ def figure_preisach_density(
         ax.axvline(0.5 * width, color="0.5", lw=0.5, ls=":")
         ax.set_title(title)
     fig.colorbar(mappable, ax=axes[1:], label="μ_rs (cell mass / r-s area)", shrink=0.85)
-    fig.suptitle(f"Preisach density, p = {width:g}, R = {spread:g}", fontsize=10)
+    if title is None:
+        title = f"Preisach density, p = {width:g}, R = {spread:g}"
+    fig.suptitle(title, fontsize=10)
     paths = [out_dir / f"{stem}.png", out_dir / f"{stem}.pdf", out_dir / f"{stem}.npz"]
     fig.savefig(paths[0], dpi=150, bbox_inches="tight")
     fig.savefig(paths[1], bbox_inches="tight")

@@ -67,7 +67,7 @@ def main() -> None:
     deltas = [1e-8, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2]
 
     ensemble = SpinDimerEnsemble.random(
-        args.spins, width=2.0, spread=1.0, coupling=2.0, seed=args.seed
+        args.spins, width=2.0, spread=1.0, spin_coupling=2.0, seed=args.seed
     )
     system = ForcedOscillator(ensemble.to_preisach(), args.coupling)
     tangent = lyapunov_spectrum(

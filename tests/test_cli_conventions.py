@@ -13,13 +13,15 @@ from analysis.cli import build_parser, main
 from analysis.cli._common import DEFAULT_OUT, HelpFormatter, progress_enabled, to_json
 
 #: commands that build a model (the shared model options must be there)
-MODEL_COMMANDS = ("lyapunov", "trajectory", "poincare", "bifurcation", "dimension", "ensemble")
+MODEL_COMMANDS = (
+    "lyapunov", "trajectory", "poincare", "bifurcation", "dimension", "ensemble", "identify",
+)  # fmt: skip
 SHARED_MODEL_OPTIONS = (
     "--model", "--spins", "--seed", "--width", "--spread", "--spin-coupling", "--width-spread",
 )  # fmt: skip
 SHARED_OUTPUT_OPTIONS = ("--out", "--json", "--quiet")
-#: the identification command is adopting the convention in its own branch (see its owner)
-PENDING = {"identify"}
+#: commands still adopting the convention in their owner's branch (none left)
+PENDING: set[str] = set()
 
 
 def _subparsers() -> dict[str, argparse.ArgumentParser]:

@@ -8,13 +8,17 @@ work done. The table covers every command and every kind of option.
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
 from analysis.cli import main
+
+DATA = Path(__file__).parent / "data"
 
 #: (argv, text the one stderr line must contain)
 CASES: list[tuple[list[str], str]] = [
@@ -169,10 +173,87 @@ CASES: list[tuple[list[str], str]] = [
     (["paper", "--workers", "0"], "--workers"),
     (["paper", "--workers", "two"], "--workers"),
     (["paper", "--smoke", "--full"], "--full"),
-    # -- hyst identify (owner: identification; reached through the shared error handling) --
+    # -- hyst identify: model options, grid, smoothing, measured files -----------------------
     (["identify", "--model", "bogus"], "--model"),
+    (["identify", "--model", "relay"], "--model"),
     (["identify", "--spins", "x"], "--spins"),
+    (["identify", "--spins", "101"], "--spins"),
+    (["identify", "--seed", "-1"], "--seed"),
+    (["identify", "--width", "nan"], "--width"),
+    (["identify", "--width", "5"], "--width"),
+    (["identify", "--spread", "-1"], "--spread"),
+    (["identify", "--spin-coupling", "0"], "--spin-coupling"),
+    (["identify", "--model", "play", "--fields", "1", "-1"], "--fields"),
+    (["identify", "--step", "0"], "--step"),
+    (["identify", "--step", "-0.1"], "--step"),
+    (["identify", "--step", "inf"], "--step"),
+    (["identify", "--step", "1e-5"], "--step"),
+    (["identify", "--model", "play", "--step", "1e-5"], "--step"),
+    (["identify", "--saturation", "0"], "--saturation"),
+    (["identify", "--saturation", "1e300", "--model", "erf-play"], "--step"),
+    (["identify", "--model", "preisach-uniform", "--saturation", "nan"], "--saturation"),
+    (["identify", "--smoothing", "0"], "--smoothing"),
+    (["identify", "--smoothing", "nan"], "--smoothing"),
+    (["identify", "--smoothing", "1", "2", "3"], "--smoothing"),
+    (["identify", "--input", "no-such-file.frc"], "--input"),
+    (["identify", "--input", "."], "--input"),
+    (["identify", "--input", str(DATA / "make_forc_data.py")], "--input"),
+    (["identify", "--input", str(DATA / "forc_micromag_irregular.frc")], "--input"),
+    (
+        ["identify", "--input", str(DATA / "forc_lakeshore_8600.csv"), "--format", "micromag"],
+        "--input",
+    ),  # fmt: skip
     (["identify", "--format", "xml"], "--format"),
+    (["identify", "--format", "csv"], "--format"),
+    (["identify", "--window", "hann"], "--window"),
+    (["identify", "--drift-correction", "cubic"], "--drift-correction"),
+    (["identify", "--drift-correction", "additive"], "--drift-correction"),
+    (
+        [
+            "identify",
+            "--input",
+            str(DATA / "forc_erf_play_mayergoyz.csv"),
+            "--drift-correction",
+            "additive",
+        ],
+        "--drift-correction",
+    ),  # fmt: skip
+    (["identify", "--grid-step", "0"], "--grid-step"),
+    (
+        ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--grid-step", "0.1"],
+        "--grid-step",
+    ),  # fmt: skip
+    (
+        ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--step", "0.1"],
+        "--step",
+    ),  # fmt: skip
+    (
+        ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--saturation", "3"],
+        "--saturation",
+    ),  # fmt: skip
+    (["identify", "--grid-step", "0.1"], "--grid-step"),
+    (
+        [
+            "identify",
+            "--input",
+            str(DATA / "forc_micromag_0016_hybrid_si.frc"),
+            "--grid-step",
+            "1e-9",
+        ],
+        "--grid-step",
+    ),
+    (
+        [
+            "identify",
+            "--input",
+            str(DATA / "forc_micromag_0016_hybrid_si.frc"),
+            "--grid-step",
+            "1e9",
+        ],
+        "--grid-step",
+    ),
+    (["identify", "--reversible-ridge"], "--reversible-ridge"),
+    (["identify", "--out", "x", "--json", "--quiet", "--bogus"], "--bogus"),
     # -- hyst ------------------------------------------------------------------------------
     (["bogus"], "invalid choice"),
 ]
@@ -197,7 +278,7 @@ def test_bad_option_is_one_line_exit_2_before_any_work(argv, needle, capsys, tmp
     assert "Traceback" not in captured.err
     assert captured.out == ""
     # validation happens before any work: nothing written, and fast
-    assert not (tmp_path / "hyst-out").exists() or argv[0] == "identify"
+    assert not (tmp_path / "hyst-out").exists() and not (tmp_path / "x").exists()
     assert elapsed < 20.0
 
 
@@ -280,3 +361,99 @@ def test_unexpected_library_error_is_one_line(monkeypatch, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
     assert err[0].startswith("hyst lyapunov: error: RuntimeError: tangent integrator")
+
+
+# -- results stores: damaged, foreign, or written by another code version ---------------------
+
+_ENSEMBLE_ARGV = ["ensemble", "--spins", "4", "--coupling", "4", "--realizations", "1",
+                  "--t-end", "60", "--transient", "2", "--workers", "1", "--quiet"]  # fmt: skip
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "Traceback" not in err[0]
+    return err[0]
+
+
+@pytest.mark.parametrize("command", ["ensemble", "paper"])
+@pytest.mark.parametrize(
+    "content", [b"not a database\n" * 10, b"SQLite format 3\x00" + b"\xff" * 200]
+)
+def test_damaged_or_foreign_store_is_one_line_and_left_untouched(
+    command, content, tmp_path, capsys
+):
+    store = tmp_path / "results.sqlite"
+    store.write_bytes(content)
+    argv = _ENSEMBLE_ARGV if command == "ensemble" else ["paper", "--smoke", "--quiet"]
+    code = main([*argv, "--store", str(store), "--out", str(tmp_path / "o")])
+    line = _one_line_error(capsys)
+    assert code == 2
+    assert line.startswith(f"hyst {command}: error: argument --store: ")
+    assert str(store) in line
+    assert store.read_bytes() == content  # nothing overwritten
+    assert not (tmp_path / "o").exists()  # refused before any work
+
+
+def _store_of_another_version(path: Path, experiment: str) -> None:
+    import sqlite3
+
+    from analysis.store import ResultStore
+
+    with ResultStore(path) as store:
+        store.put(experiment, {"x": 1}, {"y": 2.0})
+    with sqlite3.connect(path) as conn:
+        conn.execute("UPDATE tasks SET code_version = 'hysteresis-toolkit 0.0.1 (git 0000000)'")
+
+
+def _rows(path: Path) -> list[tuple]:
+    import sqlite3
+
+    with sqlite3.connect(path) as conn:
+        return conn.execute("SELECT * FROM tasks ORDER BY key").fetchall()
+
+
+def test_store_of_another_code_version_needs_allow_version_mismatch(tmp_path, capsys):
+    from analysis.ensemble import EXPERIMENT
+
+    store = tmp_path / "results.sqlite"
+    _store_of_another_version(store, EXPERIMENT)
+    before = _rows(store)
+    argv = [*_ENSEMBLE_ARGV, "--store", str(store), "--out", str(tmp_path / "o"), "--json"]
+    assert main(argv) == 2
+    line = _one_line_error(capsys)
+    assert "argument --store:" in line and "0.0.1" in line
+    assert "--allow-version-mismatch" in line  # the advice names the option, not the kwarg
+    assert _rows(store) == before  # the stored results are left as they were
+    assert main([*argv, "--allow-version-mismatch"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert [p["realizations"] for p in record["points"]] == [1]
+
+
+def _paper_task(x: int) -> dict:
+    return {"y": x}
+
+
+def test_paper_store_version_error_stops_the_run_as_one_line(tmp_path, monkeypatch, capsys):
+    """A store error inside a figure is the whole run's (every figure shares the store): it
+    ends ``hyst paper`` with one line, and --allow-version-mismatch reaches run_tasks."""
+    import analysis.paper.runner as runner
+    from analysis.paper.context import FigureSpec
+
+    store = tmp_path / "results.sqlite"
+    _store_of_another_version(store, "corpus-paper")
+    seen: list[list[dict]] = []
+
+    def build(ctx):
+        seen.append(ctx.run("corpus-paper", [{"x": 3}], _paper_task))
+        return []
+
+    monkeypatch.setattr(runner, "_figures", lambda: [FigureSpec("fig:x", "x", build)])
+    monkeypatch.setattr(runner, "check_only", lambda only: None)
+    argv = ["paper", "--smoke", "--quiet", "--store", str(store), "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    line = _one_line_error(capsys)
+    assert "argument --store:" in line and "--allow-version-mismatch" in line
+    assert seen == []
+    assert main([*argv, "--allow-version-mismatch"]) == 0
+    assert seen == [[{"y": 3}]]

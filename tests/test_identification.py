@@ -500,3 +500,30 @@ def test_cli_identify_from_file(tmp_path, capsys):
     assert abs(rep["peak_bu_mT"]) <= rep["grid_step_mT"]
     for p in rep["figures"]:
         assert Path(p).exists()
+
+
+def test_cli_paper_metrics_only_for_the_paper_models(tmp_path, capsys):
+    """Explicit dimer fields and the uniform Preisach model are not the paper's density: the
+    report has data-driven masses, no ridge/Gaussian metrics; the JSON is strict (no NaN)."""
+    from analysis.cli import main
+
+    # two dimers, J = 2: (alpha, beta) = (J - b1, -J - b2) = (1, -1) and (1.5, 0), equal weight
+    argv = ["identify", "--fields", "1", "-1", "0.5", "-2", "--step", "0.25", "--quiet"]
+    assert main([*argv, "--out", str(tmp_path / "f"), "--json"]) == 0
+    text = capsys.readouterr().out
+    rep = json.loads(text)
+    assert rep["fields"] == [[1.0, -1.0], [0.5, -2.0]] and rep["spin_coupling"] == 2.0
+    assert rep["total_mass"] == pytest.approx(1.0, abs=1e-12)
+    assert rep["irreversible_mass"] == pytest.approx(1.0, abs=1e-12)
+    for key in ("r_centre", "s_cdf_distance_gaussian", "erf_play", "spread", "width"):
+        assert key not in rep
+    assert "NaN" not in text and "Infinity" not in text
+    assert json.loads((tmp_path / "f" / "identify.json").read_text()) == rep
+
+    argv = ["identify", "--model", "preisach-uniform", "--saturation", "2", "--step", "0.5"]
+    assert main([*argv, "--quiet", "--out", str(tmp_path / "u"), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["model"] == "preisach-uniform" and rep["half_extent"] == 2.0
+    # the whole triangle lies inside the grid |u| <= H: all its mass is identified
+    assert rep["total_mass"] == pytest.approx(1.0, abs=1e-9)
+    assert "r_centre" not in rep and "preisach-uniform H=2" in rep["figure_title"]

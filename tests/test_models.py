@@ -27,6 +27,7 @@ from analysis.models import (
 def test_registry_names_are_canonical_and_complete():
     assert set(MODELS) == {
         "dimers", "erf-play", "play", "relay", "n2", "n4", "preisach", "preisach-gauss", "pi",
+        "preisach-uniform",
     }  # fmt: skip
     for name in MODELS:  # one spelling: lower case, words joined by '-'
         assert name == name.lower() and "_" not in name
@@ -135,3 +136,24 @@ def test_model_record_lists_only_what_the_model_reads_and_titles_name_it():
     title = describe_model(model_record("preisach-gauss"), [("C", 4.0)])
     assert title == "preisach-gauss p=2 R=1 σ_r=0.2, C=4"
     assert ModelParameters().spins == 20000  # paper Table II default
+
+
+def test_preisach_uniform_follows_the_closed_form_of_the_uniform_triangle():
+    """Uniform density 1/(2H²) on -H <= β <= α <= H: rising from -H to u switches up the
+    relays with α <= u, mass (u + H)²/(4H²), so M(u) = -1 + (u + H)²/(2H²); falling from H
+    to v switches down those with β >= v, mass (H - v)²/(4H²)."""
+    h = 2.0
+    op = build_operator("preisach-uniform", half_extent=h, resolution=256)
+    up = np.linspace(-h, h, 9)
+    y_up, state = op.apply(up, op.initial_state(-h))
+    np.testing.assert_allclose(y_up, -1.0 + (up + h) ** 2 / (2 * h**2), atol=1e-12)
+    down = np.linspace(h, -h, 9)
+    y_down, _ = op.apply(down, state)
+    np.testing.assert_allclose(y_down, 1.0 - (h - down) ** 2 / (2 * h**2), atol=1e-12)
+    # default H = 5R + p/2, and the record names H (the only parameter the density reads)
+    assert model_record("preisach-uniform", width=2.0, spread=1.0) == {
+        "model": "preisach-uniform",
+        "half_extent": 6.0,
+    }
+    with pytest.raises(ValueError, match="half_extent"):
+        build_operator("preisach-uniform", half_extent=-1.0)

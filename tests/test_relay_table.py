@@ -197,7 +197,7 @@ def test_dimer_relay_outputs_match_spin_dynamics(seed, steps):
     rng = np.random.default_rng(seed)
     n_dimers = 12
     fields = rng.normal(0.0, 1.5, size=(n_dimers, 2))
-    ens = SpinDimerEnsemble(fields, coupling=0.8)  # mixes hysteretic and non-hysteretic dimers
+    ens = SpinDimerEnsemble(fields, spin_coupling=0.8)  # mixes hysteretic and non-hysteretic dimers
     path = np.cumsum(rng.normal(size=steps))
     _, state = ens.apply(path)
     _, spins = ens.simulate(path)  # brute force, starts all down relaxed at path[0]
@@ -221,7 +221,7 @@ def test_dimer_relay_outputs_match_spin_dynamics(seed, steps):
 
 
 def test_dimer_relay_table_weights():
-    ens = SpinDimerEnsemble(np.array([[0.1, -0.1], [3.0, -3.0]]), coupling=1.0)
+    ens = SpinDimerEnsemble(np.array([[0.1, -0.1], [3.0, -3.0]]), spin_coupling=1.0)
     t = ens.relay_table()
     # dimer 0 hysteretic: one relay 2/N; dimer 1 (b1 - b2 = 6 > 2J): two zero-width relays 1/N
     assert list(t.weights) == [0.5, 0.25, 0.25]

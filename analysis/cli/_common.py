@@ -40,10 +40,12 @@ __all__ = [
     "add_model_options",
     "add_oscillator_options",
     "add_output_options",
+    "add_store_options",
     "add_subcommand",
     "announce_compilation",
     "build_operator",
     "build_system",
+    "check_store",
     "check_model_options",
     "check_run_length",
     "check_transient",
@@ -60,6 +62,7 @@ __all__ = [
     "positive_float",
     "prepare_out",
     "progress_enabled",
+    "store_error",
     "to_json",
     "transient_time",
 ]
@@ -321,6 +324,53 @@ def add_output_options(parser: argparse.ArgumentParser, writes: str = "") -> Non
     )
 
 
+def add_store_options(group: Any) -> None:
+    """``--store`` (default ``DIR/results.sqlite``) and ``--allow-version-mismatch``."""
+    group.add_argument(
+        "--store",
+        type=Path,
+        default=None,
+        help="SQLite results file; a rerun resumes from it (default: DIR/results.sqlite)",
+    )
+    group.add_argument(
+        "--allow-version-mismatch",
+        action="store_true",
+        help="reuse results that another code version stored in --store (refused by default: "
+        "it would mix results of different code)",
+    )
+
+
+def store_path(args: argparse.Namespace) -> Path:
+    """``--store``, or ``results.sqlite`` in ``--out``."""
+    return Path(args.store) if args.store is not None else Path(args.out) / "results.sqlite"
+
+
+def store_error(exc: BaseException) -> CliError:
+    """A :class:`CliError` naming ``--store`` for a :class:`~analysis.store.StoreError` (the
+    library's advice ``allow_version_mismatch=True`` spelled as the option)."""
+    msg = str(exc).replace("pass allow_version_mismatch=True", "pass --allow-version-mismatch")
+    return CliError(f"argument --store: {msg}")
+
+
+def check_store(args: argparse.Namespace, experiments: Sequence[str] | None = None) -> Path:
+    """Refuse, before any work, a damaged or foreign ``--store`` file and (unless
+    ``--allow-version-mismatch``) one whose ``experiments`` hold results of other code versions
+    (``None``: every experiment in the store). A missing store is fine (a new one)."""
+    from analysis.store import ResultStore, StoreError
+
+    path = store_path(args)
+    if not path.exists():
+        return path
+    try:
+        with ResultStore(path) as store:
+            names = store.experiments() if experiments is None else list(experiments)
+            for name in names:
+                store.check_versions(name, args.allow_version_mismatch)
+    except StoreError as exc:
+        raise store_error(exc) from exc
+    return path
+
+
 def add_transient_option(
     parser: argparse.ArgumentParser, default: float, *aliases: str, integer: bool = False
 ) -> None:
@@ -397,6 +447,8 @@ def model_parameters(args: argparse.Namespace) -> Any:
         alpha=args.alpha,
         beta=args.beta,
         plays=args.plays,
+        # set by commands that give preisach-uniform its half-extent (hyst identify --saturation)
+        half_extent=getattr(args, "half_extent", None),
     )
 
 

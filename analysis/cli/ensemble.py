@@ -19,17 +19,20 @@ from analysis.cli._common import (
     add_model_options,
     add_oscillator_options,
     add_output_options,
+    add_store_options,
     add_subcommand,
     add_transient_option,
     announce_compilation,
     build_system,
     check_model_options,
+    check_store,
     check_transient,
     emit,
     int_at_least,
     positive_float,
     prepare_out,
     progress_enabled,
+    store_error,
     to_json,
 )
 
@@ -71,9 +74,7 @@ def register(subparsers: Any) -> None:
         default=8.0,
         help="box counting: smallest number of boxes across the attractor (>= 1)",
     )
-    g.add_argument(
-        "--store", default=None, help="SQLite results file (default: DIR/results.sqlite)"
-    )
+    add_store_options(g)
     g.add_argument(
         "--workers",
         type=int_at_least(1, 1024),
@@ -116,31 +117,38 @@ def run(args: argparse.Namespace) -> int:
                 "argument --scheduler: needs dask.distributed "
                 "(pip install 'hysteresis-toolkit[distributed]')"
             ) from exc
+    from analysis.ensemble import EXPERIMENT
+    from analysis.store import StoreError
+
+    store = check_store(args, [EXPERIMENT])
     out = prepare_out(args)
-    store = args.store if args.store is not None else out / "results.sqlite"
     model_kw: dict[str, Any] = {"width": args.width, "spread": args.spread}
     if args.model == "dimers":
         model_kw["spin_coupling"] = args.spin_coupling
     else:  # non-default models are part of the task key; dimers keep the historical keys
         model_kw.update(model=args.model, width_spread=args.width_spread)
     announce_compilation(args)
-    points = run_ensemble(
-        args.spins,
-        args.coupling,
-        args.realizations,
-        args.seed,
-        args.t_end,
-        transient,
-        store=store,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        progress=progress_enabled(args),
-        damping_ratio=args.damping_ratio,
-        frequency=args.frequency,
-        box_max_fill=args.box_max_fill,
-        box_min_boxes=args.box_min_boxes,
-        **model_kw,
-    )
+    try:
+        points = run_ensemble(
+            args.spins,
+            args.coupling,
+            args.realizations,
+            args.seed,
+            args.t_end,
+            transient,
+            store=store,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=progress_enabled(args),
+            allow_version_mismatch=args.allow_version_mismatch,
+            damping_ratio=args.damping_ratio,
+            frequency=args.frequency,
+            box_max_fill=args.box_max_fill,
+            box_min_boxes=args.box_min_boxes,
+            **model_kw,
+        )
+    except StoreError as exc:  # e.g. another process damaged it, or wrote another version
+        raise store_error(exc) from exc
     record = {
         "model": args.model,
         **{k: v for k, v in model_kw.items() if k != "model"},

@@ -1,181 +1,234 @@
-"""``hyst identify``: Preisach-plane identification from first-order reversal curves."""
+"""``hyst identify``: Preisach-plane identification from first-order reversal curves.
+
+Two sources: an operator of the model registry (``--model``, the shared model options of
+:mod:`analysis.cli._common`) driven through the reversal curves of a regular grid, or a
+measured FORC file (``--input``). The paper's ridge metrics (``N(s; 0, R²) δ(r − p/2)``) are
+computed only for the paper's models (``dimers``, ``erf-play``); other models and measured data
+get data-driven summaries (masses, peak of the FORC density).
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import sys
+import os
 import time
 from pathlib import Path
 from typing import Any
 
-MODELS = ("dimers", "erf-play", "play", "preisach-uniform")
+from analysis.cli._common import (
+    CliError,
+    add_model_options,
+    add_output_options,
+    add_subcommand,
+    announce_compilation,
+    check_model_options,
+    emit,
+    figure_title,
+    model_parameters,
+    model_record,
+    option_error,
+    positive_float,
+    prepare_out,
+    progress_enabled,
+    to_json,
+)
+
+__all__ = ["register", "run"]
+
+#: models this command identifies (the registry's names)
+IDENTIFY_MODELS = ("dimers", "erf-play", "play", "preisach-uniform")
+#: models whose density the paper states (N(s; 0, R²) δ(r − p/2)): only these get its metrics
+PAPER_MODELS = ("dimers", "erf-play")
+FORMATS = ("auto", "csv", "micromag", "lakeshore")
+#: the grid step of a model's identification (the paper's fig:preis_dens)
+DEFAULT_STEP = 0.1
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser(
+def register(subparsers: Any) -> None:
+    p = add_subcommand(
+        subparsers,
         "identify",
         help="identify the Preisach density of an operator or of measured FORC data",
         description="Drive an operator through first-order reversal curves on a regular grid "
         "(Mayergoyz convention: rise from negative saturation to alpha, fall to beta), compute "
-        "the exact cell masses of the Preisach density and compare with the paper's "
-        "N(s; 0, R^2) delta(r - p/2). With --input, identify from a measured FORC file (MicroMag "
-        "Series 0015/0016, Lake Shore 8600 CSV or the toolkit's CSV): grid from the measurement "
-        "protocol, local-regression smoothing, FORC diagram in Bc/Bu (mT) and data-driven "
-        "metrics only (no paper overlay). Writes DIR/identify.json and the figure (PNG, PDF, "
-        "NPZ); dimers also give the paper's fig:preis_dens (erf play N -> infinity next to the "
-        "finite ensemble).",
+        "the exact cell masses of the Preisach density and, for the paper's models (dimers, "
+        "erf-play), compare with the paper's N(s; 0, R^2) delta(r - p/2). With --input, "
+        "identify from a measured FORC file (MicroMag Series 0015/0016, Lake Shore 8600 CSV or "
+        "the toolkit's CSV): grid from the measurement protocol, local-regression smoothing, "
+        "FORC diagram in Bc/Bu (mT) and data-driven metrics only (no paper overlay). Writes "
+        "DIR/identify.json and the figure (PNG, PDF, NPZ); dimers also give the paper's "
+        "fig:preis_dens (erf play N -> infinity next to the finite ensemble).",
     )
-    p.add_argument("--model", choices=MODELS, default="dimers", help="operator (default dimers)")
-    p.add_argument("--spins", type=int, default=20000, help="number of spins N (dimers)")
-    p.add_argument("--seed", type=int, default=0, help="disorder seed (dimers)")
-    p.add_argument("--width", type=float, default=2.0, help="loop width p (default 2)")
-    p.add_argument("--spread", type=float, default=1.0, help="spread R of the centres (default 1)")
-    p.add_argument("--spin-coupling", type=float, default=2.0, help="dimer coupling J (default 2)")
-    p.add_argument("--step", type=float, default=0.1, help="grid step Delta (default 0.1)")
-    p.add_argument(
-        "--saturation",
-        type=float,
+    add_model_options(p, models=IDENTIFY_MODELS, default="dimers")
+    g = p.add_argument_group("identification")
+    g.add_argument(
+        "--step",
+        type=positive_float,
         default=None,
-        help="grid half-extent H (default 5R + p/2; for dimers at least the largest |threshold|)",
+        help=f"models: grid step Delta (> 0; default {DEFAULT_STEP:g})",
     )
-    p.add_argument(
+    g.add_argument(
+        "--saturation",
+        type=positive_float,
+        default=None,
+        help="models: grid half-extent H (> 0; default 5R + p/2, for dimers at least the "
+        "largest |threshold|; preisach-uniform: also the triangle's half-extent)",
+    )
+    g.add_argument(
         "--smoothing",
-        type=float,
+        type=positive_float,
         nargs="+",
         default=None,
         metavar="SF",
         help="smoothing factor SF, or SF_R SF_S (window half-widths across r and along s, in "
-        "grid steps); models: none by default; --input: 3 by default",
+        "grid steps, > 0); default: none for models, 3 for --input",
     )
-    p.add_argument("--input", default=None, help="FORC data file instead of a model")
-    p.add_argument(
+    g.add_argument(
+        "--input",
+        type=Path,
+        default=None,
+        help="FORC data file to identify instead of a model (default: none, use --model)",
+    )
+    g.add_argument(
         "--format",
-        choices=("auto", "csv", "micromag", "lakeshore"),
+        choices=FORMATS,
         default="auto",
-        help="--input format (default: detected from the file)",
+        help="--input format (auto: detected from the file)",
     )
-    p.add_argument(
+    g.add_argument(
         "--reversible-ridge",
         action="store_true",
         help="--input: include the reversible ridge at Bc = 0 in the smoothed density (constant "
         "extension below the diagonal, exact for relay systems); default: irreversible only",
     )
-    p.add_argument(
+    g.add_argument(
         "--drift-correction",
         choices=("none", "multiplicative", "additive"),
         default="none",
-        help="--input: linear drift correction from the calibration points (default none)",
+        help="--input: linear drift correction from the calibration points (MicroMag, Lake Shore)",
     )
-    p.add_argument(
+    g.add_argument(
         "--window",
         choices=("rs", "pike"),
         default="rs",
-        help="--input: smoothing window, |dr|,|ds| <= SF steps (rs, default) or Pike et al. "
-        "(1999)'s square |dB|,|dB_r| <= SF steps (pike)",
+        help="--input: smoothing window, |dr|,|ds| <= SF steps (rs) or Pike et al. (1999)'s "
+        "square |dB|,|dB_r| <= SF steps (pike)",
     )
-    p.add_argument(
+    g.add_argument(
         "--grid-step",
-        type=float,
+        type=positive_float,
         default=None,
-        help="--input: lattice step in the file's field unit after conversion (default: the "
-        "median field step of the measurement)",
+        help="--input: lattice step in the file's field unit after conversion (> 0; default: "
+        "the median field step of the measurement)",
     )
-    p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--json", action="store_true", help="print the metrics as JSON on stdout")
-    p.add_argument("--progress", action="store_true", help="progress bar over the curves")
+    add_output_options(p, writes="identify.json and the figure as PNG, PDF and NPZ")
     p.set_defaults(func=run)
 
 
-def _build_operator(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
-    from hysteresis import play as play_mod
-
-    if args.model == "dimers":
-        from hysteresis.spin_dimers import SpinDimerEnsemble
-
-        ens = SpinDimerEnsemble.random(
-            args.spins, args.width, args.spread, args.spin_coupling, seed=args.seed
+def _smoothing(args: argparse.Namespace, default: float | None) -> tuple[float, float] | None:
+    sm = args.smoothing
+    if sm is None:
+        return None if default is None else (default, default)
+    if len(sm) not in (1, 2):
+        raise CliError(
+            f"argument --smoothing: takes one factor SF or two, SF_R SF_S; got {len(sm)} values"
         )
-        return ens, {"centres": ens.thresholds().centre, "thresholds": ens.thresholds()}
-    if args.model == "erf-play":
-        return play_mod.GeneralizedPlay.erf(args.width, args.spread), {}
-    if args.model == "play":
-        return play_mod.PlayOperator(args.width), {}
-    # preisach-uniform: uniform density on the triangle beta <= alpha in [-H, H]^2
-    from hysteresis.preisach import PreisachModel
-
-    h = float(args.saturation or (5 * args.spread + 0.5 * args.width))
-    return _uniform_preisach(PreisachModel, h), {}
-
-
-def _uniform_preisach(model_cls: Any, half_extent: float) -> Any:
-    area = 2.0 * half_extent**2  # triangle beta <= alpha inside [-H, H]^2
-
-    def density(alpha, beta):
-        import numpy as np
-
-        a = np.asarray(alpha, dtype=float)
-        b = np.asarray(beta, dtype=float)
-        inside = (b <= a) & (a <= half_extent) & (b >= -half_extent)
-        return np.where(inside, 1.0 / area, 0.0)
-
-    return model_cls.from_density(density, -half_extent, half_extent)
+    return (sm[0], sm[0]) if len(sm) == 1 else (sm[0], sm[1])
 
 
 def run(args: argparse.Namespace) -> int:
+    """Validate every option (and read ``--input`` or build the model), then identify."""
+    t0 = time.perf_counter()
+    if args.input is not None:
+        for option, given in (("--step", args.step), ("--saturation", args.saturation)):
+            if given is not None:
+                raise CliError(
+                    f"argument {option}: only for models; with --input the lattice comes from "
+                    "the measurement (--grid-step)"
+                )
+        measured = _prepare_measured(args)
+        out = prepare_out(args)
+        return _run_measured(args, out, t0, *measured)
+    for option, given in (
+        ("--grid-step", args.grid_step is not None),
+        ("--reversible-ridge", args.reversible_ridge),
+        ("--drift-correction", args.drift_correction != "none"),
+        ("--format", args.format != "auto"),
+    ):
+        if given:
+            raise CliError(f"argument {option}: only with --input (a measured FORC file)")
+    if args.step is None:
+        args.step = DEFAULT_STEP
+    model = _prepare_model(args)
+    out = prepare_out(args)
+    announce_compilation(args)
+    return _run_model(args, out, t0, *model)
+
+
+# -- models ----------------------------------------------------------------------------------
+
+
+def _prepare_model(args: argparse.Namespace) -> tuple[Any, Any, float, Any]:
+    """The operator, its thresholds (dimers), the grid's half-extent and the smoothing."""
     import numpy as np
 
-    from analysis.identification import compare_with_ridge, identify_preisach
-    from analysis.preisach_plots import figure_preisach_density, figure_single_density
-    from hysteresis.play import GeneralizedPlay
+    from analysis.models import build_operator
+    from hysteresis._validation import check_grid_nodes
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    if args.smoothing is not None and len(args.smoothing) not in (1, 2):
-        raise ValueError("--smoothing takes one factor SF or two, SF_R SF_S")
-    if args.input:
-        try:
-            return _run_measured(args, out, t0)
-        except (ValueError, OSError) as exc:
-            # a user's file: one line naming the problem (and its line), not a traceback
-            print(f"hyst identify: error: {args.input}: {exc}", file=sys.stderr)
-            return 2
-    smoothing = tuple(args.smoothing) if args.smoothing else None
-    if smoothing is not None and len(smoothing) == 1:
-        smoothing = (smoothing[0], smoothing[0])
-    report: dict[str, Any] = {
-        "width": args.width,
-        "spread": args.spread,
-    }
-    if args.step <= 0 or not math.isfinite(args.step):
-        raise ValueError(f"--step must be > 0, got {args.step}")
-    operator, extra = _build_operator(args)
-    saturation = args.saturation or (5 * args.spread + 0.5 * args.width)
-    if args.model == "dimers" and args.saturation is None:
-        th = extra["thresholds"]
-        saturation = max(saturation, float(np.max(np.abs([th.alpha, th.beta]))))
-    ident = identify_preisach(
-        operator, args.step, saturation, smoothing=smoothing, progress=args.progress
-    )
-    report.update(
-        model=args.model,
-        step=args.step,
-        saturation=saturation,
-        grid_nodes=int(ident.alpha.size),
-    )
+    check_model_options(args)
+    smoothing = _smoothing(args, None)
+    # preisach-uniform: the triangle is the grid (--saturation), so records and titles name it
+    args.half_extent = args.saturation if args.model == "preisach-uniform" else None
+    params = model_parameters(args)
+    try:
+        operator = build_operator(args.model, params)
+    except (ValueError, TypeError) as exc:
+        raise option_error(exc, "--model") from exc
+    saturation = args.saturation or (5.0 * args.spread + 0.5 * args.width)
+    thresholds = None
     if args.model == "dimers":
-        report.update(spins=args.spins, seed=args.seed, spin_coupling=args.spin_coupling)
-    label = args.model
+        thresholds = operator.thresholds()
+        if args.saturation is None:
+            extreme = float(np.max(np.abs([thresholds.alpha, thresholds.beta])))
+            saturation = max(saturation, extreme)
+    try:
+        # the reversal curves cost nodes²/2 operator steps: refuse a grid without bound here,
+        # naming the option, rather than inside the identification
+        check_grid_nodes(args.step, saturation)
+    except ValueError as exc:
+        raise CliError(f"argument --step: {exc}") from exc
+    return operator, thresholds, float(saturation), smoothing
+
+
+def _run_model(
+    args: argparse.Namespace,
+    out: Path,
+    t0: float,
+    operator: Any,
+    thresholds: Any,
+    saturation: float,
+    smoothing: tuple[float, float] | None,
+) -> int:
+    from analysis.identification import compare_with_ridge, identify_preisach
+    from analysis.models import build_operator
+    from analysis.preisach_plots import figure_preisach_density, figure_single_density
+
+    centres = None if thresholds is None else thresholds.centre
+    ident = identify_preisach(
+        operator, args.step, saturation, smoothing=smoothing, progress=progress_enabled(args)
+    )
+    report: dict[str, Any] = model_record(args)
+    report.update(step=args.step, saturation=saturation, grid_nodes=int(ident.alpha.size))
     # the paper's ridge metrics: only for the paper's models (dimers, erf play), never over
     # user data or other operators
     cmp = None
-    if args.model in ("dimers", "erf-play"):
-        cmp = compare_with_ridge(ident, args.width, args.spread, centres=extra.get("centres"))
+    # explicit --fields are the user's dimers, not the paper's disorder N(s; 0, R²)
+    paper = args.model in PAPER_MODELS and args.fields is None
+    if paper:
+        cmp = compare_with_ridge(ident, args.width, args.spread, centres=centres)
         report.update(cmp.as_dict())
     else:
-        report.pop("spread")
         report.update(
             total_mass=ident.total_mass,
             irreversible_mass=ident.irreversible_mass,
@@ -183,46 +236,45 @@ def run(args: argparse.Namespace) -> int:
         )
     report["mass_outside_grid"] = ident.mass_outside_grid
     report["smoothing"] = list(smoothing) if smoothing else None
-    if args.model == "dimers":
+    title = figure_title(args, "Preisach density", **{"Δ": float(args.step)})
+    if paper and args.model == "dimers":
+        # the paper's figure: the erf play (N -> infinity) next to the finite ensemble
         limit = identify_preisach(
-            GeneralizedPlay.erf(args.width, args.spread),
+            build_operator("erf-play", width=args.width, spread=args.spread),
             args.step,
-            report["saturation"],
+            saturation,
         )
-        lim = compare_with_ridge(limit, args.width, args.spread)
-        report["erf_play"] = lim.as_dict()
+        report["erf_play"] = compare_with_ridge(limit, args.width, args.spread).as_dict()
         paths = figure_preisach_density(
             limit,
             ident,
             args.width,
             args.spread,
             out,
-            finite_label=f"N = {args.spins}",
-            extra_data={"centres": extra["centres"]},
+            finite_label=f"N = {operator.n_spins}",
+            extra_data={"centres": centres},
+            title=title,
         )
     else:
         paths = figure_single_density(
             ident,
             out,
-            f"identify_{label}".replace(".", "_"),
-            title=f"Preisach density: {label}",
+            f"identify_{args.model}".replace(".", "_"),
+            title=title,
             smoothed=smoothing is not None,
-            spread=args.spread if args.model in ("dimers", "erf-play") else None,
+            spread=args.spread if paper else None,
         )
+    report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
     report["seconds"] = time.perf_counter() - t0
-    text = json.dumps(_jsonable(report), indent=2, allow_nan=True)
-    (out / "identify.json").write_text(text + "\n")
-    if args.json:
-        sys.stdout.write(text + "\n")
-    elif cmp is None:
-        print(
+    (out / "identify.json").write_text(to_json(report, indent=2) + "\n")
+    if cmp is None:
+        summary = (
             f"total mass {ident.total_mass:.12g} (irreversible {ident.irreversible_mass:.6g}, "
             f"on the diagonal {ident.reversible_mass:.6g})"
         )
-        print(f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}")
     else:
-        print(
+        summary = (
             f"total mass {cmp.total_mass:.12g}, r centre {cmp.r_centre:.12g}, "
             f"mass within 2 cells of the ridge {cmp.r_mass_within_2_cells:.6g}, "
             f"s-CDF distance to the Gaussian {cmp.s_cdf_distance_gaussian:.3g}"
@@ -232,38 +284,97 @@ def run(args: argparse.Namespace) -> int:
                 else ""
             )
         )
-        print(f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}")
+    written = f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}"
+    emit(args, report, [summary, written])
     return 0
 
 
-def _run_measured(args: argparse.Namespace, out: Path, t0: float) -> int:
+# -- measured data ---------------------------------------------------------------------------
+
+
+def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, float]]:
+    """Check ``--input`` and the options that go with it and read the file (before any output
+    is written); errors name the option (and the file and line)."""
+    from analysis.forc_io import detect_format, read_forc_file
+
+    path = Path(args.input)
+    if not path.exists():
+        raise CliError(f"argument --input: {path}: no such file")
+    if not path.is_file():
+        raise CliError(f"argument --input: {path}: not a regular file")
+    if not os.access(path, os.R_OK):
+        raise CliError(f"argument --input: {path}: not readable")
+    smoothing = _smoothing(args, 3.0)
+    try:
+        fmt = detect_format(path) if args.format == "auto" else args.format
+    except (ValueError, OSError) as exc:
+        raise CliError(f"argument --input: {path}: {exc}") from exc
+    kwargs: dict[str, Any] = {}
+    if args.drift_correction != "none":
+        if fmt not in ("micromag", "lakeshore"):
+            raise CliError(
+                "argument --drift-correction: needs calibration points (MicroMag or Lake Shore "
+                f"files), not {fmt!r}"
+            )
+        kwargs["drift_correction"] = args.drift_correction
+    try:
+        data = read_forc_file(path, fmt, **kwargs)
+    except (ValueError, OSError) as exc:
+        # a user's file: one line naming the problem (and its line), not a traceback
+        raise CliError(f"argument --input: {path}: {exc}") from exc
+    if args.grid_step is not None:
+        _check_grid_step(args, data.curves)
+    return fmt, data, smoothing  # type: ignore[return-value]
+
+
+def _check_grid_step(args: argparse.Namespace, curves: Any) -> None:
+    """``--grid-step`` applies to the protocol lattice only (fields that differ from curve to
+    curve); refuse it on data whose fields share one grid (it would be ignored) and refuse a
+    lattice too fine or too coarse for the data, before any output is written."""
+    import numpy as np
+
+    from analysis.identification import protocol_lattice
+
+    # the rule of identify_from_curves(grid="auto"): measured fields -> protocol lattice
+    n_union = np.unique(np.concatenate(curves.fields)).size
+    longest = max(h.size for h in curves.fields)
+    if n_union <= 2 * (longest + curves.n_curves):
+        raise CliError(
+            f"argument --grid-step: {args.input} has its fields on one shared grid (identified "
+            "on that grid); --grid-step applies to measured fields that differ curve by curve"
+        )
+    try:
+        protocol_lattice(curves, args.grid_step)
+    except ValueError as exc:
+        raise CliError(f"argument --grid-step: {args.input}: {exc}") from exc
+
+
+def _run_measured(
+    args: argparse.Namespace,
+    out: Path,
+    t0: float,
+    fmt: str,
+    data: Any,
+    smoothing: tuple[float, float],
+) -> int:
     """Measured FORC data: data-driven summaries only (no paper overlay)."""
     import numpy as np
 
-    from analysis.forc_io import detect_format, read_forc_file
     from analysis.identification import identify_from_curves
     from analysis.preisach_plots import figure_forc
 
-    fmt = detect_format(args.input) if args.format == "auto" else args.format
-    kwargs: dict[str, Any] = {}
-    if fmt in ("micromag", "lakeshore") and args.drift_correction != "none":
-        kwargs["drift_correction"] = args.drift_correction
-    elif args.drift_correction != "none":
-        raise ValueError(
-            f"--drift-correction needs calibration points (MicroMag or Lake "
-            f"Shore files), not {fmt!r}"
+    try:
+        ident = identify_from_curves(
+            data.curves,
+            smoothing=smoothing,
+            output_range=(-math.inf, math.inf),
+            extend=args.reversible_ridge,
+            step=args.grid_step,
+            window=args.window,
         )
-    data = read_forc_file(args.input, fmt, **kwargs)
-    sm = args.smoothing or [3.0]
-    smoothing = (sm[0], sm[0]) if len(sm) == 1 else (sm[0], sm[1])
-    ident = identify_from_curves(
-        data.curves,
-        smoothing=smoothing,
-        output_range=(-math.inf, math.inf),
-        extend=args.reversible_ridge,
-        step=args.grid_step,
-        window=args.window,
-    )
+    except ValueError as exc:
+        option = "--grid-step" if str(exc).startswith("step") else "--input"
+        raise CliError(f"argument {option}: {args.input}: {exc}") from exc
     bc, bu, rho = ident.density_peak()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
     report: dict[str, Any] = {
@@ -290,39 +401,27 @@ def _run_measured(args: argparse.Namespace, out: Path, t0: float) -> int:
         "drift_correction": args.drift_correction,
     }
     stem = "identify_" + Path(args.input).stem.replace(".", "_")
+    # measured data: the title names the file and the identification's parameters (there is
+    # no model)
+    title = f"FORC diagram: {Path(args.input).name}, SF={smoothing[0]:g}/{smoothing[1]:g}, "
+    title += f"Δ={step:.3g} mT, window={args.window}"
     paths = figure_forc(
         ident,
         out,
         stem,
-        title=f"{Path(args.input).name}: SF = {smoothing[0]:g}/{smoothing[1]:g}, Δ = {step:.3g} mT",
+        title=title,
         field_unit="mT",
         moment_unit=data.moment_unit,
     )
+    report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
     report["seconds"] = time.perf_counter() - t0
-    text = json.dumps(_jsonable(report), indent=2, allow_nan=True)
-    (out / "identify.json").write_text(text + "\n")
-    if args.json:
-        sys.stdout.write(text + "\n")
-    else:
-        print(
-            f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
-            f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT; irreversible mass "
-            f"{ident.irreversible_mass:.4g}"
-        )
-        print(f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}")
+    (out / "identify.json").write_text(to_json(report, indent=2) + "\n")
+    lines = [
+        f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
+        f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT; irreversible mass "
+        f"{ident.irreversible_mass:.4g}",
+        f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}",
+    ]
+    emit(args, report, lines)
     return 0
-
-
-def _jsonable(x: Any) -> Any:
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x

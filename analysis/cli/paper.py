@@ -8,12 +8,15 @@ from typing import Any
 from analysis.cli._common import (
     CliError,
     add_output_options,
+    add_store_options,
     add_subcommand,
     announce_compilation,
+    check_store,
     emit,
     int_at_least,
     prepare_out,
     progress_enabled,
+    store_error,
 )
 
 __all__ = ["register", "run"]
@@ -53,9 +56,7 @@ def register(subparsers: Any) -> None:
     )
     p.set_defaults(size="quick", func=run)
     g = p.add_argument_group("run")
-    g.add_argument(
-        "--store", default=None, help="SQLite results file (default: DIR/results.sqlite)"
-    )
+    add_store_options(g)
     g.add_argument(
         "--workers",
         type=int_at_least(1, 1024),
@@ -83,17 +84,26 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"argument --only: {str(exc).removeprefix('only: ')}") from exc
     if args.scheduler is not None and args.workers is not None:
         raise CliError("argument --workers: give --workers or --scheduler, not both")
+    from analysis.store import StoreError
+
+    # a damaged or foreign store is refused up front; other code versions per experiment, when
+    # a figure first uses it (a run with --only touches only its own experiments)
+    check_store(args, experiments=[])
     out = prepare_out(args)
     announce_compilation(args)
-    report = run_paper(
-        out,
-        size=args.size,
-        store=args.store,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        only=args.only,
-        progress=progress_enabled(args),
-    )
+    try:
+        report = run_paper(
+            out,
+            size=args.size,
+            store=args.store,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            only=args.only,
+            progress=progress_enabled(args),
+            allow_version_mismatch=args.allow_version_mismatch,
+        )
+    except StoreError as exc:
+        raise store_error(exc) from exc
     n = len(report["claims"])
     agree = sum(c["verdict"] == "agree" for c in report["claims"])
     record = {

@@ -154,6 +154,7 @@ class PaperContext:
         scheduler: str | None = None,
         progress: bool = False,
         seed: int = 0,
+        allow_version_mismatch: bool = False,
     ) -> None:
         self.out = Path(out)
         self.out.mkdir(parents=True, exist_ok=True)
@@ -163,6 +164,7 @@ class PaperContext:
         self.scheduler = scheduler
         self.progress = progress
         self.seed = seed
+        self.allow_version_mismatch = allow_version_mismatch
         self.files: list[Path] = []
         #: results shared by several figures of this run (e.g. one ensemble for four figures)
         self.cache: dict[str, Any] = {}
@@ -208,6 +210,7 @@ class PaperContext:
             workers=self.task_workers,
             scheduler=self.scheduler,
             progress=self.progress,
+            allow_version_mismatch=self.allow_version_mismatch,
         )
 
     def describe(self) -> dict[str, Any]:

@@ -35,13 +35,16 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
     import matplotlib.pyplot as plt
 
     from analysis.identification import compare_with_ridge, identify_preisach
+    from analysis.models import build_operator
     from analysis.preisach_plots import plot_density_rs, plot_s_marginal
-    from hysteresis import GeneralizedPlay, SpinDimerEnsemble
 
     n_spins = ctx.size.identification_spins
     step = ctx.size.identification_step
-    play = GeneralizedPlay.erf(WIDTH, SPREAD)
-    dimers = SpinDimerEnsemble.random(n_spins, WIDTH, SPREAD, COUPLING, seed=ctx.seed)
+    # the model registry builds both systems, as the CLI does (one definition of each model)
+    play = build_operator("erf-play", width=WIDTH, spread=SPREAD)
+    dimers = build_operator(
+        "dimers", spins=n_spins, width=WIDTH, spread=SPREAD, spin_coupling=COUPLING, seed=ctx.seed
+    )
     th = dimers.thresholds()
     # the grid must hold every relay of the ensemble and 5R + p/2 of the erf play's tails
     saturation = max(5.0 * SPREAD + 0.5 * WIDTH, float(np.max(np.abs([th.alpha, th.beta]))) + step)

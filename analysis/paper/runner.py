@@ -11,6 +11,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from analysis.paper.context import SIZES, Claim, FigureSpec, PaperContext
+from analysis.store import StoreError
 
 __all__ = ["FigureSpec", "FIGURES", "check_only", "figure_labels", "run_paper", "write_report"]
 
@@ -63,6 +64,7 @@ def run_paper(
     scheduler: str | None = None,
     only: Sequence[str] | None = None,
     progress: bool = False,
+    allow_version_mismatch: bool = False,
 ) -> dict:
     """Build every figure (or those whose label is in ``only``) and write the report.
 
@@ -70,7 +72,9 @@ def run_paper(
     whose builder raises is recorded with its traceback in ``errors`` and the others still run.
     Every argument is checked before any figure is built (an unknown label in ``only`` or
     ``workers < 1`` raises ``ValueError``); ``progress`` prints one line per figure (off by
-    default).
+    default). A results store that cannot be used (damaged, foreign, or holding results of
+    other code versions without ``allow_version_mismatch``) raises
+    :class:`~analysis.store.StoreError` for the whole run instead of failing figure by figure.
     """
     if size not in SIZES:
         raise ValueError(f"size must be one of {sorted(SIZES)}, got {size!r}")
@@ -80,7 +84,13 @@ def run_paper(
     ):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     ctx = PaperContext(
-        out, SIZES[size], store=store, workers=workers, scheduler=scheduler, progress=progress
+        out,
+        SIZES[size],
+        store=store,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        allow_version_mismatch=allow_version_mismatch,
     )
     claims: list[Claim] = []
     figures: list[dict] = []
@@ -93,6 +103,8 @@ def run_paper(
             print(f"[hyst paper] {spec.label}: {spec.title} ...", file=sys.stderr, flush=True)
         try:
             new = spec.build(ctx)
+        except StoreError:  # the run's store, not this figure: every figure would fail
+            raise
         except Exception as exc:  # keep going: one failing figure must not hide the others
             errors.append(
                 {"figure": spec.label, "error": repr(exc), "traceback": traceback.format_exc()}
