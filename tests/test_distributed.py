@@ -241,8 +241,8 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
 
 
 def test_distributed_run_survives_a_killed_worker(tmp_path):
-    """2 couplings x 2 realizations of N = 200 dimers; one of two workers SIGKILLed mid-run."""
-    _run_with_worker_killed(tmp_path, _ensemble_args(["2.9", "4.0"], 2, 15000.0), n_tasks=4)
+    """2 couplings x 3 realizations of N = 200 dimers; one of two workers SIGKILLed mid-run."""
+    _run_with_worker_killed(tmp_path, _ensemble_args(["2.9", "4.0"], 3, 8000.0), n_tasks=6)
 
 
 @pytest.mark.slow
