@@ -9,6 +9,18 @@
   (``scheduler`` address), a local process pool (``workers``), or serially in-process;
 * each result is written to the store from the parent process as soon as it arrives, in one
   transaction, with the task's wall time measured in the worker.
+
+Who writes the store: only the calling (client) process, as results arrive. Workers compute and
+return their result over the executor's channel (a pipe, or Dask's TCP connection); they never
+open the store. So there is exactly one writer (no SQLite locking across machines, which is
+unreliable on network filesystems), and the workers of a cluster need no shared filesystem and
+no write access anywhere: only the client machine holds the file.
+
+On a Dask cluster a worker that dies (killed, machine lost) costs only the tasks it held: the
+scheduler reruns them on the surviving workers and their futures still complete, so the run
+finishes by itself, with every task stored once. Losing the scheduler (or the client's
+connection to it) ends the run with a ``ConnectionError``; what finished is stored, and running
+the same sweep again against a new scheduler computes only the rest.
 """
 
 from __future__ import annotations
@@ -78,7 +90,7 @@ def _timed_call(func: Callable[..., Mapping[str, Any]], task: dict) -> tuple[dic
     return dict(result), wall
 
 
-def _dask_executor(scheduler: str) -> tuple[Executor, Callable[[], None]]:
+def _dask_client(scheduler: str) -> Any:
     try:
         from distributed import Client
     except ImportError as exc:  # pragma: no cover - depends on the environment
@@ -86,9 +98,7 @@ def _dask_executor(scheduler: str) -> tuple[Executor, Callable[[], None]]:
             "a scheduler address needs Dask distributed: "
             "pip install 'hysteresis-toolkit[distributed]'"
         ) from exc
-    client = Client(scheduler)
-    # pure=False: every submission runs (tasks are unique by key anyway; no result caching)
-    return client.get_executor(pure=False), client.close
+    return Client(scheduler)
 
 
 def run_tasks(
@@ -235,10 +245,13 @@ def _run_pending(
         return
 
     shutdown: Callable[[], None] | None = None
+    client = None
     if executor is not None:
         ex = executor
     elif scheduler is not None:
-        ex, shutdown = _dask_executor(scheduler)
+        client = _dask_client(scheduler)
+        # pure=False: every submission runs (tasks are unique by key anyway; no result caching)
+        ex, shutdown = client.get_executor(pure=False), client.close
     else:
         n = workers if workers is not None else (os.cpu_count() or 1)
         ex = ProcessPoolExecutor(max_workers=min(n, len(pending)))
@@ -250,10 +263,17 @@ def _run_pending(
         for fut in as_completed(futures):
             key = futures[fut]
             try:
+                if fut.cancelled():
+                    # nobody here cancels a pending task: the executor dropped it (a Dask
+                    # client that lost its scheduler cancels every future)
+                    raise ConnectionError("the executor cancelled the task")
                 result, wall = fut.result()
             except Exception as exc:
                 for other in futures:
                     other.cancel()
+                lost = fut.cancelled() or (client is not None and client.status != "running")
+                if lost:
+                    raise _cluster_lost(experiment, scheduler, store, results, pending) from exc
                 raise TaskError(experiment, pending[key], exc) from exc
             record(key, result, wall)
     finally:
@@ -262,3 +282,23 @@ def _run_pending(
                 ex.shutdown(wait=True, cancel_futures=True)
             else:
                 shutdown()
+
+
+def _cluster_lost(
+    experiment: str,
+    scheduler: str | None,
+    store: ResultStore | None,
+    results: dict[str, dict],
+    pending: dict[str, dict],
+) -> ConnectionError:
+    """The error for a run whose executor went away: not a task's fault, so no TaskError."""
+    total = len(results) + sum(k not in results for k in pending)
+    where = f"the Dask scheduler {scheduler}" if scheduler is not None else "the executor"
+    if store is not None:
+        kept = (
+            f"{len(results)} of {total} tasks are stored in {store.path}; run the same "
+            "sweep again (with a running scheduler) to compute only the rest"
+        )
+    else:
+        kept = f"{len(results)} of {total} tasks had finished; nothing was stored (no store)"
+    return ConnectionError(f"{experiment}: lost {where} before the run finished: {kept}")
