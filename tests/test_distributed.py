@@ -164,9 +164,8 @@ def _ensemble_args(couplings: list[str], realizations: int, t_end: float) -> lis
     ]  # fmt: skip
 
 
-def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> None:
-    """Serial reference, then the same ensemble on a 2-worker cluster with one worker killed
-    while it computes a task; the two stores must be identical."""
+def _serial_reference(tmp_path: Path, args: list[str], n_tasks: int) -> tuple[dict, dict]:
+    """The ensemble run serially (``--workers 1``) in this process; its store's content."""
     from analysis.cli import main
 
     serial_store = tmp_path / "serial.sqlite"
@@ -175,7 +174,47 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
                  "--out", str(tmp_path / "serial")]) == 0  # fmt: skip
     reference, reference_arrays = _store_rows(serial_store)
     assert len(reference) == n_tasks and reference_arrays
+    return reference, reference_arrays
 
+
+def _start_client(
+    tmp_path: Path, cluster: Cluster, args: list[str], store: Path, tag: str
+) -> subprocess.Popen:
+    """``hyst ensemble ... --scheduler ADDR --store FILE`` in a process of its own."""
+    log = tmp_path / f"client-{tag}.log"
+    cluster.logs.append(log)
+    return _spawn(
+        [sys.executable, "-m", "analysis.cli", *args, "--scheduler", cluster.address,
+         "--store", str(store), "--out", str(tmp_path / "dist")],
+        log,
+    )  # fmt: skip
+
+
+def _wait_stored(store: Path, at_least: int, proc: subprocess.Popen, cluster: Cluster) -> None:
+    deadline = time.monotonic() + RUN_TIMEOUT
+    while _stored_count(store) < at_least:
+        if proc.poll() is not None or time.monotonic() > deadline:
+            pytest.fail(f"fewer than {at_least} results stored\n" + cluster.log_tail())
+        time.sleep(0.05)
+
+
+def _assert_same_as_reference(tmp_path: Path, store: Path, reference: dict, arrays: dict):
+    rows, dist_arrays = _store_rows(store)
+    # nothing lost, nothing duplicated: the same keys (PRIMARY KEY: one row each) ...
+    assert sorted(rows) == sorted(reference)
+    # ... and bit-identical values: the JSON text round-trips every float exactly, arrays are
+    # compared as raw .npy bytes (dtype, shape and every bit)
+    assert rows == reference
+    assert dist_arrays == arrays
+    # the summaries written by both runs agree too
+    summary = [json.loads((tmp_path / d / "ensemble.json").read_text()) for d in ("serial", "dist")]
+    assert summary[0]["points"] == summary[1]["points"]
+
+
+def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> None:
+    """Serial reference, then the same ensemble on a 2-worker cluster with one worker killed
+    while it computes a task; the two stores must be identical."""
+    reference, reference_arrays = _serial_reference(tmp_path, args, n_tasks)
     dist_store = tmp_path / "dist.sqlite"
     with _cluster(tmp_path, n_workers=2) as cluster:
         client_proc = None
@@ -189,25 +228,17 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
                     for addr, pid in pids.items()
                 }
                 assert len(set(map(id, proc_of.values()))) == 2
-                client_log = tmp_path / "client.log"
-                client_proc = _spawn(
-                    [sys.executable, "-m", "analysis.cli", *args,
-                     "--scheduler", cluster.address, "--store", str(dist_store),
-                     "--out", str(tmp_path / "dist")],
-                    client_log,
-                )  # fmt: skip
-                cluster.logs.append(client_log)
+                client_proc = _start_client(tmp_path, cluster, args, dist_store, "run")
                 # kill a worker mid-run: once a result is stored and that worker is computing
+                _wait_stored(dist_store, 1, client_proc, cluster)
                 deadline = time.monotonic() + RUN_TIMEOUT
                 victim = None
                 while victim is None:
                     if client_proc.poll() is not None or time.monotonic() > deadline:
                         pytest.fail("no worker was busy mid-run\n" + cluster.log_tail())
-                    stored = _stored_count(dist_store)
-                    if stored >= 1:
-                        busy = [a for a, keys in observer.processing().items() if keys]
-                        if busy:
-                            victim = busy[-1]
+                    busy = [a for a, keys in observer.processing().items() if keys]
+                    if busy:
+                        victim = busy[-1]
                     time.sleep(0.05)
                 _kill_group(proc_of[victim], signal.SIGKILL)
                 stored_at_kill = _stored_count(dist_store)
@@ -227,17 +258,7 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
             if client_proc is not None:
                 _stop(client_proc)
         assert proc_of[victim].poll() is not None  # it is really gone
-
-    rows, arrays = _store_rows(dist_store)
-    # nothing lost, nothing duplicated: the same keys (PRIMARY KEY: one row each) ...
-    assert sorted(rows) == sorted(reference)
-    # ... and bit-identical values: the JSON text round-trips every float exactly, arrays are
-    # compared as raw .npy bytes (dtype, shape and every bit)
-    assert rows == reference
-    assert arrays == reference_arrays
-    # the summaries written by both runs agree too
-    summary = [json.loads((tmp_path / d / "ensemble.json").read_text()) for d in ("serial", "dist")]
-    assert summary[0]["points"] == summary[1]["points"]
+    _assert_same_as_reference(tmp_path, dist_store, reference, reference_arrays)
 
 
 def test_distributed_run_survives_a_killed_worker(tmp_path):
@@ -249,3 +270,47 @@ def test_distributed_run_survives_a_killed_worker(tmp_path):
 def test_distributed_ensemble_survives_a_killed_worker_full(tmp_path):
     """2 couplings x 6 realizations of N = 200 dimers; one of two workers SIGKILLed mid-run."""
     _run_with_worker_killed(tmp_path, _ensemble_args(["2.9", "4.0"], 6, 15000.0), n_tasks=12)
+
+
+@pytest.mark.slow
+def test_lost_scheduler_fails_clearly_and_a_rerun_resumes(tmp_path):
+    """The scheduler is SIGKILLed mid-run: the client exits (bounded) with one clear error that
+    says what is stored; the same command against a new cluster completes the store, identical
+    to the serial run's."""
+    args = _ensemble_args(["2.9", "4.0"], 3, 8000.0)
+    reference, reference_arrays = _serial_reference(tmp_path, args, 6)
+    dist_store = tmp_path / "dist.sqlite"
+    first = tmp_path / "cluster1"
+    first.mkdir()
+    with _cluster(first, n_workers=2) as cluster:
+        client_proc = _start_client(tmp_path, cluster, args, dist_store, "lost")
+        try:
+            _wait_stored(dist_store, 1, client_proc, cluster)
+            _kill_group(cluster.scheduler, signal.SIGKILL)
+            try:
+                rc = client_proc.wait(timeout=120)
+            except subprocess.TimeoutExpired:
+                pytest.fail("the client hung after losing its scheduler\n" + cluster.log_tail())
+        finally:
+            _stop(client_proc)
+        log = cluster.logs[-1].read_text(errors="replace")
+    stored = _stored_count(dist_store)
+    assert rc == 2, log[-3000:]
+    assert 1 <= stored < 6
+    error = [ln for ln in log.splitlines() if ln.startswith("hyst ensemble: error:")]
+    assert len(error) == 1, log[-3000:]
+    assert "ConnectionError" in error[0] and "lost the Dask scheduler" in error[0], error[0]
+    assert f"{stored} of 6 tasks are stored" in error[0], error[0]
+    assert "failed" not in error[0]  # no task is blamed
+    second = tmp_path / "cluster2"
+    second.mkdir()
+    with _cluster(second, n_workers=2) as cluster:
+        client_proc = _start_client(tmp_path, cluster, args, dist_store, "rerun")
+        try:
+            rc = client_proc.wait(timeout=RUN_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            pytest.fail("the rerun did not finish\n" + cluster.log_tail())
+        finally:
+            _stop(client_proc)
+        assert rc == 0, cluster.log_tail()
+    _assert_same_as_reference(tmp_path, dist_store, reference, reference_arrays)
