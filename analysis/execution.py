@@ -132,7 +132,9 @@ def run_tasks(
         given (default: ``os.cpu_count()``); ``workers=1`` runs serially in this process.
     scheduler:
         Address of a Dask distributed scheduler, e.g. ``"tcp://10.0.0.5:8786"``; the tasks go
-        to ``Client(scheduler).get_executor()``. Needs the ``distributed`` extra.
+        to ``Client(scheduler).get_executor()``. Needs the ``distributed`` extra. The workers
+        never see the store: results come back to this process, which alone writes them. A
+        worker lost mid-run only costs the work it held (Dask reruns it elsewhere).
     progress:
         Show a tqdm progress bar (counts, rate, ETA).
     allow_version_mismatch:
@@ -145,6 +147,14 @@ def run_tasks(
     list of dict
         One result per task, in task order. With a store, every result is read back from it,
         so fresh and resumed runs return identical objects (tuples become lists).
+
+    Raises
+    ------
+    TaskError
+        A task raised (the task's parameters and the original exception are kept).
+    ConnectionError
+        The Dask scheduler (or any executor) went away before the run finished; the message
+        says how many tasks are stored. Running the same sweep again computes only the rest.
     """
     if sum(x is not None for x in (executor, scheduler)) > 1:
         raise ValueError("give at most one of executor and scheduler")
