@@ -283,6 +283,15 @@ def _run_pending(
                     other.cancel()
                 lost = fut.cancelled() or (client is not None and client.status != "running")
                 if lost:
+                    # keep what had already arrived: a rerun then computes only the rest
+                    for other, other_key in futures.items():
+                        if (
+                            other_key not in results
+                            and other.done()
+                            and not other.cancelled()
+                            and other.exception() is None
+                        ):
+                            record(other_key, *other.result())
                     raise _cluster_lost(experiment, scheduler, store, results, pending) from exc
                 raise TaskError(experiment, pending[key], exc) from exc
             record(key, result, wall)
@@ -305,9 +314,10 @@ def _cluster_lost(
     total = len(results) + sum(k not in results for k in pending)
     where = f"the Dask scheduler {scheduler}" if scheduler is not None else "the executor"
     if store is not None:
+        again = "again (with a running scheduler)" if scheduler is not None else "again"
         kept = (
             f"{len(results)} of {total} tasks are stored in {store.path}; run the same "
-            "sweep again (with a running scheduler) to compute only the rest"
+            f"sweep {again} to compute only the rest"
         )
     else:
         kept = f"{len(results)} of {total} tasks had finished; nothing was stored (no store)"
