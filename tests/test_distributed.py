@@ -40,6 +40,8 @@ TWO_PI = 6.283185307179586
 #: wall-time bounds (s): generous for two loaded cores, but every wait ends
 STARTUP_TIMEOUT = 90.0
 RUN_TIMEOUT = 240.0
+#: the HTTP (health/metrics) server runs even with --no-dashboard: keep it on loopback too
+LOOPBACK_HTTP = "127.0.0.1:0"
 
 
 def _dask_command() -> list[str]:
@@ -100,7 +102,8 @@ def _cluster(tmp_path: Path, n_workers: int) -> Iterator[Cluster]:
         procs.append(
             _spawn(
                 [*dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                 "--scheduler-file", str(sched_file), "--idle-timeout", "600"],
+                 "--dashboard-address", LOOPBACK_HTTP, "--scheduler-file", str(sched_file),
+                 "--idle-timeout", "600"],
                 logs[0],
             )
         )  # fmt: skip
@@ -119,7 +122,8 @@ def _cluster(tmp_path: Path, n_workers: int) -> Iterator[Cluster]:
                 _spawn(
                     [*dask, "worker", "--scheduler-file", str(sched_file), "--nworkers", "1",
                      "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard",
-                     "--local-directory", str(tmp_path / f"worker{i}"), "--death-timeout", "60"],
+                     "--dashboard-address", LOOPBACK_HTTP, "--local-directory",
+                     str(tmp_path / f"worker{i}"), "--death-timeout", "60"],
                     logs[-1],
                 )
             )  # fmt: skip
@@ -127,6 +131,18 @@ def _cluster(tmp_path: Path, n_workers: int) -> Iterator[Cluster]:
     finally:
         for proc in reversed(procs):
             _stop(proc)
+
+
+def _listening_hosts(pids: list[int]) -> set[str]:
+    """Local addresses the processes listen on (TCP)."""
+    import psutil  # a dependency of distributed
+
+    hosts = set()
+    for pid in pids:
+        proc = psutil.Process(pid)
+        get = getattr(proc, "net_connections", None) or proc.connections  # psutil < 6
+        hosts |= {c.laddr.ip for c in get(kind="tcp") if c.status == psutil.CONN_LISTEN}
+    return hosts
 
 
 def _store_rows(path: Path) -> tuple[dict, dict]:
@@ -228,6 +244,13 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
                     for addr, pid in pids.items()
                 }
                 assert len(set(map(id, proc_of.values()))) == 2
+                # loopback only: no process of the cluster listens on another interface
+                everyone = [
+                    cluster.scheduler.pid,
+                    *(p.pid for p in cluster.workers),
+                    *pids.values(),
+                ]
+                assert _listening_hosts(everyone) == {"127.0.0.1"}
                 client_proc = _start_client(tmp_path, cluster, args, dist_store, "run")
                 # kill a worker mid-run: once a result is stored and that worker is computing
                 _wait_stored(dist_store, 1, client_proc, cluster)
