@@ -9,6 +9,18 @@
   (``scheduler`` address), a local process pool (``workers``), or serially in-process;
 * each result is written to the store from the parent process as soon as it arrives, in one
   transaction, with the task's wall time measured in the worker.
+
+Who writes the store: only the calling (client) process, as results arrive. Workers compute and
+return their result over the executor's channel (a pipe, or Dask's TCP connection); they never
+open the store. So there is exactly one writer (no SQLite locking across machines, which is
+unreliable on network filesystems), and the workers of a cluster need no shared filesystem and
+no write access anywhere: only the client machine holds the file.
+
+On a Dask cluster a worker that dies (killed, machine lost) costs only the tasks it held: the
+scheduler reruns them on the surviving workers and their futures still complete, so the run
+finishes by itself, with every task stored once. Losing the scheduler (or the client's
+connection to it) ends the run with a ``ConnectionError``; what finished is stored, and running
+the same sweep again against a new scheduler computes only the rest.
 """
 
 from __future__ import annotations
@@ -78,7 +90,7 @@ def _timed_call(func: Callable[..., Mapping[str, Any]], task: dict) -> tuple[dic
     return dict(result), wall
 
 
-def _dask_executor(scheduler: str) -> tuple[Executor, Callable[[], None]]:
+def _dask_client(scheduler: str) -> Any:
     try:
         from distributed import Client
     except ImportError as exc:  # pragma: no cover - depends on the environment
@@ -86,9 +98,7 @@ def _dask_executor(scheduler: str) -> tuple[Executor, Callable[[], None]]:
             "a scheduler address needs Dask distributed: "
             "pip install 'hysteresis-toolkit[distributed]'"
         ) from exc
-    client = Client(scheduler)
-    # pure=False: every submission runs (tasks are unique by key anyway; no result caching)
-    return client.get_executor(pure=False), client.close
+    return Client(scheduler)
 
 
 def run_tasks(
@@ -122,7 +132,9 @@ def run_tasks(
         given (default: ``os.cpu_count()``); ``workers=1`` runs serially in this process.
     scheduler:
         Address of a Dask distributed scheduler, e.g. ``"tcp://10.0.0.5:8786"``; the tasks go
-        to ``Client(scheduler).get_executor()``. Needs the ``distributed`` extra.
+        to ``Client(scheduler).get_executor()``. Needs the ``distributed`` extra. The workers
+        never see the store: results come back to this process, which alone writes them. A
+        worker lost mid-run only costs the work it held (Dask reruns it elsewhere).
     progress:
         Show a tqdm progress bar (counts, rate, ETA).
     allow_version_mismatch:
@@ -135,6 +147,14 @@ def run_tasks(
     list of dict
         One result per task, in task order. With a store, every result is read back from it,
         so fresh and resumed runs return identical objects (tuples become lists).
+
+    Raises
+    ------
+    TaskError
+        A task raised (the task's parameters and the original exception are kept).
+    ConnectionError
+        The Dask scheduler (or any executor) went away before the run finished; the message
+        says how many tasks are stored. Running the same sweep again computes only the rest.
     """
     if sum(x is not None for x in (executor, scheduler)) > 1:
         raise ValueError("give at most one of executor and scheduler")
@@ -235,10 +255,13 @@ def _run_pending(
         return
 
     shutdown: Callable[[], None] | None = None
+    client = None
     if executor is not None:
         ex = executor
     elif scheduler is not None:
-        ex, shutdown = _dask_executor(scheduler)
+        client = _dask_client(scheduler)
+        # pure=False: every submission runs (tasks are unique by key anyway; no result caching)
+        ex, shutdown = client.get_executor(pure=False), client.close
     else:
         n = workers if workers is not None else (os.cpu_count() or 1)
         ex = ProcessPoolExecutor(max_workers=min(n, len(pending)))
@@ -250,10 +273,26 @@ def _run_pending(
         for fut in as_completed(futures):
             key = futures[fut]
             try:
+                if fut.cancelled():
+                    # nobody here cancels a pending task: the executor dropped it (a Dask
+                    # client that lost its scheduler cancels every future)
+                    raise ConnectionError("the executor cancelled the task")
                 result, wall = fut.result()
             except Exception as exc:
                 for other in futures:
                     other.cancel()
+                lost = fut.cancelled() or (client is not None and client.status != "running")
+                if lost:
+                    # keep what had already arrived: a rerun then computes only the rest
+                    for other, other_key in futures.items():
+                        if (
+                            other_key not in results
+                            and other.done()
+                            and not other.cancelled()
+                            and other.exception() is None
+                        ):
+                            record(other_key, *other.result())
+                    raise _cluster_lost(experiment, scheduler, store, results, pending) from exc
                 raise TaskError(experiment, pending[key], exc) from exc
             record(key, result, wall)
     finally:
@@ -262,3 +301,24 @@ def _run_pending(
                 ex.shutdown(wait=True, cancel_futures=True)
             else:
                 shutdown()
+
+
+def _cluster_lost(
+    experiment: str,
+    scheduler: str | None,
+    store: ResultStore | None,
+    results: dict[str, dict],
+    pending: dict[str, dict],
+) -> ConnectionError:
+    """The error for a run whose executor went away: not a task's fault, so no TaskError."""
+    total = len(results) + sum(k not in results for k in pending)
+    where = f"the Dask scheduler {scheduler}" if scheduler is not None else "the executor"
+    if store is not None:
+        again = "again (with a running scheduler)" if scheduler is not None else "again"
+        kept = (
+            f"{len(results)} of {total} tasks are stored in {store.path}; run the same "
+            f"sweep {again} to compute only the rest"
+        )
+    else:
+        kept = f"{len(results)} of {total} tasks had finished; nothing was stored (no store)"
+    return ConnectionError(f"{experiment}: lost {where} before the run finished: {kept}")

@@ -244,8 +244,9 @@ class ResultStore:
         key = store.put("ensemble", {"spins": 100, "coupling": 4.0, "seed": 1}, {"d_ky": 1.4})
         store.has(key); store.get(key).results; store.load("ensemble")
 
-    The connection is opened in the process that creates the object; workers of a pool never
-    write (``run_tasks`` writes from the parent as results arrive).
+    The connection is opened in the process that creates the object; workers of a pool or of
+    a Dask cluster never write (``run_tasks`` writes from the parent/client process as results
+    arrive): one writer, and workers on other machines need no shared filesystem.
     """
 
     def __init__(self, path: str | Path, timeout: float = 60.0) -> None:

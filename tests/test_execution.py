@@ -10,7 +10,7 @@ import subprocess
 import sys
 import textwrap
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -258,6 +258,41 @@ def test_failing_task_raises_with_its_parameters_and_keeps_finished(tmp_path, he
         run_tasks("sweep", _tasks(6), helpers.failing, store=path, workers=1, progress=False)
     assert isinstance(info.value.__cause__, RuntimeError)
     assert _count_rows(path) == 3  # x = 0, 1, 2 were stored before the failure
+
+
+class _DroppingExecutor(Executor):
+    """Runs the first ``keep`` submissions at once, then drops (cancels) the rest, as a Dask
+    client does with every pending future when it loses its scheduler."""
+
+    def __init__(self, keep):
+        self.keep = keep
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut = Future()
+        if self.keep > 0:
+            self.keep -= 1
+            fut.set_result(fn(*args, **kwargs))
+        else:
+            fut.cancel()
+            fut.set_running_or_notify_cancel()
+        return fut
+
+
+def test_lost_executor_raises_connection_error_not_task_error(tmp_path, helpers):
+    path = tmp_path / "lost.sqlite"
+    tasks = _tasks(5)
+    with pytest.raises(ConnectionError, match="2 of 5 tasks are stored") as info:
+        run_tasks("sweep", tasks, helpers.task, store=path, executor=_DroppingExecutor(2),
+                  progress=False)  # fmt: skip
+    assert not isinstance(info.value, TaskError) and "run the same sweep again" in str(info.value)
+    assert _count_rows(path) == 2
+    # the rerun computes only the missing three and ends with the full, duplicate-free store
+    helpers.CALLS.clear()
+    run_tasks("sweep", tasks, helpers.task, store=path, workers=1, progress=False)
+    assert sorted(x for x, _ in helpers.CALLS) == [2, 3, 4]
+    assert _count_rows(path) == 5
+    with pytest.raises(ConnectionError, match="nothing was stored"):
+        run_tasks("sweep", tasks, helpers.task, executor=_DroppingExecutor(0), progress=False)
 
 
 def test_spawn_seeds_independent_and_reproducible():
