@@ -34,6 +34,7 @@ __all__ = [
     "EnsemblePoint",
     "realization_seeds",
     "section_and_magnetization",
+    "one_pass_measurements",
     "section_dimension",
     "validate_ensemble",
 ]
@@ -73,12 +74,7 @@ def section_and_magnetization(
     period). Returns ``(q, v, M_T, window_length)``.
     """
     period = float(system.period)
-    p0 = int(math.ceil(transient / period - 1e-12))
-    p1 = int(math.floor(t_end / period + 1e-12))
-    if p1 - p0 < 1:
-        raise ValueError(
-            f"t_end={t_end} - transient={transient} must cover at least one forcing period"
-        )
+    p0, p1 = _window_periods(system, t_end, transient)
     start = system.poincare_section(1, p0, q0, v0)
     q, v, opstate = start.final.q, start.final.v, start.final.operator_state
     qs: list[np.ndarray] = []
@@ -122,6 +118,76 @@ def section_dimension(
     return float(res.dimension), float(res.stderr), 0
 
 
+def _window_periods(system: Any, t_end: float, transient: float) -> tuple[int, int]:
+    """Whole forcing periods ``[P0, P1]`` inside ``[transient, t_end]``."""
+    period = float(system.period)
+    p0 = int(math.ceil(transient / period - 1e-12))
+    p1 = int(math.floor(t_end / period + 1e-12))
+    if p1 - p0 < 1:
+        raise ValueError(
+            f"t_end={t_end} - transient={transient} must cover at least one forcing period"
+        )
+    return p0, p1
+
+
+def one_pass_measurements(
+    system: Any,
+    t_end: float,
+    transient: float,
+    q0: float = -1.0,
+    v0: float = 0.1,
+    operator_state: Any = None,
+    magnetization: bool = True,
+    progress: bool = False,
+) -> tuple[Any, np.ndarray, np.ndarray, float, float]:
+    """Lyapunov spectrum, Poincaré section and ``M_T`` from one integration with tangent flow.
+
+    The window is the whole forcing periods ``[P0·T, P1·T]`` in ``[transient, t_end]`` (as
+    :func:`section_and_magnetization`). The Benettin loop of
+    :func:`~analysis.lyapunov.lyapunov_spectrum` re-orthonormalises once per period; its
+    observer reads the section point ``(q, v)`` at every period boundary from the stepper and
+    the exact ``∫M dt`` from the engine (``Engine.output_integral``) at both ends of the window,
+    so nothing is integrated twice. Returns ``(lyapunov_result, q, v, M_T, window_length)``;
+    ``M_T`` is nan with ``magnetization=False`` (for engines without an exact output integral,
+    e.g. continuous operators). ``operator_state`` is the initial memory (default: rising from
+    negative saturation to ``q0``); ``progress`` shows the Lyapunov loop's progress bar.
+    """
+    from analysis.lyapunov import lyapunov_spectrum
+
+    period = float(system.period)
+    p0, p1 = _window_periods(system, t_end, transient)
+    n = p1 - p0
+    qs = np.empty(n + 1)
+    vs = np.empty(n + 1)
+    integral = np.empty(n + 1)
+    count = [0]
+
+    def observe(stepper: Any) -> None:
+        i = count[0]
+        q, v, _ = stepper.sample
+        qs[i] = q
+        vs[i] = v
+        integral[i] = stepper.engine.output_integral() if magnetization else np.nan
+        count[0] = i + 1
+
+    ly = lyapunov_spectrum(
+        system,
+        p1 * period,
+        p0 * period,
+        q0,
+        v0,
+        operator_state,
+        progress=progress,
+        renormalize_dt=period,
+        observer=observe,
+    )
+    if count[0] != n + 1:  # the loop steps once per period; anything else is a bug here
+        raise RuntimeError(f"expected {n + 1} section points, got {count[0]}")
+    window = n * period
+    # samples at P0..P1: the section points are P0..P1-1, as section_and_magnetization
+    return ly, qs[:n], vs[:n], float((integral[n] - integral[0]) / window), window
+
+
 def ensemble_task(
     spins: int,
     coupling: float,
@@ -141,13 +207,13 @@ def ensemble_task(
     model: str = "dimers",
     width_spread: float = 0.2,
 ) -> dict:
-    """One disorder realization at one coupling: λ's, D_KY, D_BC and M_T.
+    """One disorder realization at one coupling: λ's, D_KY, D_BC and M_T, in one pass.
 
     ``spins`` = N, ``coupling`` = C, ``seed`` the disorder seed of
-    ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)``. The Lyapunov
-    spectrum (q, v; phase neglected as in the paper) is averaged over ``[transient, t_end]``; the
-    section and ``M_T`` use the whole forcing periods in that window (see
-    :func:`section_and_magnetization`). ``D_BC`` is 0 for a periodic section, else
+    ``SpinDimerEnsemble.random(N, width=p, spread=R, spin_coupling=J, seed)``. One integration
+    with the tangent flow (:func:`one_pass_measurements`) gives the Lyapunov spectrum (q, v;
+    phase neglected as in the paper), the Poincaré section and ``M_T``, all over the whole
+    forcing periods in ``[transient, t_end]``. ``D_BC`` is 0 for a periodic section, else
     :func:`~analysis.dimensions.box_counting_dimension` with ``max_fill=box_max_fill`` and
     ``min_boxes=box_min_boxes`` (relax them for short runs with few section points), nan if no
     scaling region is found. Top-level so that it runs in process pools.
@@ -157,7 +223,6 @@ def ensemble_task(
     ``spins`` is then its number of spins/relays.
     """
     from analysis.dimensions import kaplan_yorke_dimension
-    from analysis.lyapunov import lyapunov_spectrum
     from analysis.models import build_operator, canonical_model_name
     from oscillators import ForcedOscillator
 
@@ -173,9 +238,8 @@ def ensemble_task(
         )
     operator = build_operator(model, **params)
     system = ForcedOscillator(operator, coupling, damping_ratio=damping_ratio, frequency=frequency)
-    ly = lyapunov_spectrum(system, t_end, transient, q0, v0, progress=False)
+    ly, q, v, m_t, window = one_pass_measurements(system, t_end, transient, q0, v0)
     exponents = np.asarray(ly.exponents, dtype=float)
-    q, v, m_t, window = section_and_magnetization(system, t_end, transient, q0, v0)
     d_bc, d_bc_err, period = section_dimension(q, v, box_max_fill, box_min_boxes)
     out: dict[str, Any] = {
         "exponents": exponents,

@@ -27,6 +27,7 @@ directions are -inf and their columns are continued as zero vectors.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -116,6 +117,7 @@ class TangentStepper:
         self._engine: Engine | None = None
         self._t = 0.0
         self._events_at_start = 0
+        self._sample = np.full(3, np.nan)
 
     # -- re-initialise ---------------------------------------------------------------------------
     def reinit(self, state: OscillatorState | None = None, transient: float = 0.0) -> None:
@@ -126,8 +128,7 @@ class TangentStepper:
             raise ValueError(f"transient must be >= 0, got {transient}")
         self._engine = self.system.engine(state, **self.engine_options)
         self._t = 0.0
-        if transient > 0.0:
-            self._advance(transient)
+        self._advance(transient)
         self._engine.start_tangent(self.include_phase)
         self._events_at_start = self._engine.n_events
 
@@ -142,6 +143,13 @@ class TangentStepper:
         eng.advance(np.array([t]), out)
         self._t = t
         self.system.check_finite(eng, out[:, :2])
+        self._sample = out[0, :3].copy()
+
+    @property
+    def sample(self) -> np.ndarray:
+        """``(q, v, M)`` now (after the last :meth:`reinit` or :meth:`step`): cheap, unlike
+        :meth:`state`, which builds the operator state."""
+        return self._sample.copy()
 
     # -- deviations ------------------------------------------------------------------------------
     @property
@@ -223,6 +231,7 @@ def lyapunov_spectrum(
     *,
     state: OscillatorState | None = None,
     stepper: TangentStepper | None = None,
+    observer: Callable[[TangentStepper], None] | None = None,
 ) -> LyapunovResult:
     """Lyapunov spectrum of ``system`` (a :class:`~oscillators.system.ForcedOscillator`).
 
@@ -249,6 +258,12 @@ def lyapunov_spectrum(
     stepper:
         A :class:`TangentStepper` of this system to reuse (its ``include_phase`` and
         ``engine_options`` then apply).
+    observer:
+        Called as ``observer(stepper)`` once after the transient and after every
+        re-orthonormalisation, so that other measurements ride on the same integration (e.g.
+        with ``renormalize_dt`` = one forcing period and ``transient``, ``t_end`` on whole
+        periods, ``stepper.sample`` is the Poincaré section; ``stepper.engine.output_integral()``
+        gives exact time averages of ``M``). It must not move the stepper.
     """
     t_end = finite_scalar(t_end, "t_end")
     transient = finite_scalar(transient, "transient")
@@ -272,6 +287,8 @@ def lyapunov_spectrum(
     elif operator_state is not None:
         raise ValueError("give either state or operator_state, not both")
     stepper.reinit(state, transient)
+    if observer is not None:
+        observer(stepper)
     labels = stepper.tangent_space
     k = len(labels)
     span = t_end - transient
@@ -292,6 +309,8 @@ def lyapunov_spectrum(
         y, collapsed = _qr_step(stepper.deviations(), k, stepper.rank_bound(), lsum)
         n_collapses += int(collapsed)
         stepper.set_deviations(y)
+        if observer is not None:
+            observer(stepper)
         if i in marks:
             hist_t.append(target)
             hist.append(-np.sort(-lsum / (target - transient)))

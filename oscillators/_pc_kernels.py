@@ -64,9 +64,10 @@ _IFAC = np.array([1.0 / math.factorial(n) for n in range(ORDER + 2)])
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE, P_UNIT = range(11)
 N_PAR = 11
 # float state layout: q, v, tau, cos(phi), sin(phi), next up / down threshold, output M now,
-# compensated output (heap table, float weights: value and Neumaier compensation)
-S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC = range(10)
-N_ST = 10
+# compensated output (heap table, float weights: value and Neumaier compensation), the running
+# integral of M over the elapsed time (for exact time averages of the output)
+S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC, S_IM = range(11)
+N_ST = 11
 # int state layout: k (nested index), n (period), number of switches so far, weight units up and
 # in total (heap table, integer output), heap table: alpha rank of the next up switch and beta
 # rank of the next down switch (-1: none)
@@ -508,6 +509,7 @@ def advance_table(
     down = st[S_DN]
     mv = st[S_MV]
     nsw = ist[I_NSW]
+    integral = st[S_IM]
     status = 0
     while True:
         horizon = tau_stop - tau
@@ -576,6 +578,7 @@ def advance_table(
             c = c1
             s = s1
             v = dp
+            integral += mv * hh  # M is constant over the hop
             if mode == 2:
                 q = p
                 tau = tau_stop
@@ -603,6 +606,7 @@ def advance_table(
             c = c1
             s = s1
             v = v1
+            integral += mv * hh
             if direction == 0:
                 q = q1
                 tau = tau_stop
@@ -638,6 +642,7 @@ def advance_table(
     st[S_TAU] = tau
     st[S_COS] = c
     st[S_SIN] = s
+    st[S_IM] = integral
     ist[I_NSW] = nsw
     return status
 

@@ -31,6 +31,9 @@ Motion
     the extra sampled columns named by :attr:`Engine.sample_columns` after the first three.
     With ``record`` every event (relay switch; wall hit or reversal; ...) is kept for
     :meth:`Engine.records`. ``state()`` is the full :class:`OscillatorState` now.
+    ``output_integral()`` is ``∫ M dt`` since the start where the engine can give it exactly
+    (relay engines; time averages such as the paper's ``M_T`` come from it in the same pass as
+    the tangent flow), else ``NotImplementedError``.
 Tangent flow
     ``start_tangent(include_phase)`` switches the variational flow on with the identity as
     deviation vectors. :attr:`Engine.tangent_space` names the rows of the deviation matrix:
@@ -157,6 +160,16 @@ class Engine(ABC):
         ``{"events": time, q, v, kind, w}`` (kind +1 the input leaves the play onto a wall,
         -1 it enters the play).
         """
+
+    def output_integral(self) -> float:
+        """``∫ M dt`` over the elapsed time (for exact time averages of the output).
+
+        Engines that cannot give it exactly raise ``NotImplementedError`` (the relay engine
+        accumulates it per hop; continuous engines would need a quadrature of ``M``).
+        """
+        raise NotImplementedError(
+            f"the {self.name} engine does not accumulate the time integral of the output M"
+        )
 
     @property
     @abstractmethod

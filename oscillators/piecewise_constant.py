@@ -113,6 +113,7 @@ class _Generic:
         self.opstate = opstate
         self.n_switches = 0
         self.switches: list[tuple[float, float, float, float]] = []
+        self.integral = 0.0  # ∫M dt since the start
 
     @property
     def output(self) -> float:
@@ -146,6 +147,7 @@ class _Generic:
                     pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
                 kern._tangent_update(y, ntan, m00, m01, m10, m11, pq, pv)
             self.v = v1
+            self.integral += m_old * hh
             if direction == 0:
                 self.q = q1
                 self.tau = tau_stop
@@ -283,6 +285,13 @@ class RelayEngine(Engine):
         if self._generic is not None:
             return self._generic.output
         return float(self._st[kern.S_MV])
+
+    def output_integral(self) -> float:
+        """``∫ M dt`` since the start, exact: ``M`` is constant between switches, so the kernel
+        adds ``M·h`` for every hop ``h``."""
+        if self._generic is not None:
+            return self._generic.integral
+        return float(self._st[kern.S_IM])
 
     def advance(
         self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False

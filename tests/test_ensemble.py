@@ -12,6 +12,7 @@ from analysis.ensemble import (
     aggregate_ensemble,
     ensemble_task,
     ensemble_tasks,
+    one_pass_measurements,
     realization_seeds,
     run_ensemble,
     section_and_magnetization,
@@ -49,6 +50,65 @@ def test_magnetization_average_is_exact_and_section_matches():
     bound = traj.switches.size * (2.0 / 40) * dt / window
     assert abs(m_t - sampled) <= bound + 1e-12
     assert bound < 1e-2  # the check is sharp
+
+
+@pytest.mark.parametrize("model", ["dimers", "preisach"])
+def test_one_pass_equals_separate_runs(model):
+    # one integration with the tangent flow gives the same section, M_T and spectrum as the
+    # separate Lyapunov run and the chunked section/magnetization run (the trajectory does not
+    # depend on the tangent flow; 300 time units keep chaotic amplification of round-off small)
+    from analysis.lyapunov import lyapunov_spectrum
+    from analysis.models import build_operator
+
+    extra = {"spin_coupling": 2.0} if model == "dimers" else {"width_spread": 0.3}
+    op = build_operator(model, spins=200, seed=3, width=2.0, spread=1.0, **extra)
+    system = _system(op, 2.9)
+    period = system.period
+    ly, q, v, m_t, window = one_pass_measurements(system, 400.0, 100.0)
+    q2, v2, m_t2, window2 = section_and_magnetization(system, 400.0, 100.0, chunk_periods=9)
+    assert q.size == 47 == q2.size  # periods 16 .. 62 of [100, 400]
+    assert window == pytest.approx(window2) and window == pytest.approx(47 * period)
+    assert np.allclose(q, q2, atol=1e-9) and np.allclose(v, v2, atol=1e-9)
+    assert m_t == pytest.approx(m_t2, abs=1e-12)
+    ref = lyapunov_spectrum(system, 63 * period, 16 * period, renormalize_dt=period)
+    assert np.allclose(ly.exponents, ref.exponents, atol=1e-9)
+
+
+def test_output_integral_kernel_equals_generic_and_switch_sum():
+    # the kernel's running ∫M dt against the Python reference loop and against the switch
+    # records (∫M = M0·Δ + Σ ΔM_j (Δ − t_j)), for the nested (dimers) and heap (random widths)
+    # tables
+    from analysis.models import build_operator
+
+    for op in (
+        build_operator("dimers", spins=60, seed=2, width=2.0, spread=1.0, spin_coupling=2.0),
+        build_operator("preisach", spins=60, seed=2, width=2.0, spread=1.0, width_spread=0.4),
+    ):
+        system = _system(op, 3.5)
+        state = system.initial_state(-1.0, 0.1)
+        length = 12.5 * system.period
+        values = []
+        for method in ("auto", "generic"):
+            eng = system.engine(state, method=method)
+            out = np.empty((1, 3))
+            eng.advance(np.array([0.0]), out)
+            m0 = out[0, 2]
+            eng.advance(np.array([length]), record=True)
+            sw = eng.records()["switches"]
+            assert sw.size > 20
+            by_switches = m0 * length + np.sum(sw["jump"] * (length - sw["time"]))
+            assert eng.output_integral() == pytest.approx(by_switches, abs=1e-11)
+            values.append(eng.output_integral())
+        assert values[0] == pytest.approx(values[1], abs=1e-11)
+
+
+def test_output_integral_refused_where_not_exact():
+    from hysteresis import PlayOperator
+    from oscillators import ForcedOscillator
+
+    eng = ForcedOscillator(PlayOperator(2.0), 0.5).engine()
+    with pytest.raises(NotImplementedError, match="integral"):
+        eng.output_integral()
 
 
 def test_regular_realization_single_dimer_above_grazing():

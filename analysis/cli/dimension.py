@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -65,7 +66,11 @@ def register(subparsers: Any) -> None:
     add_initial_options(p)
     g = p.add_argument_group("run")
     g.add_argument(
-        "--t-end", type=positive_float, default=20000.0, help="end time of the Lyapunov run"
+        "--t-end",
+        type=positive_float,
+        default=20000.0,
+        help="end time of the run; without --points the spectrum and the section come from "
+        "one integration over the whole forcing periods in [transient, t_end]",
     )
     add_transient_option(g, 160.0)
     g.add_argument(
@@ -93,6 +98,7 @@ def register(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     from analysis.bifurcation import section_period
     from analysis.dimensions import box_counting_dimension
+    from analysis.ensemble import one_pass_measurements
     from analysis.lyapunov import lyapunov_spectrum
 
     check_model_options(args)
@@ -110,16 +116,30 @@ def run(args: argparse.Namespace) -> int:
     state = initial_operator_state(args, system.operator)
     out = prepare_out(args)
     announce_compilation(args)
-    ly = lyapunov_spectrum(
-        system,
-        t_end=args.t_end,
-        transient=transient,
-        q0=args.q0,
-        v0=args.v0,
-        operator_state=state,
-        progress=progress_enabled(args),
-    )
-    sec = system.poincare_section(n, transient_periods, args.q0, args.v0, operator_state=state)
+    if args.points is None:
+        # one integration: spectrum and section over the whole forcing periods in the window
+        ly, sq, sv, _, _ = one_pass_measurements(
+            system,
+            args.t_end,
+            transient,
+            args.q0,
+            args.v0,
+            operator_state=state,
+            magnetization=False,
+            progress=progress_enabled(args),
+        )
+        sec = SimpleNamespace(q=sq, v=sv)
+    else:
+        ly = lyapunov_spectrum(
+            system,
+            t_end=args.t_end,
+            transient=transient,
+            q0=args.q0,
+            v0=args.v0,
+            operator_state=state,
+            progress=progress_enabled(args),
+        )
+        sec = system.poincare_section(n, transient_periods, args.q0, args.v0, operator_state=state)
     points = np.column_stack([sec.q, sec.v])
     period = section_period(sec.q, sec.v)
     bc, bc_error = None, ""
