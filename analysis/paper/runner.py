@@ -71,9 +71,10 @@ def run_paper(
     Returns the report dictionary ``{"claims": [...], "figures": [...], "size": ...}``. A figure
     whose builder raises is recorded with its traceback in ``errors`` and the others still run.
     Every argument is checked before any figure is built (an unknown label in ``only`` or
-    ``workers < 1`` raises ``ValueError``); ``progress`` prints one line per figure (off by
-    default). A results store that cannot be used (damaged, foreign, or holding results of
-    other code versions without ``allow_version_mismatch``) raises
+    ``workers < 1`` raises ``ValueError``); ``progress`` prints a line per figure (its number
+    of the total, its time and the time so far) and a progress bar per task sweep (counts, rate,
+    ETA); off by default. A results store that cannot be used (damaged, foreign, or holding
+    results of other code versions without ``allow_version_mismatch``) raises
     :class:`~analysis.store.StoreError` for the whole run instead of failing figure by figure.
     """
     if size not in SIZES:
@@ -95,12 +96,17 @@ def run_paper(
     claims: list[Claim] = []
     figures: list[dict] = []
     errors: list[dict] = []
-    for spec in _figures():
-        if only and spec.label not in only:
-            continue
+    selected = [spec for spec in _figures() if not only or spec.label in only]
+    run_start = time.perf_counter()
+    for k, spec in enumerate(selected, 1):
         start = time.perf_counter()
         if progress:
-            print(f"[hyst paper] {spec.label}: {spec.title} ...", file=sys.stderr, flush=True)
+            # every task sweep inside a figure shows its own bar (counts, rate, ETA)
+            print(
+                f"[hyst paper] [{k}/{len(selected)}] {spec.label}: {spec.title} ...",
+                file=sys.stderr,
+                flush=True,
+            )
         try:
             new = spec.build(ctx)
         except StoreError:  # the run's store, not this figure: every figure would fail
@@ -117,7 +123,13 @@ def run_paper(
         seconds = time.perf_counter() - start
         figures.append({"label": spec.label, "title": spec.title, "seconds": round(seconds, 2)})
         if progress:
-            print(f"[hyst paper] {spec.label} done in {seconds:.1f} s", file=sys.stderr, flush=True)
+            total = time.perf_counter() - run_start
+            print(
+                f"[hyst paper] [{k}/{len(selected)}] {spec.label} done in {seconds:.1f} s "
+                f"({total / 60:.1f} min so far)",
+                file=sys.stderr,
+                flush=True,
+            )
     report = {
         "size": ctx.describe(),
         "claims": [asdict(c) for c in claims],
