@@ -103,6 +103,11 @@ class TangentStepper:
         neglects it (Poincaré section φ = 0).
     engine_options:
         Passed to the engine (e.g. ``{"method": "generic"}`` for relay systems).
+    sample_dt:
+        If given, every :meth:`step` also samples ``(t, q, v, M)`` at the multiples of
+        ``sample_dt`` (elapsed time since :meth:`reinit`'s start) that it passes, and at its end,
+        in the same engine call (:attr:`samples`). With ``sample_dt`` = one forcing period these
+        are Poincaré section points, while the QR interval can be several periods long.
     """
 
     def __init__(
@@ -110,14 +115,21 @@ class TangentStepper:
         system: Any,
         include_phase: bool = False,
         engine_options: dict | None = None,
+        sample_dt: float | None = None,
     ) -> None:
         self.system = system
         self.include_phase = bool(include_phase)
         self.engine_options = dict(engine_options or {})
+        if sample_dt is not None:
+            sample_dt = finite_scalar(sample_dt, "sample_dt")
+            if not sample_dt > 0.0:
+                raise ValueError(f"sample_dt must be > 0, got {sample_dt}")
+        self.sample_dt = sample_dt
         self._engine: Engine | None = None
         self._t = 0.0
         self._events_at_start = 0
         self._sample = np.full(3, np.nan)
+        self._samples = np.empty((0, 4))
 
     # -- re-initialise ---------------------------------------------------------------------------
     def reinit(self, state: OscillatorState | None = None, transient: float = 0.0) -> None:
@@ -135,21 +147,41 @@ class TangentStepper:
     # -- step ------------------------------------------------------------------------------------
     def step(self, dt: float) -> None:
         """Advance by ``dt`` with the tangent flow on."""
-        self._advance(self._t + dt)
+        t = self._t + dt
+        if self.sample_dt is None:
+            self._advance(t)
+            return
+        # multiples of sample_dt strictly inside (t_now, t), then t itself (a multiple that
+        # coincides with t up to round-off is t)
+        sd = self.sample_dt
+        tol = 1e-9 * sd
+        k0 = math.floor((self._t + tol) / sd) + 1
+        k1 = math.ceil((t - tol) / sd) - 1
+        times = np.append(sd * np.arange(k0, k1 + 1, dtype=float), t) if k1 >= k0 else None
+        self._advance(t, times)
 
-    def _advance(self, t: float) -> None:
+    def _advance(self, t: float, times: np.ndarray | None = None) -> None:
         eng = self.engine
-        out = np.empty((1, len(eng.sample_columns)))
-        eng.advance(np.array([t]), out)
+        if times is None:
+            times = np.array([t])
+        out = np.empty((times.size, len(eng.sample_columns)))
+        eng.advance(times, out)
         self._t = t
         self.system.check_finite(eng, out[:, :2])
-        self._sample = out[0, :3].copy()
+        self._sample = out[-1, :3].copy()
+        self._samples = np.column_stack([times, out[:, :3]])
 
     @property
     def sample(self) -> np.ndarray:
         """``(q, v, M)`` now (after the last :meth:`reinit` or :meth:`step`): cheap, unlike
         :meth:`state`, which builds the operator state."""
         return self._sample.copy()
+
+    @property
+    def samples(self) -> np.ndarray:
+        """Rows ``(t, q, v, M)`` sampled by the last :meth:`step` (``sample_dt``; else only its
+        end point); ``t`` is the elapsed time since :meth:`reinit`'s start."""
+        return self._samples.copy()
 
     # -- deviations ------------------------------------------------------------------------------
     @property
