@@ -42,7 +42,17 @@ def test_paper_smoke_writes_every_figure_and_a_parsable_report(tmp_path):
     assert len(report["claims"]) >= 20
     for claim in report["claims"]:
         assert set(claim) >= {"claim", "paper", "measured", "run", "verdict"}
-        assert claim["verdict"] in ("agree", "disagree")
+        assert claim["verdict"] in ("agree", "disagree", "inconclusive at this run size")
+        assert set(claim) >= {"evidence", "explanation", "figure"}
+        if claim["verdict"] != "agree":
+            assert claim["evidence"], claim["claim"]
         assert claim["claim"] and claim["paper"] and claim["measured"] and claim["run"]
     text = (out / "report.md").read_text()
     assert "| figure | claim | paper | measured | run | verdict |" in text
+    counts = {v: sum(c["verdict"] == v for c in report["claims"]) for v in ("agree", "disagree")}
+    inconclusive = len(report["claims"]) - counts["agree"] - counts["disagree"]
+    assert (
+        f"{counts['agree']} of {len(report['claims'])} claims agree, {counts['disagree']} "
+        f"disagree, {inconclusive} inconclusive at this run size"
+    ) in text
+    assert "## Discussion" in text

@@ -105,16 +105,18 @@ def run(args: argparse.Namespace) -> int:
     except StoreError as exc:
         raise store_error(exc) from exc
     n = len(report["claims"])
-    agree = sum(c["verdict"] == "agree" for c in report["claims"])
+    summary = report["summary"]
     record = {
         "size": args.size,
         "claims": n,
-        "agree": agree,
+        "agree": summary["agree"],
+        "disagree": summary["disagree"],
+        "inconclusive": summary["inconclusive"],
         "figures": [f["label"] for f in report["figures"]],
         "errors": [{"figure": e["figure"], "error": e["error"]} for e in report["errors"]],
         "report": out / "report.md",
     }
-    emit(args, record, [f"{agree}/{n} claims agree; report: {out / 'report.md'}"])
+    emit(args, record, [f"{summary['line']}; report: {out / 'report.md'}"])
     if report["errors"]:
         failed = ", ".join(e["figure"] for e in report["errors"])
         raise RuntimeError(f"figure(s) failed: {failed} (tracebacks in {out / 'report.md'})")

@@ -9,7 +9,27 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["RunSize", "SIZES", "Claim", "FigureSpec", "PaperContext"]
+__all__ = [
+    "AGREE",
+    "DISAGREE",
+    "INCONCLUSIVE",
+    "VERDICTS",
+    "RunSize",
+    "SIZES",
+    "Claim",
+    "FigureSpec",
+    "PaperContext",
+    "decide",
+    "reading",
+    "verdict",
+]
+
+AGREE = "agree"
+DISAGREE = "disagree"
+#: the evidence of this run cannot decide the claim (too few realizations, too small N, a
+#: confidence interval straddling the criterion, a grid coarser than the tolerance, ...)
+INCONCLUSIVE = "inconclusive at this run size"
+VERDICTS = (AGREE, DISAGREE, INCONCLUSIVE)
 
 
 @dataclass(frozen=True)
@@ -115,18 +135,32 @@ SIZES: dict[str, RunSize] = {s.name: s for s in (_SMOKE, _QUICK, _FULL)}
 
 @dataclass(frozen=True)
 class Claim:
-    """One quantitative statement of the paper next to what this run measured."""
+    """One quantitative statement of the paper next to what this run measured.
+
+    ``verdict`` is one of :data:`VERDICTS`: ``"agree"``, ``"disagree"`` or ``"inconclusive at
+    this run size"`` (the criterion stays the paper's; the run's own numbers say it cannot be
+    decided at this size). ``evidence`` says what was checked (run length, initial conditions,
+    realizations, convergence with N, the decisive statistic and its uncertainty), built from the
+    run's numbers; ``explanation`` is the reading (physics) of a claim that does not agree, empty
+    for one that does. The report's discussion prints both for every claim that does not agree.
+    """
 
     claim: str
     paper: str
     measured: str
     run: str
-    verdict: str  # "agree" | "disagree"
+    verdict: str  # one of VERDICTS
     figure: str = ""
+    evidence: str = ""
+    explanation: str = ""
 
     def __post_init__(self) -> None:
-        if self.verdict not in ("agree", "disagree"):
-            raise ValueError(f"verdict must be 'agree' or 'disagree', got {self.verdict!r}")
+        if self.verdict not in VERDICTS:
+            choices = ", ".join(repr(v) for v in VERDICTS)
+            raise ValueError(f"verdict must be one of {choices}, got {self.verdict!r}")
+        for name in ("evidence", "explanation"):
+            if not isinstance(getattr(self, name), str):
+                raise TypeError(f"{name} must be a str, got {type(getattr(self, name)).__name__}")
 
 
 @dataclass(frozen=True)
@@ -139,7 +173,24 @@ class FigureSpec:
 
 
 def verdict(ok: bool) -> str:
-    return "agree" if ok else "disagree"
+    """``"agree"`` if ``ok`` else ``"disagree"`` (a claim this run always decides)."""
+    return AGREE if ok else DISAGREE
+
+
+def decide(ok: bool, decidable: bool) -> str:
+    """The verdict of a claim that this run may be unable to decide: ``"inconclusive at this run
+    size"`` unless ``decidable``, else ``"agree"`` if ``ok`` else ``"disagree"``."""
+    if not decidable:
+        return INCONCLUSIVE
+    return verdict(ok)
+
+
+def reading(outcome: str, disagree: str = "", inconclusive: str = "", agree: str = "") -> str:
+    """The explanation that goes with ``outcome`` (one of :data:`VERDICTS`): the reading of a
+    disagreement, of an inconclusive result, or (usually empty) of an agreement."""
+    if outcome not in VERDICTS:
+        raise ValueError(f"outcome must be one of {VERDICTS}, got {outcome!r}")
+    return {AGREE: agree, DISAGREE: disagree, INCONCLUSIVE: inconclusive}[outcome]
 
 
 class PaperContext:

@@ -6,14 +6,32 @@ import json
 import sys
 import time
 import traceback
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 
-from analysis.paper.context import SIZES, Claim, FigureSpec, PaperContext
+from analysis.paper.context import (
+    AGREE,
+    DISAGREE,
+    INCONCLUSIVE,
+    SIZES,
+    Claim,
+    FigureSpec,
+    PaperContext,
+)
 from analysis.store import StoreError
 
-__all__ = ["FigureSpec", "FIGURES", "check_only", "figure_labels", "run_paper", "write_report"]
+__all__ = [
+    "FigureSpec",
+    "FIGURES",
+    "check_only",
+    "discussion",
+    "figure_labels",
+    "run_paper",
+    "summary_line",
+    "write_report",
+]
 
 
 def _figures() -> list[FigureSpec]:
@@ -140,7 +158,66 @@ def run_paper(
     return report
 
 
+def summary_line(claims: Sequence[dict]) -> str:
+    """``"k of n claims agree, d disagree, i inconclusive at this run size"``."""
+    count = Counter(c["verdict"] for c in claims)
+    return (
+        f"{count[AGREE]} of {len(claims)} claims agree, {count[DISAGREE]} disagree, "
+        f"{count[INCONCLUSIVE]} {INCONCLUSIVE}"
+    )
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def discussion(claims: Sequence[dict]) -> list[str]:
+    """Markdown lines of the report's "Discussion": one subsection per claim that does not
+    agree (disagreements first, then inconclusive claims, each in report order) with the
+    claim, the paper's statement, the measurement, the evidence and the reading."""
+    lines = ["## Discussion", ""]
+    open_claims = [c for c in claims if c.get("verdict") == DISAGREE] + [
+        c for c in claims if c.get("verdict") == INCONCLUSIVE
+    ]
+    if not open_claims:
+        return [*lines, "Every claim of this run agrees.", ""]
+    lines += [
+        "Every claim that does not agree, with what this run checked (evidence) and how we read "
+        "it. *Inconclusive at this run size* means the run's own uncertainty (realizations, "
+        "largest N, grid step, run length) straddles the claim's criterion; the criterion is "
+        "the same as for the verdicts above.",
+        "",
+    ]
+    for number, c in enumerate(open_claims, start=1):
+        figure = f"`{c['figure']}`: " if c.get("figure") else ""
+        lines += [
+            f"### {number}. {figure}{_one_line(c['claim'])} — {c['verdict']}",
+            "",
+            f"- **Paper:** {_one_line(c['paper'])}",
+            f"- **Measured:** {_one_line(c['measured'])}",
+            f"- **Run:** {_one_line(c['run'])}",
+            "- **Evidence:** "
+            + (_one_line(c.get("evidence") or "") or "none recorded beyond the measurement"),
+            "- **Reading:** "
+            + (_one_line(c.get("explanation") or "") or "no explanation established yet."),
+            "",
+        ]
+    return lines
+
+
 def write_report(ctx: PaperContext, report: dict) -> None:
+    """Write ``report.json`` (the report dictionary, to which it adds ``summary``: the verdict
+    counts and the summary line) and ``report.md``: the claims table, the summary line, a
+    "Discussion" of every claim that does not agree, failed figures, the figures and the run
+    size."""
+    count = Counter(c["verdict"] for c in report["claims"])
+    report["summary"] = {
+        "claims": len(report["claims"]),
+        "agree": count[AGREE],
+        "disagree": count[DISAGREE],
+        "inconclusive": count[INCONCLUSIVE],
+        "line": summary_line(report["claims"]),
+    }
     ctx.write_json("report.json", report)
     lines = [
         "# Reproduction report",
@@ -153,8 +230,8 @@ def write_report(ctx: PaperContext, report: dict) -> None:
     for c in report["claims"]:
         cells = [c["figure"], c["claim"], c["paper"], c["measured"], c["run"], c["verdict"]]
         lines.append("| " + " | ".join(str(x).replace("|", "\\|") for x in cells) + " |")
-    n_agree = sum(c["verdict"] == "agree" for c in report["claims"])
-    lines += ["", f"{n_agree} of {len(report['claims'])} claims agree.", ""]
+    lines += ["", summary_line(report["claims"]) + ".", ""]
+    lines += discussion(report["claims"])
     if report["errors"]:
         lines += ["## Figures that failed", ""]
         for e in report["errors"]:
