@@ -117,13 +117,14 @@ def iid_magnetization(
     workers: int | None = 1,
     scheduler: str | None = None,
     progress: bool = False,
+    allow_version_mismatch: bool = False,
 ) -> np.ndarray:
     """Time-averaged magnetization ``M_T`` for ``realizations`` disorder realizations.
 
     Disorder seeds are ``spawn_seeds(seed, realizations)``; the input seed is derived from
     ``seed`` too (one shared sequence if ``common_input``, else one per realization), so the
     result is reproducible from ``seed`` alone. Tasks go through :func:`run_tasks` (store,
-    workers, scheduler as there; experiment name ``"iid"``).
+    workers, scheduler, allow_version_mismatch as there; experiment name ``"iid"``).
     """
     from hysteresis._validation import (
         MAX_MAGNITUDE,
@@ -178,6 +179,7 @@ def iid_magnetization(
         workers=workers,
         scheduler=scheduler,
         progress=progress,
+        allow_version_mismatch=allow_version_mismatch,
     )
     return np.array([r["magnetization"] for r in results])
 

@@ -72,3 +72,22 @@ def test_iid_magnetization_reproducible_and_input_modes():
         iid_magnetization(100, 200, 0, seed=1)
     with pytest.raises(ValueError):
         iid_inputs(10, 0.0, 1)
+
+
+def test_store_of_another_code_version_is_reused_only_when_allowed(tmp_path):
+    # the iid ensemble honours allow_version_mismatch like every other run_tasks caller (hyst
+    # paper --allow-version-mismatch passes it through): refused by default, reused when told
+    import sqlite3
+
+    from analysis.iid import iid_magnetization
+    from analysis.store import StoreError
+
+    store = tmp_path / "s.sqlite"
+    first = iid_magnetization(20, 200, 3, seed=1, store=store)
+    with sqlite3.connect(store) as conn:
+        conn.execute("UPDATE tasks SET code_version = 'hysteresis-toolkit 0.0.1 (git 0000000)'")
+    with pytest.raises(StoreError, match="allow_version_mismatch|other code versions"):
+        iid_magnetization(20, 200, 3, seed=1, store=store)
+    with pytest.warns(UserWarning, match="other code versions"):
+        again = iid_magnetization(20, 200, 3, seed=1, store=store, allow_version_mismatch=True)
+    assert np.array_equal(first, again)

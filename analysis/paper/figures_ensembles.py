@@ -621,6 +621,7 @@ def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
         workers=ctx.task_workers,
         scheduler=ctx.scheduler,
         progress=ctx.progress,
+        allow_version_mismatch=ctx.allow_version_mismatch,
     )
     data = {"points": points, "limits": limits, "iid": iid, "window_periods": window_periods}
     ctx.cache[key] = data
