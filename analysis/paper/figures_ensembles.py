@@ -655,8 +655,10 @@ def _sem(values: np.ndarray) -> float:
 ENSEMBLE_INCONCLUSIVE = (
     "The paper's statement is about large N (its largest is N = 20 000) and its ensembles of 500 "
     "realizations; this run's largest N is smaller, or the 95 % interval of its statistic over "
-    "the run's realizations straddles the criterion. More realizations or larger N (the "
-    "quick or full size) decide it."
+    "the run's realizations straddles the criterion (the evidence above says which). Below the "
+    "paper's size a larger run size decides it; at the paper's size (500 realizations, N up to "
+    "20 000) the paper's own ensembles could not decide it either, and more realizations or "
+    "larger N are needed."
 )
 DIM_KY_DISAGREE = (
     "The finite system's Kaplan–Yorke dimension does not converge to the limit's: at N = 20 000 "

@@ -209,7 +209,8 @@ def write_report(ctx: PaperContext, report: dict) -> None:
     """Write ``report.json`` (the report dictionary, to which it adds ``summary``: the verdict
     counts and the summary line) and ``report.md``: the claims table, the summary line, a
     "Discussion" of every claim that does not agree, failed figures, the figures and the run
-    size."""
+    size. Optional ``provenance`` lines (how and when the run was made) are printed under the
+    title."""
     count = Counter(c["verdict"] for c in report["claims"])
     report["summary"] = {
         "claims": len(report["claims"]),
@@ -224,6 +225,8 @@ def write_report(ctx: PaperContext, report: dict) -> None:
         "",
         f"Run size: `{report['size']['name']}` (all knobs at the end of this file).",
         "",
+        *[f"{line}" for line in report.get("provenance", [])],
+        *([""] if report.get("provenance") else []),
         "| figure | claim | paper | measured | run | verdict |",
         "|---|---|---|---|---|---|",
     ]
