@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import statistics
 import time
 
 import numpy as np
@@ -138,6 +139,46 @@ def general_preisach(
     }
 
 
+def _median_time(run, repeats: int = 5):
+    """Median wall time of ``repeats`` calls of ``run`` and the last result."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = run()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def _per_switch_profile(sysm, t_run: float, sw_tan: int, dt_tan: float) -> dict:
+    """Where the time of a tangent run goes, per switch (medians): the kernel without tangent
+    flow (one engine call), with tangent flow (one call, no QR), and the Python QR cadence of
+    the Benettin loop (every forcing period, the default, and every 8 periods, the ensemble
+    tasks' cadence)."""
+    period = sysm.period
+    state = sysm.initial_state(-1.0, 0.1)
+
+    def one_call(tangent: bool):
+        eng = sysm.engine(state)
+        if tangent:
+            eng.start_tangent(False)
+        eng.advance(np.array([t_run]))
+        return eng.n_events
+
+    dt_k, n_k = _median_time(lambda: one_call(False))
+    dt_kt, n_kt = _median_time(lambda: one_call(True))
+    dt_8, r8 = _median_time(
+        lambda: lyapunov_spectrum(sysm, t_run, renormalize_dt=8 * period, progress=False)
+    )
+    ns = 1e9
+    return {
+        "ns_trajectory_kernel": ns * dt_k / n_k,
+        "ns_tangent_in_kernel": ns * (dt_kt / n_kt - dt_k / n_k),
+        "ns_qr_every_period": ns * (dt_tan / sw_tan - dt_kt / n_kt),
+        "ns_qr_every_8_periods": ns * (dt_8 / r8.n_switches - dt_kt / n_kt),
+        "switches_per_s_tangent_qr8": r8.n_switches / dt_8,
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--spins", type=int, default=20000)
@@ -156,14 +197,11 @@ def main() -> None:
     sysm = ForcedOscillator(SpinDimerEnsemble.random(args.spins, P, R, J, seed=0), c, ZETA, OMEGA)
     sysm.poincare_section(3)  # compile
     lyapunov_spectrum(sysm, 10.0, progress=False)
-    t0 = time.perf_counter()
-    sec = sysm.poincare_section(n_periods + 1)
-    dt_traj = time.perf_counter() - t0
+    dt_traj, sec = _median_time(lambda: sysm.poincare_section(n_periods + 1))
     sw_traj = sec.n_switches
-    t0 = time.perf_counter()
-    res = lyapunov_spectrum(sysm, t_run, progress=False)
-    dt_tan = time.perf_counter() - t0
+    dt_tan, res = _median_time(lambda: lyapunov_spectrum(sysm, t_run, progress=False))
     sw_tan = res.n_switches
+    profile = _per_switch_profile(sysm, t_run, sw_tan, dt_tan)
     print(
         f"dimers N={args.spins}, C={c}: trajectory {sw_traj} switches in {dt_traj:.3f} s "
         f"= {sw_traj / dt_traj:.3e} switches/s, {1000 * dt_traj / t_run:.4f} s per 1000 tu"
@@ -171,6 +209,11 @@ def main() -> None:
     print(
         f"  with tangent flow: {sw_tan} switches in {dt_tan:.3f} s = {sw_tan / dt_tan:.3e} "
         f"switches/s, {1000 * dt_tan / t_run:.4f} s per 1000 tu; lambda = {res.exponents}"
+    )
+
+    print(
+        "  per switch: "
+        + ", ".join(f"{k} {v:.0f} ns" for k, v in profile.items() if k.startswith("ns_"))
     )
 
     lim = ForcedOscillator(GeneralizedPlay.erf(P, R), c, ZETA, OMEGA)
@@ -205,6 +248,8 @@ def main() -> None:
                 "time_units": t_run,
                 "switches_per_s": sw_traj / dt_traj,
                 "switches_per_s_tangent": sw_tan / dt_tan,
+                "switches_per_s_tangent_qr8": profile["switches_per_s_tangent_qr8"],
+                **{k: v for k, v in profile.items() if k.startswith("ns_")},
                 "s_per_1000tu": 1000 * dt_traj / t_run,
                 "s_per_1000tu_tangent": 1000 * dt_tan / t_run,
                 "baseline_spins": args.baseline_spins,
