@@ -45,7 +45,7 @@ def register(subparsers: Any) -> None:
         dest="size",
         action="store_const",
         const="full",
-        help="paper scale (hours; resumable through --store)",
+        help="paper scale (about an hour on two cores; resumable through --store)",
     )
     size.add_argument(
         "--smoke",
