@@ -801,17 +801,6 @@ def fig_dim(ctx: PaperContext) -> list[Claim]:
 # ---------------------------------------------------------------------------------------------
 
 
-def _wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95 % Wilson score interval of a binomial fraction k/n."""
-    if n == 0:
-        return float("nan"), float("nan")
-    p = k / n
-    d = 1 + z * z / n
-    centre = (p + z * z / (2 * n)) / d
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return centre - half, centre + half
-
-
 def sap_falls(sap: np.ndarray, realizations: int) -> str:
     """Verdict of "the SAP at the largest N is below the SAP at the smallest N": the log ratio
     against 0, known to ± 1.96 · 2/sqrt(K − 1) (a ratio of two variance estimates over K
