@@ -199,9 +199,8 @@ def bifurcation_diagram(
     progress:
         Show a progress bar over the values (off by default; the CLI turns it on).
     """
-    from tqdm.auto import tqdm
-
     from analysis.lyapunov import lyapunov_spectrum
+    from hysteresis._progress import progress_bar
     from hysteresis._validation import bounded_work, finite_array, finite_scalar, positive_integer
 
     if not callable(make_system):
@@ -233,7 +232,9 @@ def bifurcation_diagram(
     spectra: list[np.ndarray | None] = []
     finals = []
     state_q, state_v, state_op = float(q0), float(v0), operator_state
-    for i, value in enumerate(tqdm(values, desc=f"bifurcation {parameter}", disable=not progress)):
+    for i, value in enumerate(
+        progress_bar(values, desc=f"bifurcation {parameter}", disable=not progress)
+    ):
         system = make_system(float(value))
         sec = system.poincare_section(n_periods, transient_periods, state_q, state_v, state_op)
         qs[i], vs[i], ms[i] = sec.q, sec.v, sec.M

@@ -200,15 +200,14 @@ def run_tasks(
                 stacklevel=2,
             )
 
-        from tqdm.auto import tqdm
+        from hysteresis._progress import progress_bar
 
-        bar = tqdm(
+        bar = progress_bar(
             total=len(results) + len(pending),
             initial=len(results),
             desc=experiment,
             unit="task",
             disable=not progress,
-            dynamic_ncols=True,
         )
         try:
             _run_pending(

@@ -1145,6 +1145,6 @@ def _positive(x: Any, name: str) -> float:
 def _progress(seq: Sequence, enabled: bool, desc: str):
     if not enabled:
         return seq
-    from tqdm.auto import tqdm
+    from hysteresis._progress import progress_bar
 
-    return tqdm(seq, desc=desc)
+    return progress_bar(seq, desc=desc)

@@ -332,9 +332,9 @@ def lyapunov_spectrum(
     n_collapses = 0
     bar = None
     if progress:
-        from tqdm.auto import tqdm
+        from hysteresis._progress import progress_bar
 
-        bar = tqdm(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
+        bar = progress_bar(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
     for i in range(n_steps):
         target = transient + (span if i == n_steps - 1 else (i + 1) * dt)
         stepper.step(target - stepper.elapsed)

@@ -362,9 +362,9 @@ class ForcedOscillator:
         bounds = np.linspace(0, times.size, n_chunks + 1).astype(int)
         bar = None
         if progress and desc:
-            from tqdm.auto import tqdm
+            from hysteresis._progress import progress_bar
 
-            bar = tqdm(total=times.size, desc=desc, unit="pt", leave=False)
+            bar = progress_bar(total=times.size, desc=desc, unit="pt", leave=False)
         for i0, i1 in zip(bounds[:-1], bounds[1:], strict=True):
             if i1 <= i0:
                 continue
