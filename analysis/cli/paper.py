@@ -38,7 +38,7 @@ def register(subparsers: Any) -> None:
         dest="size",
         action="store_const",
         const="quick",
-        help="reduced ensembles and run lengths, ~10 min on 2 cores (the default size)",
+        help="reduced ensembles and run lengths, ~5 min on 2 cores (the default size)",
     )
     size.add_argument(
         "--full",

@@ -36,7 +36,7 @@ VERDICTS = (AGREE, DISAGREE, INCONCLUSIVE)
 class RunSize:
     """Every knob that sets how long the reproduction runs.
 
-    ``full`` is the paper's scale; ``quick`` fits in about ten minutes on two cores; ``smoke``
+    ``full`` is the paper's scale; ``quick`` takes about five minutes on two cores; ``smoke``
     only checks that every figure and claim is produced.
     """
 
