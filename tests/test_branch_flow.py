@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from relay_test_support import gauss_everett_model
 from scipy.special import ndtr
 
 from hysteresis import (
@@ -32,20 +33,8 @@ def _tanh_play(width=1.6):
 
 
 def _gauss_everett_model(scale=1.3, lower=-6.0, upper=6.0):
-    """Product density ∝ φ(α)φ(β): closed-form Everett ``((Φ(a)−Φ(b))/Z)²``."""
-    z = ndtr(upper / scale) - ndtr(lower / scale)
-
-    def pdf(x):
-        return np.exp(-0.5 * (np.asarray(x) / scale) ** 2) / (scale * math.sqrt(2 * math.pi))
-
-    def everett(a, b):
-        return ((ndtr(np.asarray(a) / scale) - ndtr(np.asarray(b) / scale)) / z) ** 2
-
-    def gradient(a, b):
-        diff = ndtr(np.asarray(a) / scale) - ndtr(np.asarray(b) / scale)
-        return 2 * diff * pdf(a) / z**2, -2 * diff * pdf(b) / z**2
-
-    return PreisachModel.from_everett(everett, lower, upper, gradient)
+    """Product density ∝ φ(α)φ(β) with closed-form Everett and gradient (relay_test_support)."""
+    return gauss_everett_model(scale, lower, upper)
 
 
 def _gauss_density_model(sigma_r=0.3, resolution=256):

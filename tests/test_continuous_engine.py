@@ -15,10 +15,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy.special import erf, ndtr
+from relay_test_support import gauss_everett_model
+from scipy.special import erf
 
 from analysis.lyapunov import lyapunov_spectrum
-from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii, PreisachModel
+from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii
 from oscillators.continuous import ContinuousEngine
 from oscillators.engine import DivergenceError
 from oscillators.play_flow import PlayEngine
@@ -50,20 +51,8 @@ def _pi5():
 
 
 def _preisach_analytic(scale=1.3, lower=-6.0, upper=6.0):
-    """Product density ∝ φ(α)φ(β): Everett ``((Φ(a)−Φ(b))/Z)²`` and its exact gradient."""
-    z = ndtr(upper / scale) - ndtr(lower / scale)
-
-    def pdf(x):
-        return np.exp(-0.5 * (np.asarray(x) / scale) ** 2) / (scale * math.sqrt(2 * math.pi))
-
-    def everett(a, b):
-        return ((ndtr(np.asarray(a) / scale) - ndtr(np.asarray(b) / scale)) / z) ** 2
-
-    def gradient(a, b):
-        diff = ndtr(np.asarray(a) / scale) - ndtr(np.asarray(b) / scale)
-        return 2 * diff * pdf(a) / z**2, -2 * diff * pdf(b) / z**2
-
-    return PreisachModel.from_everett(everett, lower, upper, gradient)
+    """Product density ∝ φ(α)φ(β) with closed-form Everett and gradient (relay_test_support)."""
+    return gauss_everett_model(scale, lower, upper)
 
 
 def _start(op, q0=-1.0, v0=0.1, phi0=0.0, operator_state=None):

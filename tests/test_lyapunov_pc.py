@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from relay_test_support import pc_jacobian, pc_tangent, pc_trajectory
 from scipy.stats import norm
 
 from analysis.lyapunov import lyapunov_spectrum
@@ -18,52 +19,6 @@ from hysteresis.spin_dimers import SpinDimerEnsemble
 from oscillators import ForcedOscillator
 from oscillators import piecewise_constant as pc
 from oscillators.engine import GrazingError
-
-_METHODS = {"auto": "auto", "kernel": "nested", "generic": "generic"}
-
-
-def _options(engine: str = "auto", taylor: bool = True) -> dict:
-    return {"method": _METHODS[engine], "taylor": taylor}
-
-
-def pc_trajectory(
-    sysm,
-    t_end,
-    q0=-1.0,
-    v0=0.1,
-    operator_state=None,
-    sample_dt=0.01,
-    phi0=0.0,
-    engine="auto",
-    taylor=True,
-):
-    """The relay engine's trajectory through the seam (former pc_trajectory)."""
-    return sysm.trajectory(
-        t_end, q0, v0, operator_state, sample_dt, phi0, engine_options=_options(engine, taylor)
-    )
-
-
-def pc_jacobian(
-    sysm,
-    duration,
-    q0=-1.0,
-    v0=0.1,
-    phi0=0.0,
-    operator_state=None,
-    include_phase=True,
-    engine="auto",
-):
-    state = sysm.initial_state(q0, v0, operator_state, phi0)
-    jac, _ = sysm.jacobian(duration, state, include_phase, engine_options=_options(engine))
-    return jac
-
-
-def pc_tangent(sysm, t_end, transient=0.0, include_phase=False, engine="auto", **kw):
-    kw.pop("progress", None)
-    return lyapunov_spectrum(
-        sysm, t_end, transient, include_phase=include_phase, engine_options=_options(engine), **kw
-    )
-
 
 ZETA = 0.05
 T = 2.0 * math.pi

@@ -11,58 +11,12 @@ import math
 
 import numpy as np
 import pytest
+from relay_test_support import pc_trajectory, relay_brute_force
 from scipy.integrate import solve_ivp
 
-from analysis.lyapunov import lyapunov_spectrum
 from hysteresis.relay import Relay
 from hysteresis.spin_dimers import SpinDimerEnsemble
 from oscillators import ForcedOscillator, OscillatorState
-
-_METHODS = {"auto": "auto", "kernel": "nested", "generic": "generic"}
-
-
-def _options(engine: str = "auto", taylor: bool = True) -> dict:
-    return {"method": _METHODS[engine], "taylor": taylor}
-
-
-def pc_trajectory(
-    sysm,
-    t_end,
-    q0=-1.0,
-    v0=0.1,
-    operator_state=None,
-    sample_dt=0.01,
-    phi0=0.0,
-    engine="auto",
-    taylor=True,
-):
-    """The relay engine's trajectory through the seam (former pc_trajectory)."""
-    return sysm.trajectory(
-        t_end, q0, v0, operator_state, sample_dt, phi0, engine_options=_options(engine, taylor)
-    )
-
-
-def pc_jacobian(
-    sysm,
-    duration,
-    q0=-1.0,
-    v0=0.1,
-    phi0=0.0,
-    operator_state=None,
-    include_phase=True,
-    engine="auto",
-):
-    state = sysm.initial_state(q0, v0, operator_state, phi0)
-    jac, _ = sysm.jacobian(duration, state, include_phase, engine_options=_options(engine))
-    return jac
-
-
-def pc_tangent(sysm, t_end, transient=0.0, include_phase=False, engine="auto", **kw):
-    kw.pop("progress", None)
-    return lyapunov_spectrum(
-        sysm, t_end, transient, include_phase=include_phase, engine_options=_options(engine), **kw
-    )
-
 
 ZETA = 0.05
 OMEGA = 1.0
@@ -70,60 +24,16 @@ T = 2.0 * math.pi
 
 
 def brute_force_dimers(fields, coupling_j, c, t_end, q0=-1.0, v0=0.1, zeta=ZETA, omega=OMEGA):
-    """Switch events (time, q, v, dM) of q'' + 2ζq' + q = cos Ωt + C·M, dimers by hand."""
+    """Switch events (time, q, v, dM) of q'' + 2ζq' + q = cos Ωt + C·M, dimers by hand: dimer i
+    is the relay alpha = J - b1, beta = -J - b2 with weight 1/(number of dimers), M = mean of
+    the spins (all spins down, relaxed at q0)."""
     fields = np.asarray(fields, dtype=float)
-    b1 = fields.max(axis=1)
-    b2 = fields.min(axis=1)
-    alpha = coupling_j - b1
-    beta = -coupling_j - b2
+    alpha = coupling_j - fields.max(axis=1)
+    beta = -coupling_j - fields.min(axis=1)
     assert np.all(alpha > beta), "test helper handles hysteretic dimers only"
-    up = alpha <= q0  # all spins down, relaxed at q0
-    t, y = 0.0, np.array([q0, v0])
-    events = []
-
-    def magnetization():
-        return np.mean(np.where(up, 1.0, -1.0))
-
-    while t < t_end:
-        m = magnetization()
-        next_up = np.min(alpha[~up]) if np.any(~up) else np.inf
-        next_down = np.max(beta[up]) if np.any(up) else -np.inf
-
-        def rhs(_t, x, m=m):
-            return [x[1], -2 * zeta * x[1] - x[0] + math.cos(omega * _t) + c * m]
-
-        def ev_up(_t, x, a=next_up):
-            return x[0] - a
-
-        def ev_down(_t, x, b=next_down):
-            return x[0] - b
-
-        ev_up.terminal = True
-        ev_up.direction = 1
-        ev_down.terminal = True
-        ev_down.direction = -1
-        sol = solve_ivp(
-            rhs,
-            (t, t_end),
-            y,
-            method="DOP853",
-            rtol=1e-12,
-            atol=1e-12,
-            events=[ev_up, ev_down],
-            max_step=0.05,
-        )
-        if sol.status == 1:
-            if sol.t_events[0].size:
-                te, ye = sol.t_events[0][0], sol.y_events[0][0]
-                up[alpha == next_up] = True
-            else:
-                te, ye = sol.t_events[1][0], sol.y_events[1][0]
-                up[beta == next_down] = False
-            events.append((te, ye[0], ye[1], magnetization() - m))
-            t, y = te, ye.copy()
-        else:
-            t = t_end
-    return np.array(events).reshape(-1, 4)
+    weights = np.full(alpha.size, 1.0 / alpha.size)
+    events, _ = relay_brute_force(alpha, beta, weights, c, t_end, q0, v0, zeta, omega)
+    return events
 
 
 def dimer_system(fields, c, coupling_j=2.0):

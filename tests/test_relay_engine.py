@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from relay_test_support import relay_brute_force
 
 from analysis.lyapunov import lyapunov_spectrum
 from hysteresis import PreisachModel, Relay, SpinDimerEnsemble
@@ -44,47 +44,8 @@ def random_width_model(n, seed, weights="random", grid=None):
 
 
 def brute_force(alpha, beta, w, c, t_end, q0=-1.0, v0=0.1):
-    """Switch events (time, q, v, ΔM) of q'' + 2ζq' + q = cos Ωt + C·Σ w y, relays by hand."""
-    alpha, beta, w = (np.asarray(x, dtype=float) for x in (alpha, beta, w))
-    up = alpha <= q0  # rising from negative saturation to q0
-    t, x = 0.0, np.array([q0, v0])
-    events = []
-    while t < t_end:
-        m = math.fsum(np.where(up, w, -w))
-        next_up = np.min(alpha[~up]) if np.any(~up) else np.inf
-        next_down = np.max(beta[up]) if np.any(up) else -np.inf
-
-        def rhs(s, y, m=m):
-            return [y[1], -2 * ZETA * y[1] - y[0] + math.cos(OMEGA * s) + c * m]
-
-        def ev_up(s, y, a=next_up):
-            return y[0] - a
-
-        def ev_down(s, y, b=next_down):
-            return y[0] - b
-
-        ev_up.terminal = ev_down.terminal = True
-        ev_up.direction, ev_down.direction = 1, -1
-        sol = solve_ivp(
-            rhs,
-            (t, t_end),
-            x,
-            method="DOP853",
-            rtol=1e-12,
-            atol=1e-12,
-            events=[ev_up, ev_down],
-            max_step=0.05,
-        )
-        if sol.status != 1:
-            break
-        if sol.t_events[0].size:
-            t, x = sol.t_events[0][0], sol.y_events[0][0].copy()
-            up[alpha == next_up] = True
-        else:
-            t, x = sol.t_events[1][0], sol.y_events[1][0].copy()
-            up[beta == next_down] = False
-        events.append((t, x[0], x[1], math.fsum(np.where(up, w, -w)) - m))
-    return np.array(events).reshape(-1, 4), np.where(up, 1.0, -1.0)
+    """Switch events (time, q, v, ΔM) and final outputs, relays by hand (relay_test_support)."""
+    return relay_brute_force(alpha, beta, w, c, t_end, q0, v0, ZETA, OMEGA)
 
 
 def start(q0=-1.0, v0=0.1, opstate=None, phi0=0.0):
