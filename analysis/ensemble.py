@@ -302,11 +302,11 @@ def validate_ensemble(
         MAX_MAGNITUDE,
         bounded_work,
         finite_array,
-        finite_scalar,
         nonnegative_integer,
         positive_integer,
         positive_scalar,
         scalar_in_open_interval,
+        time_window,
     )
     from hysteresis.spin_dimers import MAX_SPINS
 
@@ -323,12 +323,7 @@ def validate_ensemble(
     realizations = positive_integer(realizations, "realizations")
     base_seed = nonnegative_integer(base_seed, "base_seed")
     bounded_work(len(spins) * len(cs) * realizations, "realizations", MAX_TASKS, "tasks")
-    t_end = finite_scalar(t_end, "t_end")
-    transient = finite_scalar(transient, "transient")
-    if transient < 0:
-        raise ValueError(f"transient must be >= 0, got {transient}")
-    if not t_end > transient:
-        raise ValueError(f"t_end must be > transient ({transient}), got {t_end}")
+    t_end, transient = time_window(t_end, transient)
     allowed = set(inspect.signature(ensemble_task).parameters) - {
         "spins",
         "coupling",

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from analysis.dimensions import kaplan_yorke_dimension
-from hysteresis._validation import finite_scalar, positive_integer
+from hysteresis._validation import finite_scalar, positive_integer, time_window
 from oscillators.engine import DivergenceError, Engine
 from oscillators.results import OscillatorState
 
@@ -128,8 +128,7 @@ class TangentStepper:
         self._engine: Engine | None = None
         self._t = 0.0
         self._events_at_start = 0
-        self._sample = np.full(3, np.nan)
-        self._samples = np.empty((0, 4))
+        self._samples = np.full((1, 4), np.nan)
 
     # -- re-initialise ---------------------------------------------------------------------------
     def reinit(self, state: OscillatorState | None = None, transient: float = 0.0) -> None:
@@ -168,14 +167,13 @@ class TangentStepper:
         eng.advance(times, out)
         self._t = t
         self.system.check_finite(eng, out[:, :2])
-        self._sample = out[-1, :3].copy()
         self._samples = np.column_stack([times, out[:, :3]])
 
     @property
     def sample(self) -> np.ndarray:
         """``(q, v, M)`` now (after the last :meth:`reinit` or :meth:`step`): cheap, unlike
         :meth:`state`, which builds the operator state."""
-        return self._sample.copy()
+        return self._samples[-1, 1:].copy()
 
     @property
     def samples(self) -> np.ndarray:
@@ -297,12 +295,7 @@ def lyapunov_spectrum(
         periods, ``stepper.sample`` is the Poincaré section; ``stepper.engine.output_integral()``
         gives exact time averages of ``M``). It must not move the stepper.
     """
-    t_end = finite_scalar(t_end, "t_end")
-    transient = finite_scalar(transient, "transient")
-    if transient < 0.0:
-        raise ValueError(f"transient must be >= 0, got {transient}")
-    if not t_end > transient:
-        raise ValueError(f"t_end must be > transient = {transient}, got {t_end}")
+    t_end, transient = time_window(t_end, transient)
     period = float(system.period)
     if t_end / period > MAX_PERIODS:
         raise ValueError(f"t_end spans more than {MAX_PERIODS:.0e} forcing periods")

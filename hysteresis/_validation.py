@@ -206,6 +206,18 @@ def finite_array(
     return arr
 
 
+def time_window(t_end: Any, transient: Any) -> tuple[float, float]:
+    """``(t_end, transient)`` as floats with ``0 <= transient < t_end`` (``ValueError`` naming
+    the parameter otherwise): the averaging window of a run."""
+    t_end = finite_scalar(t_end, "t_end")
+    transient = finite_scalar(transient, "transient")
+    if transient < 0.0:
+        raise ValueError(f"transient must be >= 0, got {transient}")
+    if not t_end > transient:
+        raise ValueError(f"t_end must be > transient = {transient}, got {t_end}")
+    return t_end, transient
+
+
 def positive_integer(x: Any, name: str, minimum: int = 1) -> int:
     """``x`` as a Python int >= ``minimum`` (floats with integral value are not accepted)."""
     if isinstance(x, bool | np.bool_) or not isinstance(x, Integral):

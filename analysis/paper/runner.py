@@ -225,7 +225,7 @@ def write_report(ctx: PaperContext, report: dict) -> None:
         "",
         f"Run size: `{report['size']['name']}` (all knobs at the end of this file).",
         "",
-        *[f"{line}" for line in report.get("provenance", [])],
+        *report.get("provenance", []),
         *([""] if report.get("provenance") else []),
         "| figure | claim | paper | measured | run | verdict |",
         "|---|---|---|---|---|---|",
