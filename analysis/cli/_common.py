@@ -40,6 +40,7 @@ __all__ = [
     "add_model_options",
     "add_oscillator_options",
     "add_output_options",
+    "add_execution_options",
     "add_store_options",
     "add_subcommand",
     "announce_compilation",
@@ -322,6 +323,19 @@ def add_output_options(parser: argparse.ArgumentParser, writes: str = "") -> Non
         action="store_true",
         help="no progress bars or notices (they are on when stderr is a terminal)",
     )
+
+
+def add_execution_options(group: Any) -> None:
+    """Where task sweeps run and are kept: :func:`add_store_options`, ``--workers`` (local
+    worker processes) and ``--scheduler`` (a Dask cluster)."""
+    add_store_options(group)
+    group.add_argument(
+        "--workers",
+        type=int_at_least(1, 1024),
+        default=None,
+        help="local worker processes (default: one per core)",
+    )
+    group.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
 
 
 def add_store_options(group: Any) -> None:

@@ -16,10 +16,10 @@ import numpy as np
 
 from analysis.cli._common import (
     CliError,
+    add_execution_options,
     add_model_options,
     add_oscillator_options,
     add_output_options,
-    add_store_options,
     add_subcommand,
     add_transient_option,
     announce_compilation,
@@ -74,14 +74,7 @@ def register(subparsers: Any) -> None:
         default=8.0,
         help="box counting: smallest number of boxes across the attractor (>= 1)",
     )
-    add_store_options(g)
-    g.add_argument(
-        "--workers",
-        type=int_at_least(1, 1024),
-        default=None,
-        help="local worker processes (default: one per core)",
-    )
-    g.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
+    add_execution_options(g)
     add_output_options(p, writes="ensemble.json, ensemble.npz, results.sqlite")
     p.set_defaults(func=run)
 

@@ -7,13 +7,12 @@ from typing import Any
 
 from analysis.cli._common import (
     CliError,
+    add_execution_options,
     add_output_options,
-    add_store_options,
     add_subcommand,
     announce_compilation,
     check_store,
     emit,
-    int_at_least,
     prepare_out,
     progress_enabled,
     store_error,
@@ -56,14 +55,7 @@ def register(subparsers: Any) -> None:
     )
     p.set_defaults(size="quick", func=run)
     g = p.add_argument_group("run")
-    add_store_options(g)
-    g.add_argument(
-        "--workers",
-        type=int_at_least(1, 1024),
-        default=None,
-        help="worker processes (default: one per core)",
-    )
-    g.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
+    add_execution_options(g)
     g.add_argument(
         "--only",
         nargs="+",
