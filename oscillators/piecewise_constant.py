@@ -145,7 +145,8 @@ class _Generic:
                 pq, pv = (0.0, 0.0)
                 if ntan == 3:
                     pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
-                kern._tangent_update(y, ntan, m00, m01, m10, m11, pq, pv)
+                phi_h = np.array([[m00, m01], [m10, m11]])
+                y[:2, :ntan] = phi_h @ y[:2, :ntan] + np.outer((pq, pv), y[2, :ntan])
             self.v = v1
             self.integral += m_old * hh
             if direction == 0:
@@ -211,7 +212,9 @@ class RelayEngine(Engine):
         self._t0 = t0
         self._ntan = 0
         self._y = np.zeros((3, 3))
-        self._mp = kern.taylor_matrix_coefficients(float(system.damping_ratio))
+        self._mp = kern.taylor_matrix_coefficients(
+            float(system.damping_ratio), float(system.frequency)
+        )
         self._chunks: list[np.ndarray] = []
         self._state_cache: OscillatorState | None = None
         self._tn1 = np.zeros(1, dtype=np.int64)
