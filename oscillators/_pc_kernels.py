@@ -543,6 +543,51 @@ def advance_table(
     down = st[S_DN]
     mv = st[S_MV]
     nsw = ist[I_NSW]
+    # the fast hop's coefficients as locals: loads from mp inside the loop would be repeated
+    # after every store (numba arrays carry no aliasing information)
+    t2q = mp[2, TC_Q]
+    t2v = mp[2, TC_V]
+    t2f = mp[2, TC_F]
+    t2c = mp[2, TC_C]
+    t2s = mp[2, TC_S]
+    t3q = mp[3, TC_Q]
+    t3v = mp[3, TC_V]
+    t3f = mp[3, TC_F]
+    t3c = mp[3, TC_C]
+    t3s = mp[3, TC_S]
+    t4q = mp[4, TC_Q]
+    t4v = mp[4, TC_V]
+    t4f = mp[4, TC_F]
+    t4c = mp[4, TC_C]
+    t4s = mp[4, TC_S]
+    t5q = mp[5, TC_Q]
+    t5v = mp[5, TC_V]
+    t5f = mp[5, TC_F]
+    t5c = mp[5, TC_C]
+    t5s = mp[5, TC_S]
+    t6q = mp[6, TC_Q]
+    t6v = mp[6, TC_V]
+    t6f = mp[6, TC_F]
+    t6c = mp[6, TC_C]
+    t6s = mp[6, TC_S]
+    g0, g1, g2, g3, g4, g5, g6 = (
+        mp[0, 1],
+        mp[1, 1],
+        mp[2, 1],
+        mp[3, 1],
+        mp[4, 1],
+        mp[5, 1],
+        mp[6, 1],
+    )
+    d0, d1, d2, d3, d4, d5, d6 = (
+        mp[0, 3],
+        mp[1, 3],
+        mp[2, 3],
+        mp[3, 3],
+        mp[4, 3],
+        mp[5, 3],
+        mp[6, 3],
+    )
     integral = st[S_IM]
     # the tangent columns live in registers during the loop (y is 3×3; unused columns are zero)
     a0, a1, a2 = y[0, 0], y[0, 1], y[0, 2]
@@ -565,32 +610,35 @@ def advance_table(
             theta = up if v > 0.0 else down
             gap = theta - q
             if abs(gap) < h_small * abs(v):
-                e2 = mp[2, TC_Q] * q + mp[2, TC_V] * v + mp[2, TC_F] * force
-                e2 += mp[2, TC_C] * c + mp[2, TC_S] * s
-                e3 = mp[3, TC_Q] * q + mp[3, TC_V] * v + mp[3, TC_F] * force
-                e3 += mp[3, TC_C] * c + mp[3, TC_S] * s
-                e4 = mp[4, TC_Q] * q + mp[4, TC_V] * v + mp[4, TC_F] * force
-                e4 += mp[4, TC_C] * c + mp[4, TC_S] * s
-                e5 = mp[5, TC_Q] * q + mp[5, TC_V] * v + mp[5, TC_F] * force
-                e5 += mp[5, TC_C] * c + mp[5, TC_S] * s
-                e6 = mp[6, TC_Q] * q + mp[6, TC_V] * v + mp[6, TC_F] * force
-                e6 += mp[6, TC_C] * c + mp[6, TC_S] * s
+                e2 = t2q * q + t2v * v + t2f * force
+                e2 += t2c * c + t2s * s
+                e3 = t3q * q + t3v * v + t3f * force
+                e3 += t3c * c + t3s * s
+                e4 = t4q * q + t4v * v + t4f * force
+                e4 += t4c * c + t4s * s
+                e5 = t5q * q + t5v * v + t5f * force
+                e5 += t5c * c + t5s * s
+                e6 = t6q * q + t6v * v + t6f * force
+                e6 += t6c * c + t6s * s
                 r = 1.0 / v
                 x = gap * r
                 k2 = e2 * r
                 k3 = e3 * r
                 # series reversion of x = h + k2 h^2 + k3 h^3 + ... to third order
-                h0 = x * (1.0 - x * (k2 - x * (2.0 * k2 * k2 - k3)))
-                # everything the Newton step needs is a polynomial in h0, side by side: the
-                # residual (Estrin form), 1/q'(h0) = r/(1 + u) by its series, v and q'' at h0,
-                # and the phase rotation; the step then corrects them to first order in dh
+                xx = x * x
+                h0 = x + xx * (x * (2.0 * k2 * k2 - k3) - k2)
+                # everything the Newton step needs is a polynomial in h0, side by side and in
+                # Estrin form (short dependency chains): the residual, 1/q'(h0) = r/(1 + u) by
+                # its series, v and q'' at h0, and the phase rotation; the step then corrects
+                # them to first order in dh
                 hh2 = h0 * h0
                 res = h0 * (v + e2 * h0 + hh2 * (e3 + e4 * h0 + hh2 * (e5 + e6 * h0))) - gap
-                u = h0 * (2.0 * k2 + h0 * (3.0 * k3 + h0 * 4.0 * e4 * r))
-                inv = r * (1.0 - u * (1.0 - u * (1.0 - u)))
-                dp0 = v + h0 * (2.0 * e2 + h0 * (3.0 * e3 + h0 * (4.0 * e4 + h0 * (5.0 * e5
-                      + h0 * 6.0 * e6))))  # fmt: skip
-                pp0 = 2.0 * e2 + h0 * (6.0 * e3 + h0 * (12.0 * e4 + h0 * 20.0 * e5))
+                u = h0 * (2.0 * k2 + 3.0 * k3 * h0 + 4.0 * e4 * r * hh2)
+                uu = u * u
+                inv = r * ((1.0 - u) + uu * (1.0 - u))
+                dp0 = (v + 2.0 * e2 * h0) + hh2 * ((3.0 * e3 + 4.0 * e4 * h0)
+                      + hh2 * (5.0 * e5 + 6.0 * e6 * h0))  # fmt: skip
+                pp0 = (2.0 * e2 + 6.0 * e3 * h0) + hh2 * (12.0 * e4 + 20.0 * e5 * h0)
                 xr = omega * h0
                 x2 = xr * xr
                 cx = 1.0 - x2 * (0.5 - x2 * (1.0 / 24.0))
@@ -615,19 +663,24 @@ def advance_table(
                     s1 = s0r - dphi * c0r
                     if tan_on:
                         # Φ(h) = [[g' + 2ζg, g], [-g, g']], g = Φ_01 (degree 6 in h)
-                        g = mp[6, 1]
-                        gd = mp[6, 3]
-                        for n in range(5, -1, -1):
-                            g = g * hf + mp[n, 1]
-                            gd = gd * hf + mp[n, 3]
+                        hp2 = hf * hf
+                        hp4 = hp2 * hp2
+                        g = (g0 + g1 * hf) + hp2 * (g2 + g3 * hf) + hp4 * (g4 + g5 * hf + hp2 * g6)
+                        gd = (d0 + d1 * hf) + hp2 * (d2 + d3 * hf) + hp4 * (d4 + d5 * hf + hp2 * d6)
                         m00 = gd + 2.0 * zeta * g
-                        pq = 0.0
-                        pv = 0.0
                         if ntan == 3:
                             pq, pv = phase_column(m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b)
-                        a0, a1, a2, b0, b1, b2 = _tangent_update(
-                            m00, g, -g, gd, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
-                        )
+                            a0, a1, a2, b0, b1, b2 = _tangent_update(
+                                m00, g, -g, gd, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
+                            )
+                        else:
+                            # (δq, δv) columns only: no phase direction
+                            a0, a1, b0, b1 = (
+                                m00 * a0 + g * b0,
+                                m00 * a1 + g * b1,
+                                gd * b0 - g * a0,
+                                gd * b1 - g * a1,
+                            )
                     direction = 1 if v > 0.0 else -1
                     c = c1
                     s = s1
@@ -750,7 +803,8 @@ def advance_table(
             sal = coupling * jump / v
             b0 += sal * a0
             b1 += sal * a1
-            b2 += sal * a2
+            if ntan == 3:
+                b2 += sal * a2
         if rec_on:
             i = sw_count[0]
             sw[i, 0] = par[P_TBASE] + ist[I_N] * period + tau
