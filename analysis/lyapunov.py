@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from analysis.dimensions import kaplan_yorke_dimension
 from hysteresis._validation import finite_scalar, positive_integer, time_window
@@ -128,7 +129,9 @@ class TangentStepper:
         self._engine: Engine | None = None
         self._t = 0.0
         self._events_at_start = 0
-        self._samples = np.full((1, 4), np.nan)
+        self._out1 = np.full((1, 3), np.nan)
+        self._out = self._out1
+        self._sample_times: np.ndarray | None = None
 
     # -- re-initialise ---------------------------------------------------------------------------
     def reinit(self, state: OscillatorState | None = None, transient: float = 0.0) -> None:
@@ -138,6 +141,7 @@ class TangentStepper:
         if transient < 0.0:
             raise ValueError(f"transient must be >= 0, got {transient}")
         self._engine = self.system.engine(state, **self.engine_options)
+        self._out1 = np.full((1, len(self._engine.sample_columns)), np.nan)
         self._t = 0.0
         self._advance(transient)
         self._engine.start_tangent(self.include_phase)
@@ -148,7 +152,7 @@ class TangentStepper:
         """Advance by ``dt`` with the tangent flow on."""
         t = self._t + dt
         if self.sample_dt is None:
-            self._advance(t)
+            self._advance(float(t))
             return
         # multiples of sample_dt strictly inside (t_now, t), then t itself (a multiple that
         # coincides with t up to round-off is t)
@@ -162,24 +166,37 @@ class TangentStepper:
     def _advance(self, t: float, times: np.ndarray | None = None) -> None:
         eng = self.engine
         if times is None:
-            times = np.array([t])
+            # one target (every QR step without sampling): a reused buffer and a scalar check,
+            # because this runs once per re-orthonormalisation
+            out = self._out1
+            eng.advance(t, out)
+            q, v = out[0, 0], out[0, 1]
+            if not (abs(q) <= 1e12 and abs(v) <= 1e12):  # also catches NaN
+                self.system.check_finite(eng, out[:, :2])
+            self._t = t
+            self._sample_times = None
+            return
         out = np.empty((times.size, len(eng.sample_columns)))
         eng.advance(times, out)
         self._t = t
         self.system.check_finite(eng, out[:, :2])
-        self._samples = np.column_stack([times, out[:, :3]])
+        self._sample_times = times
+        self._out = out
 
     @property
     def sample(self) -> np.ndarray:
         """``(q, v, M)`` now (after the last :meth:`reinit` or :meth:`step`): cheap, unlike
         :meth:`state`, which builds the operator state."""
-        return self._samples[-1, 1:].copy()
+        out = self._out1 if self._sample_times is None else self._out
+        return out[-1, :3].copy()
 
     @property
     def samples(self) -> np.ndarray:
         """Rows ``(t, q, v, M)`` sampled by the last :meth:`step` (``sample_dt``; else only its
         end point); ``t`` is the elapsed time since :meth:`reinit`'s start."""
-        return self._samples.copy()
+        if self._sample_times is None:
+            return np.concatenate(([self._t], self._out1[0, :3]))[None, :]
+        return np.column_stack([self._sample_times, self._out[:, :3]])
 
     # -- deviations ------------------------------------------------------------------------------
     @property
@@ -221,18 +238,79 @@ class TangentStepper:
         return self.engine.n_events - self._events_at_start
 
 
+@njit(cache=True)
+def householder_qr(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Reduced QR of ``y`` (d × k) by Householder reflections: ``Q`` (d × m), ``|R_jj|`` (m),
+    m = min(d, k), and whether ``y`` was finite (else Q and R are not computed).
+
+    The same reflections as LAPACK's ``geqrf`` (``np.linalg.qr``), compiled: for the 2 × 2 to
+    3 × 3 deviation matrices of the relay engines the NumPy call costs more than the integration
+    of a forcing period of a small ensemble. Plain reading::
+
+        R := Y
+        for j < m:  x := R[j:, j];  α := -sign(x_0) |x|;  u := x - α e_0
+                    R[j:, j:] -= 2 u (uᵀ R[j:, j:]) / (uᵀ u);  |R_jj| = |α|
+        Q := H_0 H_1 ... H_(m-1) I[:, :m]     (H_j = I - 2 u_j u_jᵀ / u_jᵀ u_j)
+    A zero column gives the identity reflection and R_jj = 0.
+    """
+    d, k = y.shape
+    m = min(d, k)
+    qmat = np.zeros((d, m))
+    diag = np.zeros(m)
+    for i in range(d):
+        for j in range(k):
+            if not math.isfinite(y[i, j]):
+                return qmat, diag, False
+    r = y.copy()
+    u = np.zeros((m, d))
+    unorm2 = np.zeros(m)
+    for j in range(m):
+        norm2 = 0.0
+        for i in range(j, d):
+            norm2 += r[i, j] * r[i, j]
+        if norm2 == 0.0:
+            continue
+        alpha = -math.copysign(math.sqrt(norm2), r[j, j])
+        for i in range(j, d):
+            u[j, i] = r[i, j]
+        u[j, j] -= alpha
+        un2 = 0.0
+        for i in range(j, d):
+            un2 += u[j, i] * u[j, i]
+        unorm2[j] = un2
+        diag[j] = abs(alpha)
+        for c in range(j, k):
+            dot = 0.0
+            for i in range(j, d):
+                dot += u[j, i] * r[i, c]
+            f = 2.0 * dot / un2
+            for i in range(j, d):
+                r[i, c] -= f * u[j, i]
+    for i in range(m):
+        qmat[i, i] = 1.0
+    for j in range(m - 1, -1, -1):
+        if unorm2[j] == 0.0:
+            continue
+        for c in range(m):
+            dot = 0.0
+            for i in range(j, d):
+                dot += u[j, i] * qmat[i, c]
+            f = 2.0 * dot / unorm2[j]
+            for i in range(j, d):
+                qmat[i, c] -= f * u[j, i]
+    return qmat, diag, True
+
+
 def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.ndarray, bool]:
     """One re-orthonormalisation: adds log|R_jj| (or -inf beyond ``rank``) to ``lsum``.
 
     Returns the new deviation matrix (same number of rows as ``y``, ``k`` columns) and whether a
     direction collapsed structurally in this interval.
     """
-    d = y.shape[0]
-    if not np.all(np.isfinite(y)):
+    q, diag, finite = householder_qr(np.ascontiguousarray(y, dtype=np.float64))
+    if not finite:
         raise DivergenceError("the tangent flow became non-finite (deviation vectors overflow)")
-    q, r = np.linalg.qr(y)  # reduced: q (d, m), r (m, k), m = min(d, k)
     m = q.shape[1]
-    diag = np.abs(np.diag(r))
     rank = min(rank, m)
     collapsed = False
     for j in range(k):
@@ -241,7 +319,9 @@ def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.nda
         elif math.isfinite(lsum[j]):
             lsum[j] = -math.inf
             collapsed = True
-    new = np.zeros((d, k))
+    if m == k:
+        return q, collapsed
+    new = np.zeros((y.shape[0], k))
     new[:, :m] = q
     return new, collapsed
 

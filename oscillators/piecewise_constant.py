@@ -299,11 +299,14 @@ class RelayEngine(Engine):
     def advance(
         self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
     ) -> None:
-        if isinstance(times, (float, int)) or np.size(times) == 1:
+        if type(times) is float or np.size(times) == 1:
             # one target (the Lyapunov stepper's case): no array bookkeeping on the way in
-            if np.ndim(times) > 1:
+            if type(times) is float:
+                t = times
+            elif np.ndim(times) > 1:
                 raise ValueError("times must be a scalar or a 1-D array")
-            t = float(np.reshape(times, -1)[0]) if np.ndim(times) else float(times)
+            else:
+                t = float(np.reshape(times, -1)[0]) if np.ndim(times) else float(times)
             if not math.isfinite(t):
                 raise ValueError("times must be finite")
             tgt_n, tgt_tau = self._tn1, self._tt1
@@ -334,7 +337,11 @@ class RelayEngine(Engine):
         if self._generic is not None:
             self._advance_generic(tgt_n, tgt_tau, out, record)
             return
-        buf = np.empty((tgt_n.size, 3)) if out is not None else self._nobuf
+        direct = out is not None and out.shape[1] == 3 and out.flags.c_contiguous
+        if direct:
+            buf = out
+        else:
+            buf = np.empty((tgt_n.size, 3)) if out is not None else self._nobuf
         tan_on = self._ntan > 0
         cap = 1 << 12 if record else 1
         sw = np.empty((cap, 4)) if record else self._nosw
@@ -355,7 +362,7 @@ class RelayEngine(Engine):
                 break
             cap = min(cap * 4, 1 << 20)
             sw = np.empty((cap, 4))
-        if out is not None:
+        if out is not None and not direct:
             out[:, :3] = buf
 
     def _advance_generic(self, tgt_n, tgt_tau, out, record) -> None:
