@@ -56,9 +56,11 @@ def pc_jacobian(
     operator_state=None,
     include_phase=True,
     engine="auto",
+    taylor=True,
 ):
     state = sysm.initial_state(q0, v0, operator_state, phi0)
-    jac, _ = sysm.jacobian(duration, state, include_phase, engine_options=engine_options(engine))
+    opts = engine_options(engine, taylor)
+    jac, _ = sysm.jacobian(duration, state, include_phase, engine_options=opts)
     return jac
 
 

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from relay_test_support import pc_trajectory, relay_brute_force
+from relay_test_support import pc_jacobian, pc_trajectory, relay_brute_force
 from scipy.integrate import solve_ivp
 
 from hysteresis.relay import Relay
@@ -113,6 +113,59 @@ def test_taylor_hops_at_round_off():
     np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-11)
     first = a.switches["time"] < T  # before any amplification: plain round-off
     np.testing.assert_allclose(a.switches["time"][first], b.switches["time"][first], atol=1e-13)
+
+
+def test_short_hop_fast_path_at_round_off():
+    """N = 20 000 dimers: most hops are shorter than 1e-3 and take the kernel's fast short hop
+    (series reversion + one Newton step). Every switch time, switch velocity and the tangent map
+    of one forcing period agree with the exact-propagator path (``taylor=False``), and the
+    tangent map has det = exp(-2ζt) (saltation matrices have det 1: Liouville)."""
+    ens = SpinDimerEnsemble.random(20000, 2.0, 1.0, 2.0, seed=0)
+    sysm = ForcedOscillator(ens, 4.0)
+    s0 = pc_trajectory(sysm, 20 * T, sample_dt=T).final  # on the attractor
+    x0 = dict(q0=s0.q, v0=s0.v, operator_state=s0.operator_state, phi0=s0.phi)
+    a = pc_trajectory(sysm, T, sample_dt=T / 8, taylor=True, **x0)
+    b = pc_trajectory(sysm, T, sample_dt=T / 8, taylor=False, **x0)
+    assert a.switches.size == b.switches.size > 3000
+    hops = np.diff(a.switches["time"])
+    assert np.mean(hops < 1e-3) > 0.8  # the fast path is what is being tested
+    np.testing.assert_allclose(a.switches["time"], b.switches["time"], rtol=0, atol=1e-11)
+    np.testing.assert_allclose(a.switches["v"], b.switches["v"], rtol=0, atol=1e-11)
+    np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-11)
+    jac_a = pc_jacobian(sysm, T, taylor=True, **x0)
+    jac_b = pc_jacobian(sysm, T, taylor=False, **x0)
+    np.testing.assert_allclose(jac_a, jac_b, rtol=1e-9, atol=1e-9 * np.abs(jac_b).max())
+    det = np.linalg.det(jac_a[:2, :2])
+    assert math.isclose(det, math.exp(-2 * ZETA * T), rel_tol=1e-9)
+
+
+def test_taylor_tables_against_the_exact_propagator():
+    """The hop tables give q's Taylor coefficients as linear forms in (q, v, F, cos φ, sin φ);
+    summed at h = 1e-2 they must reproduce the closed-form solution (truncation h^9/9! ~ 3e-24),
+    for several damping ratios and forcing frequencies."""
+    from oscillators import _pc_kernels as kern
+    from oscillators.linear import exact_step, particular_amplitudes
+
+    rng = np.random.default_rng(5)
+    h = 1e-2
+    for zeta, omega in [(0.05, 1.0), (0.7, 0.4), (0.3, 2.3)]:
+        tab = kern.taylor_matrix_coefficients(zeta, omega)
+        amp_a, amp_b = particular_amplitudes(zeta, omega)
+        for _ in range(20):
+            q, v, phi, force = rng.uniform(-2, 2, size=4)
+            c, s = math.cos(phi), math.sin(phi)
+            e = tab[:, kern.TC_Q] * q + tab[:, kern.TC_V] * v + tab[:, kern.TC_F] * force
+            e = e + tab[:, kern.TC_C] * c + tab[:, kern.TC_S] * s
+            c1, s1 = math.cos(phi + omega * h), math.sin(phi + omega * h)
+            q1, v1 = exact_step(q, v, c, s, c1, s1, force, h, zeta, omega, amp_a, amp_b)
+            n = np.arange(e.size)
+            assert abs(np.sum(e * h**n) - q1) < 1e-14
+            assert abs(np.sum(n[1:] * e[1:] * h ** (n[1:] - 1)) - v1) < 1e-13
+            # the propagator columns: Φ(h) = Σ A^n h^n / n!
+            phi_h = (tab[:, :4] * (h**n)[:, None]).sum(axis=0)
+            c0 = math.cos(phi)
+            x = exact_step(1.0, 0.0, c0, s, c0, s, 0.0, h, zeta, omega, 0.0, 0.0)
+            assert np.allclose(phi_h[[0, 2]], x, rtol=0, atol=1e-15)
 
 
 def test_identical_thresholds_switch_together():
