@@ -251,6 +251,7 @@ def householder_qr(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
         for j < m:  x := R[j:, j];  α := -sign(x_0) |x|;  u := x - α e_0
                     R[j:, j:] -= 2 u (uᵀ R[j:, j:]) / (uᵀ u);  |R_jj| = |α|
         Q := H_0 H_1 ... H_(m-1) I[:, :m]     (H_j = I - 2 u_j u_jᵀ / u_jᵀ u_j)
+
     A zero column gives the identity reflection and R_jj = 0.
     """
     d, k = y.shape
