@@ -9,8 +9,10 @@ dimer system (smaller N; compared per switch). The last line is one JSON object.
 Three figures with the tangent flow: ``switches_per_s_tangent`` (``lyapunov_spectrum`` with its
 default QR every forcing period), ``switches_per_s_tangent_qr8`` (QR every 8 periods, the
 ensemble tasks' cadence) and ``switches_per_s_tangent_kernel`` (the kernel alone, one engine
-call, no QR). The ``ns_*`` keys split a switch's cost into kernel, tangent flow and QR loop; they
-are differences of medians, so on a noisy machine a small one can come out negative.
+call, no QR). These five dimer measurements run interleaved (round-robin, 5 rounds, medians), so
+that a slow spell of the shared VM affects them alike. The ``ns_*`` keys split a switch's cost
+into kernel, tangent flow and QR loop; they are differences of medians, so on a noisy machine a
+small one can come out negative.
 
 General discrete Preisach models (:func:`general_preisach`): 10 000 relays with centres N(0, 1)
 and half-widths U(0.5, 1.5) (seed 0, equal weights), C = 4, switches per second of the heap
@@ -145,44 +147,63 @@ def general_preisach(
     }
 
 
-def _median_time(run, repeats: int = 5):
-    """Median wall time of ``repeats`` calls of ``run`` and the last result."""
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = run()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
+def _interleaved(runs: dict, rounds: int = 5) -> dict:
+    """Median wall time and the last result of every ``run()`` in ``runs``, measured in
+    ``rounds`` round-robin rounds (A, B, C, A, B, C, ...), so that a slow spell of the shared
+    machine hits every variant alike and their ratios stay meaningful."""
+    times: dict = {name: [] for name in runs}
+    last: dict = {}
+    for _ in range(rounds):
+        for name, run in runs.items():
+            t0 = time.perf_counter()
+            last[name] = run()
+            times[name].append(time.perf_counter() - t0)
+    return {name: (statistics.median(times[name]), last[name]) for name in runs}
 
 
-def _per_switch_profile(sysm, t_run: float, sw_tan: int, dt_tan: float) -> dict:
-    """Where the time of a tangent run goes, per switch (medians): the kernel without tangent
-    flow (one engine call), with tangent flow (one call, no QR), and the Python QR cadence of
-    the Benettin loop (every forcing period, the default, and every 8 periods, the ensemble
-    tasks' cadence)."""
+def _dimer_figures(sysm, t_run: float, n_periods: int) -> dict:
+    """The dimer measurements, interleaved: a trajectory (Poincaré run), the Lyapunov spectrum
+    with QR every forcing period (the default) and every 8 periods (the ensemble tasks'
+    cadence), and the kernel alone in one engine call without and with the tangent flow.
+    Returns medians (seconds) and switch counts, and the per-switch split: kernel, tangent flow
+    in the kernel, Python QR loop."""
     period = sysm.period
     state = sysm.initial_state(-1.0, 0.1)
 
-    def one_call(tangent: bool):
+    def one_call(tangent: bool) -> int:
         eng = sysm.engine(state)
         if tangent:
             eng.start_tangent(False)
-        eng.advance(np.array([t_run]))
+        eng.advance(t_run)
         return eng.n_events
 
-    dt_k, n_k = _median_time(lambda: one_call(False))
-    dt_kt, n_kt = _median_time(lambda: one_call(True))
-    dt_8, r8 = _median_time(
-        lambda: lyapunov_spectrum(sysm, t_run, renormalize_dt=8 * period, progress=False)
+    m = _interleaved(
+        {
+            "trajectory": lambda: sysm.poincare_section(n_periods + 1).n_switches,
+            "tangent": lambda: lyapunov_spectrum(sysm, t_run, progress=False),
+            "tangent_qr8": lambda: lyapunov_spectrum(
+                sysm, t_run, renormalize_dt=8 * period, progress=False
+            ),
+            "kernel": lambda: one_call(False),
+            "kernel_tangent": lambda: one_call(True),
+        }
     )
+    dt_k, n_k = m["kernel"]
+    dt_kt, n_kt = m["kernel_tangent"]
+    dt_tan, res = m["tangent"]
+    dt_8, r8 = m["tangent_qr8"]
     ns = 1e9
     return {
+        "dt_traj": m["trajectory"][0],
+        "sw_traj": m["trajectory"][1],
+        "dt_tan": dt_tan,
+        "result": res,
         "switches_per_s_tangent_kernel": n_kt / dt_kt,
+        "switches_per_s_tangent_qr8": r8.n_switches / dt_8,
         "ns_trajectory_kernel": ns * dt_k / n_k,
         "ns_tangent_in_kernel": ns * (dt_kt / n_kt - dt_k / n_k),
-        "ns_qr_every_period": ns * (dt_tan / sw_tan - dt_kt / n_kt),
+        "ns_qr_every_period": ns * (dt_tan / res.n_switches - dt_kt / n_kt),
         "ns_qr_every_8_periods": ns * (dt_8 / r8.n_switches - dt_kt / n_kt),
-        "switches_per_s_tangent_qr8": r8.n_switches / dt_8,
     }
 
 
@@ -204,11 +225,10 @@ def main() -> None:
     sysm = ForcedOscillator(SpinDimerEnsemble.random(args.spins, P, R, J, seed=0), c, ZETA, OMEGA)
     sysm.poincare_section(3)  # compile
     lyapunov_spectrum(sysm, 10.0, progress=False)
-    dt_traj, sec = _median_time(lambda: sysm.poincare_section(n_periods + 1))
-    sw_traj = sec.n_switches
-    dt_tan, res = _median_time(lambda: lyapunov_spectrum(sysm, t_run, progress=False))
+    profile = _dimer_figures(sysm, t_run, n_periods)
+    dt_traj, sw_traj = profile["dt_traj"], profile["sw_traj"]
+    dt_tan, res = profile["dt_tan"], profile["result"]
     sw_tan = res.n_switches
-    profile = _per_switch_profile(sysm, t_run, sw_tan, dt_tan)
     print(
         f"dimers N={args.spins}, C={c}: trajectory {sw_traj} switches in {dt_traj:.3f} s "
         f"= {sw_traj / dt_traj:.3e} switches/s, {1000 * dt_traj / t_run:.4f} s per 1000 tu"

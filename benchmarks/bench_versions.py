@@ -1,0 +1,98 @@
+"""Two checkouts of this project measured against each other in the same run.
+
+Runs the relay-kernel measurement (N = 20 000 dimers, seed 0, C = 4, 300 forcing periods from
+the paper's initial condition) alternately in two source trees, ``pairs`` times, each in a fresh
+process with that tree first on ``PYTHONPATH``, and prints the medians and the new/old ratios of
+switches per second for: the trajectory (engine, no tangent flow), the kernel with the tangent
+flow (one engine call, no QR), and ``lyapunov_spectrum`` with QR every 8 periods and every
+period. Alternating pairs keep the ratio meaningful on a shared machine whose speed drifts.
+
+    git worktree add /tmp/old <commit>
+    python benchmarks/bench_versions.py /tmp/old . [--pairs 5]
+
+The last line is one JSON object.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+KEYS = ("trajectory", "kernel_tangent", "lyapunov_qr8", "lyapunov_qr1")
+
+
+def measure() -> dict:
+    """Switches per second of this process's checkout (the child's job)."""
+    import math
+    import time
+
+    from analysis.lyapunov import lyapunov_spectrum
+    from hysteresis.spin_dimers import SpinDimerEnsemble
+    from oscillators import ForcedOscillator
+
+    sysm = ForcedOscillator(SpinDimerEnsemble.random(20000, 2.0, 1.0, 2.0, seed=0), 4.0, 0.05, 1.0)
+    lyapunov_spectrum(sysm, 20.0)  # compile
+    period = 2 * math.pi
+    t_run = 300 * period
+    out = {}
+    for tangent, key in ((False, "trajectory"), (True, "kernel_tangent")):
+        eng = sysm.engine(sysm.initial_state(-1.0, 0.1))
+        if tangent:
+            eng.start_tangent(False)
+        t0 = time.perf_counter()
+        eng.advance(t_run)
+        out[key] = eng.n_events / (time.perf_counter() - t0)
+    for dt, key in ((8 * period, "lyapunov_qr8"), (period, "lyapunov_qr1")):
+        t0 = time.perf_counter()
+        res = lyapunov_spectrum(sysm, t_run, renormalize_dt=dt)
+        out[key] = res.n_switches / (time.perf_counter() - t0)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("old", type=Path, help="source tree of the old version")
+    ap.add_argument("new", type=Path, help="source tree of the new version")
+    ap.add_argument("--pairs", type=int, default=5)
+    args = ap.parse_args()
+    rates: dict = {"old": {k: [] for k in KEYS}, "new": {k: [] for k in KEYS}}
+    ratios: dict = {k: [] for k in KEYS}
+    for _ in range(args.pairs):
+        pair = {}
+        for name, tree in (("old", args.old), ("new", args.new)):
+            env = dict(os.environ, PYTHONPATH=str(tree.resolve()))
+            child = subprocess.run(
+                [sys.executable, __file__, "--child"],
+                env=env,
+                cwd=tree,
+                capture_output=True,
+                text=True,
+                check=True,
+            )
+            pair[name] = json.loads(child.stdout.strip().splitlines()[-1])
+            for k in KEYS:
+                rates[name][k].append(pair[name][k])
+        for k in KEYS:
+            ratios[k].append(pair["new"][k] / pair["old"][k])
+    summary = {}
+    for k in KEYS:
+        old, new = statistics.median(rates["old"][k]), statistics.median(rates["new"][k])
+        r = sorted(ratios[k])
+        print(
+            f"{k}: old {old:.3e}, new {new:.3e} switches/s; new/old per pair "
+            + ", ".join(f"{x:.2f}" for x in r)
+        )
+        summary[k] = {"old": old, "new": new, "ratio_median": statistics.median(r)}
+    print(json.dumps({"benchmark": "versions", "pairs": args.pairs, **summary}))
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] == ["--child"]:
+        print(json.dumps(measure()))
+    else:
+        main()
