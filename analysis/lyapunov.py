@@ -302,17 +302,10 @@ def householder_qr(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
     return qmat, diag, True
 
 
-def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.ndarray, bool]:
-    """One re-orthonormalisation: adds log|R_jj| (or -inf beyond ``rank``) to ``lsum``.
-
-    Returns the new deviation matrix (same number of rows as ``y``, ``k`` columns) and whether a
-    direction collapsed structurally in this interval.
-    """
-    q, diag, finite = householder_qr(np.ascontiguousarray(y, dtype=np.float64))
-    if not finite:
-        raise DivergenceError("the tangent flow became non-finite (deviation vectors overflow)")
-    m = q.shape[1]
-    rank = min(rank, m)
+@njit(cache=True)
+def _accumulate_logs(diag: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> bool:
+    """lsum[j] += log|R_jj| for j < rank, -inf beyond (structural collapse); returns whether a
+    direction collapsed in this interval."""
     collapsed = False
     for j in range(k):
         if j < rank:
@@ -320,11 +313,35 @@ def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.nda
         elif math.isfinite(lsum[j]):
             lsum[j] = -math.inf
             collapsed = True
+    return collapsed
+
+
+def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.ndarray, bool]:
+    """One re-orthonormalisation: adds log|R_jj| (or -inf beyond ``rank``) to ``lsum``.
+
+    Returns the new deviation matrix (same number of rows as ``y``, ``k`` columns) and whether a
+    direction collapsed structurally in this interval.
+    """
+    q, diag, finite = householder_qr(y if y.flags.c_contiguous else np.ascontiguousarray(y))
+    if not finite:
+        raise DivergenceError("the tangent flow became non-finite (deviation vectors overflow)")
+    m = q.shape[1]
+    collapsed = _accumulate_logs(diag, k, min(rank, m), lsum)
     if m == k:
         return q, collapsed
     new = np.zeros((y.shape[0], k))
     new[:, :m] = q
     return new, collapsed
+
+
+def _running_estimates(
+    sums: list[np.ndarray], times: list[float], transient: float, k: int
+) -> np.ndarray:
+    """Rows of exponent estimates (descending) from the running log sums at ``times``."""
+    if not sums:
+        return np.zeros((0, k))
+    est = np.asarray(sums) / (np.asarray(times) - transient)[:, None]
+    return -np.sort(-est, axis=1)
 
 
 def lyapunov_spectrum(
@@ -417,9 +434,9 @@ def lyapunov_spectrum(
         stepper.set_deviations(y)
         if observer is not None:
             observer(stepper)
-        if i in marks:
+        if i in marks:  # the running sums; the estimates are formed once, after the loop
             hist_t.append(target)
-            hist.append(-np.sort(-lsum / (target - transient)))
+            hist.append(lsum.copy())
         if bar is not None:
             bar.update(1)
     if bar is not None:
@@ -429,7 +446,7 @@ def lyapunov_spectrum(
         exponents=exponents,
         tangent_space=tuple(labels),
         history_t=np.asarray(hist_t),
-        history=np.asarray(hist).reshape(len(hist), k),
+        history=_running_estimates(hist, hist_t, transient, k),
         n_switches=int(stepper.n_events),
         t_end=t_end,
         transient=transient,
