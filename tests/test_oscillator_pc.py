@@ -139,6 +139,25 @@ def test_short_hop_fast_path_at_round_off():
     assert math.isclose(det, math.exp(-2 * ZETA * T), rel_tol=1e-9)
 
 
+@pytest.mark.parametrize(
+    "zeta, omega, c", [(0.05, 1.0, -4.0), (0.0, 1.3, 3.0), (0.05, 1.0, 10.0), (0.05, 0.3, 4.0)]
+)
+def test_short_hops_across_parameter_regimes(zeta, omega, c):
+    """Negative feedback (chattering), no damping, strong coupling, slow forcing: the kernel with
+    its short-hop paths gives the exact-propagator path's switches (two forcing periods)."""
+    ens = SpinDimerEnsemble.random(20000, 2.0, 1.0, 2.0, seed=1)
+    sysm = ForcedOscillator(ens, c, zeta, omega)
+    period = 2 * math.pi / omega
+    a = pc_trajectory(sysm, 2 * period, sample_dt=period / 4, taylor=True)
+    b = pc_trajectory(sysm, 2 * period, sample_dt=period / 4, taylor=False)
+    assert a.switches.size == b.switches.size > 200
+    hops = np.diff(a.switches["time"])
+    assert np.mean(hops < 1e-3 / max(1.0, omega)) > 0.3
+    np.testing.assert_allclose(a.switches["time"], b.switches["time"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(a.switches["v"], b.switches["v"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-10)
+
+
 def test_taylor_tables_against_the_exact_propagator():
     """The hop tables give q's Taylor coefficients as linear forms in (q, v, F, cos φ, sin φ);
     summed at h = 1e-2 they must reproduce the closed-form solution (truncation h^9/9! ~ 3e-24),
