@@ -75,7 +75,6 @@ _CONTRACT = {"contract"}
 
 #: Taylor order of the short-hop expansion (error term h^9/9! ≈ 1e-21 at h = 0.02).
 ORDER = 8
-_IFAC = np.array([1.0 / math.factorial(n) for n in range(ORDER + 2)])
 
 # parameter vector layout (P_UNIT: weight unit of the heap table's integer output, 0 = float)
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE, P_UNIT, P_HS = range(12)
@@ -91,8 +90,9 @@ N_ST = 11
 I_K, I_N, I_NSW, I_UP, I_TOT, I_IA, I_IB = range(7)
 N_IST = 7
 # columns of the hop tables (taylor_matrix_coefficients) holding q's Taylor coefficients as
-# linear forms in q, v, F = C·M, cos φ, sin φ
-TC_Q, TC_V, TC_F, TC_C, TC_S = range(4, 9)
+# linear forms in q, v, F = C·M, cos φ, sin φ; the q and v coefficients are [A^n]_00/n! and
+# [A^n]_01/n!, the first two propagator columns
+TC_Q, TC_V, TC_F, TC_C, TC_S = 0, 1, 4, 5, 6
 
 
 def make_params(
@@ -123,27 +123,25 @@ def make_params(
     return par
 
 
-def taylor_matrix_coefficients(zeta: float, omega: float = 1.0) -> np.ndarray:
+def taylor_matrix_coefficients(zeta: float, omega: float) -> np.ndarray:
     """Rows n = 0..ORDER of the hop tables.
 
     Columns 0-3: the entries of A^n/n! with A = [[0, 1], [-1, -2ζ]] (flattened 2×2), the Taylor
-    coefficients of the propagator Φ(h) = Σ A^n h^n/n!. Columns 4-8 (``TC_Q .. TC_S``): the n-th
-    Taylor coefficient of q as a linear form in the hop's start values,
+    coefficients of the propagator Φ(h) = Σ A^n h^n/n!. Columns ``TC_Q, TC_V, TC_F, TC_C, TC_S``
+    (0, 1, 4, 5, 6): the n-th Taylor coefficient of q as a linear form in the hop's start values,
     ``q^(n)(0)/n! = t_q q + t_v v + t_F F + t_c cos φ + t_s sin φ`` (F = C·M), which follows from
     ``x' = A x + (0, cos φ + F)``: ``q^(n) = [A^n x]_0 + Σ_{k<n} [A^(n-1-k)]_01 f^(k)`` with
     ``f^(0) = cos φ + F`` and ``f^(k) = Ω^k cos(φ + kπ/2)``. The fast hop evaluates these forms
     side by side instead of the recursion, which is a chain of ORDER dependent steps.
     """
     a = np.array([[0.0, 1.0], [-1.0, -2.0 * zeta]])
-    out = np.zeros((ORDER + 1, 9))
+    out = np.zeros((ORDER + 1, 7))
     powers = [np.eye(2)]
     for _ in range(ORDER):
         powers.append(powers[-1] @ a)
     for n in range(ORDER + 1):
         fac = math.factorial(n)
-        out[n, :4] = (powers[n] / fac).ravel()
-        out[n, TC_Q] = powers[n][0, 0] / fac
-        out[n, TC_V] = powers[n][0, 1] / fac
+        out[n, :4] = (powers[n] / fac).ravel()  # includes TC_Q, TC_V
         for k in range(n):
             w = powers[n - 1 - k][0, 1] / fac
             if k == 0:
@@ -675,11 +673,8 @@ def advance_table(
                     q = theta
                     tau += hf
                     mode = 3
-        if mode == 3:
-            pass
-        elif h_taylor > 0.0:
-            # the Taylor coefficients as independent linear forms (the recursion of
-            # _taylor_coeffs is a chain of ORDER dependent steps)
+        if mode == 0 and h_taylor > 0.0:
+            # general Taylor path: coefficients up to ORDER from the same linear forms
             e[0] = q
             e[1] = v
             for n in range(2, ORDER + 1):
@@ -721,9 +716,7 @@ def advance_table(
                 b = _excursion_bound(e, horizon)
                 if q + b < up and q - b >= down:
                     mode = 2
-        if mode == 3:
-            pass
-        elif mode != 0:
+        if mode == 1 or mode == 2:
             hh = h if mode == 1 else horizon
             p, dp = _poly2(e, hh)
             cx, sx = _rotation(omega * hh)
@@ -757,7 +750,7 @@ def advance_table(
             q = theta
             tau += hh
             direction = tdir
-        else:
+        elif mode == 0:
             ph = phi0 + omega * tau
             c = math.cos(ph)
             s = math.sin(ph)

@@ -301,12 +301,11 @@ class RelayEngine(Engine):
     ) -> None:
         if type(times) is float or np.size(times) == 1:
             # one target (the Lyapunov stepper's case): no array bookkeeping on the way in
-            if type(times) is float:
-                t = times
-            elif np.ndim(times) > 1:
-                raise ValueError("times must be a scalar or a 1-D array")
-            else:
-                t = float(np.reshape(times, -1)[0]) if np.ndim(times) else float(times)
+            if type(times) is not float:
+                if np.ndim(times) > 1:
+                    raise ValueError("times must be a scalar or a 1-D array")
+                times = float(np.reshape(times, -1)[0])
+            t = times
             if not math.isfinite(t):
                 raise ValueError("times must be finite")
             tgt_n, tgt_tau = self._tn1, self._tt1
@@ -337,7 +336,13 @@ class RelayEngine(Engine):
         if self._generic is not None:
             self._advance_generic(tgt_n, tgt_tau, out, record)
             return
-        direct = out is not None and out.shape[1] == 3 and out.flags.c_contiguous
+        # the kernel writes straight into ``out`` when it has its layout (the stepper's buffer)
+        direct = (
+            out is not None
+            and out.shape[1] == 3
+            and out.dtype == np.float64
+            and out.flags.c_contiguous
+        )
         if direct:
             buf = out
         else:
