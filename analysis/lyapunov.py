@@ -166,20 +166,18 @@ class TangentStepper:
     def _advance(self, t: float, times: np.ndarray | None = None) -> None:
         eng = self.engine
         if times is None:
-            # one target (every QR step without sampling): a reused buffer and a scalar check,
-            # because this runs once per re-orthonormalisation
+            # one target (every QR step without sampling): a reused buffer and a scalar
+            # pre-check, because this runs once per re-orthonormalisation
             out = self._out1
             eng.advance(t, out)
-            q, v = out[0, 0], out[0, 1]
-            if not (abs(q) <= 1e12 and abs(v) <= 1e12):  # also catches NaN
+            bound = self.system.divergence_bound
+            if not (abs(out[0, 0]) <= bound and abs(out[0, 1]) <= bound):  # also catches NaN
                 self.system.check_finite(eng, out[:, :2])
-            self._t = t
-            self._sample_times = None
-            return
-        out = np.empty((times.size, len(eng.sample_columns)))
-        eng.advance(times, out)
+        else:
+            out = np.empty((times.size, len(eng.sample_columns)))
+            eng.advance(times, out)
+            self.system.check_finite(eng, out[:, :2])
         self._t = t
-        self.system.check_finite(eng, out[:, :2])
         self._sample_times = times
         self._out = out
 
@@ -187,16 +185,14 @@ class TangentStepper:
     def sample(self) -> np.ndarray:
         """``(q, v, M)`` now (after the last :meth:`reinit` or :meth:`step`): cheap, unlike
         :meth:`state`, which builds the operator state."""
-        out = self._out1 if self._sample_times is None else self._out
-        return out[-1, :3].copy()
+        return self._out[-1, :3].copy()
 
     @property
     def samples(self) -> np.ndarray:
         """Rows ``(t, q, v, M)`` sampled by the last :meth:`step` (``sample_dt``; else only its
         end point); ``t`` is the elapsed time since :meth:`reinit`'s start."""
-        if self._sample_times is None:
-            return np.concatenate(([self._t], self._out1[0, :3]))[None, :]
-        return np.column_stack([self._sample_times, self._out[:, :3]])
+        times = np.array([self._t]) if self._sample_times is None else self._sample_times
+        return np.column_stack([times, self._out[:, :3]])
 
     # -- deviations ------------------------------------------------------------------------------
     @property

@@ -65,6 +65,9 @@ class ForcedOscillator:
     run that diverges raises :class:`~oscillators.engine.DivergenceError`.
     """
 
+    #: ``|q|`` or ``|v|`` above this counts as diverged (:meth:`check_finite`)
+    divergence_bound = 1e12
+
     def __init__(
         self,
         operator: Hysteron,
@@ -200,12 +203,13 @@ class ForcedOscillator:
         self, engine: Engine, values: np.ndarray, times: np.ndarray | None = None
     ) -> None:
         """Raise :class:`DivergenceError` if ``values`` (rows of states just computed, first
-        columns q and v) are not finite or have run away (``|q|`` or ``|v|`` above ``1e12``).
+        columns q and v) are not finite or have run away (``|q|`` or ``|v|`` above
+        :attr:`divergence_bound`).
 
         ``times`` (elapsed, one per row) locate the first bad row in the message.
         """
         values = np.asarray(values, dtype=np.float64)
-        good = np.isfinite(values) & (np.abs(values) <= 1e12)
+        good = np.isfinite(values) & (np.abs(values) <= self.divergence_bound)
         if good.all():
             return
         rows = good.reshape(values.shape[0], -1).all(axis=1) if values.ndim > 1 else good
@@ -213,7 +217,8 @@ class ForcedOscillator:
         elapsed = engine.elapsed if times is None else float(np.asarray(times)[first])
         t = engine.start.t + elapsed
         raise DivergenceError(
-            f"the motion diverged by t = {t:.6g} (non-finite or |q|, |v| > 1e12) for {self!r}; "
+            f"the motion diverged by t = {t:.6g} (non-finite or |q|, |v| > "
+            f"{self.divergence_bound:.0e}) for {self!r}; "
             "an unbounded operator with C·slope >= 1 is a positive-feedback instability",
             time=t,
         )
