@@ -8,10 +8,24 @@ _check_import_name("oscillators")
 from oscillators.engine import DivergenceError, Engine, GrazingError, select_engine  # noqa: E402
 from oscillators.linear import forced_response, homogeneous_propagator, propagate, segment_jacobian
 from oscillators.results import OscillatorState, PoincareSection, Trajectory
-from oscillators.system import ForcedOscillator
+from oscillators.system import (
+    DEFAULT_Q0,
+    FREQUENCY_RANGE,
+    MAX_COUPLING,
+    MAX_DAMPING_RATIO,
+    MAX_PERIODS,
+    MAX_SAMPLES,
+    ForcedOscillator,
+)
 
 __all__ = [
     "__version__",
+    "DEFAULT_Q0",
+    "FREQUENCY_RANGE",
+    "MAX_COUPLING",
+    "MAX_DAMPING_RATIO",
+    "MAX_PERIODS",
+    "MAX_SAMPLES",
     "DivergenceError",
     "Engine",
     "GrazingError",

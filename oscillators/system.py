@@ -32,6 +32,14 @@ _SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8
 #: parameters such as Ω = 1e-300 that would make a run last forever).
 MAX_PERIODS = 10**8
 MAX_SAMPLES = 10**8
+#: Bounds of the system parameters, validated once, here (the CLI and the analyses report this
+#: module's messages): |C| <= MAX_COUPLING, 0 <= ζ <= MAX_DAMPING_RATIO, Ω in FREQUENCY_RANGE.
+MAX_COUPLING = 1e6
+MAX_DAMPING_RATIO = 1e6
+FREQUENCY_RANGE = (1e-6, 1e6)
+#: The paper's initial condition (q(0) = −1 at rest, all spins down): the default start of every
+#: trajectory, section and analysis.
+DEFAULT_Q0 = -1.0
 
 
 def _real_parameter(value: Any, name: str) -> float:
@@ -78,14 +86,19 @@ class ForcedOscillator:
         if not isinstance(operator, Hysteron):
             raise TypeError(f"operator must be a Hysteron, got {type(operator).__name__}")
         coupling = _real_parameter(coupling, "coupling")
-        if abs(coupling) > 1e6:
-            raise ValueError(f"coupling must lie in [-1e6, 1e6], got {coupling}")
+        if abs(coupling) > MAX_COUPLING:
+            raise ValueError(
+                f"coupling must lie in [-{MAX_COUPLING:g}, {MAX_COUPLING:g}], got {coupling}"
+            )
         zeta = _real_parameter(damping_ratio, "damping_ratio")
-        if not 0.0 <= zeta <= 1e6:
-            raise ValueError(f"damping_ratio must lie in [0, 1e6], got {damping_ratio}")
+        if not 0.0 <= zeta <= MAX_DAMPING_RATIO:
+            raise ValueError(
+                f"damping_ratio must lie in [0, {MAX_DAMPING_RATIO:g}], got {damping_ratio}"
+            )
         omega = _real_parameter(frequency, "frequency")
-        if not 1e-6 <= omega <= 1e6:
-            raise ValueError(f"frequency must lie in [1e-6, 1e6], got {frequency}")
+        f_lo, f_hi = FREQUENCY_RANGE
+        if not f_lo <= omega <= f_hi:
+            raise ValueError(f"frequency must lie in [{f_lo:g}, {f_hi:g}], got {frequency}")
         if zeta == 0.0 and omega == 1.0:
             raise ValueError(
                 "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
@@ -168,7 +181,7 @@ class ForcedOscillator:
     # -- states and engines --------------------------------------------------------------------
     def initial_state(
         self,
-        q0: float = -1.0,
+        q0: float = DEFAULT_Q0,
         v0: float = 0.1,
         operator_state: Any = None,
         phi0: float = 0.0,
@@ -227,7 +240,7 @@ class ForcedOscillator:
     def trajectory(
         self,
         t_end: float,
-        q0: float = -1.0,
+        q0: float = DEFAULT_Q0,
         v0: float = 0.1,
         operator_state: Any = None,
         sample_dt: float = 0.01,
@@ -279,7 +292,7 @@ class ForcedOscillator:
         self,
         n_periods: int,
         transient_periods: int = 0,
-        q0: float = -1.0,
+        q0: float = DEFAULT_Q0,
         v0: float = 0.1,
         operator_state: Any = None,
         *,
