@@ -33,7 +33,8 @@ _SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8
 MAX_PERIODS = 10**8
 MAX_SAMPLES = 10**8
 #: Bounds of the system parameters, validated once, here (the CLI and the analyses report this
-#: module's messages): |C| <= MAX_COUPLING, 0 <= ζ <= MAX_DAMPING_RATIO, Ω in FREQUENCY_RANGE.
+#: module's messages): ``abs(C) <= MAX_COUPLING``, ``0 <= ζ <= MAX_DAMPING_RATIO``, Ω in
+#: ``FREQUENCY_RANGE``.
 MAX_COUPLING = 1e6
 MAX_DAMPING_RATIO = 1e6
 FREQUENCY_RANGE = (1e-6, 1e6)
