@@ -68,7 +68,7 @@ class PreisachProjection:
 
     def model(self) -> Any:
         """The :class:`~hysteresis.preisach.DiscretePreisachModel` of the relays."""
-        from hysteresis.preisach import DiscretePreisachModel
+        from hysteresis.preisach.continuous import DiscretePreisachModel
 
         return DiscretePreisachModel(self.alpha, self.beta, self.weights)
 

@@ -40,7 +40,6 @@ from typing import Any
 
 import numpy as np
 
-from hysteresis import _preisach_kernels as _k
 from hysteresis._validation import (
     MAX_MAGNITUDE,
     ParameterTypeError,
@@ -62,6 +61,7 @@ from hysteresis.base import (
     Switching,
 )
 from hysteresis.flow import BranchFlow
+from hysteresis.preisach import _kernels as _k
 from hysteresis.relay_table import RelayTable
 
 __all__ = [
@@ -221,7 +221,7 @@ class PreisachModel(Hysteron):
         :func:`hysteresis.fitting.project_identification`, which also returns ``K`` and the
         residual.
         """
-        from hysteresis.fitting import project_identification
+        from hysteresis.preisach.projection import project_identification
 
         return project_identification(result, use_measured_only=use_measured_only).model()
 
