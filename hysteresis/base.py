@@ -171,13 +171,33 @@ class ContinuousHysteron(Hysteron):
 
     piecewise_constant = False
 
-    @abstractmethod
+    # -- derived from branch_flow (one implementation for every continuous operator) ---------
     def branch(self, state: Any, direction: int) -> Branch:
-        """Branch followed when the input moves in ``direction`` (+1 rising, -1 falling)."""
+        """Branch followed when the input moves in ``direction`` (+1 rising, -1 falling):
+        the output in ``state``, the slope ``dy/du`` of :meth:`branch_flow` at the state's input
+        (:meth:`BranchFlow.slope <hysteresis.flow.BranchFlow.slope>`) and its breakpoint."""
+        flow = self.branch_flow(state, direction)
+        return Branch(
+            value=float(self.output(state)),
+            slope=float(flow.slope(flow.input)),
+            breakpoint=float(flow.breakpoint),
+        )
 
-    @abstractmethod
     def linearize(self, state: Any, direction: int) -> Linearization:
-        """Derivatives on the branch followed in ``direction`` (+1 rising, -1 falling)."""
+        """Derivatives on the branch followed in ``direction`` (+1 rising, -1 falling), read
+        from :meth:`branch_flow`: its partials at the state's input, its memory variables
+        (frozen or slaved) and the ones whose perturbation is reset at the breakpoint."""
+        flow = self.branch_flow(state, direction)
+        d_input, d_memory = flow.partials(flow.input)
+        position = {label: i for i, label in enumerate(flow.labels)}
+        return Linearization(
+            d_output_d_input=float(d_input),
+            d_output_d_memory=np.array(d_memory, dtype=np.float64).reshape(flow.n_memory),
+            slaved=np.array(flow.slaved, dtype=bool),
+            reset_on_leave=np.array(
+                [position[label] for label in flow.breakpoint_resets], dtype=np.int64
+            ),
+        )
 
     # -- what the oscillator's continuous engines need (oscillators.engine.select_engine) -----
     def branch_flow(self, state: Any, direction: int) -> Any:

@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis.preisach.base import PreisachModel
+
 __all__ = ["PreisachProjection", "project_identification"]
 
 _DENSE_LIMIT = 2500  # cells; above, the iterative bounded solver on the cumulative-sum operator
@@ -66,11 +68,9 @@ class PreisachProjection:
     residual_rms: float
     n_nodes: int
 
-    def model(self) -> Any:
+    def model(self) -> PreisachModel:
         """The :class:`~hysteresis.preisach.DiscretePreisachModel` of the relays."""
-        from hysteresis.preisach.continuous import DiscretePreisachModel
-
-        return DiscretePreisachModel(self.alpha, self.beta, self.weights)
+        return PreisachModel.from_relays(self.alpha, self.beta, self.weights)
 
 
 def _everett_apply(masses: np.ndarray) -> np.ndarray:
