@@ -61,9 +61,8 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
             total = float(weights.sum())
             if abs(total - 1.0) > _WEIGHT_TOLERANCE:
                 raise ValueError(f"weights must sum to 1 (within 1e-9), got sum {total!r}")
-        self._alpha = _readonly(alpha)
-        self._beta = _readonly(beta)
-        self._weights = _readonly(weights)
+        # the relays themselves: one read-only table, shared with the oscillator's relay engine
+        self._relays = RelayTable(alpha, beta, weights)
         self._fingerprint = _fingerprint(b"discrete", alpha, beta, weights)
 
         order_a = np.argsort(alpha, kind="stable")
@@ -110,32 +109,32 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
     # -- parameters -------------------------------------------------------------------------
     @property
     def alpha(self) -> np.ndarray:
-        """Up-switching thresholds α_i (read-only)."""
-        return self._alpha
+        """Up-switching thresholds α_i (read-only; the relay table's)."""
+        return self._relays.alpha
 
     @property
     def beta(self) -> np.ndarray:
-        """Down-switching thresholds β_i (read-only)."""
-        return self._beta
+        """Down-switching thresholds β_i (read-only; the relay table's)."""
+        return self._relays.beta
 
     @property
     def weights(self) -> np.ndarray:
-        """Weights w_i >= 0, Σ w_i = 1 (read-only)."""
-        return self._weights
+        """Weights w_i >= 0, Σ w_i = 1 (read-only; the relay table's)."""
+        return self._relays.weights
 
     @property
     def n_relays(self) -> int:
-        return int(self._alpha.size)
+        return self._relays.n_relays
 
     @property
     def centre(self) -> np.ndarray:
         """Loop centres s_i = (α_i + β_i)/2."""
-        return 0.5 * (self._alpha + self._beta)
+        return 0.5 * (self.alpha + self.beta)
 
     @property
     def half_width(self) -> np.ndarray:
         """Half-widths r_i = (α_i − β_i)/2."""
-        return 0.5 * (self._alpha - self._beta)
+        return 0.5 * (self.alpha - self.beta)
 
     @property
     def equal_widths(self) -> bool:
@@ -167,7 +166,7 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         return f"DiscretePreisachModel(n_relays={self.n_relays}, equal_widths={self._equal_widths})"
 
     def _saturation_input(self) -> float:
-        return float(self._alpha.max())
+        return float(self.alpha.max())
 
     # -- states -----------------------------------------------------------------------------
     def _make_state(self, stack, cnt_a, cnt_b, top, output) -> PreisachState:
@@ -238,7 +237,7 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
             )
         if self.n_relays * e.size <= 10_000_000:
             up = self.relay_states(state)
-            expected = float(np.sum(np.where(up, self._weights, -self._weights)))
+            expected = float(np.sum(np.where(up, self.weights, -self.weights)))
             if abs(expected - float(state.output)) > 1e-9:
                 raise ValueError(
                     f"state.output {state.output!r} does not match this model in that staircase "
@@ -320,9 +319,9 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         last_down = np.zeros(self.n_relays, dtype=int)  # the -inf minimum at position 0
         for i, e in enumerate(state.extrema, start=1):
             if i % 2:  # maxima at odd positions (1-based after the sentinel)
-                last_up = np.where(e >= self._alpha, i, last_up)
+                last_up = np.where(e >= self.alpha, i, last_up)
             else:
-                last_down = np.where(e < self._beta, i, last_down)
+                last_down = np.where(e < self.beta, i, last_down)
         return last_up > last_down
 
     def everett(self, a, b) -> np.ndarray:
@@ -336,18 +335,15 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
             if aa[idx] < bb[idx]:
                 out[idx] = 0.0
             else:
-                mask = (self._alpha <= aa[idx]) & (self._beta > bb[idx])
-                out[idx] = float(self._weights[mask].sum())
+                mask = (self.alpha <= aa[idx]) & (self.beta > bb[idx])
+                out[idx] = float(self.weights[mask].sum())
         return out
 
     # -- relay contract (oscillators' relay engine) -------------------------------------------
     def relay_table(self) -> RelayTable:
-        """The model as a :class:`~hysteresis.relay_table.RelayTable` (same relay order; cached)."""
-        table = self.__dict__.get("_relay_table")
-        if table is None:
-            table = RelayTable(self._alpha, self._beta, self._weights)
-            self.__dict__["_relay_table"] = table
-        return table
+        """The model's relays as a :class:`~hysteresis.relay_table.RelayTable` (same relay
+        order; the table the model holds, not a copy)."""
+        return self._relays
 
     def relay_outputs(self, state: PreisachState) -> np.ndarray:
         """Relay outputs ``±1`` (table order) in ``state``; O(N log depth).
@@ -360,9 +356,9 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         if state.counts_alpha is None:
             raise ValueError("state must be a state of a discrete PreisachModel")
         maxima = state.maxima
-        j = np.searchsorted(state.minima, self._beta, side="left")
+        j = np.searchsorted(state.minima, self.beta, side="left")
         safe = np.minimum(j, maxima.size - 1)
-        up = (j < maxima.size) & (self._alpha <= maxima[safe])
+        up = (j < maxima.size) & (self.alpha <= maxima[safe])
         return np.where(up, 1.0, -1.0)
 
     def state_from_relay_outputs(self, outputs, input: float) -> PreisachState:
@@ -378,19 +374,19 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         """
         input = finite_scalar(input, "input")
         y = np.asarray(outputs, dtype=np.float64)
-        if y.shape != self._alpha.shape:
+        if y.shape != self.alpha.shape:
             raise ValueError(f"outputs must have length {self.n_relays}, got shape {y.shape}")
         if not np.all((y == 1.0) | (y == -1.0)):
             raise ValueError("outputs must be +1 or -1")
-        active = self._weights > 0.0
+        active = self.weights > 0.0
         table = self.relay_table()
         table.check_outputs(np.where(active, y, table.initial_outputs(input)), input)
         up = active & (y > 0)
         down = active & (y < 0)
-        c = self._beta[up]
+        c = self.beta[up]
         order = np.argsort(c, kind="stable")
         c = c[order]
-        a = self._alpha[up][order]
+        a = self.alpha[up][order]
         if c.size:
             smax = np.maximum.accumulate(a[::-1])[::-1]
             # g on (c_{l-1}, c_l] is the suffix maximum at the first relay with β = c_l (tie
@@ -401,14 +397,14 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
             ends = np.flatnonzero(np.append(gval[1:], -np.inf) < gval)
             minima = c[first[ends]]
             maxima = np.concatenate([[gval[0]], gval[ends[:-1] + 1]])
-            gb = np.searchsorted(c, self._beta[down], side="left")
+            gb = np.searchsorted(c, self.beta[down], side="left")
             g = np.where(gb < c.size, smax[np.minimum(gb, c.size - 1)], -np.inf)
-            bad = np.flatnonzero(self._alpha[down] <= g)
+            bad = np.flatnonzero(self.alpha[down] <= g)
             if bad.size:
                 i = int(np.flatnonzero(down)[bad[0]])
                 raise ValueError(
                     f"outputs are not a reachable relay configuration: relay {i} "
-                    f"(alpha={self._alpha[i]}, beta={self._beta[i]}) is down although an up "
+                    f"(alpha={self.alpha[i]}, beta={self.beta[i]}) is down although an up "
                     "relay has a larger alpha and a larger beta"
                 )
             history = np.empty(2 * minima.size + 1)
