@@ -41,7 +41,7 @@ from hysteresis._validation import (
     finite_array,
     finite_scalar,
 )
-from hysteresis.base import Branch, ContinuousHysteron, Linearization
+from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
 from hysteresis.play import _touches_wall, _wall_tolerance
 
@@ -262,7 +262,7 @@ class PrandtlIshlinskii(ContinuousHysteron):
         tail = np.cumsum(aw[::-1])[::-1] - aw  # Σ_{j>i} a_j w_j
         return PIState(_readonly(partial * w + tail), self.output(state))
 
-    # -- branch and linearization -----------------------------------------------------------
+    # -- branch flow (branch() and linearize() derive from it, hysteresis.base) -------------
     def _walls(self, state: PIState, direction: int) -> np.ndarray:
         check_state_type(state, PIState, self)  # O(1); the size is checked by zip(strict)
         u = float(state.input)
@@ -282,29 +282,6 @@ class PrandtlIshlinskii(ContinuousHysteron):
         idx = np.flatnonzero(inside)
         tol = 8.0 * np.finfo(float).eps * max(abs(bp), 1.0)
         return bp, idx[np.abs(ahead - bp) <= tol].astype(np.int64)
-
-    def branch(self, state: PIState, direction: int) -> Branch:
-        """Slope = sum of the weights of the plays dragged in ``direction``; breakpoint = the
-        nearest wall ahead of a play that is still inside (``±inf`` if all are dragged)."""
-        direction = direction_sign(direction)
-        walls = self._walls(state, direction)
-        bp, _ = self._breakpoint(state, direction, walls)
-        return Branch(
-            value=self.output(state), slope=float(np.sum(self._weights[walls])), breakpoint=bp
-        )
-
-    def linearize(self, state: PIState, direction: int) -> Linearization:
-        """Memory = all wagon positions; ``y = Σ a_i w_i`` (``d_output_d_input = 0``); dragged
-        plays are slaved; at the breakpoint the plays whose wall it is get ``δw_i := δu``."""
-        direction = direction_sign(direction)
-        walls = self._walls(state, direction)
-        _, reset = self._breakpoint(state, direction, walls)
-        return Linearization(
-            d_output_d_input=0.0,
-            d_output_d_memory=np.array(self._weights),
-            slaved=walls,
-            reset_on_leave=reset,
-        )
 
     def branch_flow(self, state: PIState, direction: int) -> BranchFlow:
         """The branch in ``direction`` as a :class:`~hysteresis.flow.BranchFlow`.

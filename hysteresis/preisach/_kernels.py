@@ -511,17 +511,20 @@ def _switched_weight(
 ):  # pragma: no cover - compiled
     """Total weight of the relays that switch in one step of the staircase.
 
-    Parameters (the two directions are mirror images)
-    -------------------------------------------------
-    ``rising`` (:data:`_RISING`): the input rises through a step; the relays are in
-    alpha-order, ``keys`` their beta (search keys, see the module docstring), ``table`` the
-    sparse table of range-argmax of ``keys``, ``bound`` the last minimum ``m``: the relays with
-    ``beta > m`` switch up. :data:`_FALLING`: beta-order, ``keys`` their alpha, range-argmin,
-    ``bound`` the last maximum ``M``: the relays with ``alpha <= M`` switch down.
-    ``weights`` in the same order; ``[lo, hi)`` the step's index range in that order (clamped
-    to the arrays); ``work`` the explicit stack (``2 * _WORK_RANGES`` int64); ``mode`` the lane
-    sums (:func:`lane_mode`). ``rising`` is a constant at every call site: after inlining, the
-    branches on it fold away and each direction compiles to its own straight code.
+    The two directions are mirror images, selected by ``rising``:
+
+    * ``rising`` = :data:`_RISING` (the input rises through a step): ``keys`` are the relays'
+      beta in alpha-order (search keys, see the module docstring), ``table`` the sparse table
+      of range-argmax of ``keys``, ``bound`` the last minimum ``m``; relays with ``beta > m``
+      switch up.
+    * ``rising`` = :data:`_FALLING`: ``keys`` are the alpha in beta-order, ``table`` the
+      range-argmin, ``bound`` the last maximum ``M``; relays with ``alpha <= M`` switch down.
+
+    ``weights`` are in the same order as ``keys``; ``[lo, hi)`` is the step's index range in
+    that order (clamped to the arrays); ``work`` the explicit stack (``2 * _WORK_RANGES``
+    int64); ``mode`` the lane sums (:func:`lane_mode`). ``rising`` is a constant at every call
+    site: after inlining, the branches on it fold away and each direction compiles to its own
+    straight code.
 
     Plain-Python reading::
 
