@@ -84,13 +84,15 @@ USE_SIMD: bool | None = (
 
 
 @njit(cache=True)
-def sparse_table_argmax(values):  # pragma: no cover - compiled
-    """Sparse table of range-argmax indices.
+def sparse_table(values, largest):  # pragma: no cover - compiled
+    """Sparse table of range-argmax (``largest=True``) or range-argmin (``largest=False``)
+    indices, for the O(1) queries :func:`_range_argmax` / :func:`_range_argmin`.
 
     Plain-Python reading::
 
+        better = max if largest else min        # ties: the left index
         table[0] = range(n)
-        for k in 1..: table[k][i] = argmax of values over [i, i + 2**k)
+        for k in 1..: table[k][i] = arg-better of values over [i, i + 2**k)
                       = better of table[k-1][i] and table[k-1][i + 2**(k-1)]
     """
     n = values.size
@@ -105,26 +107,10 @@ def sparse_table_argmax(values):  # pragma: no cover - compiled
         for i in range(n - (1 << k) + 1):
             a = table[k - 1, i]
             b = table[k - 1, i + half]
-            table[k, i] = a if values[a] >= values[b] else b
-    return table
-
-
-@njit(cache=True)
-def sparse_table_argmin(values):  # pragma: no cover - compiled
-    """Sparse table of range-argmin indices (see :func:`sparse_table_argmax`)."""
-    n = values.size
-    levels = 1
-    while (1 << levels) <= n:
-        levels += 1
-    table = np.empty((levels, max(n, 1)), dtype=np.int32)
-    for i in range(n):
-        table[0, i] = i
-    for k in range(1, levels):
-        half = 1 << (k - 1)
-        for i in range(n - (1 << k) + 1):
-            a = table[k - 1, i]
-            b = table[k - 1, i + half]
-            table[k, i] = a if values[a] <= values[b] else b
+            if largest:
+                table[k, i] = a if values[a] >= values[b] else b
+            else:
+                table[k, i] = a if values[a] <= values[b] else b
     return table
 
 

@@ -43,7 +43,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from hysteresis._validation import as_input_sequence, check_state_type
+from hysteresis._validation import as_input_sequence, check_state_type, readonly_array
 from hysteresis.base import Hysteron
 
 __all__ = ["PreisachModel", "PreisachState"]
@@ -55,12 +55,6 @@ def _fingerprint(*parts: Any) -> int:
     for part in parts:
         h.update(part if isinstance(part, bytes) else np.ascontiguousarray(part).tobytes())
     return int.from_bytes(h.digest(), "little")
-
-
-def _readonly(a: Any, dtype=np.float64) -> np.ndarray:
-    arr = np.array(a, dtype=dtype)
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,7 +124,7 @@ def _gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
     # cached: leggauss solves an eigenvalue problem, and everett_gradient needs the nodes on
     # every call (the oscillator's continuous engine calls it once per integrator stage)
     x, w = np.polynomial.legendre.leggauss(n)
-    return _readonly(0.5 * (x + 1.0)), _readonly(0.5 * w)  # on [0, 1]
+    return readonly_array(0.5 * (x + 1.0)), readonly_array(0.5 * w)  # on [0, 1]
 
 
 class PreisachModel(Hysteron):

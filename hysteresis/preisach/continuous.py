@@ -22,6 +22,7 @@ from hysteresis._validation import (
     finite_scalar,
     positive_integer,
     positive_scalar,
+    readonly_array,
 )
 from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
@@ -31,7 +32,6 @@ from hysteresis.preisach.base import (
     PreisachState,
     _fingerprint,
     _gauss,
-    _readonly,
     _stack,
 )
 from hysteresis.preisach.gaussian import gaussian_everett
@@ -316,9 +316,9 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         stack = np.array([np.inf, -np.inf, u0])
         prefix = np.cumsum(self._terms(stack))
         return PreisachState(
-            extrema=_readonly([u0]),
+            extrema=readonly_array([u0]),
             output=float(-1.0 + 2.0 * prefix[-1]),
-            prefix=_readonly(prefix),
+            prefix=readonly_array(prefix),
             model_fingerprint=self._fingerprint,
         )
 
@@ -359,9 +359,9 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         final_prefix[:2] = 0.0
         outputs = -1.0 + 2.0 * sums
         new_state = PreisachState(
-            extrema=_readonly(vals[2 : top + 1]),
+            extrema=readonly_array(vals[2 : top + 1]),
             output=float(outputs[-1]),
-            prefix=_readonly(final_prefix),
+            prefix=readonly_array(final_prefix),
             model_fingerprint=self._fingerprint,
         )
         return outputs, new_state

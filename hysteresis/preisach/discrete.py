@@ -11,10 +11,16 @@ from typing import Any
 
 import numpy as np
 
-from hysteresis._validation import MAX_MAGNITUDE, as_input_sequence, finite_array, finite_scalar
+from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    as_input_sequence,
+    finite_array,
+    finite_scalar,
+    readonly_array,
+)
 from hysteresis.base import PiecewiseConstantHysteron, Switching
 from hysteresis.preisach import _kernels as _k
-from hysteresis.preisach.base import PreisachModel, PreisachState, _fingerprint, _readonly, _stack
+from hysteresis.preisach.base import PreisachModel, PreisachState, _fingerprint, _stack
 from hysteresis.preisach.projection import project_identification
 from hysteresis.relay_table import RelayTable
 
@@ -80,8 +86,8 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         # below a maximum); it still counts for the staircase positions
         self._beta_key_a = np.where(self._w_by_a > 0, self._beta_by_a, -np.inf)
         self._alpha_key_b = np.where(self._w_by_b > 0, self._alpha_by_b, np.inf)
-        self._table_a = _k.sparse_table_argmax(self._beta_key_a)
-        self._table_b = _k.sparse_table_argmin(self._alpha_key_b)
+        self._table_a = _k.sparse_table(self._beta_key_a, True)  # range-argmax
+        self._table_b = _k.sparse_table(self._alpha_key_b, False)  # range-argmin
         self._cum_w_a = np.concatenate([[0.0], np.cumsum(self._w_by_a)])
         # uniform bucket grids over the thresholds: O(1) expected "count <= u" per input step;
         # 8 buckets per relay keep the in-bucket search (unpredictable branches) to about one
@@ -102,9 +108,9 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         self._equal_widths = bool(np.ptp(width) <= 1e-12 * scale)
         centre = 0.5 * (alpha + beta)
         order_c = np.argsort(centre, kind="stable")
-        self._order_c = _readonly(order_c, np.int64)
-        self._sorted_centres = _readonly(centre[order_c])
-        self._sorted_weights = _readonly(weights[order_c])
+        self._order_c = readonly_array(order_c, np.int64)
+        self._sorted_centres = readonly_array(centre[order_c])
+        self._sorted_weights = readonly_array(weights[order_c])
 
     # -- parameters -------------------------------------------------------------------------
     @property
@@ -171,10 +177,10 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
     # -- states -----------------------------------------------------------------------------
     def _make_state(self, stack, cnt_a, cnt_b, top, output) -> PreisachState:
         return PreisachState(
-            extrema=_readonly(stack[2 : top + 1]),
+            extrema=readonly_array(stack[2 : top + 1]),
             output=float(output),
-            counts_alpha=_readonly(cnt_a[2 : top + 1], np.int64),
-            counts_beta=_readonly(cnt_b[2 : top + 1], np.int64),
+            counts_alpha=readonly_array(cnt_a[2 : top + 1], np.int64),
+            counts_beta=readonly_array(cnt_b[2 : top + 1], np.int64),
             model_fingerprint=self._fingerprint,
         )
 
@@ -185,10 +191,10 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         pb = int(np.searchsorted(self._beta_by_b, u0, side="right"))
         output = -1.0 + 2.0 * float(self._cum_w_a[pa])
         return PreisachState(
-            extrema=_readonly([u0]),
+            extrema=readonly_array([u0]),
             output=output,
-            counts_alpha=_readonly([pa], np.int64),
-            counts_beta=_readonly([pb], np.int64),
+            counts_alpha=readonly_array([pa], np.int64),
+            counts_beta=readonly_array([pb], np.int64),
             model_fingerprint=self._fingerprint,
         )
 
