@@ -5,8 +5,9 @@ inputs ``u_t`` and outputs ``y_t``. Both models here are linear in their weights
 input record is fixed, so the identification is a constrained linear least-squares problem:
 
 * :func:`fit_preisach_record` — a discrete Preisach model on a lattice: one relay per lattice
-  cell (the corner relays of :mod:`hysteresis.fitting`), ``y_t ≈ c + Σ_k m_k r_k(t)`` with the
-  relay outputs ``r_k(t) ∈ {−1, +1}`` computed from the input record and ``m_k >= 0``.
+  cell (the corner relays of :mod:`hysteresis.preisach.projection`),
+  ``y_t ≈ c + Σ_k m_k r_k(t)`` with the relay outputs ``r_k(t) ∈ {−1, +1}`` computed from the
+  input record and ``m_k >= 0``.
 * :func:`fit_prandtl_ishlinskii` — a Prandtl–Ishlinskii operator,
   ``y_t ≈ c + Σ_i a_i F_{p_i}[u]_t`` with plays of given widths (width 0 = the linear term).
   The weights may be negative (a saturating actuator needs them: its loading curve is

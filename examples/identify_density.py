@@ -33,7 +33,7 @@ from analysis.identification import (  # noqa: E402
 )
 from analysis.preisach_plots import figure_forc, figure_preisach_density  # noqa: E402
 from hysteresis import GeneralizedPlay, PreisachModel, SpinDimerEnsemble  # noqa: E402
-from hysteresis.fitting import project_identification  # noqa: E402
+from hysteresis.preisach.projection import project_identification  # noqa: E402
 
 
 def main() -> None:

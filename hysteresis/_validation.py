@@ -305,3 +305,11 @@ def check_grid_nodes(step: Any, saturation: Any, max_nodes: int = MAX_GRID_NODES
             f"{2.0 * saturation / (max_nodes - 1):.3g}"
         )
     return int(nodes)
+
+
+def readonly_array(a: Any, dtype: Any = np.float64) -> np.ndarray:
+    """A read-only copy of ``a`` as an array of ``dtype`` (``None``: the dtype numpy infers);
+    the one helper every immutable parameter and state object of the package uses."""
+    arr = np.array(a, dtype=dtype)
+    arr.setflags(write=False)
+    return arr

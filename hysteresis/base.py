@@ -8,20 +8,29 @@ memory lives in a separate immutable *state* object, so
 
 never mutates anything and the memory never grows with the length of the input.
 
-Two families exist, and the forced-oscillator integrator treats them differently:
+Two families exist, and the forced-oscillator engines (:func:`oscillators.engine.select_engine`)
+treat them differently. The contract is exactly what those engines use; its required methods
+are abstract, so a class that misses one cannot be instantiated (Python's ``TypeError`` names
+the method).
 
-* **Piecewise-constant** operators (``Relay``, discrete ``PreisachModel``, ``SpinDimerEnsemble``):
-  the output is constant between switching inputs. :meth:`PiecewiseConstantHysteron.switching`
-  reports, for a state, the next input below and above the current one at which the output
-  jumps, and the size of the jumps. Between switches the coupled oscillator is linear with a
-  constant force ``C*M``; at a switch the oscillator applies the saltation matrix with entry
+* **Piecewise-constant** operators (``piecewise_constant = True``: ``Relay``, discrete
+  ``PreisachModel``, ``SpinDimerEnsemble``): the output is constant between switching inputs.
+  Required: :meth:`~PiecewiseConstantHysteron.relay_table` (the relays and their weights, which
+  the event-driven engine integrates), :meth:`~PiecewiseConstantHysteron.relay_outputs` and
+  :meth:`~PiecewiseConstantHysteron.state_from_relay_outputs` (the state to and from the
+  relays' outputs), and :meth:`~PiecewiseConstantHysteron.switching` (next switching inputs and
+  jumps, the Python reference engine's view). Between switches the coupled oscillator is linear
+  with a constant force ``C*M``; at a switch it applies the saltation matrix with entry
   ``C*ΔM/v*`` (paper eq. ``salt_matrix``).
 * **Continuous** operators (``PlayOperator``, ``GeneralizedPlay``, continuous ``PreisachModel``,
   ``PrandtlIshlinskii``): for a fixed direction of input motion the output follows a smooth
-  monotone branch between breakpoints. :meth:`ContinuousHysteron.branch` reports the branch value,
-  slope and the next breakpoint; :meth:`ContinuousHysteron.linearize` gives the derivative of
-  the output with respect to the input and to the memory variables, and how each memory variable
-  moves with the input (frozen inside the play, slaved ``δw = δu`` at a wall).
+  monotone branch between breakpoints. Required: :meth:`~ContinuousHysteron.branch_flow` (the
+  branch as a function of the input, with its memory variables and breakpoint,
+  :class:`hysteresis.flow.BranchFlow`), which the generic continuous engine integrates.
+  Optional: :meth:`~ContinuousHysteron.compiled_play` (a fast path). ``branch`` (value, slope,
+  breakpoint) and ``linearize`` (derivatives with respect to the input and the memory
+  variables) are not part of what an operator must provide: they are derived from
+  ``branch_flow`` once, here.
 
 Conventions (see docs/architecture.md): a relay with thresholds ``alpha >= beta`` outputs +1
 once the input has reached ``u >= alpha`` and -1 once it has fallen to ``u < beta``.
@@ -36,6 +45,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from hysteresis.flow import BranchFlow
 
 __all__ = [
     "Hysteron",
@@ -146,24 +157,25 @@ class PiecewiseConstantHysteron(Hysteron):
 
     piecewise_constant = True
 
-    @abstractmethod
-    def switching(self, state: Any) -> Switching:
-        """Next switching inputs below/above the state's current input and the jumps there."""
-
     # -- what the oscillator's relay engine needs (oscillators.engine.select_engine) ----------
+    @abstractmethod
     def relay_table(self) -> Any:
         """The operator as a table of relays (:class:`hysteresis.relay_table.RelayTable`):
         thresholds, weights, ``M = Σ weights·y``. The oscillator's event-driven engine runs on
-        it; operators that cannot provide one are not coupled to the oscillator."""
-        raise NotImplementedError(f"{type(self).__name__} provides no relay_table()")
+        it."""
 
+    @abstractmethod
     def relay_outputs(self, state: Any) -> np.ndarray:
         """Outputs ``y_i = ±1`` of the relays of :meth:`relay_table` in ``state`` (table order)."""
-        raise NotImplementedError(f"{type(self).__name__} provides no relay_outputs()")
 
+    @abstractmethod
     def state_from_relay_outputs(self, outputs: np.ndarray, input: float) -> Any:
         """The operator state whose relays output ``outputs`` at the current ``input``."""
-        raise NotImplementedError(f"{type(self).__name__} provides no state_from_relay_outputs()")
+
+    # -- what the Python reference engine needs (RelayEngine(method="generic")) ---------------
+    @abstractmethod
+    def switching(self, state: Any) -> Switching:
+        """Next switching inputs below/above the state's current input and the jumps there."""
 
 
 class ContinuousHysteron(Hysteron):
@@ -171,24 +183,50 @@ class ContinuousHysteron(Hysteron):
 
     piecewise_constant = False
 
-    @abstractmethod
+    # -- derived from branch_flow (one implementation for every continuous operator) ---------
     def branch(self, state: Any, direction: int) -> Branch:
-        """Branch followed when the input moves in ``direction`` (+1 rising, -1 falling)."""
+        """Branch followed when the input moves in ``direction`` (+1 rising, -1 falling):
+        the output in ``state``, the slope ``dy/du`` of :meth:`branch_flow` at the state's input
+        (:meth:`BranchFlow.slope <hysteresis.flow.BranchFlow.slope>`) and its breakpoint."""
+        flow = self.branch_flow(state, direction)
+        return Branch(
+            value=float(self.output(state)),
+            slope=float(flow.slope(flow.input)),
+            breakpoint=float(flow.breakpoint),
+        )
 
-    @abstractmethod
     def linearize(self, state: Any, direction: int) -> Linearization:
-        """Derivatives on the branch followed in ``direction`` (+1 rising, -1 falling)."""
+        """Derivatives on the branch followed in ``direction`` (+1 rising, -1 falling), read
+        from :meth:`branch_flow`: its partials at the state's input, its memory variables
+        (frozen or slaved) and the ones whose perturbation is reset at the breakpoint."""
+        flow = self.branch_flow(state, direction)
+        d_input, d_memory = flow.partials(flow.input)
+        position = {label: i for i, label in enumerate(flow.labels)}
+        return Linearization(
+            d_output_d_input=float(d_input),
+            d_output_d_memory=np.array(d_memory, dtype=np.float64).reshape(flow.n_memory),
+            slaved=np.array(flow.slaved, dtype=bool),
+            reset_on_leave=np.array(
+                [position[label] for label in flow.breakpoint_resets], dtype=np.int64
+            ),
+        )
 
     # -- what the oscillator's continuous engines need (oscillators.engine.select_engine) -----
-    def branch_flow(self, state: Any, direction: int) -> Any:
-        """The branch followed in ``direction`` as a function of the input, with its memory
-        variables, their linearization and the next breakpoint
+    @abstractmethod
+    def branch_flow(self, state: Any, direction: int) -> BranchFlow:
+        """The branch followed in ``direction`` (+1 rising, -1 falling) as a function of the
+        input, with its memory variables, their linearization and the next breakpoint
         (:class:`hysteresis.flow.BranchFlow`). The generic continuous engine of the oscillator
         integrates any operator that provides it."""
-        raise NotImplementedError(f"{type(self).__name__} provides no branch_flow()")
 
     def compiled_play(self) -> Any:
         """A description for the compiled play-limit kernel
         (:class:`hysteresis.play.CompiledPlay`) if this operator is a play with a shape the
-        kernel knows (identity, erf), else ``None`` (the default): a fast path only."""
+        kernel knows (identity, erf), else ``None`` (the default): a fast path only.
+
+        An operator whose ``compiled_play()`` is not ``None`` also offers
+        ``state(position, input)``, the state with the wagon at ``position`` and the input at
+        ``input``: the oscillator's play engine builds the operator states it hands back through
+        it (it does not construct the play's state class itself).
+        """
         return None

@@ -62,13 +62,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hysteresis._validation import readonly_array
+
 __all__ = ["BranchFlow"]
-
-
-def _readonly(a, dtype=np.float64) -> np.ndarray:
-    arr = np.array(a, dtype=dtype)
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True)
@@ -129,10 +125,10 @@ class BranchFlow:
         n = len(self.labels)
         if len(set(self.labels)) != n:
             raise ValueError(f"labels must be unique, got {self.labels}")
-        object.__setattr__(self, "memory", _readonly(self.memory))
-        object.__setattr__(self, "slaved", _readonly(self.slaved, bool))
+        object.__setattr__(self, "memory", readonly_array(self.memory))
+        object.__setattr__(self, "slaved", readonly_array(self.slaved, bool))
         pushed = np.zeros(n, dtype=bool) if self.pushed is None else self.pushed
-        object.__setattr__(self, "pushed", _readonly(pushed, bool))
+        object.__setattr__(self, "pushed", readonly_array(pushed, bool))
         for name in ("memory", "slaved", "pushed"):
             if getattr(self, name).shape != (n,):
                 raise ValueError(f"{name} must have one entry per label ({n})")

@@ -40,7 +40,7 @@ from hysteresis._validation import (
     nonnegative_scalar,
     positive_scalar,
 )
-from hysteresis.base import Branch, ContinuousHysteron, Linearization
+from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
 
 __all__ = ["CompiledPlay", "PlayState", "PlayOperator", "GeneralizedPlay", "play_positions"]
@@ -192,45 +192,12 @@ class _PlayBase(ContinuousHysteron):
         self._check_state(state)
         return float(self._f(float(state.position)))
 
-    # -- branch and linearization -----------------------------------------------------------
+    # -- branch flow (branch() and linearize() derive from it, hysteresis.base) -------------
     def on_wall(self, state: PlayState, direction: int) -> bool:
         """True if moving the input in ``direction`` drags the wagon (finger on that wall)."""
         direction = direction_sign(direction)
         check_state_type(state, PlayState, self)  # O(1): integrators call this every step
         return _touches_wall(float(state.position), float(state.input), self.half_width, direction)
-
-    def branch(self, state: PlayState, direction: int) -> Branch:
-        """Inside: constant output, breakpoint at the wall ``w ± p/2`` ahead. On the wall moving
-        outward: output ``f(u ∓ p/2)``, slope ``f'(w)``, no breakpoint (``±inf``)."""
-        direction = direction_sign(direction)
-        w = float(state.position)
-        value = float(self._f(w))
-        if self.on_wall(state, direction):
-            return Branch(value=value, slope=float(self._df(w)), breakpoint=direction * np.inf)
-        return Branch(value=value, slope=0.0, breakpoint=w + direction * self.half_width)
-
-    def linearize(self, state: PlayState, direction: int) -> Linearization:
-        """Memory ``m = (w,)``, output ``y = f(w)`` (no explicit input dependence, so
-        ``d_output_d_input = 0``; the total slope on a wall is
-        ``d_output_d_memory @ slaved = f'(w)``).
-
-        Inside: ``w`` frozen; when the input reaches the wall ahead the perturbation of ``w``
-        is reset to the input's, ``δw := δu`` (paper ``V_out``), hence ``reset_on_leave = [0]``.
-        On the wall moving outward: ``δw = δu`` (slaved), nothing to leave, ``reset_on_leave``
-        empty.
-        """
-        direction = direction_sign(direction)
-        w = float(state.position)
-        dm = np.array([float(self._df(w))])
-        if self.on_wall(state, direction):
-            slaved = np.array([True])
-            reset = np.zeros(0, dtype=np.int64)
-        else:
-            slaved = np.array([False])
-            reset = np.array([0], dtype=np.int64)
-        return Linearization(
-            d_output_d_input=0.0, d_output_d_memory=dm, slaved=slaved, reset_on_leave=reset
-        )
 
     def branch_flow(self, state: PlayState, direction: int) -> BranchFlow:
         """The branch in ``direction`` as a :class:`~hysteresis.flow.BranchFlow` (any shape).

@@ -40,8 +40,9 @@ from hysteresis._validation import (
     direction_sign,
     finite_array,
     finite_scalar,
+    readonly_array,
 )
-from hysteresis.base import Branch, ContinuousHysteron, Linearization
+from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
 from hysteresis.play import _touches_wall, _wall_tolerance
 
@@ -55,12 +56,6 @@ class PIState:
 
     positions: np.ndarray
     input: float
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=np.float64)
-    a.setflags(write=False)
-    return a
 
 
 @njit(cache=True)
@@ -121,9 +116,9 @@ class PrandtlIshlinskii(ContinuousHysteron):
         widths, weights = widths[order], weights[order]
         if np.any(np.diff(widths) == 0):
             raise ValueError("widths must be distinct")
-        self._widths = _readonly(widths)
-        self._weights = _readonly(weights)
-        self._half = _readonly(0.5 * widths)
+        self._widths = readonly_array(widths)
+        self._weights = readonly_array(weights)
+        self._half = readonly_array(0.5 * widths)
 
     @property
     def widths(self) -> np.ndarray:
@@ -161,7 +156,7 @@ class PrandtlIshlinskii(ContinuousHysteron):
     def initial_state(self, u0: float) -> PIState:
         """Rising from −∞: every wagon on its right wall, ``w_i = u0 - p_i/2``."""
         u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
-        return PIState(_readonly(u0 - self._half), u0)
+        return PIState(readonly_array(u0 - self._half), u0)
 
     def state(self, positions, input: float) -> PIState:
         """Explicit state; requires ``|input - positions_i| <= widths_i/2`` for every play."""
@@ -175,7 +170,7 @@ class PrandtlIshlinskii(ContinuousHysteron):
                     "positions must satisfy |input - positions_i| <= widths_i/2 "
                     f"(position {w} with half-width {r} at input {input})"
                 )
-        return PIState(_readonly(positions), input)
+        return PIState(readonly_array(positions), input)
 
     def _check_state(self, state: object) -> np.ndarray:
         """Type, size and consistency of a state (O(n_plays)); returns the positions."""
@@ -222,7 +217,7 @@ class PrandtlIshlinskii(ContinuousHysteron):
                 f"inputs: the output overflows at input {u[k]!r} with these weights "
                 f"(max |weight| {float(np.max(np.abs(self._weights)))!r}); scale them down"
             )
-        return out, PIState(_readonly(w), float(u[-1]))
+        return out, PIState(readonly_array(w), float(u[-1]))
 
     def output(self, state: PIState) -> float:
         return float(np.dot(self._weights, self._check_state(state)))
@@ -260,9 +255,9 @@ class PrandtlIshlinskii(ContinuousHysteron):
         w = np.asarray(state.positions, dtype=np.float64)
         aw = self._weights * w
         tail = np.cumsum(aw[::-1])[::-1] - aw  # Σ_{j>i} a_j w_j
-        return PIState(_readonly(partial * w + tail), self.output(state))
+        return PIState(readonly_array(partial * w + tail), self.output(state))
 
-    # -- branch and linearization -----------------------------------------------------------
+    # -- branch flow (branch() and linearize() derive from it, hysteresis.base) -------------
     def _walls(self, state: PIState, direction: int) -> np.ndarray:
         check_state_type(state, PIState, self)  # O(1); the size is checked by zip(strict)
         u = float(state.input)
@@ -282,29 +277,6 @@ class PrandtlIshlinskii(ContinuousHysteron):
         idx = np.flatnonzero(inside)
         tol = 8.0 * np.finfo(float).eps * max(abs(bp), 1.0)
         return bp, idx[np.abs(ahead - bp) <= tol].astype(np.int64)
-
-    def branch(self, state: PIState, direction: int) -> Branch:
-        """Slope = sum of the weights of the plays dragged in ``direction``; breakpoint = the
-        nearest wall ahead of a play that is still inside (``±inf`` if all are dragged)."""
-        direction = direction_sign(direction)
-        walls = self._walls(state, direction)
-        bp, _ = self._breakpoint(state, direction, walls)
-        return Branch(
-            value=self.output(state), slope=float(np.sum(self._weights[walls])), breakpoint=bp
-        )
-
-    def linearize(self, state: PIState, direction: int) -> Linearization:
-        """Memory = all wagon positions; ``y = Σ a_i w_i`` (``d_output_d_input = 0``); dragged
-        plays are slaved; at the breakpoint the plays whose wall it is get ``δw_i := δu``."""
-        direction = direction_sign(direction)
-        walls = self._walls(state, direction)
-        _, reset = self._breakpoint(state, direction, walls)
-        return Linearization(
-            d_output_d_input=0.0,
-            d_output_d_memory=np.array(self._weights),
-            slaved=walls,
-            reset_on_leave=reset,
-        )
 
     def branch_flow(self, state: PIState, direction: int) -> BranchFlow:
         """The branch in ``direction`` as a :class:`~hysteresis.flow.BranchFlow`.

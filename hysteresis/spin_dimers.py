@@ -39,6 +39,7 @@ from hysteresis._validation import (
     finite_array,
     positive_integer,
     positive_scalar,
+    readonly_array,
     scalar_in_open_interval,
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
@@ -47,12 +48,6 @@ __all__ = ["SpinDimerEnsemble", "DimerThresholds", "MAX_SPINS"]
 
 #: largest ensemble :meth:`SpinDimerEnsemble.random` builds (memory ~ 100 bytes per spin)
 MAX_SPINS = 100_000_000
-
-
-def _readonly(a) -> np.ndarray:
-    a = np.array(a)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True)
@@ -184,7 +179,9 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
                 f"fields must have shape (n_dimers, 2) with n_dimers >= 1, got {fields.shape}"
             )
         self._spin_coupling = positive_scalar(spin_coupling, "spin_coupling", MAX_MAGNITUDE)
-        self._fields = _readonly(np.sort(fields, axis=1)[:, ::-1])  # b1 >= b2 in every row
+        self._fields = readonly_array(
+            np.sort(fields, axis=1)[:, ::-1], None
+        )  # b1 >= b2 in every row
         self._preisach = None
 
     @classmethod
@@ -262,10 +259,10 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
         alpha = self._spin_coupling - b1
         beta = -self._spin_coupling - b2
         return DimerThresholds(
-            alpha=_readonly(alpha),
-            beta=_readonly(beta),
-            hysteretic=_readonly(alpha > beta),
-            paired=_readonly(alpha >= beta),
+            alpha=readonly_array(alpha, None),
+            beta=readonly_array(beta, None),
+            hysteretic=readonly_array(alpha > beta, None),
+            paired=readonly_array(alpha >= beta, None),
         )
 
     def relays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

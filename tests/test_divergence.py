@@ -104,11 +104,9 @@ def test_unbounded_work_is_refused_up_front():
 
 
 def test_operators_that_cannot_be_integrated_are_refused_at_construction():
-    from hysteresis.base import Branch, ContinuousHysteron, PiecewiseConstantHysteron
+    from hysteresis.base import ContinuousHysteron, Hysteron, PiecewiseConstantHysteron
 
-    class NoFlow(ContinuousHysteron):
-        """Continuous operator without branch_flow (the engine's contract)."""
-
+    class Tanh:
         def initial_state(self, u0):
             return float(u0)
 
@@ -119,28 +117,18 @@ def test_operators_that_cannot_be_integrated_are_refused_at_construction():
         def output(self, state):
             return float(np.tanh(state))
 
-        def branch(self, state, direction):
-            return Branch(float(np.tanh(state)), 0.0, np.inf)
+    class NoFlow(Tanh, ContinuousHysteron):
+        """Continuous operator without branch_flow (the engine's contract)."""
 
-        def linearize(self, state, direction):
-            raise NotImplementedError
-
-    class NoSwitching(PiecewiseConstantHysteron):
+    class NoSwitching(Tanh, PiecewiseConstantHysteron):
         """Piecewise-constant operator without switching()/relay_table()."""
 
-        def initial_state(self, u0):
-            return float(u0)
+    class NoFamily(Tanh, Hysteron):
+        """An operator of neither family."""
 
-        def apply(self, inputs, state=None):
-            u = np.asarray(inputs, dtype=float)
-            return np.sign(u), float(u[-1])
-
-        def output(self, state):
-            return 1.0
-
-        def switching(self, state):
-            raise NotImplementedError
-
-    for op in (NoFlow(), NoSwitching()):
-        with pytest.raises(TypeError, match="cannot be coupled"):
-            ForcedOscillator(op, coupling=1.0)
+    # the contract's required methods are abstract: such operators cannot even be built
+    for cls, missing in ((NoFlow, "branch_flow"), (NoSwitching, "relay_table")):
+        with pytest.raises(TypeError, match=missing):
+            ForcedOscillator(cls(), coupling=1.0)
+    with pytest.raises(TypeError, match="cannot be coupled"):
+        ForcedOscillator(NoFamily(), coupling=1.0)

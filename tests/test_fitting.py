@@ -21,7 +21,11 @@ from analysis.identification import (
     regular_grid,
 )
 from hysteresis import DiscretePreisachModel, PrandtlIshlinskii, PreisachModel
-from hysteresis.fitting import _everett_adjoint, _everett_apply, project_identification
+from hysteresis.preisach.projection import (
+    _everett_adjoint,
+    _everett_apply,
+    project_identification,
+)
 
 NOISE = 0.01
 
@@ -238,3 +242,15 @@ def test_record_fit_argument_checks():
         fit_preisach_record(np.r_[u[:-1], np.nan], u, [0.0, 1.0])
     with pytest.raises(ValueError, match="nodes"):
         fit_preisach_record(u, u, [1.0, 0.0])
+
+
+def test_old_module_path_still_imports_and_warns():
+    """``hysteresis.fitting`` (moved to ``hysteresis.preisach.projection``) is kept one release."""
+    import importlib
+    import sys
+
+    sys.modules.pop("hysteresis.fitting", None)
+    with pytest.warns(DeprecationWarning, match="hysteresis.preisach.projection"):
+        old = importlib.import_module("hysteresis.fitting")
+    assert old.project_identification is project_identification
+    assert old._everett_apply is _everett_apply

@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 
 from hysteresis import PreisachModel
-from hysteresis import _preisach_kernels as k
+from hysteresis.preisach import _kernels as k
 
 ADVERSARIAL = textwrap.dedent(
     """
     import numpy as np
     from hysteresis import PreisachModel
-    from hysteresis import _preisach_kernels as k
+    from hysteresis.preisach import _kernels as k
 
     rng = np.random.default_rng(7)
     beta = rng.normal(size=600)
@@ -122,7 +122,7 @@ def test_model_outputs_identical_with_the_scalar_fallback(monkeypatch):
 def test_environment_variable_selects_the_scalar_path():
     env = dict(os.environ, HYSTERESIS_NO_SIMD="1")
     code = (
-        "from hysteresis import _preisach_kernels as k, PreisachModel\n"
+        "from hysteresis.preisach import _kernels as k, PreisachModel\n"
         "assert k.lane_mode() is k.SCALAR_MODE\n"
         "print(PreisachModel.from_relays([1.0, 0.0], [-1.0, 0.0]).apply([2.0, -0.5])[0])\n"
     )

@@ -341,8 +341,9 @@ def test_uncoupled_random_width_exponents():
     np.testing.assert_allclose(res.exponents, [-ZETA, -ZETA], atol=2e-3)
 
 
-def test_operator_without_relay_contract_runs_on_the_generic_path():
-    """A piecewise-constant operator known only through switching()/apply() still couples."""
+def test_generic_path_matches_the_heap_and_the_relay_contract_is_required():
+    """The Python reference path (switching()/apply()) gives the heap's switches; an operator
+    without the relay contract cannot be built (its methods are abstract, hysteresis.base)."""
     from hysteresis.base import PiecewiseConstantHysteron
 
     class Wrapped(PiecewiseConstantHysteron):
@@ -362,9 +363,9 @@ def test_operator_without_relay_contract_runs_on_the_generic_path():
             return self.inner.switching(state)
 
     model = random_width_model(30, seed=13)
-    eng, sw = run(ForcedOscillator(Wrapped(model), 3.0), 5 * T, "auto")
+    eng, sw = run(ForcedOscillator(model, 3.0), 5 * T, "generic")
     assert eng.method == "generic"
     _, ref = run(ForcedOscillator(model, 3.0), 5 * T, "heap")
     assert_same_switches(sw, ref, 1e-10)
-    with pytest.raises(NotImplementedError, match="relay_table"):
-        RelayEngine(ForcedOscillator(Wrapped(model), 3.0), start(), method="heap")
+    with pytest.raises(TypeError, match="relay_table"):
+        Wrapped(model)

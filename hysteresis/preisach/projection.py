@@ -34,6 +34,8 @@ import numpy as np
 from scipy.optimize import nnls
 from scipy.sparse.linalg import LinearOperator, lsmr
 
+from hysteresis.preisach.base import PreisachModel
+
 __all__ = ["PreisachProjection", "project_identification"]
 
 _DENSE_LIMIT = 2500  # cells; above, block principal pivoting on the cumulative-sum operator
@@ -72,11 +74,9 @@ class PreisachProjection:
     residual_rms: float
     n_nodes: int
 
-    def model(self) -> Any:
+    def model(self) -> PreisachModel:
         """The :class:`~hysteresis.preisach.DiscretePreisachModel` of the relays."""
-        from hysteresis.preisach import DiscretePreisachModel
-
-        return DiscretePreisachModel(self.alpha, self.beta, self.weights)
+        return PreisachModel.from_relays(self.alpha, self.beta, self.weights)
 
 
 def _everett_apply(masses: np.ndarray) -> np.ndarray:

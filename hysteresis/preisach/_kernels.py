@@ -84,13 +84,15 @@ USE_SIMD: bool | None = (
 
 
 @njit(cache=True)
-def sparse_table_argmax(values):  # pragma: no cover - compiled
-    """Sparse table of range-argmax indices.
+def sparse_table(values, largest):  # pragma: no cover - compiled
+    """Sparse table of range-argmax (``largest=True``) or range-argmin (``largest=False``)
+    indices, for the O(1) queries :func:`_range_argmax` / :func:`_range_argmin`.
 
     Plain-Python reading::
 
+        better = max if largest else min        # ties: the left index
         table[0] = range(n)
-        for k in 1..: table[k][i] = argmax of values over [i, i + 2**k)
+        for k in 1..: table[k][i] = arg-better of values over [i, i + 2**k)
                       = better of table[k-1][i] and table[k-1][i + 2**(k-1)]
     """
     n = values.size
@@ -105,26 +107,10 @@ def sparse_table_argmax(values):  # pragma: no cover - compiled
         for i in range(n - (1 << k) + 1):
             a = table[k - 1, i]
             b = table[k - 1, i + half]
-            table[k, i] = a if values[a] >= values[b] else b
-    return table
-
-
-@njit(cache=True)
-def sparse_table_argmin(values):  # pragma: no cover - compiled
-    """Sparse table of range-argmin indices (see :func:`sparse_table_argmax`)."""
-    n = values.size
-    levels = 1
-    while (1 << levels) <= n:
-        levels += 1
-    table = np.empty((levels, max(n, 1)), dtype=np.int32)
-    for i in range(n):
-        table[0, i] = i
-    for k in range(1, levels):
-        half = 1 << (k - 1)
-        for i in range(n - (1 << k) + 1):
-            a = table[k - 1, i]
-            b = table[k - 1, i + half]
-            table[k, i] = a if values[a] <= values[b] else b
+            if largest:
+                table[k, i] = a if values[a] >= values[b] else b
+            else:
+                table[k, i] = a if values[a] <= values[b] else b
     return table
 
 
@@ -461,65 +447,86 @@ def masked_sums(keys, weights, a, b, x, mode):  # pragma: no cover - compiled
     a = min(max(a, 0), keys.size)
     b = min(max(b, a), keys.size)
     return (
-        _masked_sum_above(keys, weights, a, b, x, mode),
-        _masked_sum_at_most(keys, weights, a, b, x, mode),
+        _masked_sum(keys, weights, a, b, x, mode, True),
+        _masked_sum(keys, weights, a, b, x, mode, False),
     )
 
 
 @njit(cache=True, inline="always")
-def _masked_sum_above(keys, weights, a, b, m, mode):  # pragma: no cover - compiled
-    """``sum(weights[i] for i in range(a, b) if keys[i] > m)`` (``b >= a``, ``keys`` non-empty)
-    with four independent accumulators: lane ``j`` adds the relays ``i = a + j (mod 4)`` in
-    order, the tail goes to lane 0, and the result is ``(s0 + s1) + (s2 + s3)``. The lanes are
-    packed in one SIMD register (:func:`_lane_sums_intrinsic`) or, with the scalar ``mode``,
-    summed by a plain loop."""
-    n_blocks = (b - a) >> 2
-    s0, s1, s2, s3 = _lanes_above(keys, weights, a, n_blocks, m, mode)
-    # the 0..3 remaining relays go to lane 0 in order; a fixed three-step branch-free tail
-    # (an index past the range reads a clamped, in-bounds entry and adds +0.0, which leaves
-    # the non-negative sum s0 unchanged)
-    i = a + 4 * n_blocks
-    last = keys.size - 1
-    for j in range(3):
-        k = min(i + j, last)
-        s0 += weights[k] * ((i + j < b) & (keys[k] > m))
-    return (s0 + s1) + (s2 + s3)
-
-
-@njit(cache=True, inline="always")
-def _masked_sum_at_most(keys, weights, a, b, big, mode):  # pragma: no cover - compiled
-    """``sum(weights[i] for i in range(a, b) if keys[i] <= big)`` (as :func:`_masked_sum_above`)."""
-    n_blocks = (b - a) >> 2
-    s0, s1, s2, s3 = _lanes_at_most(keys, weights, a, n_blocks, big, mode)
-    # the 0..3 remaining relays go to lane 0 in order; a fixed three-step branch-free tail
-    # (an index past the range reads a clamped, in-bounds entry and adds +0.0, which leaves
-    # the non-negative sum s0 unchanged)
-    i = a + 4 * n_blocks
-    last = keys.size - 1
-    for j in range(3):
-        k = min(i + j, last)
-        s0 += weights[k] * ((i + j < b) & (keys[k] <= big))
-    return (s0 + s1) + (s2 + s3)
-
-
-@njit(cache=True, inline="always")
-def _sum_up(table, beta_by_a, w_by_a, lo, hi, m, work, mode):  # pragma: no cover - compiled
-    """Total weight of the relays with alpha-order index in [lo, hi) and beta > m.
+def _masked_sum(keys, weights, a, b, bound, mode, above):  # pragma: no cover - compiled
+    """Weight of the relays in ``range(a, b)`` (``b >= a``, ``keys`` non-empty) whose key is
+    above ``bound`` (``above=True``) or at most ``bound`` (``above=False``).
 
     Plain-Python reading::
 
-        return sum(w_by_a[i] for i in range(lo, hi) if beta_by_a[i] > m)
+        passes = (lambda key: key > bound) if above else (lambda key: key <= bound)
+        return sum(weights[i] for i in range(a, b) if passes(keys[i]))
 
-    but in O(1 + k) for k reported relays: take the argmax of beta on the range; if it is > m
-    it is reported and both sides are searched (explicit stack ``work``), otherwise the range
-    holds no relay with beta > m.
+    with four independent accumulators: lane ``j`` adds the relays ``i = a + j (mod 4)`` in
+    order, the tail goes to lane 0, and the result is ``(s0 + s1) + (s2 + s3)``. The lanes are
+    packed in one SIMD register (:func:`_lane_sums_intrinsic`) or, with the scalar ``mode``,
+    summed by a plain loop. ``above`` is a constant at every call site: after inlining, the
+    branches on it fold away.
+    """
+    n_blocks = (b - a) >> 2
+    if above:
+        s0, s1, s2, s3 = _lanes_above(keys, weights, a, n_blocks, bound, mode)
+    else:
+        s0, s1, s2, s3 = _lanes_at_most(keys, weights, a, n_blocks, bound, mode)
+    # the 0..3 remaining relays go to lane 0 in order; a fixed three-step branch-free tail
+    # (an index past the range reads a clamped, in-bounds entry and adds +0.0, which leaves
+    # the non-negative sum s0 unchanged)
+    i = a + 4 * n_blocks
+    last = keys.size - 1
+    for j in range(3):
+        k = min(i + j, last)
+        passes = keys[k] > bound if above else keys[k] <= bound
+        s0 += weights[k] * ((i + j < b) & passes)
+    return (s0 + s1) + (s2 + s3)
+
+
+#: ``rising`` argument of :func:`_switched_weight`: an up step (relays switching up)
+_RISING = True
+#: ``rising`` argument of :func:`_switched_weight`: a down step (relays switching down)
+_FALLING = False
+
+
+@njit(cache=True, inline="always")
+def _switched_weight(
+    table, keys, weights, lo, hi, bound, work, mode, rising
+):  # pragma: no cover - compiled
+    """Total weight of the relays that switch in one step of the staircase.
+
+    The two directions are mirror images, selected by ``rising``:
+
+    * ``rising`` = :data:`_RISING` (the input rises through a step): ``keys`` are the relays'
+      beta in alpha-order (search keys, see the module docstring), ``table`` the sparse table
+      of range-argmax of ``keys``, ``bound`` the last minimum ``m``; relays with ``beta > m``
+      switch up.
+    * ``rising`` = :data:`_FALLING`: ``keys`` are the alpha in beta-order, ``table`` the
+      range-argmin, ``bound`` the last maximum ``M``; relays with ``alpha <= M`` switch down.
+
+    ``weights`` are in the same order as ``keys``; ``[lo, hi)`` is the step's index range in
+    that order (clamped to the arrays); ``work`` the explicit stack (``2 * _WORK_RANGES``
+    int64); ``mode`` the lane sums (:func:`lane_mode`). ``rising`` is a constant at every call
+    site: after inlining, the branches on it fold away and each direction compiles to its own
+    straight code.
+
+    Plain-Python reading::
+
+        switches = (lambda key: key > bound) if rising else (lambda key: key <= bound)
+        return sum(weights[i] for i in range(lo, hi) if switches(keys[i]))
+
+    but in O(1 + k) for k switching relays: take the range extremum of the key (max rising,
+    min falling); if that relay switches it is reported and both sides are searched (explicit
+    stack ``work``), otherwise no relay of the range switches. Ranges of at most ``_SHORT``
+    relays are summed by :func:`_masked_sum`.
     """
     total = 0.0
     lo = max(lo, 0)  # counts from a forged state must not index out of range
-    hi = min(hi, beta_by_a.size)
+    hi = min(hi, keys.size)
     if hi <= lo:
         return total
-    top = 0
     work[0] = lo
     work[1] = hi
     top = 1
@@ -530,57 +537,16 @@ def _sum_up(table, beta_by_a, w_by_a, lo, hi, m, work, mode):  # pragma: no cove
         if b - a <= _SHORT:
             # a short range is scanned branch-free: bounded O(1) work per visited node, cheaper
             # than recursing (mispredicted branches) and the complexity stays O(1 + k)
-            total += _masked_sum_above(beta_by_a, w_by_a, a, b, m, mode)
+            total += _masked_sum(keys, weights, a, b, bound, mode, rising)
             continue
-        k = _range_argmax(table, beta_by_a, a, b)
-        if beta_by_a[k] > m:
-            total += w_by_a[k]
-            # push the larger side first so that the smaller one is processed first: every
-            # pending range is then at least as long as the current one's parent half, and the
-            # explicit stack never holds more than log2(n) + 1 ranges
-            if k - a >= b - k - 1:
-                first_lo, first_hi, second_lo, second_hi = a, k, k + 1, b
-            else:
-                first_lo, first_hi, second_lo, second_hi = k + 1, b, a, k
-            if first_hi > first_lo:
-                work[2 * top] = first_lo
-                work[2 * top + 1] = first_hi
-                top += 1
-            if second_hi > second_lo:
-                work[2 * top] = second_lo
-                work[2 * top + 1] = second_hi
-                top += 1
-    return total
-
-
-@njit(cache=True, inline="always")
-def _sum_down(table, alpha_by_b, w_by_b, lo, hi, big, work, mode):  # pragma: no cover - compiled
-    """Total weight of the relays with beta-order index in [lo, hi) and alpha <= big.
-
-    Plain-Python reading::
-
-        return sum(w_by_b[i] for i in range(lo, hi) if alpha_by_b[i] <= big)
-
-    in O(1 + k) with the range-argmin of alpha (mirror of :func:`_sum_up`).
-    """
-    total = 0.0
-    lo = max(lo, 0)
-    hi = min(hi, alpha_by_b.size)
-    if hi <= lo:
-        return total
-    work[0] = lo
-    work[1] = hi
-    top = 1
-    while top > 0:
-        top -= 1
-        a = work[2 * top]
-        b = work[2 * top + 1]
-        if b - a <= _SHORT:
-            total += _masked_sum_at_most(alpha_by_b, w_by_b, a, b, big, mode)
-            continue
-        k = _range_argmin(table, alpha_by_b, a, b)
-        if alpha_by_b[k] <= big:
-            total += w_by_b[k]
+        if rising:
+            k = _range_argmax(table, keys, a, b)
+            switches = keys[k] > bound
+        else:
+            k = _range_argmin(table, keys, a, b)
+            switches = keys[k] <= bound
+        if switches:
+            total += weights[k]
             # push the larger side first so that the smaller one is processed first: every
             # pending range is then at least as long as the current one's parent half, and the
             # explicit stack never holds more than log2(n) + 1 ranges
@@ -683,13 +649,13 @@ def discrete_apply(
                 # top >= 4: never wipe out the +inf sentinel (only an input of +inf could)
                 while top >= 4 and v >= vals[top - 2]:
                     hi = cnt_a[top - 2]
-                    output += 2.0 * _sum_up(
-                        table_a, beta_by_a, w_by_a, lo, hi, vals[top - 1], work, mode
+                    output += 2.0 * _switched_weight(
+                        table_a, beta_by_a, w_by_a, lo, hi, vals[top - 1], work, mode, _RISING
                     )
                     lo = hi
                     top -= 2
-                output += 2.0 * _sum_up(
-                    table_a, beta_by_a, w_by_a, lo, npa, vals[top - 1], work, mode
+                output += 2.0 * _switched_weight(
+                    table_a, beta_by_a, w_by_a, lo, npa, vals[top - 1], work, mode, _RISING
                 )
                 vals[top] = v
                 cnt_a[top] = npa
@@ -710,13 +676,13 @@ def discrete_apply(
                 # top >= 5: never wipe out the -inf sentinel
                 while top >= 5 and v <= vals[top - 2]:
                     lo = cnt_b[top - 2]
-                    output -= 2.0 * _sum_down(
-                        table_b, alpha_by_b, w_by_b, lo, hi, vals[top - 1], work, mode
+                    output -= 2.0 * _switched_weight(
+                        table_b, alpha_by_b, w_by_b, lo, hi, vals[top - 1], work, mode, _FALLING
                     )
                     hi = lo
                     top -= 2
-                output -= 2.0 * _sum_down(
-                    table_b, alpha_by_b, w_by_b, npb, hi, vals[top - 1], work, mode
+                output -= 2.0 * _switched_weight(
+                    table_b, alpha_by_b, w_by_b, npb, hi, vals[top - 1], work, mode, _FALLING
                 )
                 vals[top] = v
                 cnt_a[top] = npa
@@ -819,7 +785,9 @@ def discrete_switching(
         if i >= 0:
             upper = alpha_by_a[i]
             j = _count_le(alpha_by_a, i, upper)
-            jump_up = 2.0 * _sum_up(table_a, beta_by_a, w_by_a, i, j, m, work, mode)
+            jump_up = 2.0 * _switched_weight(
+                table_a, beta_by_a, w_by_a, i, j, m, work, mode, _RISING
+            )
             break
         if ref == 0:
             break
@@ -847,7 +815,9 @@ def discrete_switching(
             lower = beta_by_b[i]
             # relays with beta == lower: indices [count(beta < lower), i]
             j = _count_lt(beta_by_b, lower)
-            jump_down = -2.0 * _sum_down(table_b, alpha_by_b, w_by_b, j, i + 1, big, work, mode)
+            jump_down = -2.0 * _switched_weight(
+                table_b, alpha_by_b, w_by_b, j, i + 1, big, work, mode, _FALLING
+            )
             break
         if ref == 1:
             break

@@ -1,0 +1,582 @@
+"""The continuous Preisach model: a density on the triangle (see :mod:`hysteresis.preisach.base`).
+
+Amortised O(1) Everett evaluations per input step through cached prefix sums along the
+staircase (:func:`hysteresis.preisach._kernels.continuous_staircase`). The Gaussian
+width-disorder density of :meth:`ContinuousPreisachModel.gaussian` is built in
+:mod:`hysteresis.preisach.gaussian`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    ParameterTypeError,
+    as_input_sequence,
+    bounded_work,
+    direction_sign,
+    finite_scalar,
+    positive_integer,
+    positive_scalar,
+    readonly_array,
+)
+from hysteresis.base import ContinuousHysteron
+from hysteresis.flow import BranchFlow
+from hysteresis.preisach import _kernels as _k
+from hysteresis.preisach.base import (
+    PreisachModel,
+    PreisachState,
+    _fingerprint,
+    _gauss,
+    _stack,
+)
+from hysteresis.preisach.gaussian import gaussian_everett
+
+__all__ = ["ContinuousPreisachModel"]
+
+#: largest ``resolution`` of :meth:`PreisachModel.from_density` (memory ~ 16·resolution²/2)
+_MAX_RESOLUTION = 4096
+
+
+class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuous"):
+    """Preisach model with a density on the triangle ``lower <= β <= α <= upper``.
+
+    Memory variables for :meth:`linearize`: the staircase extrema (see there). Branch slopes are
+    ``2 ∂E/∂α(u, m_last)`` on a rising input and ``−2 ∂E/∂β(M_last, u)`` on a falling one.
+    """
+
+    def __init__(self, lower: float, upper: float) -> None:
+        self._lower = finite_scalar(lower, "lower", MAX_MAGNITUDE)
+        self._upper = finite_scalar(upper, "upper", MAX_MAGNITUDE)
+        if not self._upper > self._lower:
+            raise ValueError(f"upper must be > lower, got lower={lower}, upper={upper}")
+        self._everett_fn: Callable = None  # type: ignore[assignment]
+        self._gradient_fn: Callable | None = None
+        self._density_fn: Callable | None = None
+
+    @property
+    def lower(self) -> float:
+        return self._lower
+
+    @property
+    def upper(self) -> float:
+        return self._upper
+
+    def _saturation_input(self) -> float:
+        return self._upper
+
+    def __repr__(self) -> str:
+        return f"ContinuousPreisachModel(lower={self._lower}, upper={self._upper})"
+
+    # -- construction ------------------------------------------------------------------------
+    @classmethod
+    def _from_density(cls, density, lower, upper, resolution, mass_tolerance):
+        if not callable(density):
+            raise ParameterTypeError("density must be a vectorised callable density(alpha, beta)")
+        model = cls(lower, upper)
+        n = positive_integer(resolution, "resolution", minimum=2)
+        # the quadrature holds 16 resolution²/2 density values: bound the memory up front
+        bounded_work(n, "resolution", _MAX_RESOLUTION, "grid cells per side")
+        mass_tolerance = positive_scalar(mass_tolerance, "mass_tolerance")
+        lo, up = model._lower, model._upper
+        h = (up - lo) / n
+        nodes = lo + h * np.arange(n + 1)
+        g, gw = _gauss(4)
+        # square cells (alpha-cell i > beta-cell j): tensor Gauss
+        ii, jj = np.tril_indices(n, -1)
+        qa = nodes[ii][:, None, None] + h * g[None, :, None]
+        qb = nodes[jj][:, None, None] + h * g[None, None, :]
+        mu = np.asarray(density(*np.broadcast_arrays(qa, qb)), dtype=np.float64)
+        if mu.shape != qa.shape[:1] + (g.size, g.size):
+            mu = np.broadcast_to(mu, (ii.size, g.size, g.size))
+        if not np.all(np.isfinite(mu)) or np.any(mu < 0):
+            raise ValueError("density must be finite and >= 0 on lower <= beta <= alpha <= upper")
+        sq = h * h * np.einsum("kij,i,j->k", mu, gw, gw)
+        # diagonal cells: triangle beta <= alpha, collapsed coordinates
+        # alpha = x + h*xi, beta = x + h*xi*eta, Jacobian h^2 xi
+        d = np.arange(n)
+        ta = nodes[d][:, None, None] + h * g[None, :, None] + 0.0 * g[None, None, :]
+        tb = nodes[d][:, None, None] + h * g[None, :, None] * g[None, None, :]
+        mu_t = np.asarray(density(ta, tb), dtype=np.float64)
+        mu_t = np.broadcast_to(mu_t, ta.shape)
+        if not np.all(np.isfinite(mu_t)) or np.any(mu_t < 0):
+            raise ValueError("density must be finite and >= 0 on lower <= beta <= alpha <= upper")
+        tri = h * h * np.einsum("kij,i,j,i->k", mu_t, gw, gw, g)
+        cell = np.zeros((n, n))
+        cell[ii, jj] = sq
+        cell[d, d] = tri
+        total = float(cell.sum())
+        if abs(total - 1.0) > mass_tolerance:
+            raise ValueError(
+                f"density must have mass 1 on the triangle lower <= beta <= alpha <= upper "
+                f"(within mass_tolerance={mass_tolerance}), got {total!r}"
+            )
+        # within the tolerance the small mass defect is quadrature error: divide it out so that
+        # saturation is exactly M = ±1
+        cell /= total
+        model._mass_scale = 1.0 / total
+        # E(x_i, x_j) = sum of cells with alpha-cell < i and beta-cell >= j
+        table = np.zeros((n + 1, n + 1))
+        suffix = np.cumsum(cell[:, ::-1], axis=1)[:, ::-1]  # sum over beta-cells >= j
+        table[1:, :n] = np.cumsum(suffix, axis=0)
+        model._table = table
+        model._h = h
+        model._n = n
+        model._density_fn = density
+        model._everett_fn = model._everett_from_table
+        model._gradient_fn = model._gradient_from_density
+        model._set_fingerprint()
+        return model
+
+    @classmethod
+    def _from_everett(cls, everett, lower, upper, everett_gradient):
+        if not callable(everett):
+            raise ParameterTypeError("everett must be a vectorised callable everett(alpha, beta)")
+        if everett_gradient is not None and not callable(everett_gradient):
+            raise ParameterTypeError("everett_gradient must be callable or None")
+        model = cls(lower, upper)
+        lo, up = model._lower, model._upper
+        try:
+            total_arr = np.asarray(everett(np.array([up]), np.array([lo])))
+        except Exception as exc:
+            raise ValueError(
+                f"everett must accept numpy arrays (a, b); it raised {type(exc).__name__}: {exc}"
+            ) from exc
+        if total_arr.dtype.kind not in "iuf" or total_arr.shape != (1,):
+            raise ValueError(
+                "everett must return one real value per (a, b) pair, got "
+                f"dtype {total_arr.dtype} shape {total_arr.shape}"
+            )
+        total = float(total_arr[0])
+        if abs(total - 1.0) > 1e-6:
+            raise ValueError(
+                f"everett must satisfy E(upper, lower) = 1 (total mass), got {total!r}"
+            )
+        x = np.linspace(lo, up, 11)
+        if np.max(np.abs(np.asarray(everett(x, x), dtype=np.float64))) > 1e-9:
+            raise ValueError("everett must vanish on the diagonal, E(a, a) = 0")
+        model._everett_fn = lambda a, b: np.asarray(everett(a, b), dtype=np.float64)
+        model._gradient_fn = everett_gradient
+        model._check_everett_probe()
+        model._set_fingerprint()
+        return model
+
+    def _check_everett_probe(self, nodes: int = 65) -> None:
+        """Everett function on a probe grid: finite, one value per pair, and every cell mass
+        ``E(a', b) − E(a, b) − E(a', b') + E(a, b') >= 0`` (non-negative density)."""
+        x = np.linspace(self._lower, self._upper, nodes)
+        a, b = np.meshgrid(x, x, indexing="ij")
+        lower = a > b
+        values = self._everett_fn(a[lower], b[lower])
+        if values.shape != (int(lower.sum()),):
+            raise ValueError(
+                f"everett must return one value per (a, b) pair, got shape {values.shape}"
+            )
+        if not np.all(np.isfinite(values)):
+            i = int(np.argmax(~np.isfinite(values)))
+            raise ValueError(
+                f"everett must be finite on lower <= b <= a <= upper, got {values[i]} at "
+                f"(a, b) = ({a[lower][i]!r}, {b[lower][i]!r})"
+            )
+        table = np.zeros((nodes, nodes))
+        table[lower] = values
+        # cell (a_i, a_{i+1}] x (b_j, b_{j+1}] for j <= i; E = 0 for b >= a
+        mass = table[1:, :-1] - table[:-1, :-1] - table[1:, 1:] + table[:-1, 1:]
+        cells = np.tril(np.ones_like(mass, dtype=bool))
+        tol = 1e-9 * max(1.0, float(np.max(np.abs(values))))
+        if np.any(mass[cells] < -tol):
+            i, j = np.argwhere(cells & (mass < -tol))[0]
+            raise ValueError(
+                "everett must be the Everett function of a non-negative density, but the cell "
+                f"alpha in ({x[i]:.6g}, {x[i + 1]:.6g}], beta in ({x[j]:.6g}, {x[j + 1]:.6g}] "
+                f"has negative mass {mass[i, j]:.3g}"
+            )
+
+    def _set_fingerprint(self) -> None:
+        x = np.linspace(self._lower, self._upper, 9)
+        a, b = np.meshgrid(x, x, indexing="ij")
+        self._fingerprint = _fingerprint(
+            b"continuous", np.array([self._lower, self._upper]), self.everett(a, b)
+        )
+
+    # -- Everett function ----------------------------------------------------------------------
+    def _clip(self, a, b):
+        a = np.clip(np.asarray(a, dtype=np.float64), self._lower, self._upper)
+        b = np.clip(np.asarray(b, dtype=np.float64), self._lower, self._upper)
+        return np.broadcast_arrays(a, b)
+
+    def everett(self, a, b) -> np.ndarray:
+        """``E(a, b)``: mass of ``{b < β <= α <= a}``; 0 for ``b >= a``. Arguments outside
+        ``[lower, upper]`` act as the nearest bound (the density vanishes outside)."""
+        a, b = self._clip(a, b)
+        out = np.zeros(a.shape)
+        mask = a > b
+        if np.any(mask):
+            out[mask] = self._everett_fn(a[mask], b[mask])
+        return out
+
+    def _everett_from_table(self, a, b):
+        fa = (a - self._lower) / self._h
+        fb = (b - self._lower) / self._h
+        i = np.clip(np.floor(fa).astype(np.int64), 0, self._n - 1)
+        j = np.clip(np.floor(fb).astype(np.int64), 0, self._n - 1)
+        ta = fa - i
+        tb = fb - j
+        t = self._table
+        e = (
+            t[i, j] * (1 - ta) * (1 - tb)
+            + t[i + 1, j] * ta * (1 - tb)
+            + t[i, j + 1] * (1 - ta) * tb
+            + t[i + 1, j + 1] * ta * tb
+        )
+        return np.maximum(e, 0.0)
+
+    def _gradient_from_density(self, a, b):
+        # dE/da = ∫_b^a μ(a, β) dβ ; dE/db = -∫_b^a μ(α, b) dα (Gauss–Legendre, 64 points)
+        g, gw = _gauss(64)
+        span = (a - b)[..., None]
+        pts = b[..., None] + span * g
+        mu = self._density_fn
+        da = np.sum(np.asarray(mu(np.broadcast_to(a[..., None], pts.shape), pts)) * gw, -1)
+        db = -np.sum(np.asarray(mu(pts, np.broadcast_to(b[..., None], pts.shape))) * gw, -1)
+        scale = self._mass_scale * span[..., 0]
+        return da * scale, db * scale
+
+    def everett_gradient(self, a, b) -> tuple[np.ndarray, np.ndarray]:
+        """``(∂E/∂α, ∂E/∂β)`` at ``(a, b)``; zero outside the triangle's interior."""
+        a0 = np.asarray(a, dtype=np.float64)
+        b0 = np.asarray(b, dtype=np.float64)
+        a, b = self._clip(a0, b0)
+        da = np.zeros(a.shape)
+        db = np.zeros(a.shape)
+        inside = a > b
+        if np.any(inside):
+            if self._gradient_fn is not None:
+                ga, gb = self._gradient_fn(a[inside], b[inside])
+            else:
+                step = 1e-6 * (self._upper - self._lower)
+                ai, bi = a[inside], b[inside]
+                ga = (self._everett_fn(ai + step, bi) - self._everett_fn(ai - step, bi)) / (
+                    2 * step
+                )
+                gb = (self._everett_fn(ai, bi + step) - self._everett_fn(ai, bi - step)) / (
+                    2 * step
+                )
+            da[inside] = ga
+            db[inside] = gb
+        a_b, b_b = np.broadcast_arrays(a0, b0)
+        # beyond the support the Everett function no longer depends on that argument
+        da = np.where((a_b < self._lower) | (a_b > self._upper), 0.0, da)
+        db = np.where((b_b < self._lower) | (b_b > self._upper), 0.0, db)
+        return da, db
+
+    def density(self, alpha, beta) -> np.ndarray:
+        """Preisach density ``μ(α, β) = −∂²E/∂α∂β`` (the given callable for
+        :meth:`from_density`, central differences of ``E`` for :meth:`from_everett`)."""
+        alpha, beta = np.broadcast_arrays(
+            np.asarray(alpha, dtype=np.float64), np.asarray(beta, dtype=np.float64)
+        )
+        if self._density_fn is not None:
+            return self._mass_scale * np.asarray(self._density_fn(alpha, beta), dtype=np.float64)
+        h = 1e-4 * (self._upper - self._lower)
+        e = self._everett_fn
+        return -(
+            e(alpha + h, beta + h)
+            - e(alpha + h, beta - h)
+            - e(alpha - h, beta + h)
+            + e(alpha - h, beta - h)
+        ) / (4 * h * h)
+
+    def density_rs(self, r, s) -> np.ndarray:
+        """Density in rotated coordinates ``s = (α+β)/2``, ``r = (α−β)/2``:
+        ``μ_rs(r, s) = 2 μ(s + r, s − r)`` (Jacobian of the map (r, s) -> (α, β) is 2)."""
+        r = np.asarray(r, dtype=np.float64)
+        s = np.asarray(s, dtype=np.float64)
+        return 2.0 * self.density(s + r, s - r)
+
+    # -- states ------------------------------------------------------------------------------
+    def _terms(self, stack: np.ndarray) -> np.ndarray:
+        """Everett term of every stack entry (0 for the sentinels)."""
+        terms = np.zeros(stack.size)
+        if stack.size > 2:
+            idx = np.arange(2, stack.size)
+            is_max = idx % 2 == 0
+            a = np.where(is_max, stack[idx], stack[idx - 1])
+            b = np.where(is_max, stack[idx - 1], stack[idx])
+            terms[2:] = np.where(is_max, 1.0, -1.0) * self.everett(a, b)
+        return terms
+
+    def initial_state(self, u0: float) -> PreisachState:
+        """Rise from negative saturation to ``u0``: ``M = −1 + 2 E(u0, lower)``."""
+        u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
+        stack = np.array([np.inf, -np.inf, u0])
+        prefix = np.cumsum(self._terms(stack))
+        return PreisachState(
+            extrema=readonly_array([u0]),
+            output=float(-1.0 + 2.0 * prefix[-1]),
+            prefix=readonly_array(prefix),
+            model_fingerprint=self._fingerprint,
+        )
+
+    def _unpack(self, state: PreisachState):
+        self._check_state(state)
+        if state.prefix is None:
+            raise ValueError("state must be a state of a continuous PreisachModel")
+        prefix = np.asarray(state.prefix, dtype=np.float64)
+        if prefix.shape != (state.extrema.size + 2,):
+            raise ValueError("state is inconsistent: prefix and extrema differ in length")
+        if state.model_fingerprint is None:
+            # a state built by hand: its prefix sums must be this model's (O(depth), once)
+            e = np.asarray(state.extrema, dtype=np.float64)
+            if not np.all(np.isfinite(e)) or float(np.max(np.abs(e))) > MAX_MAGNITUDE:
+                raise ValueError("state.extrema must be finite with magnitude <= 1e300")
+            expected = np.cumsum(self._terms(_stack(state)))
+            if not np.allclose(prefix, expected, rtol=0.0, atol=1e-9):
+                raise ValueError("state does not belong to this PreisachModel (prefix sums)")
+        return _stack(state), prefix
+
+    def apply(self, inputs, state: PreisachState | None = None) -> tuple[np.ndarray, PreisachState]:
+        u = as_input_sequence(inputs)
+        if state is None:
+            state = self.initial_state(float(u[0]))
+        stack, prefix = self._unpack(state)
+        top = stack.size - 1
+        vals = np.empty(stack.size + u.size + 2)  # at most one new entry per input
+        vals[: stack.size] = stack
+        refs = np.empty(vals.size, dtype=np.int64)
+        refs[: stack.size] = -1 - np.arange(stack.size)
+        a, b, sign, base, vals, refs, top = _k.continuous_staircase(u, vals, refs, top)
+        terms = sign * self.everett(a, b)
+        sums = _k.continuous_accumulate(terms, base, prefix)
+        refs = refs[: top + 1]
+        final_prefix = np.where(
+            refs >= 0, sums[np.maximum(refs, 0)], prefix[np.maximum(-1 - refs, 0)]
+        )
+        final_prefix[:2] = 0.0
+        outputs = -1.0 + 2.0 * sums
+        new_state = PreisachState(
+            extrema=readonly_array(vals[2 : top + 1]),
+            output=float(outputs[-1]),
+            prefix=readonly_array(final_prefix),
+            model_fingerprint=self._fingerprint,
+        )
+        return outputs, new_state
+
+    # -- branch flow for the oscillator's continuous engine ------------------------------------
+    @staticmethod
+    def extremum_label(index: int) -> str:
+        """Memory label of ``extrema[index]``: ``"M1", "m1", "M2", "m2", ...``."""
+        return f"M{index // 2 + 1}" if index % 2 == 0 else f"m{index // 2 + 1}"
+
+    def branch_flow(self, state: PreisachState, direction: int) -> BranchFlow:
+        """The branch in ``direction`` as a :class:`~hysteresis.flow.BranchFlow`.
+
+        Memory: the remembered extrema (labels :meth:`extremum_label`), all frozen. Continuing
+        the last monotone segment they are ``extrema[:-1]``; reversing, the current input
+        becomes a new extremum (flagged ``pushed``, ``δm := δu``) and the memory is all of
+        ``extrema``. With ``m`` the last memory variable (partner of the moving input) and
+        ``c`` the Everett prefix sum up to it, the output is
+        ``y(u) = −1 + 2c + 2E(u, m)`` rising and ``y(u) = −1 + 2c − 2E(m, u)`` falling, so
+        ``∂y/∂u = 2∂E/∂α(u, m)`` / ``−2∂E/∂β(m, u)``; ``∂y/∂m_j`` is constant for every
+        extremum but ``m``, which adds ``2∂E/∂β(u, m)`` / ``−2∂E/∂α(m, u)``
+        (:meth:`everett_gradient`). Breakpoint: the previous extremum of the moving input's
+        kind; reaching it wipes it out together with ``m`` (``breakpoint_removes``). A reversal
+        pushes the reversal input (``reversal_pushes``).
+        """
+        direction = direction_sign(direction)
+        stack, prefix = self._unpack(state)
+        top = stack.size - 1
+        rising_state = top % 2 == 0
+        reversing = (direction > 0) != rising_state
+        partner = top if reversing else top - 1  # stack index of the memory variable m
+        n_mem = partner - 1  # stack indices 2 .. partner
+        memory = stack[2 : partner + 1].copy()
+        labels = tuple(self.extremum_label(k) for k in range(n_mem))
+        pushed = np.zeros(n_mem, dtype=bool)
+        if reversing:
+            pushed[-1] = True
+        # constant gradient of the Everett terms that do not involve the moving input
+        grad0 = np.zeros(stack.size)
+        if partner >= 2:
+            idx = np.arange(2, partner + 1)
+            even = idx % 2 == 0
+            a = np.where(even, stack[idx], stack[idx - 1])
+            b = np.where(even, stack[idx - 1], stack[idx])
+            da, db = self.everett_gradient(a, b)
+            sign = np.where(even, 2.0, -2.0)
+            np.add.at(grad0, np.where(even, idx, idx - 1), sign * da)
+            np.add.at(grad0, np.where(even, idx - 1, idx), sign * db)
+        grad0 = grad0[2 : partner + 1]
+        m = float(stack[partner])
+        base = -1.0 + 2.0 * float(prefix[partner])
+        k_last = n_mem - 1
+        everett, gradient = self._scalar_everett(), self._scalar_gradient()
+        if direction > 0:
+
+            def output(u):
+                return base + 2.0 * everett(u, m)
+
+            def partials(u):
+                ea, eb = gradient(u, m)
+                u = np.asarray(u, dtype=np.float64)
+                d_m = np.broadcast_to(grad0, u.shape + grad0.shape).copy()
+                if k_last >= 0:
+                    d_m[..., k_last] += 2.0 * eb
+                return 2.0 * ea, d_m
+
+        else:
+
+            def output(u):
+                return base - 2.0 * everett(m, u)
+
+            def partials(u):
+                ea, eb = gradient(m, u)
+                u = np.asarray(u, dtype=np.float64)
+                d_m = np.broadcast_to(grad0, u.shape + grad0.shape).copy()
+                if k_last >= 0:
+                    d_m[..., k_last] -= 2.0 * ea
+                return -2.0 * eb, d_m
+
+        bp_index = partner - 1
+        breakpoint = float(stack[bp_index])
+        removes = tuple(labels[i - 2] for i in (bp_index, partner) if i >= 2)
+        return BranchFlow(
+            direction=direction,
+            input=float(stack[top]),
+            labels=labels,
+            memory=memory,
+            slaved=np.zeros(n_mem, dtype=bool),
+            output=output,
+            partials=partials,
+            breakpoint=breakpoint,
+            breakpoint_removes=removes if np.isfinite(breakpoint) else (),
+            reversal_pushes=True,
+            pushed=pushed,
+        )
+
+    def _scalar_everett(self) -> Callable:
+        """``everett`` with a fast path for scalar arguments (same arithmetic as the tabulated
+        bilinear interpolation, so the result is identical; the engine calls it per stage)."""
+        vector = self.everett
+        fast = getattr(self, "_fast_scalar", None)
+        if fast is not None:
+            everett_scalar = fast[0]
+
+            def everett_fast(a, b):
+                if isinstance(a, float) and isinstance(b, float):
+                    return everett_scalar(a, b)
+                return vector(a, b)[()]
+
+            return everett_fast
+        if getattr(self, "_table", None) is None:
+
+            def everett_any(a, b):
+                return vector(a, b)[()]
+
+            return everett_any
+        rows = self.__dict__.get("_table_rows")
+        if rows is None:
+            rows = self._table.tolist()
+            self._table_rows = rows
+        lo, up, h, n = self._lower, self._upper, self._h, self._n
+
+        def everett(a, b):
+            if not (isinstance(a, float) and isinstance(b, float)):
+                return vector(a, b)[()]
+            a = min(max(a, lo), up)
+            b = min(max(b, lo), up)
+            if not a > b:
+                return 0.0
+            fa = (a - lo) / h
+            fb = (b - lo) / h
+            i = min(max(math.floor(fa), 0), n - 1)
+            j = min(max(math.floor(fb), 0), n - 1)
+            ta = fa - i
+            tb = fb - j
+            r0, r1 = rows[i], rows[i + 1]
+            e = (
+                r0[j] * (1 - ta) * (1 - tb)
+                + r1[j] * ta * (1 - tb)
+                + r0[j + 1] * (1 - ta) * tb
+                + r1[j + 1] * ta * tb
+            )
+            return max(e, 0.0)
+
+        return everett
+
+    def _scalar_gradient(self) -> Callable:
+        """``everett_gradient`` with a fast path for scalar arguments of a density model."""
+        vector = self.everett_gradient
+
+        def gradient_any(a, b):
+            da, db = vector(a, b)
+            return da[()], db[()]
+
+        fast = getattr(self, "_fast_scalar", None)
+        if fast is not None:
+            gradient_scalar = fast[1]
+
+            def gradient_fast(a, b):
+                if isinstance(a, float) and isinstance(b, float):
+                    return gradient_scalar(a, b)
+                return gradient_any(a, b)
+
+            return gradient_fast
+        if self._density_fn is None or self._gradient_fn != self._gradient_from_density:
+            return gradient_any
+        nodes, weights = _gauss(64)
+        mu = self._density_fn
+        lo, up, scale = self._lower, self._upper, self._mass_scale
+
+        def gradient(a0, b0):
+            if not (isinstance(a0, float) and isinstance(b0, float)):
+                return gradient_any(a0, b0)
+            a = min(max(a0, lo), up)
+            b = min(max(b0, lo), up)
+            if not a > b:
+                return 0.0, 0.0
+            span = a - b
+            pts = b + span * nodes
+            da = 0.0
+            db = 0.0
+            if lo <= a0 <= up:
+                da = float(np.dot(np.asarray(mu(np.full(pts.shape, a), pts)), weights))
+            if lo <= b0 <= up:
+                db = -float(np.dot(np.asarray(mu(pts, np.full(pts.shape, b))), weights))
+            return da * scale * span, db * scale * span
+
+        return gradient
+
+    @classmethod
+    def gaussian(
+        cls,
+        width: float = 2.0,
+        spread: float = 1.0,
+        width_spread: float = 0.1,
+        nodes: int = 48,
+    ) -> ContinuousPreisachModel:
+        """Density ``N(s; 0, R²)·N(r; p/2, σ_r²)`` in rotated coordinates (paper eq. pdens_sr
+        with the ridge ``δ(r − p/2)`` widened to a normal law of the half-width ``r``).
+
+        ``width`` = p > 0, ``spread`` = R > 0, ``width_spread`` = σ_r > 0. The width law is
+        cut at ``r >= 0`` and the model renormalised to mass 1 (a change only if σ_r is not
+        small against p/2). The Everett function is smooth and computed by ``nodes``-point
+        Gauss–Legendre quadrature of the one remaining integral,
+
+            E(a, b) = ∫_0^{(a−b)/2} N(r; p/2, σ_r²) [Φ((a − r)/R) − Φ((b + r)/R)] dr
+
+        (``Φ`` the standard normal CDF), restricted to ``|r − p/2| <= 8σ_r``; its gradient
+        ``∂E/∂a = ∫ N(r) φ((a − r)/R)/R dr``, ``∂E/∂b = −∫ N(r) φ((b + r)/R)/R dr`` likewise
+        (the integrand vanishes at the moving limit). As σ_r → 0 the model tends to the
+        generalized play ``GeneralizedPlay.erf(p, R)`` (paper: the thermodynamic limit).
+        Support ``[−L, L]`` with ``L = p/2 + 8σ_r + 9R``.
+        """
+        law = gaussian_everett(width, spread, width_spread, nodes)
+        model = cls._from_everett(law.everett, -law.bound, law.bound, law.gradient)
+        model._gaussian = law.parameters
+        model._fast_scalar = (law.everett_scalar, law.gradient_scalar)
+        return model

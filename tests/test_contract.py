@@ -1,0 +1,142 @@
+"""The operator contract (hysteresis.base): required methods are abstract, and every library
+operator satisfies the contract of its family (what the oscillator's engines use)."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+import hysteresis
+from hysteresis import (
+    ContinuousHysteron,
+    GeneralizedPlay,
+    Hysteron,
+    PiecewiseConstantHysteron,
+    PlayOperator,
+    PrandtlIshlinskii,
+    PreisachModel,
+    Relay,
+    RelayTable,
+    SpinDimerEnsemble,
+    Switching,
+)
+from hysteresis.base import Branch, Linearization
+from hysteresis.flow import BranchFlow
+from oscillators import ForcedOscillator
+
+PC_REQUIRED = ("relay_table", "relay_outputs", "state_from_relay_outputs", "switching")
+CONTINUOUS_REQUIRED = ("branch_flow",)
+
+
+class _Common:
+    """The Hysteron part of an operator (state = the current input)."""
+
+    def initial_state(self, u0):
+        return float(u0)
+
+    def apply(self, inputs, state=None):
+        u = np.asarray(inputs, dtype=float)
+        return np.sign(u), float(u[-1])
+
+    def output(self, state):
+        return 1.0
+
+
+def _subclass(family, required, missing):
+    """A subclass of ``family`` implementing every required method but ``missing``."""
+    body = {name: (lambda self, *args: None) for name in required if name != missing}
+    return type(f"Without_{missing}", (_Common, family), body)
+
+
+@pytest.mark.parametrize("missing", PC_REQUIRED)
+def test_piecewise_constant_operator_missing_a_method_cannot_be_constructed(missing):
+    cls = _subclass(PiecewiseConstantHysteron, PC_REQUIRED, missing)
+    with pytest.raises(TypeError, match=missing):
+        cls()
+
+
+@pytest.mark.parametrize("missing", CONTINUOUS_REQUIRED)
+def test_continuous_operator_missing_a_method_cannot_be_constructed(missing):
+    cls = _subclass(ContinuousHysteron, CONTINUOUS_REQUIRED, missing)
+    with pytest.raises(TypeError, match=missing):
+        cls()
+
+
+def test_complete_operators_construct_and_optional_methods_default():
+    _subclass(PiecewiseConstantHysteron, PC_REQUIRED, None)()
+    op = _subclass(ContinuousHysteron, CONTINUOUS_REQUIRED, None)()
+    assert op.compiled_play() is None
+
+
+def _piecewise_constant_operators():
+    return [
+        Relay(1.0, -0.5),
+        PreisachModel.from_relays([1.0, 0.5, 0.2, 0.0], [-1.0, 0.0, -0.3, 0.0]),
+        SpinDimerEnsemble.random(40, width=2.0, spread=1.0, spin_coupling=2.0, seed=0),
+    ]
+
+
+def _continuous_operators():
+    return [
+        PlayOperator(1.0),
+        GeneralizedPlay.erf(2.0, 1.0),
+        PrandtlIshlinskii([0.0, 0.5, 1.5], [0.2, 0.5, 0.3]),
+        PreisachModel.from_everett(lambda a, b: ((a - b) / 2.0) ** 2, -1.0, 1.0),
+    ]
+
+
+def test_every_library_operator_belongs_to_one_family_and_is_complete():
+    """Every concrete operator class the package exports is in exactly one family, and none is
+    abstract (it implements every required method)."""
+    exported = [getattr(hysteresis, name) for name in hysteresis.__all__]
+    classes = [c for c in exported if inspect.isclass(c) and issubclass(c, Hysteron)]
+    families = (Hysteron, PiecewiseConstantHysteron, ContinuousHysteron, PreisachModel)
+    concrete = [c for c in classes if c not in families]
+    for cls in concrete:
+        pc = issubclass(cls, PiecewiseConstantHysteron)
+        assert pc != issubclass(cls, ContinuousHysteron), cls
+        assert cls.piecewise_constant is pc
+        assert not inspect.isabstract(cls), (cls, cls.__abstractmethods__)
+    # and the contract tests below build one of each
+    built = {type(op) for op in _piecewise_constant_operators() + _continuous_operators()}
+    assert set(concrete) == built
+
+
+@pytest.mark.parametrize("op", _piecewise_constant_operators(), ids=lambda op: type(op).__name__)
+def test_piecewise_constant_contract(op):
+    state = op.apply([0.3, 2.0, -0.2])[1]
+    table = op.relay_table()
+    assert isinstance(table, RelayTable)
+    y = op.relay_outputs(state)
+    assert y.shape == (table.n_relays,)
+    assert table.output(y) == pytest.approx(op.output(state), abs=1e-12)
+    back = op.state_from_relay_outputs(y, -0.2)
+    assert np.array_equal(op.relay_outputs(back), y)
+    assert op.output(back) == pytest.approx(op.output(state), abs=1e-12)
+    assert isinstance(op.switching(state), Switching)
+    ForcedOscillator(op, coupling=0.5)  # the engine probes the contract at construction
+
+
+@pytest.mark.parametrize("op", _continuous_operators(), ids=lambda op: type(op).__name__)
+def test_continuous_contract(op):
+    state = op.apply([0.3, 0.8, 0.1])[1]
+    for direction in (1, -1):
+        flow = op.branch_flow(state, direction)
+        assert isinstance(flow, BranchFlow)
+        assert float(flow.output(flow.input)) == pytest.approx(op.output(state), abs=1e-12)
+        branch = op.branch(state, direction)
+        assert isinstance(branch, Branch)
+        assert branch.slope == float(flow.slope(flow.input))
+        assert branch.breakpoint == flow.breakpoint
+        lin = op.linearize(state, direction)
+        assert isinstance(lin, Linearization)
+        assert lin.d_output_d_memory.shape == (flow.n_memory,)
+        assert np.array_equal(lin.slaved, flow.slaved)
+    spec = op.compiled_play()
+    if spec is not None:
+        # a compiled play also offers state(position, input): the engine builds states with it
+        rebuilt = op.state(float(state.position), float(state.input))
+        assert op.output(rebuilt) == op.output(state)
+    ForcedOscillator(op, coupling=0.5)
