@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.optimize import nnls
 
 from analysis.fitting import (
     fit_prandtl_ishlinskii,
@@ -22,6 +23,7 @@ from analysis.identification import (
 )
 from hysteresis import DiscretePreisachModel, PrandtlIshlinskii, PreisachModel
 from hysteresis.preisach.projection import (
+    _block_pivoting_nnls,
     _everett_adjoint,
     _everett_apply,
     project_identification,
@@ -128,10 +130,6 @@ def test_from_identification_round_trip_reproduces_held_out_inputs(step):
 def test_large_problem_solver_reaches_the_lawson_hanson_optimum():
     """Block principal pivoting (matrix-free, used above 2500 cells) against scipy's
     Lawson–Hanson NNLS on the explicit matrix: the same optimum, to the KKT tolerance."""
-    from scipy.optimize import nnls
-
-    from hysteresis.fitting import _block_pivoting_nnls
-
     rng = np.random.default_rng(5)
     shape = (30, 30)
     cells = np.tril(np.ones(shape, dtype=bool))
