@@ -295,7 +295,7 @@ def _run_model(
 def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, float]]:
     """Check ``--input`` and the options that go with it and read the file (before any output
     is written); errors name the option (and the file and line)."""
-    from analysis.forc_io import detect_format, read_forc_file
+    from analysis.identification.forc_io import detect_format, read_forc_file
 
     path = Path(args.input)
     if not path.exists():

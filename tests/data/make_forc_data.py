@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis.forc_io import write_csv, write_micromag
 from analysis.identification import measure_reversal_curves, regular_grid
+from analysis.identification.forc_io import write_csv, write_micromag
 from hysteresis.play import GeneralizedPlay
 from hysteresis.preisach import PreisachModel
 
