@@ -28,7 +28,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from analysis.fitting import fit_prandtl_ishlinskii  # noqa: E402
+from analysis.identification.fitting import fit_prandtl_ishlinskii  # noqa: E402
 from hysteresis import PrandtlIshlinskii  # noqa: E402
 
 NOISE = 0.005

@@ -31,7 +31,7 @@ from analysis.identification import (  # noqa: E402
     measure_reversal_curves,
 )
 from analysis.identification.forc_io import read_micromag, write_micromag  # noqa: E402
-from analysis.preisach_plots import figure_forc, figure_preisach_density  # noqa: E402
+from analysis.identification.plots import figure_forc, figure_preisach_density  # noqa: E402
 from hysteresis import GeneralizedPlay, PreisachModel, SpinDimerEnsemble  # noqa: E402
 from hysteresis.fitting import project_identification  # noqa: E402
 

@@ -9,16 +9,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.fitting import (
-    fit_prandtl_ishlinskii,
-    fit_preisach_record,
-    relay_outputs,
-)
 from analysis.identification import (
     ReversalCurves,
     identify_from_curves,
     measure_reversal_curves,
     regular_grid,
+)
+from analysis.identification.fitting import (
+    fit_prandtl_ishlinskii,
+    fit_preisach_record,
+    relay_outputs,
 )
 from hysteresis import DiscretePreisachModel, PrandtlIshlinskii, PreisachModel
 from hysteresis.fitting import _everett_adjoint, _everett_apply, project_identification

@@ -211,8 +211,8 @@ def _run_model(
     smoothing: tuple[float, float] | None,
 ) -> int:
     from analysis.identification import compare_with_ridge, identify_preisach
+    from analysis.identification.plots import figure_preisach_density, figure_single_density
     from analysis.models import build_operator
-    from analysis.preisach_plots import figure_preisach_density, figure_single_density
 
     centres = None if thresholds is None else thresholds.centre
     ident = identify_preisach(
@@ -361,7 +361,7 @@ def _run_measured(
     import numpy as np
 
     from analysis.identification import identify_from_curves
-    from analysis.preisach_plots import figure_forc
+    from analysis.identification.plots import figure_forc
 
     try:
         ident = identify_from_curves(
