@@ -331,14 +331,10 @@ def _check_grid_step(args: argparse.Namespace, curves: Any) -> None:
     """``--grid-step`` applies to the protocol lattice only (fields that differ from curve to
     curve); refuse it on data whose fields share one grid (it would be ignored) and refuse a
     lattice too fine or too coarse for the data, before any output is written."""
-    import numpy as np
-
-    from analysis.identification import protocol_lattice
+    from analysis.identification import auto_grid, protocol_lattice
 
     # the rule of identify_from_curves(grid="auto"): measured fields -> protocol lattice
-    n_union = np.unique(np.concatenate(curves.fields)).size
-    longest = max(h.size for h in curves.fields)
-    if n_union <= 2 * (longest + curves.n_curves):
+    if auto_grid(curves) == "native":
         raise CliError(
             f"argument --grid-step: {args.input} has its fields on one shared grid (identified "
             "on that grid); --grid-step applies to measured fields that differ curve by curve"

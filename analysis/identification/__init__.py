@@ -30,7 +30,7 @@ from analysis.identification.curves import (
     protocol_lattice,
     regular_grid,
 )
-from analysis.identification.density import identify_from_curves, identify_preisach
+from analysis.identification.density import auto_grid, identify_from_curves, identify_preisach
 from analysis.identification.metrics import (
     RidgeComparison,
     compare_with_ridge,
@@ -56,4 +56,5 @@ __all__ = [
     "regular_grid",
     "protocol_lattice",
     "grid_quadratic_density",
+    "auto_grid",
 ]

@@ -56,8 +56,11 @@ __all__ = [
 ]
 
 CONVENTIONS = ("mayergoyz", "pike")
-#: largest number of nodes along one side of a protocol lattice (the lattice is square: memory
-#: and time grow with the square of the node count)
+#: largest number of nodes along one side of the protocol lattice of measured data
+#: (:func:`protocol_lattice`; the lattice is square: memory and time grow with the square of the
+#: node count). A bound of its own: ``hysteresis._validation.MAX_GRID_NODES`` (2001) limits the
+#: grid an *operator* is driven through (:func:`~analysis.identification.identify_preisach`,
+#: nodes²/2 operator steps).
 MAX_PROTOCOL_NODES = 3000
 
 

@@ -30,7 +30,7 @@ from analysis.identification.smoothing import (
 )
 from hysteresis._validation import check_grid_nodes
 
-__all__ = ["identify_preisach", "identify_from_curves"]
+__all__ = ["identify_preisach", "identify_from_curves", "auto_grid"]
 
 GRIDS = ("auto", "native", "protocol")
 
@@ -169,9 +169,7 @@ def identify_from_curves(
     if grid not in GRIDS:
         raise ValueError(f"grid must be one of {GRIDS}, got {grid!r}")
     if grid == "auto":
-        n_union = np.unique(np.concatenate(curves.fields)).size
-        longest = max(h.size for h in curves.fields)
-        grid = "protocol" if n_union > 2 * (longest + curves.n_curves) else "native"
+        grid = auto_grid(curves)
     if window not in WINDOWS:
         raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
     if grid == "protocol":
@@ -215,6 +213,15 @@ def identify_from_curves(
         n_curves=curves.n_curves,
         n_points=curves.n_points,
     )
+
+
+def auto_grid(curves: ReversalCurves) -> str:
+    """The grid ``identify_from_curves(grid="auto")`` uses: ``"protocol"`` when the union of
+    field values has more than twice as many values as the longest curve plus the number of
+    curves (measured fields, different on every curve), else ``"native"``."""
+    n_union = np.unique(np.concatenate(curves.fields)).size
+    longest = max(h.size for h in curves.fields)
+    return "protocol" if n_union > 2 * (longest + curves.n_curves) else "native"
 
 
 def _protocol_table(
