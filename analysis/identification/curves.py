@@ -14,7 +14,8 @@ way to ``α`` and back down on the way to ``β``::
     E(α, β) = Σ_k w_k [α_k <= α] [β_k > β]           (relay conventions of docs/architecture.md)
 
 so that ``μ(α, β) = −∂²E/∂α∂β``. ``E(α, β) = 0`` for ``β >= α`` (nothing can have switched back),
-which is the exact constant extension of the measured region used below.
+which is the exact constant extension of the measured region used by the identification
+(:mod:`analysis.identification.density`).
 
 **Pike (FORC literature).** A curve starts in *positive* saturation, falls to the reversal field
 ``H_r`` and rises through fields ``H >= H_r``, moment ``M(H_r, H)``; the FORC distribution is

@@ -49,9 +49,10 @@ def identify_preisach(
     The grid is :func:`regular_grid` ``(step, saturation, centre)``. For every node ``α_i`` the
     operator is put in ``initial_state(α_i)`` (rise from negative saturation) and driven by one
     ``apply`` through the descending nodes ``α_i, α_{i−1}, …, α_0`` (Mayergoyz convention). The
-    result holds the Everett function on the grid and the exact cell masses (see module
-    docstring). ``saturation`` should make the operator saturate at ``±saturation`` (for the
-    paper's density, ``saturation >= 5R + p/2`` leaves < 6·10⁻⁷ of the mass outside).
+    result holds the Everett function on the grid and the exact cell masses (see
+    :mod:`analysis.identification.result`). ``saturation`` should make the operator saturate
+    at ``±saturation`` (for the paper's density, ``saturation >= 5R + p/2`` leaves < 6·10⁻⁷ of
+    the mass outside).
 
     Parameters
     ----------
