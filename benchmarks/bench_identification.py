@@ -38,13 +38,10 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from analysis.forc_io import read_micromag  # noqa: E402
-from analysis.identification import (  # noqa: E402
-    _protocol_table,
-    identify_from_curves,
-    local_quadratic_density,
-)
-from analysis.preisach_plots import figure_forc  # noqa: E402
+from analysis.identification import identify_from_curves, local_quadratic_density  # noqa: E402
+from analysis.identification.density import _protocol_table  # noqa: E402
+from analysis.identification.forc_io import read_micromag  # noqa: E402
+from analysis.identification.plots import figure_forc  # noqa: E402
 
 STEP = 0.5  # mT
 N_CURVES = 300

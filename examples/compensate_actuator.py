@@ -7,11 +7,12 @@ The "actuator" is a hysteretic operator the fit does not know, of the piezo-actu
 (0, 2.5] with weights ``∝ exp(−p/0.8)``, plus a linear term and an offset, measured with noise
 — none of its widths is on the fitted lattice. (A saturating actuator is outside the
 Prandtl–Ishlinskii class, whose Preisach density is uniform along ``s``; fit it with
-:func:`analysis.fitting.fit_preisach_record` instead.) Steps:
+:func:`analysis.identification.fitting.fit_preisach_record` instead.) Steps:
 
 1. excite it with an amplitude-modulated sine (the identification record), split the record
    in time (70 % training, 30 % validation) and fit Prandtl–Ishlinskii weights by constrained
-   least squares (:func:`analysis.fitting.fit_prandtl_ishlinskii`); print the validation error;
+   least squares (:func:`analysis.identification.fitting.fit_prandtl_ishlinskii`); print the
+   validation error;
 2. for a desired output trajectory, compute the command through the fitted model's exact
    inverse (``PrandtlIshlinskii.inverse``) and drive the actuator with it;
 3. compare the tracking error with and without compensation, and write a figure.
@@ -28,7 +29,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from analysis.fitting import fit_prandtl_ishlinskii  # noqa: E402
+from analysis.identification.fitting import fit_prandtl_ishlinskii  # noqa: E402
 from hysteresis import PrandtlIshlinskii  # noqa: E402
 
 NOISE = 0.005

@@ -21,7 +21,7 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 
 from analysis.identification import compare_with_ridge, identify_preisach  # noqa: E402
-from analysis.preisach_plots import figure_preisach_density  # noqa: E402
+from analysis.identification.plots import figure_preisach_density  # noqa: E402
 from hysteresis import GeneralizedPlay, SpinDimerEnsemble  # noqa: E402
 
 WIDTH, SPREAD, COUPLING = 2.0, 1.0, 2.0  # p, R, J

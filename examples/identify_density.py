@@ -23,7 +23,6 @@ import matplotlib
 matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 
-from analysis.forc_io import read_micromag, write_micromag  # noqa: E402
 from analysis.identification import (  # noqa: E402
     ReversalCurves,  # noqa: E402
     compare_with_ridge,
@@ -31,7 +30,8 @@ from analysis.identification import (  # noqa: E402
     identify_preisach,
     measure_reversal_curves,
 )
-from analysis.preisach_plots import figure_forc, figure_preisach_density  # noqa: E402
+from analysis.identification.forc_io import read_micromag, write_micromag  # noqa: E402
+from analysis.identification.plots import figure_forc, figure_preisach_density  # noqa: E402
 from hysteresis import GeneralizedPlay, PreisachModel, SpinDimerEnsemble  # noqa: E402
 from hysteresis.preisach.projection import project_identification  # noqa: E402
 

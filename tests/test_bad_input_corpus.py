@@ -67,7 +67,7 @@ from analysis.iid import iid_inputs, iid_magnetization
 from analysis.execution import run_tasks, spawn_seeds
 from analysis.store import ResultStore
 from analysis.identification import identify_preisach
-from analysis.forc_io import read_csv, read_forc, read_micromag
+from analysis.identification.forc_io import read_csv, read_forc, read_micromag
 
 def write(name, data):
     path = os.path.join(TMP, name)

@@ -10,16 +10,16 @@ import numpy as np
 import pytest
 from scipy.optimize import nnls
 
-from analysis.fitting import (
-    fit_prandtl_ishlinskii,
-    fit_preisach_record,
-    relay_outputs,
-)
 from analysis.identification import (
     ReversalCurves,
     identify_from_curves,
     measure_reversal_curves,
     regular_grid,
+)
+from analysis.identification.fitting import (
+    fit_prandtl_ishlinskii,
+    fit_preisach_record,
+    relay_outputs,
 )
 from hysteresis import DiscretePreisachModel, PrandtlIshlinskii, PreisachModel
 from hysteresis.preisach.projection import (

@@ -9,12 +9,18 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from analysis.forc_io import read_csv, read_forc, read_micromag, write_csv, write_micromag
 from analysis.identification import (
     identify_from_curves,
     identify_preisach,
     measure_reversal_curves,
     regular_grid,
+)
+from analysis.identification.forc_io import (
+    read_csv,
+    read_forc,
+    read_micromag,
+    write_csv,
+    write_micromag,
 )
 from hysteresis.play import GeneralizedPlay
 

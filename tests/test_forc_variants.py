@@ -12,8 +12,13 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from analysis.forc_io import detect_format, read_forc_file, read_lakeshore_csv, read_micromag
 from analysis.identification import ReversalCurves, identify_from_curves
+from analysis.identification.forc_io import (
+    detect_format,
+    read_forc_file,
+    read_lakeshore_csv,
+    read_micromag,
+)
 
 DATA = Path(__file__).parent / "data"
 

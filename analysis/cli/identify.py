@@ -211,8 +211,8 @@ def _run_model(
     smoothing: tuple[float, float] | None,
 ) -> int:
     from analysis.identification import compare_with_ridge, identify_preisach
+    from analysis.identification.plots import figure_preisach_density, figure_single_density
     from analysis.models import build_operator
-    from analysis.preisach_plots import figure_preisach_density, figure_single_density
 
     centres = None if thresholds is None else thresholds.centre
     ident = identify_preisach(
@@ -295,7 +295,7 @@ def _run_model(
 def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, float]]:
     """Check ``--input`` and the options that go with it and read the file (before any output
     is written); errors name the option (and the file and line)."""
-    from analysis.forc_io import detect_format, read_forc_file
+    from analysis.identification.forc_io import detect_format, read_forc_file
 
     path = Path(args.input)
     if not path.exists():
@@ -331,14 +331,10 @@ def _check_grid_step(args: argparse.Namespace, curves: Any) -> None:
     """``--grid-step`` applies to the protocol lattice only (fields that differ from curve to
     curve); refuse it on data whose fields share one grid (it would be ignored) and refuse a
     lattice too fine or too coarse for the data, before any output is written."""
-    import numpy as np
-
-    from analysis.identification import protocol_lattice
+    from analysis.identification import auto_grid, protocol_lattice
 
     # the rule of identify_from_curves(grid="auto"): measured fields -> protocol lattice
-    n_union = np.unique(np.concatenate(curves.fields)).size
-    longest = max(h.size for h in curves.fields)
-    if n_union <= 2 * (longest + curves.n_curves):
+    if auto_grid(curves) == "native":
         raise CliError(
             f"argument --grid-step: {args.input} has its fields on one shared grid (identified "
             "on that grid); --grid-step applies to measured fields that differ curve by curve"
@@ -361,7 +357,7 @@ def _run_measured(
     import numpy as np
 
     from analysis.identification import identify_from_curves
-    from analysis.preisach_plots import figure_forc
+    from analysis.identification.plots import figure_forc
 
     try:
         ident = identify_from_curves(

@@ -35,8 +35,8 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
     import matplotlib.pyplot as plt
 
     from analysis.identification import compare_with_ridge, identify_preisach
+    from analysis.identification.plots import plot_density_rs, plot_s_marginal
     from analysis.models import build_operator
-    from analysis.preisach_plots import plot_density_rs, plot_s_marginal
 
     n_spins = ctx.size.identification_spins
     step = ctx.size.identification_step

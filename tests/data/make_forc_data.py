@@ -14,7 +14,7 @@ Instrument-style exports of a synthetic *sample* (:func:`sample`: 20 000 relays 
 (:func:`measure`): regular protocol of step 2 mT, measured fields jittered by 0.05 mT,
 calibration point at HCal (its field drifting by up to 2 mT) before every curve, moment noise
 0.1 % of the saturation moment, and a slow multiplicative drift of the instrument gain. Layouts
-follow the MicroMag and Lake Shore file descriptions (see :mod:`analysis.forc_io`):
+follow the MicroMag and Lake Shore file descriptions (see :mod:`analysis.identification.forc_io`):
 
 * ``forc_micromag_0015_cgs.frc``: Series 0015 header (short keys ``NForc``, ``NData``,
   ``HCal``, ``HSat`` with ``=``), ``Units of measure = cgs`` (Oe, emu), LF line ends.
@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis.forc_io import write_csv, write_micromag
 from analysis.identification import measure_reversal_curves, regular_grid
+from analysis.identification.forc_io import write_csv, write_micromag
 from hysteresis.play import GeneralizedPlay
 from hysteresis.preisach import PreisachModel
 

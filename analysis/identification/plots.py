@@ -15,6 +15,9 @@ distribution ``ρ = −½ ∂²M/∂B_r∂B`` (equal to the Preisach ``μ_αβ``
 (diverging, centred at 0, only where they are), contour lines at fixed fractions of the peak,
 and the colour mesh rasterised inside vector axes, so that a PDF of a 10⁵-node diagram stays
 small and fast to write.
+
+matplotlib is imported inside the drawing functions, on purpose: importing this module neither
+loads matplotlib nor fixes its backend (the caller may still choose one, e.g. ``Agg``).
 """
 
 from __future__ import annotations
@@ -24,8 +27,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.stats import norm
 
-from analysis.identification import PreisachIdentification
+from analysis.identification.result import PreisachIdentification
 
 __all__ = [
     "plot_density_rs",
@@ -108,8 +112,6 @@ def plot_s_marginal(
     centre: float = 0.0,
 ) -> None:
     """Numerical ``μ(s)`` (see :meth:`PreisachIdentification.s_density`) vs ``N(s; centre, R²)``."""
-    from scipy.stats import norm
-
     markers = ["o", "s", "^", "v"]
     lo, hi = np.inf, -np.inf
     for (label, ident), mk in zip(idents.items(), markers, strict=False):
@@ -205,8 +207,6 @@ def figure_single_density(
         s, dens = ident.s_density()
         axes[0].plot(s, dens, "o", ms=3, mfc="none", label="identified")
         if spread is not None:
-            from scipy.stats import norm
-
             axes[0].plot(s, norm.pdf(s, scale=spread), "k-", lw=1, label="N(s; 0, R²)")
         axes[0].set_xlabel("s")
         axes[0].set_ylabel("μ(s)")

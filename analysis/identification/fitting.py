@@ -32,6 +32,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.optimize import nnls
+
+from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
+from hysteresis.preisach import DiscretePreisachModel
 
 __all__ = [
     "RecordFit",
@@ -134,8 +138,6 @@ def fit_preisach_record(
     RecordFit
         ``model`` normalised (weights sum 1), ``y ≈ offset + scale · model(u)``.
     """
-    from hysteresis.preisach import DiscretePreisachModel
-
     u, y, n_train = _record(u, y, train_fraction)
     x = np.asarray(nodes, dtype=float)
     if x.ndim != 1 or x.size < 2 or np.any(np.diff(x) <= 0) or not np.all(np.isfinite(x)):
@@ -187,8 +189,6 @@ def fit_prandtl_ishlinskii(
     RecordFit
         ``model`` a :class:`~hysteresis.PrandtlIshlinskii`, ``y ≈ offset + model(u)``.
     """
-    from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
-
     u, y, n_train = _record(u, y, train_fraction)
     p = np.asarray(widths, dtype=float).ravel()
     if p.size == 0 or not np.all(np.isfinite(p)) or np.any(p < 0):
@@ -221,8 +221,6 @@ def _bounded_lstsq(design: np.ndarray, y: np.ndarray, lower: np.ndarray) -> np.n
     Active-set NNLS (Lawson–Hanson, exact) after the substitutions ``x[1:] = lower + z`` and
     ``x[0] = c⁺ − c⁻``.
     """
-    from scipy.optimize import nnls
-
     shifted = y - design[:, 1:] @ lower
     aug = np.column_stack([design[:, :1], -design[:, :1], design[:, 1:]])
     z, _ = nnls(aug, shifted, maxiter=50 * aug.shape[1])

@@ -1,0 +1,60 @@
+"""Preisach-plane identification: reversal curves, the Preisach density, FORC files, fitting.
+
+Modules, by job:
+
+- :mod:`~analysis.identification.curves` — reversal-curve data (:class:`ReversalCurves`), the
+  Mayergoyz and Pike conventions, driving an operator through reversal curves, the protocol
+  lattice of a measurement;
+- :mod:`~analysis.identification.result` — :class:`PreisachIdentification`: nodes, Everett
+  table, exact cell masses, marginals;
+- :mod:`~analysis.identification.density` — the identification itself
+  (:func:`identify_preisach`, :func:`identify_from_curves`);
+- :mod:`~analysis.identification.smoothing` — the smoothed density (local quadratic regression);
+- :mod:`~analysis.identification.metrics` — comparison with the paper's ridge density;
+- :mod:`~analysis.identification.forc_io` — instrument FORC files (CSV, MicroMag, Lake Shore;
+  the readers live in :mod:`analysis.identification.forc_files`);
+- :mod:`~analysis.identification.fitting` — Preisach / Prandtl–Ishlinskii models fitted to
+  arbitrary input/output records;
+- :mod:`~analysis.identification.plots` — figures of identified densities and FORC diagrams.
+
+The names below are those of the first five modules; import the last three from their modules.
+"""
+
+from __future__ import annotations
+
+from analysis.identification.curves import (
+    ReversalCurves,
+    measure_reversal_curves,
+    pike_to_preisach,
+    preisach_to_pike,
+    protocol_lattice,
+    regular_grid,
+)
+from analysis.identification.density import auto_grid, identify_from_curves, identify_preisach
+from analysis.identification.metrics import (
+    RidgeComparison,
+    compare_with_ridge,
+    empirical_cdf,
+    s_cdf_distance,
+)
+from analysis.identification.result import PreisachIdentification
+from analysis.identification.smoothing import grid_quadratic_density, local_quadratic_density
+
+__all__ = [
+    "ReversalCurves",
+    "PreisachIdentification",
+    "RidgeComparison",
+    "measure_reversal_curves",
+    "identify_preisach",
+    "identify_from_curves",
+    "local_quadratic_density",
+    "preisach_to_pike",
+    "pike_to_preisach",
+    "s_cdf_distance",
+    "empirical_cdf",
+    "compare_with_ridge",
+    "regular_grid",
+    "protocol_lattice",
+    "grid_quadratic_density",
+    "auto_grid",
+]

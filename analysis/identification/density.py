@@ -1,0 +1,369 @@
+"""Identification of the Preisach density from reversal curves.
+
+The Everett function is tabulated on the *native* grid (reversal fields × union of field
+values: exact cell masses of simulated or shared-lattice data) or on the *protocol* lattice
+(measured data, regridded onto the measurement's field step), the exact cell masses are its
+mixed second differences, and the smoothed density is a local quadratic regression
+(:mod:`analysis.identification.smoothing`). Conventions: :mod:`analysis.identification.curves`;
+cells and masses: :mod:`analysis.identification.result`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from analysis.identification._checks import positive_number
+from analysis.identification.curves import (
+    ReversalCurves,
+    measure_reversal_curves,
+    protocol_lattice,
+    regular_grid,
+    rising_form,
+)
+from analysis.identification.result import PreisachIdentification
+from analysis.identification.smoothing import (
+    WINDOWS,
+    grid_quadratic_density,
+    local_quadratic_density,
+)
+from hysteresis._validation import check_grid_nodes
+
+__all__ = ["identify_preisach", "identify_from_curves", "auto_grid"]
+
+GRIDS = ("auto", "native", "protocol")
+
+
+def identify_preisach(
+    operator: Any,
+    step: float,
+    saturation: float,
+    *,
+    centre: float = 0.0,
+    smoothing: float | tuple[float, float] | None = None,
+    progress: bool = False,
+) -> PreisachIdentification:
+    """Identify the Preisach density of ``operator`` from reversal curves on a regular grid.
+
+    The grid is :func:`regular_grid` ``(step, saturation, centre)``. For every node ``α_i`` the
+    operator is put in ``initial_state(α_i)`` (rise from negative saturation) and driven by one
+    ``apply`` through the descending nodes ``α_i, α_{i−1}, …, α_0`` (Mayergoyz convention). The
+    result holds the Everett function on the grid and the exact cell masses (see
+    :mod:`analysis.identification.result`). ``saturation`` should make the operator saturate
+    at ``±saturation`` (for the paper's density, ``saturation >= 5R + p/2`` leaves < 6·10⁻⁷ of
+    the mass outside).
+
+    Parameters
+    ----------
+    smoothing:
+        ``None`` (no smoothed density), a smoothing factor ``SF`` (isotropic) or
+        ``(SF_r, SF_s)``: local quadratic regression of ``E`` over the nodes with
+        ``|Δr| <= SF_r·Δ`` and ``|Δs| <= SF_s·Δ`` (keep ``SF_r`` small across a ridge and
+        ``SF_s`` larger along it); see :func:`local_quadratic_density`.
+    """
+    check_grid_nodes(step, saturation)  # refuse an unbounded grid (MAX_GRID_NODES) up front
+    grid = regular_grid(step, saturation, centre)
+    curves = measure_reversal_curves(operator, grid, convention="mayergoyz", progress=progress)
+    output_range = tuple(float(x) for x in getattr(operator, "output_range", (-1.0, 1.0)))
+    return identify_from_curves(curves, smoothing=smoothing, output_range=output_range, extend=True)
+
+
+def _everett_table(curves: ReversalCurves) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """E on (curve nodes × union of fields); returns (alpha_nodes, beta_nodes, E[alpha, beta]).
+
+    Along each curve E is taken at its native points, linearly interpolated between them (exact
+    at the native points; exact everywhere when the curves share their field values), zero on the
+    reversal side (the exact extension) and constant beyond the curve's last point (the curve is
+    assumed to end in saturation).
+    """
+    order = np.argsort(curves.reversal_field)
+    rev = curves.reversal_field[order]
+    pts = np.unique(np.concatenate(curves.fields))
+    table = np.zeros((rev.size, pts.size))
+    for row, c in enumerate(order):
+        h = curves.fields[c]
+        m = curves.moments[c]
+        if curves.convention == "mayergoyz":
+            e = 0.5 * (m[0] - m)  # E(α = H_r, β = h)
+            # h falls; np.interp needs ascending abscissae
+            vals = np.interp(pts, h[::-1], e[::-1])  # constant beyond both ends
+            vals[pts >= h[0]] = 0.0
+        else:
+            e = 0.5 * (m - m[0])  # E(α = h, β = H_r)
+            vals = np.interp(pts, h, e)
+            vals[pts <= h[0]] = 0.0
+        table[row] = vals
+    if curves.convention == "mayergoyz":
+        return rev, pts, table
+    return pts, rev, table.T.copy()
+
+
+def _is_regular(alpha: np.ndarray, beta: np.ndarray) -> float | None:
+    if alpha.size < 2 or alpha.size != beta.size or not np.array_equal(alpha, beta):
+        return None
+    d = np.diff(alpha)
+    step = (alpha[-1] - alpha[0]) / (alpha.size - 1)
+    if np.allclose(d, step, rtol=1e-9, atol=0.0):
+        return float(step)
+    return None
+
+
+def identify_from_curves(
+    curves: ReversalCurves,
+    *,
+    smoothing: float | tuple[float, float] | None = None,
+    output_range: tuple[float, float] = (-1.0, 1.0),
+    extend: bool | None = None,
+    grid: str = "auto",
+    step: float | None = None,
+    window: str = "rs",
+) -> PreisachIdentification:
+    """Identify from reversal-curve data (measured or simulated, regular or irregular).
+
+    Parameters
+    ----------
+    curves:
+        The reversal curves (either convention).
+    smoothing:
+        ``None`` (cell masses only), a smoothing factor ``SF`` or ``(SF_r, SF_s)``: local
+        quadratic regression of ``E`` in the window ``|Δr| <= SF_r·Δ``, ``|Δs| <= SF_s·Δ``
+        (see :func:`identify_preisach`). On the native grid of irregular data the unit ``Δ`` is
+        the larger of the median reversal-field spacing and the median field step.
+    output_range:
+        Saturation outputs (for :attr:`PreisachIdentification.mass_outside_grid`); pass
+        ``(-inf, inf)`` for measured data of unknown saturation.
+    extend:
+        Use the extension ``E = 0`` for ``β >= α`` in the regression. This is exact for relay
+        (Preisach) systems and puts the reversible part of a measured sample into a ridge at
+        ``r = 0``; ``False`` regresses measured points only (the usual irreversible FORC
+        density, NaN where a window has no data on one side of a node). Default (``None``):
+        ``True`` on the native grid (simulated data), ``False`` on the protocol grid
+        (measured data: the reversible ridge is excluded unless asked for).
+    grid:
+        ``"native"``: nodes are the reversal fields along one axis and the union of all field
+        values along the other (exact cell masses of simulated or shared-lattice data; no
+        regridding). ``"protocol"``: a regular lattice with the measurement's field step ``Δ``
+        (``step``, default the median field increment along the curves), anchored at the
+        reversal fields; each curve is interpolated linearly onto it along the field and
+        neighbouring curves linearly across reversal fields. Use it for measured data, whose
+        field values all differ slightly (the native grid of such data has near-zero-area
+        cells). ``"auto"`` (default): ``"protocol"`` when the union of field values has more
+        than twice as many values as the longest curve plus the number of curves (measured
+        fields), else ``"native"``.
+    step:
+        Lattice step of the protocol grid (> 0); ignored on the native grid.
+    window:
+        Shape of the regression window on the protocol grid: ``"rs"`` (default),
+        ``|Δr| <= SF_r·Δ`` and ``|Δs| <= SF_s·Δ``; ``"pike"``, Pike et al. (1999)'s square
+        ``|Δα| <= SF·Δ`` and ``|ΔB_r| = |Δβ| <= SF·Δ`` (``(2 SF + 1)²`` points, ``SF = SF_r``).
+        The native grid always uses ``"rs"``.
+
+    Returns
+    -------
+    PreisachIdentification
+        With ``measured`` set on the protocol grid (nodes backed by data; outside it ``E`` is
+        extended: 0 for ``β >= α``, constant beyond a curve's last point) and the smoothed
+        density NaN wherever the node is not measured or its window lacks data on either side
+        across or along the diagonal.
+    """
+    if grid not in GRIDS:
+        raise ValueError(f"grid must be one of {GRIDS}, got {grid!r}")
+    if grid == "auto":
+        grid = auto_grid(curves)
+    if window not in WINDOWS:
+        raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
+    if grid == "protocol":
+        ext = False if extend is None else bool(extend)
+        return _identify_protocol(curves, smoothing, output_range, ext, step, window)
+    extend = True if extend is None else bool(extend)
+    alpha, beta, E = _everett_table(curves)
+    if alpha.size < 2 or beta.size < 2:
+        raise ValueError("need at least two reversal curves and two distinct fields")
+    mass = E[1:, :-1] - E[:-1, :-1] - E[1:, 1:] + E[:-1, 1:]
+    reg_step = _is_regular(alpha, beta)
+    density = None
+    sm = None
+    if smoothing is not None:
+        sm = _smoothing_factors(smoothing)
+        unit = reg_step if reg_step is not None else _typical_step(curves)
+        pa, pb, pe = _native_points(
+            curves, beta if curves.convention == "mayergoyz" else alpha, extend
+        )
+        aa, bb = np.meshgrid(alpha, beta, indexing="ij")
+        where = bb <= aa
+        density = np.full(aa.shape, np.nan)
+        density[where] = local_quadratic_density(
+            pa, pb, pe, aa[where], bb[where], sm[0] * unit, sm[1] * unit
+        )
+    for arr in (alpha, beta, E, mass):
+        arr.setflags(write=False)
+    if density is not None:
+        density.setflags(write=False)
+    return PreisachIdentification(
+        alpha=alpha,
+        beta=beta,
+        everett=E,
+        cell_mass=mass,
+        step=reg_step,
+        output_range=(float(output_range[0]), float(output_range[1])),
+        density_alpha_beta=density,
+        smoothing=sm,
+        convention=curves.convention,
+        reversible_ridge=extend,
+        n_curves=curves.n_curves,
+        n_points=curves.n_points,
+    )
+
+
+def auto_grid(curves: ReversalCurves) -> str:
+    """The grid ``identify_from_curves(grid="auto")`` uses: ``"protocol"`` when the union of
+    field values has more than twice as many values as the longest curve plus the number of
+    curves (measured fields, different on every curve), else ``"native"``."""
+    n_union = np.unique(np.concatenate(curves.fields)).size
+    longest = max(h.size for h in curves.fields)
+    return "protocol" if n_union > 2 * (longest + curves.n_curves) else "native"
+
+
+def _protocol_table(
+    curves: ReversalCurves, step: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Everett table on the protocol lattice: ``(nodes, E[α, β], measured[α, β], step)``."""
+    nodes = protocol_lattice(curves, step)
+    step = float(nodes[1] - nodes[0])
+    rev, fields, ev = rising_form(curves)
+    order = np.argsort(rev)
+    rev = rev[order]
+    n = nodes.size
+    half = 0.5 * step
+    g = np.empty((rev.size, n))
+    meas = np.empty((rev.size, n), dtype=bool)
+    for row, c in enumerate(order):
+        h, e = fields[c], ev[c]
+        g[row] = np.interp(nodes, h, e)  # 0 below the reversal field, constant beyond the end
+        g[row, nodes < h[0]] = 0.0
+        meas[row] = (nodes >= h[0] - half) & (nodes <= h[-1] + half)
+    # across reversal fields: linear interpolation between the bracketing curves
+    k = np.clip(np.searchsorted(rev, nodes), 1, max(rev.size - 1, 1))
+    if rev.size == 1:
+        t = np.zeros(n)
+        c0 = c1 = np.zeros(n, dtype=int)
+    else:
+        c0, c1 = k - 1, k
+        t = np.clip((nodes - rev[c0]) / (rev[c1] - rev[c0]), 0.0, 1.0)
+    table = (1.0 - t)[:, None] * g[c0] + t[:, None] * g[c1]
+    used0 = t < 1.0 - 1e-9
+    used1 = t > 1e-9
+    m_tab = (meas[c0] | ~used0[:, None]) & (meas[c1] | ~used1[:, None])
+    # nodes farther than half a step outside the reversal-field range are not measured
+    outside = (nodes < rev[0] - half) | (nodes > rev[-1] + half)
+    m_tab[outside] = False
+    # above the highest reversal field nothing reverses: E(x, h) = E_last(h) − E_last(x) (the
+    # upper branch of the last curve; a constant in x would pile its cumulative rise into
+    # every diagonal cell)
+    above = np.flatnonzero(nodes > rev[-1] + half)
+    if above.size:
+        last = g[np.argmax(rev)] if rev.size else g[0]
+        table[above] = last[None, :] - last[above][:, None]
+    # table[R, h]; physical region h >= R; on and below the diagonal E = 0 exactly
+    below = nodes[None, :] <= nodes[:, None]
+    table[below] = 0.0
+    diag = np.eye(n, dtype=bool) & ~outside[:, None]
+    m_tab = (m_tab & ~below) | diag
+    if curves.convention == "pike":  # alpha = h, beta = R
+        E, measured = table.T.copy(), m_tab.T.copy()
+        out_nodes = nodes
+    else:  # alpha = -R', beta = -h'
+        E, measured = table[::-1, ::-1].copy(), m_tab[::-1, ::-1].copy()
+        out_nodes = -nodes[::-1]
+    return out_nodes, E, measured, step
+
+
+def _identify_protocol(
+    curves: ReversalCurves,
+    smoothing: float | tuple[float, float] | None,
+    output_range: tuple[float, float],
+    extend: bool,
+    step: float | None,
+    window: str = "rs",
+) -> PreisachIdentification:
+    nodes, E, measured, step = _protocol_table(curves, step)
+    mass = E[1:, :-1] - E[:-1, :-1] - E[1:, 1:] + E[:-1, 1:]
+    density = None
+    sm = None
+    if smoothing is not None:
+        sm = _smoothing_factors(smoothing)
+        aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
+        valid = measured | ((bb > aa) if extend else False)
+        evaluate = measured & (bb <= aa)
+        density = grid_quadratic_density(E, valid, evaluate, step, sm[0], sm[1], window)
+        density.setflags(write=False)
+    alpha = nodes.copy()
+    beta = nodes.copy()
+    for arr in (alpha, beta, E, mass, measured):
+        arr.setflags(write=False)
+    return PreisachIdentification(
+        alpha=alpha,
+        beta=beta,
+        everett=E,
+        cell_mass=mass,
+        step=step,
+        output_range=(float(output_range[0]), float(output_range[1])),
+        density_alpha_beta=density,
+        smoothing=sm,
+        convention=curves.convention,
+        measured=measured,
+        reversible_ridge=extend,
+        n_curves=curves.n_curves,
+        n_points=curves.n_points,
+    )
+
+
+def _native_points(
+    curves: ReversalCurves, other_nodes: np.ndarray, extend: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scattered (α, β, E) at the native curve points, plus extension points E = 0."""
+    a_list, b_list, e_list = [], [], []
+    for r, h, m in zip(curves.reversal_field, curves.fields, curves.moments, strict=True):
+        if curves.convention == "mayergoyz":
+            a_list.append(np.full(h.size, r))
+            b_list.append(h)
+            e_list.append(0.5 * (m[0] - m))
+            if extend:
+                ext = other_nodes[other_nodes > r]
+                a_list.append(np.full(ext.size, r))
+                b_list.append(ext)
+                e_list.append(np.zeros(ext.size))
+        else:
+            a_list.append(h)
+            b_list.append(np.full(h.size, r))
+            e_list.append(0.5 * (m - m[0]))
+            if extend:
+                ext = other_nodes[other_nodes < r]
+                a_list.append(ext)
+                b_list.append(np.full(ext.size, r))
+                e_list.append(np.zeros(ext.size))
+    return np.concatenate(a_list), np.concatenate(b_list), np.concatenate(e_list)
+
+
+def _typical_step(curves: ReversalCurves) -> float:
+    """Smoothing unit for irregular data: the larger of the median spacing of the reversal
+    fields and the median field step along the curves."""
+    rev = np.diff(np.sort(curves.reversal_field))
+    along = np.concatenate([np.abs(np.diff(h)) for h in curves.fields])
+    candidates = [float(np.median(x)) for x in (rev, along) if x.size]
+    if not candidates:
+        raise ValueError("smoothing needs at least two reversal curves or two points per curve")
+    return max(candidates)
+
+
+def _smoothing_factors(smoothing: float | tuple[float, float]) -> tuple[float, float]:
+    if np.ndim(smoothing) == 0:
+        sf = positive_number(smoothing, "smoothing")
+        return (sf, sf)
+    if len(smoothing) != 2:
+        raise ValueError("smoothing must be a positive number or a pair (SF_r, SF_s)")
+    return (
+        positive_number(smoothing[0], "smoothing[0] (SF_r)"),
+        positive_number(smoothing[1], "smoothing[1] (SF_s)"),
+    )

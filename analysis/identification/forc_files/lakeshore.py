@@ -1,0 +1,148 @@
+"""Lake Shore 8600-series FORC CSV exports (:func:`read_lakeshore_csv`).
+
+Assumed layout (stated, not taken from a vendor specification): optional ``key,value`` header
+rows, then one column-title row naming a field column and a moment column with their units in
+brackets or parentheses (``Field (µ0H) [T]``, ``Moment (m) [A·m²]``; a ``Time Stamp [s]``
+column is allowed), then one data row per point in measurement order with no blank lines.
+Units ``T``, ``mT``, ``Oe``, ``A/m`` (fields) and ``A·m²``/``Am²``, ``emu`` (moments) are
+converted to mT and A·m². Curves are split where the field falls; a single point within 5 % of
+the calibration field (header ``Calibration field``, else the first point when it is followed
+by a fall) is a calibration point, usable for the same drift correction.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from analysis.identification.forc_files.common import (
+    CAL_ABS_TOL_MT,
+    CAL_REL_TOL,
+    DriftMode,
+    MicroMagData,
+    build_curves,
+    decode,
+    drift_mode,
+    header_number,
+    parse_float,
+)
+
+__all__ = ["read_lakeshore_csv"]
+
+_FIELD_UNITS = {"t": 1e3, "mt": 1.0, "oe": 0.1, "a/m": 4e-4 * math.pi, "ka/m": 0.4 * math.pi}
+_MOMENT_UNITS = {"a·m²": 1.0, "am²": 1.0, "am2": 1.0, "a·m2": 1.0, "a m²": 1.0, "emu": 1e-3}
+
+
+def _column_unit(title: str, table: dict[str, float], lineno: int, what: str) -> float:
+    units = re.findall(r"[\[(]([^\])]*)[\])]", title)
+    for u in reversed(units):
+        key = u.strip().lower().replace("^2", "²").replace(" ", "")
+        for name, fac in table.items():
+            if key == name.replace(" ", ""):
+                return fac
+    raise ValueError(
+        f"line {lineno}: cannot tell the unit of the {what} column {title!r} "
+        f"(expected one of {', '.join(table)} in brackets)"
+    )
+
+
+def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) -> MicroMagData:
+    """Read a Lake Shore 8600-series FORC CSV export (layout assumed in the module docstring).
+
+    Returns the same :class:`MicroMagData` as :func:`read_micromag` (fields in mT, moments in
+    A·m²; Pike curves split where the field falls; calibration points recognised by field).
+    """
+    drift = drift_mode(drift_correction)
+    lines = decode(path).splitlines()
+    header: dict[str, str] = {}
+    header_line: dict[str, int] = {}
+    title_line = None
+    for idx, raw in enumerate(lines):
+        cells = [c.strip().strip('"') for c in raw.split(",")]
+        low = [c.lower() for c in cells]
+        if any("field" in c for c in low) and any("moment" in c for c in low):
+            title_line = idx
+            break
+        if len(cells) >= 2 and cells[0]:
+            header[cells[0].rstrip(":")] = cells[1]
+            header_line[cells[0].rstrip(":")] = idx + 1
+    if title_line is None:
+        raise ValueError(
+            f"{path}: no column-title row naming a field and a moment column "
+            "(Lake Shore 8600 FORC CSV)"
+        )
+    titles = [c.strip().strip('"') for c in lines[title_line].split(",")]
+    ln_t = title_line + 1
+    i_h = next(i for i, c in enumerate(titles) if "field" in c.lower())
+    i_m = next(i for i, c in enumerate(titles) if "moment" in c.lower())
+    f_fac = _column_unit(titles[i_h], _FIELD_UNITS, ln_t, "field")
+    m_fac = _column_unit(titles[i_m], _MOMENT_UNITS, ln_t, "moment")
+    pts: list[tuple[float, float, int]] = []
+    for idx in range(title_line + 1, len(lines)):
+        line = lines[idx].strip()
+        if not line:
+            continue
+        cells = [c.strip() for c in line.split(",")]
+        if len(cells) != len(titles):
+            raise ValueError(
+                f"line {idx + 1}: expected {len(titles)} columns like the title row, "
+                f"got {len(cells)}"
+            )
+        pts.append(
+            (
+                parse_float(cells[i_h], idx + 1, "field") * f_fac,
+                parse_float(cells[i_m], idx + 1, "moment") * m_fac,
+                idx + 1,
+            )
+        )
+    if not pts:
+        raise ValueError(f"{path}: no data rows after the column titles (line {ln_t})")
+    h_cal: float | None = None
+    for k, v in header.items():
+        if k.lower().startswith("calibration field"):
+            num = header_number(v, header_line[k], k, False)
+            if num is not None:
+                unit = (
+                    _column_unit(k + " " + v, _FIELD_UNITS, header_line[k], "calibration")
+                    if ("[" in k or "(" in k)
+                    else f_fac
+                )
+                h_cal = num * unit
+    # calibration points: near HCal, reached by a jump up (> 2 field steps) and followed by a
+    # fall (or the end); curves: split where the field falls
+    h = np.array([p[0] for p in pts])
+    rises = np.diff(h)
+    step = float(np.median(rises[rises > 0])) if np.any(rises > 0) else 0.0
+    if h_cal is None and h.size > 1 and h[1] < h[0]:
+        h_cal = float(h[0])
+    blocks: list[list[tuple[float, float, int]]] = []
+    for i, p in enumerate(pts):
+        is_cal = (
+            h_cal is not None
+            and abs(p[0] - h_cal) <= max(CAL_REL_TOL * abs(h_cal), CAL_ABS_TOL_MT)
+            and (i == 0 or p[0] - h[i - 1] > 2 * step)
+            and (i == h.size - 1 or h[i + 1] < p[0])
+        )
+        if is_cal or not blocks or p[0] < blocks[-1][-1][0] or blocks[-1][-1][3]:
+            blocks.append([])
+        blocks[-1].append((*p, is_cal))
+    blocks = [[q[:3] for q in b] for b in blocks]
+    curves, cal_m, cal_h = build_curves(blocks, h_cal, drift, None, CAL_ABS_TOL_MT)
+    notes = []
+    if drift is not None and cal_m is not None:
+        notes.append(f"{drift} drift correction from {cal_m.size} calibration points")
+    return MicroMagData(
+        curves,
+        h_cal,
+        cal_m,
+        header,
+        field_unit="mT",
+        moment_unit="A·m²",
+        units_of_measure=None,
+        complete=True,
+        notes=tuple(notes),
+        calibration_fields=cal_h,
+    )
