@@ -1,14 +1,15 @@
 """Figures of bifurcations and disorder ensembles: fig:bif_0, fig:bif, fig:dim, fig:sap, fig:mag,
 fig:mag_his.
 
-Every long computation is an independent task run through :func:`analysis.execution.run_tasks`
-(process pool or Dask, results store, resume):
+Every long computation is an independent task run through
+:func:`analysis.experiments.execution.run_tasks` (process pool or Dask, results store, resume):
 
 * a bifurcation sweep with continuation is sequential in C, so one sweep is one task
   (:func:`bifurcation_task`); the sweeps of one figure run in parallel;
-* an ensemble is one task per (N, C, realization) (:func:`analysis.ensemble.ensemble_task`);
-  the limit values one task per C (:func:`limit_dimension_task`); the iid reference one task
-  per (N, realization) (:func:`analysis.iid.iid_task`).
+* an ensemble is one task per (N, C, realization)
+  (:func:`analysis.experiments.ensemble.ensemble_task`); the limit values one task per C
+  (:func:`limit_dimension_task`); the iid reference one task
+  per (N, realization) (:func:`analysis.experiments.iid.iid_task`).
 
 fig:dim, fig:sap, fig:mag and fig:mag_his share one ensemble computation: it is computed by the
 first of them that runs and cached for the others (module-level, keyed by output directory,
@@ -22,6 +23,18 @@ from typing import Any
 
 import numpy as np
 
+from analysis.experiments.parameters import (
+    DAMPING_RATIO,
+    DEFAULT_Q0,
+    ENSEMBLE_COUPLINGS,
+    FREQUENCY,
+    PAPER_LARGEST_N,
+    PAPER_REGULAR_FRACTION,
+    SPIN_COUPLING,
+    SPREAD,
+    V0,
+    WIDTH,
+)
 from analysis.paper import decisions as dec
 from analysis.paper.context import (
     AGREE,
@@ -36,18 +49,6 @@ from analysis.paper.context import (
 
 __all__ = ["FIGURES", "bifurcation_task", "limit_dimension_task"]
 
-# Paper Table II and Table I
-DAMPING_RATIO = 0.05
-FREQUENCY = 1.0
-Q0, V0 = -1.0, 0.1
-WIDTH, SPREAD, SPIN_COUPLING = 2.0, 1.0, 2.0
-#: the two couplings of the paper's ensemble section (fig:dim, fig:sap, fig:mag)
-ENSEMBLE_COUPLINGS = (2.9, 4.0)
-#: paper fig:sap(b): "nearly 100 of the 500 disorder realizations lead to D_KY = 0" at C = 2.9
-PAPER_REGULAR_FRACTION = 100 / 500
-#: the largest N of the paper's ensembles and of its fig:bif / fig:erf_10000 dimers: the claims
-#: "at large N" are about it, and a run whose largest N is smaller cannot decide them
-PAPER_LARGEST_N = 20000
 #: minimum number of grid values of C inside a window of fig:bif for its claim to be decided
 MIN_WINDOW_VALUES = 3
 #: fig:bif_0 cascade: the grazing value C = 1/(2ζ) + β = 10 − 1 = 9 (period-1 orbit with
@@ -62,9 +63,9 @@ CASCADE_ZOOM = (9.3, 7.0)
 
 def _make_operator(kind: str, spins: int, seed: int):
     """The operator of a task ``kind``: ``"dimer_pair"`` (fig:bif_0's dimer b = (1, -1)) or a
-    model name of :mod:`analysis.models` (``"dimers"``, ``"erf-play"``) at the paper's
+    model name of :mod:`analysis.experiments.models` (``"dimers"``, ``"erf-play"``) at the paper's
     parameters."""
-    from analysis.models import MODELS, build_operator, canonical_model_name
+    from analysis.experiments.models import MODELS, build_operator, canonical_model_name
 
     params = dict(width=WIDTH, spread=SPREAD, spin_coupling=SPIN_COUPLING)
     if kind == "dimer_pair":  # fig:bif_0: one dimer, b = (1, -1), J = 2
@@ -95,7 +96,7 @@ def bifurcation_task(
     (spins, 2, 1, 2, seed)``) or ``"erf-play"`` (the limit). Returns the Poincaré points q, v
     (n_values × n_periods), the spectra, λ_max and the orbit period per C (0: none found).
     """
-    from analysis.bifurcation import bifurcation_diagram, section_period
+    from analysis.dynamics.bifurcation import bifurcation_diagram, section_period
     from oscillators import ForcedOscillator
 
     operator = _make_operator(kind, spins, seed)
@@ -108,7 +109,7 @@ def bifurcation_task(
         continuation=True,
         lyapunov=True,
         lyapunov_t_end=lyapunov_t,
-        q0=Q0,
+        q0=DEFAULT_Q0,
         v0=V0,
         progress=False,
     )
@@ -129,13 +130,13 @@ def limit_dimension_task(
     """D_KY (Lyapunov spectrum over [transient, t_end]) and D_BC (box counting of the Poincaré
     section (q, v), ``section_periods`` points after ``section_transient`` periods) of the
     erf-play limit at coupling C, from the paper's initial condition (w0 = q0 − p/2)."""
-    from analysis.dimensions import box_counting_dimension
-    from analysis.lyapunov import lyapunov_spectrum
+    from analysis.dynamics.dimensions import box_counting_dimension
+    from analysis.dynamics.lyapunov import lyapunov_spectrum
     from oscillators import ForcedOscillator
 
     system = ForcedOscillator(_make_operator("erf-play", 0, 0), coupling, DAMPING_RATIO, FREQUENCY)
-    ly = lyapunov_spectrum(system, t_end, transient, Q0, V0, progress=False)
-    sec = system.poincare_section(int(section_periods), int(section_transient), Q0, V0)
+    ly = lyapunov_spectrum(system, t_end, transient, DEFAULT_Q0, V0, progress=False)
+    sec = system.poincare_section(int(section_periods), int(section_transient), DEFAULT_Q0, V0)
     try:
         bc = box_counting_dimension(np.column_stack([sec.q, sec.v]))
         d_bc, d_bc_err = float(bc.dimension), float(bc.stderr)
@@ -598,8 +599,13 @@ def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
     key = "ensemble_data"
     if key in ctx.cache:
         return ctx.cache[key]
-    from analysis.ensemble import EXPERIMENT, aggregate_ensemble, ensemble_task, ensemble_tasks
-    from analysis.iid import iid_variance_scaling
+    from analysis.experiments.ensemble import (
+        EXPERIMENT,
+        aggregate_ensemble,
+        ensemble_task,
+        ensemble_tasks,
+    )
+    from analysis.experiments.iid import iid_variance_scaling
 
     s = ctx.size
     tasks = ensemble_tasks(
@@ -985,7 +991,7 @@ def fig_mag(ctx: PaperContext) -> list[Claim]:
     """Paper fig:mag: VAR[M] vs N for C = 2.9, 4.0 (a) and for iid input with its power law (b)."""
     import matplotlib.pyplot as plt
 
-    from analysis.statistics import power_law_fit
+    from analysis.dynamics.statistics import power_law_fit
 
     data = _ensemble_data(ctx)
     iid = data["iid"]
@@ -1120,7 +1126,7 @@ def fig_mag_his(ctx: PaperContext) -> list[Claim]:
     """Paper fig:mag_his: empirical PDFs of M_T for the two largest N (C = 4.0, 2.9, iid)."""
     import matplotlib.pyplot as plt
 
-    from analysis.statistics import empirical_pdf
+    from analysis.dynamics.statistics import empirical_pdf
 
     data = _ensemble_data(ctx)
     iid = data["iid"]

@@ -34,8 +34,8 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
     """Paper fig:preis_dens: (a) μ(s) vs N(s; 0, R²), (b) erf play (N → ∞), (c) N dimers."""
     import matplotlib.pyplot as plt
 
+    from analysis.experiments.models import build_operator
     from analysis.identification import compare_with_ridge, identify_preisach
-    from analysis.models import build_operator
     from analysis.preisach_plots import plot_density_rs, plot_s_marginal
 
     n_spins = ctx.size.identification_spins

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analysis.models import build_operator
+from analysis.experiments.models import build_operator
 from analysis.paper.context import Claim, FigureSpec, PaperContext, verdict
 
 __all__ = ["FIGURES"]

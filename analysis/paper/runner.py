@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 
+from analysis.experiments.store import StoreError
 from analysis.paper.context import (
     AGREE,
     DISAGREE,
@@ -20,7 +21,6 @@ from analysis.paper.context import (
     FigureSpec,
     PaperContext,
 )
-from analysis.store import StoreError
 
 __all__ = [
     "FigureSpec",
@@ -93,7 +93,8 @@ def run_paper(
     of the total, its time and the time so far) and a progress bar per task sweep (counts, rate,
     ETA); off by default. A results store that cannot be used (damaged, foreign, or holding
     results of other code versions without ``allow_version_mismatch``) raises
-    :class:`~analysis.store.StoreError` for the whole run instead of failing figure by figure.
+    :class:`~analysis.experiments.store.StoreError` for the whole run instead of failing figure
+    by figure.
     """
     if size not in SIZES:
         raise ValueError(f"size must be one of {sorted(SIZES)}, got {size!r}")

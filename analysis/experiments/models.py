@@ -43,6 +43,16 @@ from typing import Any
 
 import numpy as np
 
+from analysis.experiments.parameters import (
+    PLAYS,
+    SEED,
+    SPIN_COUPLING,
+    SPINS,
+    SPREAD,
+    WIDTH,
+    WIDTH_SPREAD,
+)
+
 __all__ = [
     "ALIASES",
     "MODELS",
@@ -88,16 +98,16 @@ class ModelParameters:
         H, half-extent of the ``preisach-uniform`` triangle, > 0 (default ``5R + p/2``).
     """
 
-    spins: int = 20000
-    seed: int = 0
-    width: float = 2.0
-    spread: float = 1.0
-    spin_coupling: float = 2.0
-    width_spread: float = 0.2
+    spins: int = SPINS
+    seed: int = SEED
+    width: float = WIDTH
+    spread: float = SPREAD
+    spin_coupling: float = SPIN_COUPLING
+    width_spread: float = WIDTH_SPREAD
     fields: tuple[tuple[float, float], ...] | None = None
     alpha: float | None = None
     beta: float | None = None
-    plays: int = 10
+    plays: int = PLAYS
     resolution: int = 512
     half_extent: float | None = None
 

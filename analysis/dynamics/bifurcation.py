@@ -16,6 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from analysis.experiments.parameters import V0
+from oscillators import DEFAULT_Q0
+
 #: most parameter values in one sweep
 MAX_VALUES = 1_000_000
 #: most forcing periods one sweep may integrate (values × (n_periods + transient_periods))
@@ -169,8 +172,8 @@ def bifurcation_diagram(
     continuation: bool = True,
     lyapunov: bool = True,
     lyapunov_t_end: float = 1000.0,
-    q0: float = -1.0,
-    v0: float = 0.1,
+    q0: float = DEFAULT_Q0,
+    v0: float = V0,
     operator_state: Any = None,
     parameter: str = "coupling",
     progress: bool = False,
@@ -199,7 +202,7 @@ def bifurcation_diagram(
     progress:
         Show a progress bar over the values (off by default; the CLI turns it on).
     """
-    from analysis.lyapunov import lyapunov_spectrum
+    from analysis.dynamics.lyapunov import lyapunov_spectrum
     from hysteresis._progress import progress_bar
     from hysteresis._validation import bounded_work, finite_array, finite_scalar, positive_integer
 
