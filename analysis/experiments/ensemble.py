@@ -22,8 +22,14 @@ from typing import Any
 
 import numpy as np
 
-from analysis.dynamics.dimensions import kaplan_yorke_dimension
-from analysis.dynamics.statistics import magnetization_variance, self_averaging_parameter
+from analysis.dynamics.bifurcation import section_period
+from analysis.dynamics.dimensions import box_counting_dimension, kaplan_yorke_dimension
+from analysis.dynamics.lyapunov import TangentStepper, lyapunov_spectrum
+from analysis.dynamics.statistics import (
+    empirical_pdf,
+    magnetization_variance,
+    self_averaging_parameter,
+)
 from analysis.experiments.execution import run_tasks, spawn_seeds
 from analysis.experiments.models import build_operator, canonical_model_name
 from analysis.experiments.parameters import (
@@ -37,6 +43,16 @@ from analysis.experiments.parameters import (
     WIDTH_SPREAD,
 )
 from analysis.experiments.store import ResultStore
+from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    bounded_work,
+    finite_array,
+    nonnegative_integer,
+    positive_integer,
+    positive_scalar,
+    scalar_in_open_interval,
+    time_window,
+)
 from hysteresis.spin_dimers import MAX_SPINS
 from oscillators import MAX_PERIODS, ForcedOscillator
 
@@ -64,7 +80,6 @@ def realization_seeds(base_seed: int, spins: int, realizations: int) -> list[int
     """Disorder seeds of the realizations at N spins: ``spawn_seeds`` from a base derived from
     ``(base_seed, N)``. Different N get independent disorder; different couplings C at the same
     N share it (the same realizations are followed across C)."""
-    from hysteresis._validation import nonnegative_integer, positive_integer
 
     base_seed = nonnegative_integer(base_seed, "base_seed")
     spins = positive_integer(spins, "spins")
@@ -119,8 +134,6 @@ def section_dimension(
     q: np.ndarray, v: np.ndarray, max_fill: float, min_boxes: float
 ) -> tuple[float, float, int]:
     """(D_BC, its stderr, period): 0 for a periodic section, nan if no scaling region."""
-    from analysis.dynamics.bifurcation import section_period
-    from analysis.dynamics.dimensions import box_counting_dimension
 
     period = section_period(q, v)
     if period > 0:
@@ -176,8 +189,6 @@ def one_pass_measurements(
     the second direction in double precision (the exponents are the same in exact arithmetic
     for any QR interval; a test compares with one QR step per period).
     """
-    from analysis.dynamics.lyapunov import TangentStepper, lyapunov_spectrum
-    from hysteresis._validation import positive_integer
 
     qr_periods = positive_integer(qr_periods, "qr_periods")
     period = float(system.period)
@@ -307,16 +318,6 @@ def validate_ensemble(
     ``(0, 2 spin_coupling)``, ``t_end <= transient``, or more than :data:`MAX_TASKS` tasks or
     :data:`MAX_PERIODS` forcing periods per task (refused, not started).
     """
-    from hysteresis._validation import (
-        MAX_MAGNITUDE,
-        bounded_work,
-        finite_array,
-        nonnegative_integer,
-        positive_integer,
-        positive_scalar,
-        scalar_in_open_interval,
-        time_window,
-    )
 
     if isinstance(spins_list, str | bytes) or not isinstance(spins_list, Iterable):
         raise TypeError(f"spins must be a sequence of even integers, got {spins_list!r}")
@@ -431,7 +432,6 @@ class EnsemblePoint:
 
     def pdf(self, field: str = "magnetization", bins: int | Sequence[float] = 30):
         """Empirical PDF of a per-realization field (paper fig:mag_his for M_T)."""
-        from analysis.dynamics.statistics import empirical_pdf
 
         return empirical_pdf(getattr(self, field), bins)
 

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from analysis.experiments.store import ResultStore, code_version, task_key
+from hysteresis._validation import bounded_work, nonnegative_integer
 
 __all__ = ["run_tasks", "spawn_seeds", "TaskError"]
 
@@ -72,7 +73,6 @@ def spawn_seeds(base_seed: int, n: int) -> list[int]:
     statistically independent streams. The same ``(base_seed, n)`` always gives the same list,
     and the first ``m`` seeds do not depend on ``n``.
     """
-    from hysteresis._validation import bounded_work, nonnegative_integer
 
     n = nonnegative_integer(n, "n")
     bounded_work(n, "n", 10_000_000, "seeds")

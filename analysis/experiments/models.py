@@ -52,6 +52,12 @@ from analysis.experiments.parameters import (
     WIDTH,
     WIDTH_SPREAD,
 )
+from hysteresis._validation import as_generator, positive_integer
+from hysteresis.play import GeneralizedPlay, PlayOperator
+from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
+from hysteresis.preisach import ContinuousPreisachModel, PreisachModel
+from hysteresis.relay import Relay
+from hysteresis.spin_dimers import SpinDimerEnsemble
 
 __all__ = [
     "ALIASES",
@@ -141,42 +147,30 @@ class ModelSpec:
 
 
 def _dimers(p: ModelParameters) -> Any:
-    from hysteresis.spin_dimers import SpinDimerEnsemble
-
     if p.fields is not None:
         return SpinDimerEnsemble(np.asarray(p.fields, dtype=float), p.spin_coupling)
     return SpinDimerEnsemble.random(p.spins, p.width, p.spread, p.spin_coupling, p.seed)
 
 
 def _erf_play(p: ModelParameters) -> Any:
-    from hysteresis.play import GeneralizedPlay
-
     return GeneralizedPlay.erf(p.width, p.spread)
 
 
 def _play(p: ModelParameters) -> Any:
-    from hysteresis.play import PlayOperator
-
     return PlayOperator(p.width)
 
 
 def _relay(p: ModelParameters) -> Any:
-    from hysteresis.relay import Relay
-
     alpha = 0.5 * p.width if p.alpha is None else p.alpha
     beta = -0.5 * p.width if p.beta is None else p.beta
     return Relay(alpha, beta)
 
 
 def _n2(p: ModelParameters) -> Any:
-    from hysteresis.spin_dimers import SpinDimerEnsemble
-
     return SpinDimerEnsemble(np.array([[2.0, 0.0]]), p.spin_coupling)
 
 
 def _n4(p: ModelParameters) -> Any:
-    from hysteresis.spin_dimers import SpinDimerEnsemble
-
     return SpinDimerEnsemble(np.array([[2.0, 0.0], [-0.5, -2.5]]), p.spin_coupling)
 
 
@@ -196,9 +190,6 @@ def _check_positive(value: Any, name: str) -> float:
 
 
 def _preisach(p: ModelParameters) -> Any:
-    from hysteresis._validation import as_generator, positive_integer
-    from hysteresis.preisach import PreisachModel
-
     n = positive_integer(p.spins, "spins")
     width = _check_positive(p.width, "width")
     spread = _check_positive(p.spread, "spread")
@@ -218,8 +209,6 @@ def _preisach(p: ModelParameters) -> Any:
 
 
 def _preisach_gauss(p: ModelParameters) -> Any:
-    from hysteresis.preisach import ContinuousPreisachModel
-
     width = _check_positive(p.width, "width")
     spread = _check_positive(p.spread, "spread")
     sr = _check_width_spread(p, strictly_positive=True)
@@ -230,9 +219,6 @@ def _preisach_gauss(p: ModelParameters) -> Any:
 
 
 def _pi(p: ModelParameters) -> Any:
-    from hysteresis._validation import positive_integer
-    from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
-
     k = positive_integer(p.plays, "plays")
     width = _check_positive(p.width, "width")
     widths = width * np.linspace(0.5, 1.5, k) if k > 1 else np.array([width])
@@ -249,8 +235,6 @@ def uniform_half_extent(p: ModelParameters) -> float:
 
 
 def _preisach_uniform(p: ModelParameters) -> Any:
-    from hysteresis.preisach import PreisachModel
-
     h = uniform_half_extent(p)
     area = 2.0 * h**2  # the triangle β <= α inside [-H, H]²
 

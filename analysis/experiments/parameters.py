@@ -1,8 +1,8 @@
 """The paper's parameter values and the run sizes of its reproduction, named once.
 
-Zech, Otto & Radons, Tables I and II: every model default (:class:`~analysis.experiments.models.
-ModelParameters`), every oscillator default of the analyses and the command line, and the
-ensembles and figures of ``hyst paper`` read these names; nothing else spells the numbers.
+Zech, Otto & Radons, Tables I and II: every model default
+(:class:`~analysis.experiments.models.ModelParameters`), every oscillator default of the analyses
+and the command line, and the ensembles and figures of ``hyst paper`` read these names.
 The paper's initial position is the oscillator library's :data:`oscillators.DEFAULT_Q0`.
 
 :class:`RunSize` holds every knob that sets how long the reproduction runs; :data:`SIZES` are

@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from analysis._json import to_json
+from analysis.experiments.execution import run_tasks
 from analysis.experiments.parameters import SIZES, RunSize
 
 __all__ = [
@@ -138,7 +140,6 @@ class PaperContext:
 
     def write_json(self, name: str, payload: Any) -> Path:
         path = self.out / name
-        from analysis._json import to_json
 
         # strict JSON: non-finite numbers as "inf"/"-inf"/"nan", as the CLI's --json
         path.write_text(to_json(payload, indent=2))
@@ -153,7 +154,6 @@ class PaperContext:
     def run(self, experiment: str, tasks: list[dict], func: Callable[..., Any]) -> list[dict]:
         """Run independent tasks through :func:`analysis.experiments.execution.run_tasks` with
         this run's results store, workers and scheduler (parallel, and resumable on a rerun)."""
-        from analysis.experiments.execution import run_tasks
 
         return run_tasks(
             experiment,

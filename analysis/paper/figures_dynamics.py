@@ -8,7 +8,9 @@ through the results store.
 from __future__ import annotations
 
 import numpy as np
+from scipy.stats import ks_2samp
 
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 from analysis.experiments.models import build_operator
 from analysis.experiments.parameters import (
     DAMPING_RATIO,
@@ -19,6 +21,7 @@ from analysis.experiments.parameters import (
 )
 from analysis.paper import decisions as dec
 from analysis.paper.context import Claim, FigureSpec, PaperContext, reading, verdict
+from oscillators import ForcedOscillator
 
 __all__ = ["FIGURES"]
 
@@ -38,8 +41,6 @@ def _dimers(fields, coupling_j: float = 2.0):
 
 
 def _system(operator, coupling: float):
-    from oscillators import ForcedOscillator
-
     return ForcedOscillator(operator, coupling, DAMPING_RATIO, FREQUENCY)
 
 
@@ -193,7 +194,6 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
     axes[0].set_ylabel("v,  C·M")
     axes[0].legend(fontsize=8, loc="upper left")
     ctx.save_figure(fig, "fig:erf_10000", data)
-    from scipy.stats import ks_2samp
 
     ks = ks_2samp(data["limit_section_q"], data["dimers_section_q"]).statistic
     n1, n2 = data["limit_section_q"].size, data["dimers_section_q"].size
@@ -229,7 +229,6 @@ def dky_task(
     coupling: float, q0: float, w0: float, v0: float, t_end: float, transient: float
 ) -> dict:
     """One Kaplan–Yorke dimension of the erf-play limit (task function, picklable)."""
-    from analysis.dynamics.lyapunov import lyapunov_spectrum
 
     play = _erf_play()
     res = lyapunov_spectrum(

@@ -12,6 +12,11 @@ from dataclasses import asdict
 from pathlib import Path
 
 from analysis.experiments.store import StoreError
+from analysis.paper import figures_bifurcations as bif
+from analysis.paper import figures_dynamics as dyn
+from analysis.paper import figures_ensembles as ens
+from analysis.paper import figures_identification as ident
+from analysis.paper import figures_operators as ops
 from analysis.paper.context import (
     AGREE,
     DISAGREE,
@@ -35,12 +40,7 @@ __all__ = [
 
 
 def _figures() -> list[FigureSpec]:
-    from analysis.paper import figures_dynamics as dyn
-    from analysis.paper import figures_ensembles as ens
-    from analysis.paper import figures_identification as ident
-    from analysis.paper import figures_operators as ops
-
-    return [*ops.FIGURES, *ident.FIGURES, *dyn.FIGURES, *ens.FIGURES]
+    return [*ops.FIGURES, *ident.FIGURES, *dyn.FIGURES, *bif.FIGURES, *ens.FIGURES]
 
 
 class _LazyFigures(Sequence):
