@@ -1,6 +1,13 @@
 """Analyses of systems with hysteresis: Lyapunov spectra, dimensions, bifurcations, ensembles,
 Preisach-plane identification, figures and the ``hyst`` command line.
 
+Grouped by purpose: :mod:`analysis.dynamics` (one system: Lyapunov spectra, dimensions,
+bifurcations, statistics), :mod:`analysis.experiments` (the paper's parameters, the model
+registry, ensembles, task execution and the results store), :mod:`analysis.identification`,
+:mod:`analysis.paper` (``hyst paper``) and :mod:`analysis.cli` (``hyst``). The module paths
+before this grouping (``analysis.lyapunov``, ...) still import for one release, with a
+``DeprecationWarning`` (:mod:`analysis._legacy`).
+
 Public names are imported lazily so that a command line subcommand only loads what it uses.
 (The import-name check below imports :mod:`hysteresis`, which every analysis needs anyway.)
 """

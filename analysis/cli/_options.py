@@ -40,7 +40,7 @@ from analysis.cli._parsing import (
 from analysis.experiments.models import MODELS, ModelParameters, canonical_model_name
 from analysis.experiments.parameters import DAMPING_RATIO, DEFAULT_Q0, FREQUENCY, V0
 from hysteresis.spin_dimers import MAX_SPINS
-from oscillators import MAX_PERIODS
+from oscillators import FREQUENCY_RANGE, MAX_COUPLING, MAX_DAMPING_RATIO, MAX_PERIODS
 
 __all__ = [
     "DEFAULT_OUT",
@@ -159,7 +159,7 @@ def add_oscillator_options(parser: argparse.ArgumentParser, coupling: str = "req
         kw["default"] = None
     g.add_argument(
         "--coupling",
-        help="C, strength of the hysteresis force"
+        help=f"C, strength of the hysteresis force, |C| <= {MAX_COUPLING:g}"
         + ("; one or more values" * (coupling == "multiple")),
         **kw,
     )
@@ -167,10 +167,13 @@ def add_oscillator_options(parser: argparse.ArgumentParser, coupling: str = "req
         "--damping-ratio",
         type=finite_float,
         default=DAMPING_RATIO,
-        help="zeta, damping ratio (the library's range; < 1 for play-type models)",
+        help=f"zeta, damping ratio in [0, {MAX_DAMPING_RATIO:g}] (< 1 for play-type models)",
     )
     g.add_argument(
-        "--frequency", type=finite_float, default=FREQUENCY, help="Omega, forcing frequency"
+        "--frequency",
+        type=finite_float,
+        default=FREQUENCY,
+        help="Omega, forcing frequency in [{:g}, {:g}]".format(*FREQUENCY_RANGE),
     )
 
 

@@ -52,12 +52,16 @@ from analysis.experiments.parameters import (
     WIDTH,
     WIDTH_SPREAD,
 )
+from hysteresis import (
+    ContinuousPreisachModel,
+    GeneralizedPlay,
+    PlayOperator,
+    PrandtlIshlinskii,
+    PreisachModel,
+    Relay,
+    SpinDimerEnsemble,
+)
 from hysteresis._validation import as_generator, positive_integer
-from hysteresis.play import GeneralizedPlay, PlayOperator
-from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
-from hysteresis.preisach import ContinuousPreisachModel, PreisachModel
-from hysteresis.relay import Relay
-from hysteresis.spin_dimers import SpinDimerEnsemble
 
 __all__ = [
     "ALIASES",
