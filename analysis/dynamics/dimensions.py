@@ -6,7 +6,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from hysteresis._validation import (
     as_generator,
@@ -168,6 +167,9 @@ def box_counts(
 
 def _typical_spacing(pts: np.ndarray, rng: np.random.Generator, sample: int = 2000) -> float:
     """Median nearest-neighbour distance among the points (a subsample for large sets)."""
+
+    # deliberately lazy: scipy.spatial costs ~0.2 s at every `hyst` start
+    from scipy.spatial import cKDTree
 
     tree = cKDTree(pts)
     idx = rng.choice(pts.shape[0], size=min(sample, pts.shape[0]), replace=False)

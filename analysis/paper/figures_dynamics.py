@@ -8,7 +8,6 @@ through the results store.
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import ks_2samp
 
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from analysis.experiments.models import build_operator
@@ -194,6 +193,9 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
     axes[0].set_ylabel("v,  C·M")
     axes[0].legend(fontsize=8, loc="upper left")
     ctx.save_figure(fig, "fig:erf_10000", data)
+
+    # deliberately lazy: scipy.stats costs about a second at every `hyst` start
+    from scipy.stats import ks_2samp
 
     ks = ks_2samp(data["limit_section_q"], data["dimers_section_q"]).statistic
     n1, n2 = data["limit_section_q"].size, data["dimers_section_q"].size
