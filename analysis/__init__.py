@@ -1,6 +1,13 @@
 """Analyses of systems with hysteresis: Lyapunov spectra, dimensions, bifurcations, ensembles,
 Preisach-plane identification, figures and the ``hyst`` command line.
 
+Grouped by purpose: :mod:`analysis.dynamics` (one system: Lyapunov spectra, dimensions,
+bifurcations, statistics), :mod:`analysis.experiments` (the paper's parameters, the model
+registry, ensembles, task execution and the results store), :mod:`analysis.identification`,
+:mod:`analysis.paper` (``hyst paper``) and :mod:`analysis.cli` (``hyst``). The module paths
+before this grouping (``analysis.lyapunov``, ...) still import for one release, with a
+``DeprecationWarning`` (:mod:`analysis._legacy`).
+
 Public names are imported lazily so that a command line subcommand only loads what it uses.
 (The import-name check below imports :mod:`hysteresis`, which every analysis needs anyway.)
 """
@@ -10,28 +17,31 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from analysis import _legacy
 from hysteresis._distribution import check_import_name as _check_import_name
 from hysteresis._version import __version__ as __version__
 
 # "analysis" is also the import name of an unrelated PyPI distribution: refuse to run mixed
 _check_import_name("analysis")
+# the module paths before the grouping by purpose (analysis.lyapunov, ...): one more release
+_legacy.install()
 
 _LAZY = {
-    "lyapunov_spectrum": "analysis.lyapunov",
-    "TangentStepper": "analysis.lyapunov",
-    "LyapunovResult": "analysis.lyapunov",
-    "kaplan_yorke_dimension": "analysis.dimensions",
-    "box_counting_dimension": "analysis.dimensions",
-    "BoxCountingResult": "analysis.dimensions",
-    "self_averaging_parameter": "analysis.statistics",
+    "lyapunov_spectrum": "analysis.dynamics.lyapunov",
+    "TangentStepper": "analysis.dynamics.lyapunov",
+    "LyapunovResult": "analysis.dynamics.lyapunov",
+    "kaplan_yorke_dimension": "analysis.dynamics.dimensions",
+    "box_counting_dimension": "analysis.dynamics.dimensions",
+    "BoxCountingResult": "analysis.dynamics.dimensions",
+    "self_averaging_parameter": "analysis.dynamics.statistics",
     "identify_preisach": "analysis.identification",
-    "bifurcation_diagram": "analysis.bifurcation",
-    "magnetization_variance": "analysis.statistics",
-    "run_ensemble": "analysis.ensemble",
-    "ensemble_task": "analysis.ensemble",
-    "iid_magnetization": "analysis.iid",
-    "ResultStore": "analysis.store",
-    "run_tasks": "analysis.execution",
+    "bifurcation_diagram": "analysis.dynamics.bifurcation",
+    "magnetization_variance": "analysis.dynamics.statistics",
+    "run_ensemble": "analysis.experiments.ensemble",
+    "ensemble_task": "analysis.experiments.ensemble",
+    "iid_magnetization": "analysis.experiments.iid",
+    "ResultStore": "analysis.experiments.store",
+    "run_tasks": "analysis.experiments.execution",
 }
 
 __all__ = sorted([*_LAZY, "__version__"])

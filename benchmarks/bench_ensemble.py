@@ -28,8 +28,8 @@ import statistics
 import time
 from pathlib import Path
 
-from analysis.ensemble import ensemble_task, ensemble_tasks
-from analysis.execution import run_tasks
+from analysis.experiments.ensemble import ensemble_task, ensemble_tasks
+from analysis.experiments.execution import run_tasks
 
 
 def main() -> None:
@@ -91,8 +91,8 @@ ENSEMBLE_FIGURES = ("fig:dim", "fig:sap", "fig:mag", "fig:mag_his")
 
 
 def _full_estimate(args: argparse.Namespace, speedup: float) -> dict:
+    from analysis.experiments.parameters import ENSEMBLE_COUPLINGS
     from analysis.paper.context import SIZES
-    from analysis.paper.figures_ensembles import ENSEMBLE_COUPLINGS
 
     full = SIZES["full"]
     transient = 100.0

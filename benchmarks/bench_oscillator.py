@@ -35,7 +35,7 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from analysis.lyapunov import lyapunov_spectrum
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis.play import GeneralizedPlay
 from hysteresis.preisach import PreisachModel
 from hysteresis.spin_dimers import SpinDimerEnsemble

@@ -31,7 +31,7 @@ def measure() -> dict:
     import math
     import time
 
-    from analysis.lyapunov import lyapunov_spectrum
+    from analysis.dynamics.lyapunov import lyapunov_spectrum
     from hysteresis.spin_dimers import SpinDimerEnsemble
     from oscillators import ForcedOscillator
 

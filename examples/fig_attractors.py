@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.stats import ks_2samp  # noqa: E402
 
-from analysis.lyapunov import lyapunov_spectrum  # noqa: E402
+from analysis.dynamics.lyapunov import lyapunov_spectrum  # noqa: E402
 from hysteresis import GeneralizedPlay, SpinDimerEnsemble  # noqa: E402
 from oscillators import ForcedOscillator  # noqa: E402
 

@@ -21,7 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from analysis.bifurcation import bifurcation_diagram  # noqa: E402
+from analysis.dynamics.bifurcation import bifurcation_diagram  # noqa: E402
 from hysteresis import GeneralizedPlay, SpinDimerEnsemble  # noqa: E402
 from oscillators import ForcedOscillator  # noqa: E402
 

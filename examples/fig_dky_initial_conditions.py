@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from analysis.lyapunov import lyapunov_spectrum  # noqa: E402
+from analysis.dynamics.lyapunov import lyapunov_spectrum  # noqa: E402
 from hysteresis import GeneralizedPlay  # noqa: E402
 from oscillators import ForcedOscillator  # noqa: E402
 

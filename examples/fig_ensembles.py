@@ -6,9 +6,10 @@
 
 Each task is one disorder realization SpinDimerEnsemble.random(N, p=2, R=1, J=2, seed) at one
 coupling C (2.9 and 4.0): its Lyapunov spectrum in (q, v), D_KY, the box-counting dimension of
-the section and the time-averaged magnetization M_T (``analysis.ensemble.ensemble_task``).
-The tasks run through ``analysis.execution.run_tasks`` — process pool or Dask cluster — and every
-result goes to a SQLite ``ResultStore``: run the script again and finished tasks are skipped, so
+the section and the time-averaged magnetization M_T
+(``analysis.experiments.ensemble.ensemble_task``). The tasks run through
+``analysis.experiments.execution.run_tasks`` — process pool or Dask cluster — and every result goes
+to a SQLite ``ResultStore``: run the script again and finished tasks are skipped, so
 a crashed or interrupted sweep resumes where it stopped. Then per (N, C): means of D_KY and D_BC,
 SAP[D] = (mean(D²) − mean(D)²)/mean(D)², the number of regular realizations (D_KY = 0), and
 VAR[M] = mean(M_T²) − mean(M_T)².
@@ -24,9 +25,14 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from analysis.ensemble import EXPERIMENT, aggregate_ensemble, ensemble_task, ensemble_tasks  # noqa: E402
-from analysis.execution import run_tasks  # noqa: E402
-from analysis.store import ResultStore  # noqa: E402
+from analysis.experiments.ensemble import (  # noqa: E402
+    EXPERIMENT,
+    aggregate_ensemble,
+    ensemble_task,
+    ensemble_tasks,
+)
+from analysis.experiments.execution import run_tasks  # noqa: E402
+from analysis.experiments.store import ResultStore  # noqa: E402
 
 COUPLINGS = (2.9, 4.0)
 

@@ -39,8 +39,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from analysis.dimensions import kaplan_yorke_dimension  # noqa: E402
-from analysis.lyapunov import lyapunov_spectrum  # noqa: E402
+from analysis.dynamics.dimensions import kaplan_yorke_dimension  # noqa: E402
+from analysis.dynamics.lyapunov import lyapunov_spectrum  # noqa: E402
 from hysteresis import ContinuousPreisachModel, GeneralizedPlay  # noqa: E402
 from oscillators import ForcedOscillator  # noqa: E402
 

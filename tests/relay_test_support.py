@@ -14,7 +14,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.special import ndtr
 
-from analysis.lyapunov import lyapunov_spectrum
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 
 _METHODS = {"auto": "auto", "kernel": "nested", "generic": "generic"}
 

@@ -57,15 +57,15 @@ from hysteresis import (
     GeneralizedPlay, PIState, PlayOperator, PlayState, PrandtlIshlinskii, PreisachModel,
     PreisachState, Relay, RelayState, SpinDimerEnsemble,
 )
-from analysis.dimensions import box_counting_dimension, box_counts, kaplan_yorke_dimension
-from analysis.statistics import (
+from analysis.dynamics.dimensions import box_counting_dimension, box_counts, kaplan_yorke_dimension
+from analysis.dynamics.statistics import (
     empirical_pdf, magnetization_variance, power_law_fit, self_averaging_parameter,
 )
-from analysis.bifurcation import bifurcation_diagram, distinct_points, orbit_period
-from analysis.ensemble import ensemble_tasks, run_ensemble
-from analysis.iid import iid_inputs, iid_magnetization
-from analysis.execution import run_tasks, spawn_seeds
-from analysis.store import ResultStore
+from analysis.dynamics.bifurcation import bifurcation_diagram, distinct_points, orbit_period
+from analysis.experiments.ensemble import ensemble_tasks, run_ensemble
+from analysis.experiments.iid import iid_inputs, iid_magnetization
+from analysis.experiments.execution import run_tasks, spawn_seeds
+from analysis.experiments.store import ResultStore
 from analysis.identification import identify_preisach
 from analysis.identification.forc_io import read_csv, read_forc, read_micromag
 

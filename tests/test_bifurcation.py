@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.bifurcation import bifurcation_diagram, distinct_points, orbit_period
+from analysis.dynamics.bifurcation import bifurcation_diagram, distinct_points, orbit_period
 
 ZETA = 0.05
 AMPLITUDE = 1.0 / (2.0 * ZETA)  # resonance amplitude at Ω = 1
@@ -91,7 +91,7 @@ def test_bifurcation_diagram_full_range():
     couplings = np.round(np.arange(10.0, 0.5, -0.01), 6)
     d = _diagram(couplings, n_periods=120, transient=300, lyapunov_t_end=4000.0)
     sub = d.values >= 6.0
-    from analysis.bifurcation import BifurcationDiagram
+    from analysis.dynamics.bifurcation import BifurcationDiagram
 
     upper = BifurcationDiagram(
         d.parameter,

@@ -10,7 +10,16 @@ import math
 import pytest
 
 from analysis.cli import build_parser, main
-from analysis.cli._common import DEFAULT_OUT, HelpFormatter, progress_enabled, to_json
+from analysis.cli._options import (
+    DEFAULT_OUT,
+)
+from analysis.cli._output import (
+    progress_enabled,
+    to_json,
+)
+from analysis.cli._parsing import (
+    HelpFormatter,
+)
 
 #: commands that build a model (the shared model options must be there)
 MODEL_COMMANDS = (
@@ -38,7 +47,7 @@ def test_every_command_is_registered():
 def test_help_of_every_command_shows_the_shared_options_defaults_and_help(command, capsys):
     assert main([command, "--help"]) == 0
     if command in PENDING and "--quiet" not in capsys.readouterr().out:
-        pytest.xfail(f"hyst {command} adopts analysis.cli._common in its owner's branch")
+        pytest.xfail(f"hyst {command} adopts the shared analysis.cli options in its owner's branch")
     assert main([command, "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())  # undo the help formatter's wrapping
     for opt in SHARED_OUTPUT_OPTIONS:
@@ -80,8 +89,8 @@ def test_progress_is_off_when_not_a_tty_and_with_quiet(monkeypatch):
 def test_library_functions_are_quiet_by_default():
     import inspect
 
-    from analysis.bifurcation import bifurcation_diagram
-    from analysis.ensemble import run_ensemble
+    from analysis.dynamics.bifurcation import bifurcation_diagram
+    from analysis.experiments.ensemble import run_ensemble
     from analysis.paper import run_paper
 
     for fn in (bifurcation_diagram, run_ensemble, run_paper):
@@ -100,7 +109,9 @@ def test_json_output_is_one_object_and_the_figure_title_names_model_and_paramete
     assert record["model"] == "n4" and record["spin_coupling"] == 2.0
     assert record["points"] == 20 and record["transient_periods"] == 2
     assert (out / "poincare.png").stat().st_size > 1000
-    from analysis.cli._common import figure_title
+    from analysis.cli._output import (
+        figure_title,
+    )
 
     ns = build_parser().parse_args(argv)
     title = figure_title(ns, "Poincaré section φ = 0")
@@ -108,7 +119,7 @@ def test_json_output_is_one_object_and_the_figure_title_names_model_and_paramete
 
 
 def test_compilation_is_announced_only_without_a_cache(tmp_path, monkeypatch, capsys):
-    import analysis.cli._common as common
+    import analysis.cli._output as common
 
     ns = argparse.Namespace(quiet=False)
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))

@@ -332,15 +332,15 @@ def _failing_task(x: int) -> dict:
 
 def test_error_inside_a_worker_process_is_one_line(monkeypatch, tmp_path, capsys):
     """An exception raised in a worker process of an ensemble reaches the user as one line."""
-    import analysis.ensemble
-    from analysis.execution import run_tasks
+    import analysis.cli.ensemble
+    from analysis.experiments.execution import run_tasks
 
     def fake_run_ensemble(*args, **kwargs):
         return run_tasks(
             "corpus-fail", [{"x": 101}, {"x": 103}], _failing_task, workers=2, progress=False
         )
 
-    monkeypatch.setattr(analysis.ensemble, "run_ensemble", fake_run_ensemble)
+    monkeypatch.setattr(analysis.cli.ensemble, "run_ensemble", fake_run_ensemble)
     code = main(
         ["ensemble", "--spins", "20", "--coupling", "4", "--realizations", "1",
          "--out", str(tmp_path), "--quiet"]
@@ -351,12 +351,12 @@ def test_error_inside_a_worker_process_is_one_line(monkeypatch, tmp_path, capsys
 
 
 def test_unexpected_library_error_is_one_line(monkeypatch, capsys):
-    import analysis.lyapunov
+    import analysis.cli.lyapunov
 
     def boom(*args, **kwargs):
         raise RuntimeError("tangent integrator returned unsorted exponents\n[1, 2]")
 
-    monkeypatch.setattr(analysis.lyapunov, "lyapunov_spectrum", boom)
+    monkeypatch.setattr(analysis.cli.lyapunov, "lyapunov_spectrum", boom)
     code = main(["lyapunov", "--coupling", "4", "--spins", "20", "--quiet", "--out", "/tmp"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
@@ -398,7 +398,7 @@ def test_damaged_or_foreign_store_is_one_line_and_left_untouched(
 def _store_of_another_version(path: Path, experiment: str) -> None:
     import sqlite3
 
-    from analysis.store import ResultStore
+    from analysis.experiments.store import ResultStore
 
     with ResultStore(path) as store:
         store.put(experiment, {"x": 1}, {"y": 2.0})
@@ -414,7 +414,7 @@ def _rows(path: Path) -> list[tuple]:
 
 
 def test_store_of_another_code_version_needs_allow_version_mismatch(tmp_path, capsys):
-    from analysis.ensemble import EXPERIMENT
+    from analysis.experiments.ensemble import EXPERIMENT
 
     store = tmp_path / "results.sqlite"
     _store_of_another_version(store, EXPERIMENT)

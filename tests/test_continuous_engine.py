@@ -18,7 +18,7 @@ import pytest
 from relay_test_support import gauss_everett_model
 from scipy.special import erf
 
-from analysis.lyapunov import lyapunov_spectrum
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii
 from oscillators.continuous import ContinuousEngine
 from oscillators.engine import DivergenceError

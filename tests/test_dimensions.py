@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from analysis.dimensions import box_counting_dimension, box_counts, kaplan_yorke_dimension
+from analysis.dynamics.dimensions import box_counting_dimension, box_counts, kaplan_yorke_dimension
 
 # ------------------------------------------------------------------------------------------
 # Kaplan–Yorke

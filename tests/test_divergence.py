@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 import pytest
 
-from analysis.lyapunov import lyapunov_spectrum
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis import GeneralizedPlay, PlayOperator, SpinDimerEnsemble
 from oscillators import DivergenceError, ForcedOscillator
 

@@ -38,7 +38,7 @@ def test_docs_build_with_warnings_as_errors(tmp_path):
         assert (html / "tutorials" / f"{page}.html").is_file(), page
     # the API reference is generated from the code: the registry and the oscillator are there
     api = html / "api" / "generated"
-    assert "build_operator" in (api / "analysis.models.html").read_text()
+    assert "build_operator" in (api / "analysis.experiments.models.html").read_text()
     assert "poincare_section" in (api / "oscillators.system.html").read_text()
     # the CLI page carries the parser's own help
     assert "--width-spread" in (html / "cli.html").read_text()

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from analysis.ensemble import (
+from analysis.experiments.ensemble import (
     EXPERIMENT,
     aggregate_ensemble,
     ensemble_task,
@@ -17,7 +17,7 @@ from analysis.ensemble import (
     run_ensemble,
     section_and_magnetization,
 )
-from analysis.store import ResultStore
+from analysis.experiments.store import ResultStore
 
 ZETA = 0.05
 
@@ -57,8 +57,8 @@ def test_one_pass_equals_separate_runs(model):
     # one integration with the tangent flow gives the same section, M_T and spectrum as the
     # separate Lyapunov run and the chunked section/magnetization run (the trajectory does not
     # depend on the tangent flow; 300 time units keep chaotic amplification of round-off small)
-    from analysis.lyapunov import lyapunov_spectrum
-    from analysis.models import build_operator
+    from analysis.dynamics.lyapunov import lyapunov_spectrum
+    from analysis.experiments.models import build_operator
 
     extra = {"spin_coupling": 2.0} if model == "dimers" else {"width_spread": 0.3}
     op = build_operator(model, spins=200, seed=3, width=2.0, spread=1.0, **extra)
@@ -78,7 +78,7 @@ def test_output_integral_kernel_equals_generic_and_switch_sum():
     # the kernel's running ∫M dt against the Python reference loop and against the switch
     # records (∫M = M0·Δ + Σ ΔM_j (Δ − t_j)), for the nested (dimers) and heap (random widths)
     # tables
-    from analysis.models import build_operator
+    from analysis.experiments.models import build_operator
 
     for op in (
         build_operator("dimers", spins=60, seed=2, width=2.0, spread=1.0, spin_coupling=2.0),
@@ -114,7 +114,7 @@ def test_output_integral_refused_where_not_exact():
 def test_regular_realization_single_dimer_above_grazing():
     # one dimer b = (1, -1), J = 2 at C = 9.5 > 9: the orbit stays on the sheet M = -1 (see
     # test_bifurcation), so M_T = -1, D_KY = 0 and the section is one point (D_BC = 0)
-    from analysis.ensemble import section_dimension
+    from analysis.experiments.ensemble import section_dimension
     from hysteresis.spin_dimers import SpinDimerEnsemble
 
     system = _system(SpinDimerEnsemble(fields=[[1.0, -1.0]], spin_coupling=2.0), 9.5)

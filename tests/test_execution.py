@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.execution import TaskError, run_tasks, spawn_seeds
-from analysis.store import ResultStore, StoreError
+from analysis.experiments.execution import TaskError, run_tasks, spawn_seeds
+from analysis.experiments.store import ResultStore, StoreError
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -54,7 +54,7 @@ SWEEP = textwrap.dedent(
     import sys
     sys.path.insert(0, {helpers_dir!r})
     import sweep_helpers
-    from analysis.execution import run_tasks, spawn_seeds
+    from analysis.experiments.execution import run_tasks, spawn_seeds
     seeds = spawn_seeds(2024, {n})
     tasks = [dict(x=i, seed=s, sleep={sleep}) for i, s in enumerate(seeds)]
     run_tasks("sweep", tasks, sweep_helpers.task, store={store!r}, workers={workers},

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from analysis.lyapunov import householder_qr
+from analysis.dynamics.lyapunov import householder_qr
 
 
 @pytest.mark.parametrize("shape", [(2, 2), (3, 3), (5, 3), (3, 5), (1, 2), (40, 7)])

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from analysis.execution import spawn_seeds
-from analysis.iid import iid_inputs, iid_magnetization, iid_task, iid_variance_scaling
+from analysis.experiments.execution import spawn_seeds
+from analysis.experiments.iid import iid_inputs, iid_magnetization, iid_task, iid_variance_scaling
 
 
 def test_iid_task_matches_brute_force_spin_flips():
@@ -79,8 +79,8 @@ def test_store_of_another_code_version_is_reused_only_when_allowed(tmp_path):
     # paper --allow-version-mismatch passes it through): refused by default, reused when told
     import sqlite3
 
-    from analysis.iid import iid_magnetization
-    from analysis.store import StoreError
+    from analysis.experiments.iid import iid_magnetization
+    from analysis.experiments.store import StoreError
 
     store = tmp_path / "s.sqlite"
     first = iid_magnetization(20, 200, 3, seed=1, store=store)

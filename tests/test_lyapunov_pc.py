@@ -13,7 +13,7 @@ import pytest
 from relay_test_support import pc_jacobian, pc_tangent, pc_trajectory
 from scipy.stats import norm
 
-from analysis.lyapunov import lyapunov_spectrum
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis.play import GeneralizedPlay
 from hysteresis.spin_dimers import SpinDimerEnsemble
 from oscillators import ForcedOscillator

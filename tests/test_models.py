@@ -1,4 +1,4 @@
-"""The model registry (analysis.models): every name builds the operator it documents.
+"""The model registry (analysis.experiments.models): every name builds the operator it documents.
 
 Truths are independent of the builders: closed-form branch masses of the Gaussian density by
 quadrature, sampling statistics of the truncated normal from scipy.stats, the dimers' direct
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from analysis.models import (
+from analysis.experiments.models import (
     MODELS,
     ModelParameters,
     build_operator,

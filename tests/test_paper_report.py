@@ -10,13 +10,13 @@ import pytest
 
 from analysis.paper import decisions as dec
 from analysis.paper.context import SIZES, Claim, PaperContext, reading
-from analysis.paper.figures_ensembles import (
+from analysis.paper.runner import write_report
+from analysis.paper.verdicts import (
     cascade_verdict,
     sap_falls,
     std_ratio_verdict,
     variance_slope_stderr,
 )
-from analysis.paper.runner import write_report
 
 INC = "inconclusive at this run size"
 

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from analysis.lyapunov import LyapunovResult, lyapunov_spectrum
+from analysis.dynamics.lyapunov import LyapunovResult, lyapunov_spectrum
 from hysteresis.play import GeneralizedPlay, PlayOperator
 from oscillators import ForcedOscillator
 

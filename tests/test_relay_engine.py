@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from relay_test_support import relay_brute_force
 
-from analysis.lyapunov import lyapunov_spectrum
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis import PreisachModel, Relay, SpinDimerEnsemble
 from oscillators import ForcedOscillator
 from oscillators.engine import GrazingError

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from analysis.statistics import (
+from analysis.dynamics.statistics import (
     empirical_pdf,
     magnetization_variance,
     power_law_fit,

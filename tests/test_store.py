@@ -7,7 +7,7 @@ import sqlite3
 import numpy as np
 import pytest
 
-from analysis.store import ResultStore, canonical_json, task_key
+from analysis.experiments.store import ResultStore, canonical_json, task_key
 
 
 def test_task_key_is_stable_and_canonical():

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.execution import TaskError, run_tasks
-from analysis.store import ResultStore, StoreError, task_key
+from analysis.experiments.execution import TaskError, run_tasks
+from analysis.experiments.store import ResultStore, StoreError, task_key
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -22,7 +22,7 @@ WRITER = textwrap.dedent(
     """
     import sys
     import numpy as np
-    from analysis.store import ResultStore
+    from analysis.experiments.store import ResultStore
     path, who, start = sys.argv[1], sys.argv[2], int(sys.argv[3])
     with ResultStore(path, timeout=120) as store:
         for i in range(start, start + 150):
@@ -73,7 +73,7 @@ def test_two_concurrent_run_tasks_agree(tmp_path):
         import sys, json
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         from test_store_robustness import _square
-        from analysis.execution import run_tasks
+        from analysis.experiments.execution import run_tasks
         res = run_tasks("sq", [dict(x=i) for i in range(60)], _square,
                         store={str(tmp_path / "sq.sqlite")!r}, workers=1, progress=False)
         print(json.dumps([r["y"] for r in res]))
@@ -169,7 +169,7 @@ def test_worker_exception_reaches_the_caller_as_one_clear_error(tmp_path):
 
 
 def test_version_check_refuses_other_commits_not_a_dirty_tree(tmp_path, monkeypatch):
-    import analysis.store as store_module
+    import analysis.experiments.store as store_module
 
     path = tmp_path / "v.sqlite"
     with ResultStore(path) as store:

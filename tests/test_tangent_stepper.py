@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.lyapunov import TangentStepper, lyapunov_spectrum
+from analysis.dynamics.lyapunov import TangentStepper, lyapunov_spectrum
 from hysteresis.spin_dimers import SpinDimerEnsemble
 from oscillators import ForcedOscillator
 

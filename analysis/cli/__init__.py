@@ -2,48 +2,51 @@
 
 Every subcommand lives in its own module of this package and exposes
 ``register(subparsers) -> None``, which adds an ``argparse`` sub-parser whose ``func`` default
-is called with the parsed arguments and returns the process exit code. Modules are discovered
-automatically, so adding a subcommand never touches this file. The conventions every command
-follows (shared options, units, ``--json``, ``--quiet``, errors) live in
-:mod:`analysis.cli._common`.
+is called with the parsed arguments and returns the process exit code. The commands are listed
+in :data:`COMMANDS` (add a new module there). The conventions every command follows (shared
+options, units, ``--json``, ``--quiet``, errors) live in :mod:`analysis.cli._options`, with the
+parser pieces in :mod:`analysis.cli._parsing`, the building of library objects from options in
+:mod:`analysis.cli._build` and the output in :mod:`analysis.cli._output`.
 """
 
 from __future__ import annotations
 
-import importlib
 import os
-import pkgutil
 import sys
 from collections.abc import Sequence
 
-from analysis.cli._common import EXIT_USAGE, CliError, HelpFormatter, HystArgumentParser, fail
+from analysis import __version__
+from analysis.cli import (
+    bifurcation,
+    dimension,
+    ensemble,
+    identify,
+    lyapunov,
+    paper,
+    poincare,
+    trajectory,
+)
+from analysis.cli._parsing import EXIT_USAGE, CliError, HelpFormatter, HystArgumentParser, fail
+from analysis.experiments.execution import TaskError
 
-__all__ = ["main", "build_parser"]
+__all__ = ["COMMANDS", "main", "build_parser"]
 
-
-def _version() -> str:
-    from analysis import __version__
-
-    return __version__
+#: the subcommands, in the order of ``hyst --help``
+COMMANDS = (bifurcation, dimension, ensemble, identify, lyapunov, paper, poincare, trajectory)
 
 
 def build_parser() -> HystArgumentParser:
-    """The ``hyst`` parser with every subcommand registered."""
+    """The ``hyst`` parser with every subcommand of :data:`COMMANDS` registered."""
     parser = HystArgumentParser(
         prog="hyst",
         description="Hysteresis operators and forced oscillators with hysteresis "
         "(reproduces Zech, Otto & Radons, spin dimers and the generalized play).",
         formatter_class=HelpFormatter,
     )
-    parser.add_argument("--version", action="version", version=f"hyst {_version()}")
+    parser.add_argument("--version", action="version", version=f"hyst {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
-            continue
-        module = importlib.import_module(f"{__name__}.{info.name}")
-        register = getattr(module, "register", None)
-        if register is not None:
-            register(subparsers)
+    for command in COMMANDS:
+        command.register(subparsers)
     return parser
 
 
@@ -72,8 +75,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # library and worker errors: one line, no traceback
         if os.environ.get("HYST_DEBUG"):
             raise
-        from analysis.execution import TaskError
-
         if isinstance(exc, TaskError) and exc.__cause__ is not None:
             # a worker's error: name the task and the original exception, not the wrapper
             cause = exc.__cause__

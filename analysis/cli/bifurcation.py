@@ -17,29 +17,36 @@ from typing import Any
 
 import numpy as np
 
-from analysis.cli._common import (
-    CliError,
-    add_initial_options,
-    add_model_options,
-    add_oscillator_options,
-    add_output_options,
-    add_subcommand,
-    add_transient_option,
-    announce_compilation,
+from analysis.cli._build import (
     build_operator,
     build_system,
     check_model_options,
     check_run_length,
+    initial_operator_state,
+    model_record,
+)
+from analysis.cli._options import (
+    add_initial_options,
+    add_model_options,
+    add_oscillator_options,
+    add_output_options,
+    add_transient_option,
+)
+from analysis.cli._output import (
+    announce_compilation,
     emit,
     figure_title,
-    finite_float,
-    initial_operator_state,
-    int_at_least,
-    model_record,
-    nonnegative_float,
     prepare_out,
     progress_enabled,
 )
+from analysis.cli._parsing import (
+    CliError,
+    add_subcommand,
+    finite_float,
+    int_at_least,
+    nonnegative_float,
+)
+from analysis.dynamics.bifurcation import bifurcation_diagram
 
 __all__ = ["register", "run", "plot_diagram"]
 
@@ -130,8 +137,6 @@ def plot_diagram(diagram: Any, path: Path, title: str | None = None) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analysis.bifurcation import bifurcation_diagram
-
     check_model_options(args)
     values = _values(args)
     check_run_length(args, args.lyapunov_t, "--lyapunov-t")

@@ -14,28 +14,38 @@ from typing import Any
 
 import numpy as np
 
-from analysis.cli._common import (
-    CliError,
+from analysis.cli._build import (
+    build_system,
+    check_model_options,
+    check_transient,
+    initial_operator_state,
+    initial_record,
+    model_record,
+)
+from analysis.cli._options import (
     add_initial_options,
     add_model_options,
     add_oscillator_options,
     add_output_options,
-    add_subcommand,
     add_transient_option,
+)
+from analysis.cli._output import (
     announce_compilation,
-    build_system,
-    check_model_options,
-    check_transient,
     emit,
     figure_title,
-    initial_operator_state,
-    initial_record,
-    int_at_least,
-    model_record,
-    positive_float,
     prepare_out,
     progress_enabled,
 )
+from analysis.cli._parsing import (
+    CliError,
+    add_subcommand,
+    int_at_least,
+    positive_float,
+)
+from analysis.dynamics.bifurcation import section_period
+from analysis.dynamics.dimensions import box_counting_dimension
+from analysis.dynamics.lyapunov import lyapunov_spectrum
+from analysis.experiments.ensemble import one_pass_measurements
 
 __all__ = ["register", "run"]
 
@@ -96,14 +106,9 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analysis.bifurcation import section_period
-    from analysis.dimensions import box_counting_dimension
-    from analysis.ensemble import one_pass_measurements
-    from analysis.lyapunov import lyapunov_spectrum
-
     check_model_options(args)
-    transient = check_transient(args, args.t_end)
     system = build_system(args)
+    transient = check_transient(args, args.t_end)
     transient_periods = int(np.ceil(args.transient - 1e-12))
     n = args.points
     if n is None:

@@ -14,27 +14,35 @@ from typing import Any
 
 import numpy as np
 
-from analysis.cli._common import (
-    CliError,
-    add_execution_options,
-    add_model_options,
-    add_oscillator_options,
-    add_output_options,
-    add_subcommand,
-    add_transient_option,
-    announce_compilation,
+from analysis.cli._build import (
     build_system,
     check_model_options,
     check_store,
     check_transient,
+    store_error,
+)
+from analysis.cli._options import (
+    add_execution_options,
+    add_model_options,
+    add_oscillator_options,
+    add_output_options,
+    add_transient_option,
+)
+from analysis.cli._output import (
+    announce_compilation,
     emit,
-    int_at_least,
-    positive_float,
     prepare_out,
     progress_enabled,
-    store_error,
     to_json,
 )
+from analysis.cli._parsing import (
+    CliError,
+    add_subcommand,
+    int_at_least,
+    positive_float,
+)
+from analysis.experiments.ensemble import EXPERIMENT, run_ensemble
+from analysis.experiments.store import StoreError
 
 __all__ = ["register", "run"]
 
@@ -87,19 +95,17 @@ def float_fraction(text: str) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analysis.ensemble import run_ensemble
-
     check_model_options(args)
     if args.fields is not None:
         raise CliError("argument --fields: an ensemble draws its disorder (no explicit fields)")
     if args.box_min_boxes < 1:
         raise CliError(f"argument --box-min-boxes: must be >= 1, got {args.box_min_boxes:g}")
-    transient = check_transient(args, args.t_end)
     # every (N, C) must give a valid system: build one of each before any task runs
     for n in args.spins:
         for c in args.coupling:
             ns = argparse.Namespace(**{**vars(args), "spins": [n], "coupling": c})
             build_system(ns)
+    transient = check_transient(args, args.t_end)
     if args.scheduler is not None and args.workers is not None:
         raise CliError("argument --workers: give --workers or --scheduler, not both")
     if args.scheduler is not None:
@@ -110,8 +116,6 @@ def run(args: argparse.Namespace) -> int:
                 "argument --scheduler: needs dask.distributed "
                 "(pip install 'hysteresis-toolkit[distributed]')"
             ) from exc
-    from analysis.ensemble import EXPERIMENT
-    from analysis.store import StoreError
 
     store = check_store(args, [EXPERIMENT])
     out = prepare_out(args)

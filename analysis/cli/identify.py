@@ -1,7 +1,7 @@
 """``hyst identify``: Preisach-plane identification from first-order reversal curves.
 
 Two sources: an operator of the model registry (``--model``, the shared model options of
-:mod:`analysis.cli._common`) driven through the reversal curves of a regular grid, or a
+:mod:`analysis.cli._options`) driven through the reversal curves of a regular grid, or a
 measured FORC file (``--input``). The paper's ridge metrics (``N(s; 0, R²) δ(r − p/2)``) are
 computed only for the paper's models (``dimers``, ``erf-play``); other models and measured data
 get data-driven summaries (masses, peak of the FORC density).
@@ -16,22 +16,28 @@ import time
 from pathlib import Path
 from typing import Any
 
-from analysis.cli._common import (
-    CliError,
-    add_model_options,
-    add_output_options,
-    add_subcommand,
-    announce_compilation,
+from analysis.cli._build import (
     check_model_options,
-    emit,
-    figure_title,
     model_parameters,
     model_record,
     option_error,
-    positive_float,
+)
+from analysis.cli._options import (
+    add_model_options,
+    add_output_options,
+)
+from analysis.cli._output import (
+    announce_compilation,
+    emit,
+    figure_title,
     prepare_out,
     progress_enabled,
     to_json,
+)
+from analysis.cli._parsing import (
+    CliError,
+    add_subcommand,
+    positive_float,
 )
 
 __all__ = ["register", "run"]
@@ -173,7 +179,7 @@ def _prepare_model(args: argparse.Namespace) -> tuple[Any, Any, float, Any]:
     """The operator, its thresholds (dimers), the grid's half-extent and the smoothing."""
     import numpy as np
 
-    from analysis.models import build_operator
+    from analysis.experiments.models import build_operator
     from hysteresis._validation import check_grid_nodes
 
     check_model_options(args)
@@ -210,9 +216,9 @@ def _run_model(
     saturation: float,
     smoothing: tuple[float, float] | None,
 ) -> int:
+    from analysis.experiments.models import build_operator
     from analysis.identification import compare_with_ridge, identify_preisach
     from analysis.identification.plots import figure_preisach_density, figure_single_density
-    from analysis.models import build_operator
 
     centres = None if thresholds is None else thresholds.centre
     ident = identify_preisach(

@@ -1,7 +1,8 @@
 """``hyst lyapunov``: Lyapunov spectrum and Kaplan–Yorke dimension of one system.
 
-Defaults are the paper's Table II: ζ = 0.05, Ω = 1, q0 = −1, v0 = 0.1, p = 2, R = 1, J = 2,
-N = 20 000 spins (seed 0), all spins down relaxed at q0; for the play limit w0 = q0 − p/2.
+Defaults are the paper's Tables I and II (:mod:`analysis.experiments.parameters`): ζ = 0.05,
+Ω = 1, q0 = −1, v0 = 0.1, p = 2, R = 1, J = 2, N = 20 000 spins (seed 0), all spins down relaxed
+at q0; for the play limit w0 = q0 − p/2.
 Writes DIR/lyapunov.json (the record that ``--json`` prints).
 """
 
@@ -10,26 +11,33 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from analysis.cli._common import (
+from analysis.cli._build import (
+    build_system,
+    check_model_options,
+    check_transient,
+    initial_operator_state,
+    initial_record,
+    model_record,
+)
+from analysis.cli._options import (
     add_initial_options,
     add_model_options,
     add_oscillator_options,
     add_output_options,
-    add_subcommand,
     add_transient_option,
+)
+from analysis.cli._output import (
     announce_compilation,
-    build_system,
-    check_model_options,
-    check_transient,
     emit,
-    initial_operator_state,
-    initial_record,
-    model_record,
-    positive_float,
     prepare_out,
     progress_enabled,
     to_json,
 )
+from analysis.cli._parsing import (
+    add_subcommand,
+    positive_float,
+)
+from analysis.dynamics.lyapunov import lyapunov_spectrum
 
 __all__ = ["register", "run"]
 
@@ -54,11 +62,9 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analysis.lyapunov import lyapunov_spectrum
-
     check_model_options(args)
+    system = build_system(args)  # the one system; the library checks C, zeta, Omega
     transient = check_transient(args, args.t_end)
-    system = build_system(args)
     state = initial_operator_state(args, system.operator)
     out = prepare_out(args)
     announce_compilation(args)

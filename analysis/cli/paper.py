@@ -5,18 +5,27 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from analysis.cli._common import (
-    CliError,
+from analysis.cli._build import (
+    check_store,
+    store_error,
+)
+from analysis.cli._options import (
     add_execution_options,
     add_output_options,
-    add_subcommand,
+)
+from analysis.cli._output import (
     announce_compilation,
-    check_store,
     emit,
     prepare_out,
     progress_enabled,
-    store_error,
 )
+from analysis.cli._parsing import (
+    CliError,
+    add_subcommand,
+)
+from analysis.experiments.store import StoreError
+from analysis.paper import run_paper
+from analysis.paper.runner import check_only
 
 __all__ = ["register", "run"]
 
@@ -67,16 +76,12 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from analysis.paper import run_paper
-    from analysis.paper.runner import check_only
-
     try:
         check_only(args.only)
     except ValueError as exc:
         raise CliError(f"argument --only: {str(exc).removeprefix('only: ')}") from exc
     if args.scheduler is not None and args.workers is not None:
         raise CliError("argument --workers: give --workers or --scheduler, not both")
-    from analysis.store import StoreError
 
     # a damaged or foreign store is refused up front; other code versions per experiment, when
     # a figure first uses it (a run with --only touches only its own experiments)

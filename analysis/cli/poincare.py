@@ -8,23 +8,29 @@ from typing import Any
 
 import numpy as np
 
-from analysis.cli._common import (
+from analysis.cli._build import (
+    build_system,
+    check_model_options,
+    initial_operator_state,
+    initial_record,
+    model_record,
+)
+from analysis.cli._options import (
     add_initial_options,
     add_model_options,
     add_oscillator_options,
     add_output_options,
-    add_subcommand,
     add_transient_option,
+)
+from analysis.cli._output import (
     announce_compilation,
-    build_system,
-    check_model_options,
     emit,
     figure_title,
-    initial_operator_state,
-    initial_record,
-    int_at_least,
-    model_record,
     prepare_out,
+)
+from analysis.cli._parsing import (
+    add_subcommand,
+    int_at_least,
 )
 
 __all__ = ["register", "run"]

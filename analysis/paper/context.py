@@ -1,13 +1,18 @@
-"""Run sizes and the output context shared by the figure builders of ``hyst paper``."""
+"""The output context shared by the figure builders of ``hyst paper`` (the run sizes live in
+:mod:`analysis.experiments.parameters`)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from analysis._json import to_json
+from analysis.experiments.execution import run_tasks
+from analysis.experiments.parameters import SIZES, RunSize
 
 __all__ = [
     "AGREE",
@@ -30,107 +35,6 @@ DISAGREE = "disagree"
 #: confidence interval straddling the criterion, a grid coarser than the tolerance, ...)
 INCONCLUSIVE = "inconclusive at this run size"
 VERDICTS = (AGREE, DISAGREE, INCONCLUSIVE)
-
-
-@dataclass(frozen=True)
-class RunSize:
-    """Every knob that sets how long the reproduction runs.
-
-    ``full`` is the paper's scale; ``quick`` takes about five minutes on two cores; ``smoke``
-    only checks that every figure and claim is produced.
-    """
-
-    name: str
-    # fig:bif_0 (N = 2, b = (1, -1)): couplings stepped downward
-    bif0_couplings: int = 200
-    bif0_c_range: tuple[float, float] = (0.5, 10.0)
-    bif0_periods: int = 60
-    bif0_transient: int = 200
-    bif0_lyapunov_t: float = 2000.0
-    # fig:bif (N = 20 000 vs the erf-play limit)
-    bif_spins: int = 20000
-    bif_couplings: int = 301
-    bif_c_range: tuple[float, float] = (1.5, 4.5)
-    bif_periods: int = 60
-    bif_transient: int = 100
-    bif_lyapunov_t: float = 2000.0
-    # attractors and single-system Lyapunov runs
-    attractor_periods: int = 2000
-    dky_t_end: float = 2.0e4
-    dky_transient: float = 1.0e3
-    # fig:mboa: initial conditions per panel
-    mboa_points: int = 40
-    # disorder ensembles (fig:dim, fig:sap, fig:mag, fig:mag_his)
-    ensemble_spins: tuple[int, ...] = (100, 500, 1000, 5000, 10000, 15000, 20000)
-    ensemble_realizations: int = 500
-    ensemble_t_end: float = 2.0e4
-    ensemble_transient: float = 1.0e3
-    # iid-input reference
-    iid_spins: tuple[int, ...] = (100, 300, 1000, 3000, 10000, 20000)
-    iid_realizations: int = 500
-    iid_steps: int = 10000
-    # fig:preis_dens
-    identification_spins: int = 20000
-    identification_step: float = 0.1
-    extra: dict = field(default_factory=dict)
-
-
-_FULL = RunSize(name="full")
-_QUICK = replace(
-    _FULL,
-    name="quick",
-    bif0_couplings=200,
-    bif0_periods=40,
-    bif0_transient=100,
-    bif0_lyapunov_t=500.0,
-    bif_spins=20000,
-    bif_couplings=61,
-    bif_periods=40,
-    bif_transient=60,
-    bif_lyapunov_t=3000.0,
-    attractor_periods=1000,
-    dky_t_end=2.0e4,
-    dky_transient=1.0e3,
-    mboa_points=12,
-    # t_end >= 5000: fewer than ~700 section points leave box counting no scaling region
-    ensemble_spins=(100, 1000, 5000, 20000),
-    ensemble_realizations=100,
-    ensemble_t_end=1.0e4,
-    ensemble_transient=500.0,
-    iid_spins=(100, 300, 1000, 3000, 10000),
-    iid_realizations=200,
-    iid_steps=5000,
-    identification_spins=20000,
-    identification_step=0.1,
-)
-_SMOKE = replace(
-    _QUICK,
-    name="smoke",
-    bif0_couplings=6,
-    bif0_periods=10,
-    bif0_transient=10,
-    bif0_lyapunov_t=50.0,
-    bif_spins=400,
-    bif_couplings=3,
-    bif_periods=8,
-    bif_transient=5,
-    bif_lyapunov_t=40.0,
-    attractor_periods=30,
-    dky_t_end=200.0,
-    dky_transient=20.0,
-    mboa_points=2,
-    ensemble_spins=(20, 60),
-    ensemble_realizations=3,
-    ensemble_t_end=100.0,
-    ensemble_transient=10.0,
-    iid_spins=(20, 60, 200),
-    iid_realizations=20,
-    iid_steps=200,
-    identification_spins=400,
-    identification_step=0.25,
-)
-
-SIZES: dict[str, RunSize] = {s.name: s for s in (_SMOKE, _QUICK, _FULL)}
 
 
 @dataclass(frozen=True)
@@ -236,7 +140,6 @@ class PaperContext:
 
     def write_json(self, name: str, payload: Any) -> Path:
         path = self.out / name
-        from analysis._json import to_json
 
         # strict JSON: non-finite numbers as "inf"/"-inf"/"nan", as the CLI's --json
         path.write_text(to_json(payload, indent=2))
@@ -249,9 +152,8 @@ class PaperContext:
         return 1 if self.workers is None and self.size.name == "smoke" else self.workers
 
     def run(self, experiment: str, tasks: list[dict], func: Callable[..., Any]) -> list[dict]:
-        """Run independent tasks through :func:`analysis.execution.run_tasks` with this run's
-        results store, workers and scheduler (parallel, and resumable on a rerun)."""
-        from analysis.execution import run_tasks
+        """Run independent tasks through :func:`analysis.experiments.execution.run_tasks` with
+        this run's results store, workers and scheduler (parallel, and resumable on a rerun)."""
 
         return run_tasks(
             experiment,

@@ -1,16 +1,26 @@
 """Figures of the coupled dynamics: sheets, trajectories, attractors, D_KY vs initial conditions.
 
-Every long computation is an independent task run through :func:`analysis.execution.run_tasks`
-so ``--full`` runs are parallel and resumable through the results store.
+Every long computation is an independent task run through
+:func:`analysis.experiments.execution.run_tasks` so ``--full`` runs are parallel and resumable
+through the results store.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from analysis.models import build_operator
+from analysis.dynamics.lyapunov import lyapunov_spectrum
+from analysis.experiments.models import build_operator
+from analysis.experiments.parameters import (
+    DAMPING_RATIO,
+    DEFAULT_Q0,
+    FREQUENCY,
+    PAPER_LARGEST_N,
+    V0,
+)
 from analysis.paper import decisions as dec
 from analysis.paper.context import Claim, FigureSpec, PaperContext, reading, verdict
+from oscillators import ForcedOscillator
 
 __all__ = ["FIGURES"]
 
@@ -19,28 +29,21 @@ __all__ = ["FIGURES"]
 # enters the bistable region -2 < q < 0, so the overlap the caption describes cannot show there;
 # a scan of C = 0.5, 1.0, ..., 10 (1000 periods each) found points in that region only at
 # C = 1.0, which we therefore use. The report states this choice next to the claim.
-#: the N of the paper's fig:erf_10000 dimers (the figure's name notwithstanding)
-PAPER_ATTRACTOR_N = 20000
 C_SHEETS = 4.0
 C_N2_SECTION = 1.0
-TABLE_II = {"damping_ratio": 0.05, "frequency": 1.0, "q0": -1.0, "v0": 0.1}
 
 
 def _dimers(fields, coupling_j: float = 2.0):
-    from analysis.models import build_operator
 
     pairs = np.asarray(fields, dtype=float).reshape(-1, 2)
     return build_operator("dimers", fields=pairs, spin_coupling=coupling_j)
 
 
 def _system(operator, coupling: float):
-    from oscillators import ForcedOscillator
-
-    return ForcedOscillator(operator, coupling, TABLE_II["damping_ratio"], TABLE_II["frequency"])
+    return ForcedOscillator(operator, coupling, DAMPING_RATIO, FREQUENCY)
 
 
 def _erf_play():
-    from analysis.models import build_operator
 
     return build_operator("erf-play", width=2.0, spread=1.0)
 
@@ -74,7 +77,7 @@ def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
             f"section reaches -2<q<0), {periods} periods after 100",
             verdict=verdict(n1 > 0 and n2 > 0),
             evidence=f"{sec.q.size} section points, {int(np.sum(bistable))} of them in "
-            f"-2 < q < 0, from q0={TABLE_II['q0']:g}, v0={TABLE_II['v0']:g}",
+            f"-2 < q < 0, from q0={DEFAULT_Q0:g}, v0={V0:g}",
             explanation=reading(
                 verdict(n1 > 0 and n2 > 0),
                 disagree="The paper gives no coupling for this figure; at most couplings the "
@@ -190,11 +193,13 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
     axes[0].set_ylabel("v,  C·M")
     axes[0].legend(fontsize=8, loc="upper left")
     ctx.save_figure(fig, "fig:erf_10000", data)
+
+    # deliberately lazy: scipy.stats costs about a second at every `hyst` start
     from scipy.stats import ks_2samp
 
     ks = ks_2samp(data["limit_section_q"], data["dimers_section_q"]).statistic
     n1, n2 = data["limit_section_q"].size, data["dimers_section_q"].size
-    outcome = dec.needs_size(dec.ks_below(ks, n1, n2, 0.15), n_spins, PAPER_ATTRACTOR_N)
+    outcome = dec.needs_size(dec.ks_below(ks, n1, n2, 0.15), n_spins, PAPER_LARGEST_N)
     return [
         Claim(
             claim="C=4.0: attractor of N=20 000 dimers resembles the limit's (Poincaré q "
@@ -206,7 +211,7 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
             evidence=f"{n1} and {n2} section points: the KS sampling scale 1.36·sqrt((n1+n2)/"
             f"(n1·n2)) = {dec.ks_sampling_scale(n1, n2):.3f} (a lower bound: successive section "
             f"points are correlated) against |KS − 0.15| = {abs(ks - 0.15):.3f}; N = {n_spins} "
-            f"(paper: {PAPER_ATTRACTOR_N}), one disorder realization",
+            f"(paper: {PAPER_LARGEST_N}), one disorder realization",
             explanation=reading(
                 outcome,
                 disagree="Not explained by this run. The limit and the N-dimer system share "
@@ -226,7 +231,6 @@ def dky_task(
     coupling: float, q0: float, w0: float, v0: float, t_end: float, transient: float
 ) -> dict:
     """One Kaplan–Yorke dimension of the erf-play limit (task function, picklable)."""
-    from analysis.lyapunov import lyapunov_spectrum
 
     play = _erf_play()
     res = lyapunov_spectrum(

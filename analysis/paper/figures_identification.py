@@ -34,9 +34,9 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
     """Paper fig:preis_dens: (a) μ(s) vs N(s; 0, R²), (b) erf play (N → ∞), (c) N dimers."""
     import matplotlib.pyplot as plt
 
+    from analysis.experiments.models import build_operator
     from analysis.identification import compare_with_ridge, identify_preisach
     from analysis.identification.plots import plot_density_rs, plot_s_marginal
-    from analysis.models import build_operator
 
     n_spins = ctx.size.identification_spins
     step = ctx.size.identification_step

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from analysis.models import build_operator
+from analysis.experiments.models import build_operator
 from analysis.paper.context import Claim, FigureSpec, PaperContext, verdict
+from hysteresis import SpinDimerEnsemble
 
 __all__ = ["FIGURES"]
 
@@ -17,8 +18,6 @@ def _sweep(lo: float, hi: float, n: int = 801) -> np.ndarray:
 
 
 def _dimer_loop(fields: tuple[float, float], coupling: float, u: np.ndarray) -> np.ndarray:
-    from hysteresis import SpinDimerEnsemble
-
     ens = SpinDimerEnsemble(np.array([fields], dtype=float), coupling)
     m, _ = ens.simulate(u)
     return np.asarray(m)
@@ -27,8 +26,6 @@ def _dimer_loop(fields: tuple[float, float], coupling: float, u: np.ndarray) -> 
 def fig_elem_hys(ctx: PaperContext) -> list[Claim]:
     """Paper fig:elem_hys: the three scenarios of a spin dimer (J > 0, b1 > b2)."""
     import matplotlib.pyplot as plt
-
-    from hysteresis import SpinDimerEnsemble
 
     J = 2.0
     cases = {
@@ -82,8 +79,6 @@ def fig_elem_hys(ctx: PaperContext) -> list[Claim]:
 def fig_elem_hys_ex(ctx: PaperContext) -> list[Claim]:
     """Paper fig:elem_hys_ex: energies of the four states of J=2, b=(2,1) and the loop."""
     import matplotlib.pyplot as plt
-
-    from hysteresis import SpinDimerEnsemble
 
     J, b1, b2 = 2.0, 2.0, 1.0
     q = np.linspace(-6, 4, 1001)

@@ -11,6 +11,12 @@ from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 
+from analysis.experiments.store import StoreError
+from analysis.paper import figures_bifurcations as bif
+from analysis.paper import figures_dynamics as dyn
+from analysis.paper import figures_ensembles as ens
+from analysis.paper import figures_identification as ident
+from analysis.paper import figures_operators as ops
 from analysis.paper.context import (
     AGREE,
     DISAGREE,
@@ -20,7 +26,6 @@ from analysis.paper.context import (
     FigureSpec,
     PaperContext,
 )
-from analysis.store import StoreError
 
 __all__ = [
     "FigureSpec",
@@ -35,12 +40,7 @@ __all__ = [
 
 
 def _figures() -> list[FigureSpec]:
-    from analysis.paper import figures_dynamics as dyn
-    from analysis.paper import figures_ensembles as ens
-    from analysis.paper import figures_identification as ident
-    from analysis.paper import figures_operators as ops
-
-    return [*ops.FIGURES, *ident.FIGURES, *dyn.FIGURES, *ens.FIGURES]
+    return [*ops.FIGURES, *ident.FIGURES, *dyn.FIGURES, *bif.FIGURES, *ens.FIGURES]
 
 
 class _LazyFigures(Sequence):
@@ -93,7 +93,8 @@ def run_paper(
     of the total, its time and the time so far) and a progress bar per task sweep (counts, rate,
     ETA); off by default. A results store that cannot be used (damaged, foreign, or holding
     results of other code versions without ``allow_version_mismatch``) raises
-    :class:`~analysis.store.StoreError` for the whole run instead of failing figure by figure.
+    :class:`~analysis.experiments.store.StoreError` for the whole run instead of failing figure
+    by figure.
     """
     if size not in SIZES:
         raise ValueError(f"size must be one of {sorted(SIZES)}, got {size!r}")

@@ -37,6 +37,7 @@ import subprocess
 import threading
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
@@ -143,7 +144,6 @@ def task_key(experiment: str, params: Mapping[str, Any]) -> str:
 @functools.lru_cache(maxsize=1)
 def code_version() -> str:
     """``hysteresis-toolkit <version>`` plus ``git describe --always --dirty`` when available."""
-    from importlib.metadata import PackageNotFoundError, version
 
     try:
         ver = version("hysteresis-toolkit")

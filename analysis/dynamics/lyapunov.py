@@ -34,15 +34,13 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from analysis.dimensions import kaplan_yorke_dimension
+from analysis.dynamics.dimensions import kaplan_yorke_dimension
+from analysis.experiments.parameters import V0
+from hysteresis._progress import progress_bar
 from hysteresis._validation import finite_scalar, positive_integer, time_window
-from oscillators.engine import DivergenceError, Engine
-from oscillators.results import OscillatorState
+from oscillators import DEFAULT_Q0, MAX_PERIODS, DivergenceError, Engine, OscillatorState
 
 __all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]
-
-#: Longest run one call may ask for, in forcing periods.
-MAX_PERIODS = 10**8
 
 
 @dataclass(frozen=True)
@@ -344,8 +342,8 @@ def lyapunov_spectrum(
     system: Any,
     t_end: float,
     transient: float = 0.0,
-    q0: float = -1.0,
-    v0: float = 0.1,
+    q0: float = DEFAULT_Q0,
+    v0: float = V0,
     operator_state: Any = None,
     include_phase: bool = False,
     progress: bool = False,
@@ -419,8 +417,6 @@ def lyapunov_spectrum(
     n_collapses = 0
     bar = None
     if progress:
-        from hysteresis._progress import progress_bar
-
         bar = progress_bar(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
     for i in range(n_steps):
         target = transient + (span if i == n_steps - 1 else (i + 1) * dt)

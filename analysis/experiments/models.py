@@ -43,6 +43,26 @@ from typing import Any
 
 import numpy as np
 
+from analysis.experiments.parameters import (
+    PLAYS,
+    SEED,
+    SPIN_COUPLING,
+    SPINS,
+    SPREAD,
+    WIDTH,
+    WIDTH_SPREAD,
+)
+from hysteresis import (
+    ContinuousPreisachModel,
+    GeneralizedPlay,
+    PlayOperator,
+    PrandtlIshlinskii,
+    PreisachModel,
+    Relay,
+    SpinDimerEnsemble,
+)
+from hysteresis._validation import as_generator, positive_integer
+
 __all__ = [
     "ALIASES",
     "MODELS",
@@ -88,16 +108,16 @@ class ModelParameters:
         H, half-extent of the ``preisach-uniform`` triangle, > 0 (default ``5R + p/2``).
     """
 
-    spins: int = 20000
-    seed: int = 0
-    width: float = 2.0
-    spread: float = 1.0
-    spin_coupling: float = 2.0
-    width_spread: float = 0.2
+    spins: int = SPINS
+    seed: int = SEED
+    width: float = WIDTH
+    spread: float = SPREAD
+    spin_coupling: float = SPIN_COUPLING
+    width_spread: float = WIDTH_SPREAD
     fields: tuple[tuple[float, float], ...] | None = None
     alpha: float | None = None
     beta: float | None = None
-    plays: int = 10
+    plays: int = PLAYS
     resolution: int = 512
     half_extent: float | None = None
 
@@ -131,42 +151,30 @@ class ModelSpec:
 
 
 def _dimers(p: ModelParameters) -> Any:
-    from hysteresis.spin_dimers import SpinDimerEnsemble
-
     if p.fields is not None:
         return SpinDimerEnsemble(np.asarray(p.fields, dtype=float), p.spin_coupling)
     return SpinDimerEnsemble.random(p.spins, p.width, p.spread, p.spin_coupling, p.seed)
 
 
 def _erf_play(p: ModelParameters) -> Any:
-    from hysteresis.play import GeneralizedPlay
-
     return GeneralizedPlay.erf(p.width, p.spread)
 
 
 def _play(p: ModelParameters) -> Any:
-    from hysteresis.play import PlayOperator
-
     return PlayOperator(p.width)
 
 
 def _relay(p: ModelParameters) -> Any:
-    from hysteresis.relay import Relay
-
     alpha = 0.5 * p.width if p.alpha is None else p.alpha
     beta = -0.5 * p.width if p.beta is None else p.beta
     return Relay(alpha, beta)
 
 
 def _n2(p: ModelParameters) -> Any:
-    from hysteresis.spin_dimers import SpinDimerEnsemble
-
     return SpinDimerEnsemble(np.array([[2.0, 0.0]]), p.spin_coupling)
 
 
 def _n4(p: ModelParameters) -> Any:
-    from hysteresis.spin_dimers import SpinDimerEnsemble
-
     return SpinDimerEnsemble(np.array([[2.0, 0.0], [-0.5, -2.5]]), p.spin_coupling)
 
 
@@ -186,9 +194,6 @@ def _check_positive(value: Any, name: str) -> float:
 
 
 def _preisach(p: ModelParameters) -> Any:
-    from hysteresis._validation import as_generator, positive_integer
-    from hysteresis.preisach import PreisachModel
-
     n = positive_integer(p.spins, "spins")
     width = _check_positive(p.width, "width")
     spread = _check_positive(p.spread, "spread")
@@ -208,8 +213,6 @@ def _preisach(p: ModelParameters) -> Any:
 
 
 def _preisach_gauss(p: ModelParameters) -> Any:
-    from hysteresis.preisach import ContinuousPreisachModel
-
     width = _check_positive(p.width, "width")
     spread = _check_positive(p.spread, "spread")
     sr = _check_width_spread(p, strictly_positive=True)
@@ -220,9 +223,6 @@ def _preisach_gauss(p: ModelParameters) -> Any:
 
 
 def _pi(p: ModelParameters) -> Any:
-    from hysteresis._validation import positive_integer
-    from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
-
     k = positive_integer(p.plays, "plays")
     width = _check_positive(p.width, "width")
     widths = width * np.linspace(0.5, 1.5, k) if k > 1 else np.array([width])
@@ -239,8 +239,6 @@ def uniform_half_extent(p: ModelParameters) -> float:
 
 
 def _preisach_uniform(p: ModelParameters) -> Any:
-    from hysteresis.preisach import PreisachModel
-
     h = uniform_half_extent(p)
     area = 2.0 * h**2  # the triangle β <= α inside [-H, H]²
 

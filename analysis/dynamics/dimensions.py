@@ -167,6 +167,8 @@ def box_counts(
 
 def _typical_spacing(pts: np.ndarray, rng: np.random.Generator, sample: int = 2000) -> float:
     """Median nearest-neighbour distance among the points (a subsample for large sets)."""
+
+    # deliberately lazy: scipy.spatial costs ~0.2 s at every `hyst` start
     from scipy.spatial import cKDTree
 
     tree = cKDTree(pts)

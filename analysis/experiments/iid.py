@@ -30,9 +30,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analysis.execution import run_tasks, spawn_seeds
-from analysis.statistics import PowerLawFit, magnetization_variance, power_law_fit
-from analysis.store import ResultStore
+from analysis.dynamics.statistics import PowerLawFit, magnetization_variance, power_law_fit
+from analysis.experiments.execution import run_tasks, spawn_seeds
+from analysis.experiments.models import build_operator
+from analysis.experiments.parameters import SPIN_COUPLING, SPREAD, WIDTH
+from analysis.experiments.store import ResultStore
+from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    bounded_work,
+    nonnegative_integer,
+    positive_integer,
+    positive_scalar,
+    scalar_in_open_interval,
+)
+from hysteresis.spin_dimers import MAX_SPINS
 
 __all__ = [
     "iid_inputs",
@@ -45,7 +56,6 @@ __all__ = [
 
 DEFAULT_INPUT_STD = 2.0
 #: disorder of the paper (Table I): loop width p, centre spread R, spin coupling J
-PAPER_WIDTH, PAPER_SPREAD, PAPER_SPIN_COUPLING = 2.0, 1.0, 2.0
 
 
 #: longest input sequence of one realization (8 bytes per step)
@@ -54,13 +64,6 @@ MAX_STEPS = 500_000_000
 
 def iid_inputs(n_steps: int, input_std: float, seed: int) -> np.ndarray:
     """The iid field sequence ``u_k ~ N(0, input_std²)``, k = 1..n_steps."""
-    from hysteresis._validation import (
-        MAX_MAGNITUDE,
-        bounded_work,
-        nonnegative_integer,
-        positive_integer,
-        positive_scalar,
-    )
 
     n_steps = positive_integer(n_steps, "n_steps")
     bounded_work(n_steps, "n_steps", MAX_STEPS, "input steps")
@@ -75,9 +78,9 @@ def iid_task(
     seed: int,
     input_seed: int,
     input_std: float = DEFAULT_INPUT_STD,
-    width: float = PAPER_WIDTH,
-    spread: float = PAPER_SPREAD,
-    spin_coupling: float = PAPER_SPIN_COUPLING,
+    width: float = WIDTH,
+    spread: float = SPREAD,
+    spin_coupling: float = SPIN_COUPLING,
     transient_steps: int = 0,
 ) -> dict:
     """One realization: ``M_T`` of the registry's ``dimers`` (``SpinDimerEnsemble.random(spins,
@@ -87,8 +90,6 @@ def iid_task(
     The spins start all down and relax at the first input (``initial_state(u_0)``); the first
     ``transient_steps`` outputs are not averaged. Top-level, so it runs in process pools.
     """
-    from analysis.models import build_operator
-    from hysteresis._validation import nonnegative_integer, positive_integer
 
     n_steps = positive_integer(n_steps, "n_steps")
     transient_steps = nonnegative_integer(transient_steps, "transient_steps")
@@ -110,9 +111,9 @@ def iid_magnetization(
     input_std: float = DEFAULT_INPUT_STD,
     common_input: bool = True,
     transient_steps: int = 0,
-    width: float = PAPER_WIDTH,
-    spread: float = PAPER_SPREAD,
-    spin_coupling: float = PAPER_SPIN_COUPLING,
+    width: float = WIDTH,
+    spread: float = SPREAD,
+    spin_coupling: float = SPIN_COUPLING,
     store: ResultStore | str | os.PathLike | None = None,
     workers: int | None = 1,
     scheduler: str | None = None,
@@ -126,15 +127,6 @@ def iid_magnetization(
     result is reproducible from ``seed`` alone. Tasks go through :func:`run_tasks` (store,
     workers, scheduler, allow_version_mismatch as there; experiment name ``"iid"``).
     """
-    from hysteresis._validation import (
-        MAX_MAGNITUDE,
-        bounded_work,
-        nonnegative_integer,
-        positive_integer,
-        positive_scalar,
-        scalar_in_open_interval,
-    )
-    from hysteresis.spin_dimers import MAX_SPINS
 
     # everything checked here, before a task reaches a worker process
     n_spins = positive_integer(n_spins, "n_spins", minimum=2)

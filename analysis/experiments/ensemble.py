@@ -4,8 +4,9 @@ fig:mag_his).
 One task is one disorder realization ``SpinDimerEnsemble.random(N, p, R, J, seed)`` at one
 coupling C: its Lyapunov spectrum in the Poincaré section (q, v) and ``D_KY``, the box-counting
 dimension ``D_BC`` of the section points (q, v) (the superposition of all sheets, as the paper),
-and the time-averaged magnetization ``M_T``. Tasks run through :func:`~analysis.execution.
-run_tasks` (process pool or Dask cluster, SQLite store, resume); :func:`aggregate_ensemble`
+and the time-averaged magnetization ``M_T``. Tasks run through
+:func:`~analysis.experiments.execution.run_tasks` (process pool or Dask cluster, SQLite store,
+resume); :func:`aggregate_ensemble`
 reduces them per (N, C) to means, ``SAP[D]``, ``VAR[M]``, the regular count (``D_KY = 0``) and
 the empirical PDFs.
 """
@@ -21,9 +22,39 @@ from typing import Any
 
 import numpy as np
 
-from analysis.execution import run_tasks, spawn_seeds
-from analysis.statistics import magnetization_variance, self_averaging_parameter
-from analysis.store import ResultStore
+from analysis.dynamics.bifurcation import section_period
+from analysis.dynamics.dimensions import box_counting_dimension, kaplan_yorke_dimension
+from analysis.dynamics.lyapunov import TangentStepper, lyapunov_spectrum
+from analysis.dynamics.statistics import (
+    empirical_pdf,
+    magnetization_variance,
+    self_averaging_parameter,
+)
+from analysis.experiments.execution import run_tasks, spawn_seeds
+from analysis.experiments.models import build_operator, canonical_model_name
+from analysis.experiments.parameters import (
+    DAMPING_RATIO,
+    DEFAULT_Q0,
+    FREQUENCY,
+    SPIN_COUPLING,
+    SPREAD,
+    V0,
+    WIDTH,
+    WIDTH_SPREAD,
+)
+from analysis.experiments.store import ResultStore
+from hysteresis._validation import (
+    MAX_MAGNITUDE,
+    bounded_work,
+    finite_array,
+    nonnegative_integer,
+    positive_integer,
+    positive_scalar,
+    scalar_in_open_interval,
+    time_window,
+)
+from hysteresis.spin_dimers import MAX_SPINS
+from oscillators import MAX_PERIODS, ForcedOscillator
 
 __all__ = [
     "EXPERIMENT",
@@ -43,14 +74,12 @@ EXPERIMENT = "ensemble-dimers"
 #: forcing periods per QR step of an ensemble task (see :func:`one_pass_measurements`)
 QR_PERIODS = 8
 #: paper Table I: loop width p, centre spread R, spin coupling J
-PAPER_WIDTH, PAPER_SPREAD, PAPER_SPIN_COUPLING = 2.0, 1.0, 2.0
 
 
 def realization_seeds(base_seed: int, spins: int, realizations: int) -> list[int]:
     """Disorder seeds of the realizations at N spins: ``spawn_seeds`` from a base derived from
     ``(base_seed, N)``. Different N get independent disorder; different couplings C at the same
     N share it (the same realizations are followed across C)."""
-    from hysteresis._validation import nonnegative_integer, positive_integer
 
     base_seed = nonnegative_integer(base_seed, "base_seed")
     spins = positive_integer(spins, "spins")
@@ -62,8 +91,8 @@ def section_and_magnetization(
     system: Any,
     t_end: float,
     transient: float,
-    q0: float = -1.0,
-    v0: float = 0.1,
+    q0: float = DEFAULT_Q0,
+    v0: float = V0,
     chunk_periods: int = 50,
 ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Poincaré section (q, v) at φ = 0 and the exact time average of M over the same window.
@@ -105,8 +134,6 @@ def section_dimension(
     q: np.ndarray, v: np.ndarray, max_fill: float, min_boxes: float
 ) -> tuple[float, float, int]:
     """(D_BC, its stderr, period): 0 for a periodic section, nan if no scaling region."""
-    from analysis.bifurcation import section_period
-    from analysis.dimensions import box_counting_dimension
 
     period = section_period(q, v)
     if period > 0:
@@ -136,8 +163,8 @@ def one_pass_measurements(
     system: Any,
     t_end: float,
     transient: float,
-    q0: float = -1.0,
-    v0: float = 0.1,
+    q0: float = DEFAULT_Q0,
+    v0: float = V0,
     operator_state: Any = None,
     magnetization: bool = True,
     progress: bool = False,
@@ -147,7 +174,7 @@ def one_pass_measurements(
 
     The window is the whole forcing periods ``[P0·T, P1·T]`` in ``[transient, t_end]`` (as
     :func:`section_and_magnetization`). The Benettin loop of
-    :func:`~analysis.lyapunov.lyapunov_spectrum` re-orthonormalises every ``qr_periods``
+    :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` re-orthonormalises every ``qr_periods``
     periods; its stepper samples ``(q, v)`` at every period boundary in the same engine calls
     (``TangentStepper(sample_dt=T)``), and the observer collects them and reads the exact
     ``∫M dt`` from the engine (``Engine.output_integral``) at both ends of the window, so
@@ -162,8 +189,6 @@ def one_pass_measurements(
     the second direction in double precision (the exponents are the same in exact arithmetic
     for any QR interval; a test compares with one QR step per period).
     """
-    from analysis.lyapunov import TangentStepper, lyapunov_spectrum
-    from hysteresis._validation import positive_integer
 
     qr_periods = positive_integer(qr_periods, "qr_periods")
     period = float(system.period)
@@ -211,18 +236,18 @@ def ensemble_task(
     seed: int,
     t_end: float,
     transient: float,
-    width: float = PAPER_WIDTH,
-    spread: float = PAPER_SPREAD,
-    spin_coupling: float = PAPER_SPIN_COUPLING,
-    damping_ratio: float = 0.05,
-    frequency: float = 1.0,
-    q0: float = -1.0,
-    v0: float = 0.1,
+    width: float = WIDTH,
+    spread: float = SPREAD,
+    spin_coupling: float = SPIN_COUPLING,
+    damping_ratio: float = DAMPING_RATIO,
+    frequency: float = FREQUENCY,
+    q0: float = DEFAULT_Q0,
+    v0: float = V0,
     box_max_fill: float = 0.1,
     box_min_boxes: float = 8.0,
     keep_section: bool = False,
     model: str = "dimers",
-    width_spread: float = 0.2,
+    width_spread: float = WIDTH_SPREAD,
 ) -> dict:
     """One disorder realization at one coupling: λ's, D_KY, D_BC and M_T, in one pass.
 
@@ -231,18 +256,15 @@ def ensemble_task(
     with the tangent flow (:func:`one_pass_measurements`) gives the Lyapunov spectrum (q, v;
     phase neglected as in the paper), the Poincaré section and ``M_T``, all over the whole
     forcing periods in ``[transient, t_end]``. ``D_BC`` is 0 for a periodic section, else
-    :func:`~analysis.dimensions.box_counting_dimension` with ``max_fill=box_max_fill`` and
+    :func:`~analysis.dynamics.dimensions.box_counting_dimension` with ``max_fill=box_max_fill`` and
     ``min_boxes=box_min_boxes`` (relax them for short runs with few section points), nan if no
     scaling region is found. Top-level so that it runs in process pools.
 
-    ``model`` is a name of the model registry (:mod:`analysis.models`) with disorder (``dimers``,
-    the default, or ``preisach``: random relays with half-width spread ``width_spread``);
+    ``model`` is a name of the model registry (:mod:`analysis.experiments.models`) with
+    disorder (``dimers``, the default, or ``preisach``: random relays with half-width spread
+    ``width_spread``);
     ``spins`` is then its number of spins/relays.
     """
-    from analysis.dimensions import kaplan_yorke_dimension
-    from analysis.models import build_operator, canonical_model_name
-    from oscillators import ForcedOscillator
-
     model = canonical_model_name(model)
     params = dict(spins=spins, seed=seed, width=width, spread=spread)
     if model == "dimers":
@@ -278,8 +300,6 @@ def ensemble_task(
 
 #: most tasks one ensemble may ask for (N values × couplings × realizations)
 MAX_TASKS = 1_000_000
-#: most forcing periods one task may integrate
-MAX_PERIODS = 100_000_000
 
 
 def validate_ensemble(
@@ -298,17 +318,6 @@ def validate_ensemble(
     ``(0, 2 spin_coupling)``, ``t_end <= transient``, or more than :data:`MAX_TASKS` tasks or
     :data:`MAX_PERIODS` forcing periods per task (refused, not started).
     """
-    from hysteresis._validation import (
-        MAX_MAGNITUDE,
-        bounded_work,
-        finite_array,
-        nonnegative_integer,
-        positive_integer,
-        positive_scalar,
-        scalar_in_open_interval,
-        time_window,
-    )
-    from hysteresis.spin_dimers import MAX_SPINS
 
     if isinstance(spins_list, str | bytes) or not isinstance(spins_list, Iterable):
         raise TypeError(f"spins must be a sequence of even integers, got {spins_list!r}")
@@ -335,12 +344,13 @@ def validate_ensemble(
     if unknown:
         raise TypeError(f"unknown ensemble task options {unknown}; allowed: {sorted(allowed)}")
     spin_coupling = positive_scalar(
-        task_kwargs.get("spin_coupling", PAPER_SPIN_COUPLING), "spin_coupling", MAX_MAGNITUDE
+        task_kwargs.get("spin_coupling", SPIN_COUPLING), "spin_coupling", MAX_MAGNITUDE
     )
-    scalar_in_open_interval(task_kwargs.get("width", PAPER_WIDTH), "width", 0.0, 2 * spin_coupling)
-    positive_scalar(task_kwargs.get("spread", PAPER_SPREAD), "spread", MAX_MAGNITUDE)
-    frequency = positive_scalar(task_kwargs.get("frequency", 1.0), "frequency", MAX_MAGNITUDE)
-    scalar_in_open_interval(task_kwargs.get("damping_ratio", 0.05), "damping_ratio", 0.0, 1.0)
+    scalar_in_open_interval(task_kwargs.get("width", WIDTH), "width", 0.0, 2 * spin_coupling)
+    positive_scalar(task_kwargs.get("spread", SPREAD), "spread", MAX_MAGNITUDE)
+    frequency = positive_scalar(task_kwargs.get("frequency", FREQUENCY), "frequency", MAX_MAGNITUDE)
+    zeta = task_kwargs.get("damping_ratio", DAMPING_RATIO)
+    scalar_in_open_interval(zeta, "damping_ratio", 0.0, 1.0)
     periods = t_end * frequency / (2.0 * math.pi)
     bounded_work(periods, "t_end", MAX_PERIODS, "forcing periods per task")
     return spins, cs, realizations, base_seed, t_end, transient, task_kwargs
@@ -422,7 +432,6 @@ class EnsemblePoint:
 
     def pdf(self, field: str = "magnetization", bins: int | Sequence[float] = 30):
         """Empirical PDF of a per-realization field (paper fig:mag_his for M_T)."""
-        from analysis.statistics import empirical_pdf
 
         return empirical_pdf(getattr(self, field), bins)
 

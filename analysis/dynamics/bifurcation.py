@@ -16,6 +16,18 @@ from typing import Any
 
 import numpy as np
 
+from analysis.dynamics.lyapunov import lyapunov_spectrum
+from analysis.experiments.parameters import V0
+from hysteresis._progress import progress_bar
+from hysteresis._validation import (
+    bounded_work,
+    finite_array,
+    finite_scalar,
+    positive_integer,
+    real_array,
+)
+from oscillators import DEFAULT_Q0
+
 #: most parameter values in one sweep
 MAX_VALUES = 1_000_000
 #: most forcing periods one sweep may integrate (values × (n_periods + transient_periods))
@@ -31,8 +43,6 @@ __all__ = [
 
 
 def _real(x: Any, name: str, size: int | None = None) -> np.ndarray:
-    from hysteresis._validation import real_array
-
     arr = real_array(x, name).ravel()
     if size is not None and arr.size != size:
         raise ValueError(f"{name} must have the length of q ({size}), got {arr.size}")
@@ -169,8 +179,8 @@ def bifurcation_diagram(
     continuation: bool = True,
     lyapunov: bool = True,
     lyapunov_t_end: float = 1000.0,
-    q0: float = -1.0,
-    v0: float = 0.1,
+    q0: float = DEFAULT_Q0,
+    v0: float = V0,
     operator_state: Any = None,
     parameter: str = "coupling",
     progress: bool = False,
@@ -199,9 +209,6 @@ def bifurcation_diagram(
     progress:
         Show a progress bar over the values (off by default; the CLI turns it on).
     """
-    from analysis.lyapunov import lyapunov_spectrum
-    from hysteresis._progress import progress_bar
-    from hysteresis._validation import bounded_work, finite_array, finite_scalar, positive_integer
 
     if not callable(make_system):
         raise TypeError(f"make_system must be a callable value -> system, got {make_system!r}")

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hysteresis._validation import real_array
+
 __all__ = [
     "self_averaging_parameter",
     "magnetization_variance",
@@ -18,8 +20,6 @@ __all__ = [
 
 
 def _values(values: Sequence[float] | np.ndarray, name: str = "values") -> np.ndarray:
-    from hysteresis._validation import real_array
-
     x = real_array(values, name)
     if x.ndim != 1 or x.size == 0:
         raise ValueError(f"{name} must be a non-empty 1-D sequence, got shape {x.shape}")

@@ -4,7 +4,8 @@
 
 * tasks are dicts of JSON-serialisable parameters; ``func(**task) -> dict`` is a top-level
   (picklable) function;
-* tasks already in the :class:`~analysis.store.ResultStore` are skipped (resume after a crash);
+* tasks already in the :class:`~analysis.experiments.store.ResultStore` are skipped (resume
+  after a crash);
 * the rest run on a ``concurrent.futures.Executor``: the one given, a Dask distributed cluster
   (``scheduler`` address), a local process pool (``workers``), or serially in-process;
 * each result is written to the store from the parent process as soon as it arrives, in one
@@ -35,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from analysis.store import ResultStore, code_version, task_key
+from analysis.experiments.store import ResultStore, code_version, task_key
+from hysteresis._validation import bounded_work, nonnegative_integer
 
 __all__ = ["run_tasks", "spawn_seeds", "TaskError"]
 
@@ -71,7 +73,6 @@ def spawn_seeds(base_seed: int, n: int) -> list[int]:
     statistically independent streams. The same ``(base_seed, n)`` always gives the same list,
     and the first ``m`` seeds do not depend on ``n``.
     """
-    from hysteresis._validation import bounded_work, nonnegative_integer
 
     n = nonnegative_integer(n, "n")
     bounded_work(n, "n", 10_000_000, "seeds")
@@ -139,8 +140,8 @@ def run_tasks(
         Show a tqdm progress bar (counts, rate, ETA).
     allow_version_mismatch:
         A store whose ``experiment`` holds results of other code versions is refused
-        (:class:`~analysis.store.StoreError`) unless this is ``True``; then they are reused
-        with a warning.
+        (:class:`~analysis.experiments.store.StoreError`) unless this is ``True``; then they are
+        reused with a warning.
 
     Returns
     -------

@@ -1,0 +1,242 @@
+"""From the options to the library's objects: model parameters, operator, system, initial state,
+run window and results store, each built once, with the library's errors reported against the
+option that carried the value (:func:`~analysis.cli._parsing.library_errors`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from analysis.cli._parsing import CliError, library_errors
+from analysis.cli._parsing import option_error as _option_error
+from analysis.experiments.models import MODELS, ModelParameters
+from analysis.experiments.models import build_operator as build_model
+from analysis.experiments.models import model_record as record_model
+from analysis.experiments.store import ResultStore, StoreError
+from oscillators import MAX_PERIODS, ForcedOscillator
+
+__all__ = [
+    "MODEL_OPTIONS",
+    "OPTION_OF",
+    "OSCILLATOR_OPTIONS",
+    "option_error",
+    "RUN_OPTIONS",
+    "build_operator",
+    "build_system",
+    "check_model_options",
+    "check_run_length",
+    "check_store",
+    "check_transient",
+    "initial_operator_state",
+    "initial_record",
+    "model_parameters",
+    "model_record",
+    "store_error",
+    "store_path",
+    "transient_time",
+]
+
+#: library parameter name -> the option that carries it (model options)
+MODEL_OPTIONS = {
+    "n_spins": "--spins",
+    "spins": "--spins",
+    "seed": "--seed",
+    "width_spread": "--width-spread",
+    "width": "--width",
+    "spread": "--spread",
+    "spin_coupling": "--spin-coupling",
+    "fields": "--fields",
+    "alpha": "--alpha",
+    "beta": "--beta",
+    "plays": "--plays",
+}
+#: library parameter name -> option, for the oscillator and its initial condition
+OSCILLATOR_OPTIONS = {
+    "coupling": "--coupling",
+    "damping_ratio": "--damping-ratio",
+    "frequency": "--frequency",
+    "q0": "--q0",
+    "v0": "--v0",
+    "u0": "--q0",
+    "position": "--w0",
+    "w0": "--w0",
+}
+#: library parameter name -> option, for the run window
+RUN_OPTIONS = {"t_end": "--t-end", "transient": "--transient"}
+
+
+#: every library parameter the commands pass from an option
+OPTION_OF = {**MODEL_OPTIONS, **OSCILLATOR_OPTIONS, **RUN_OPTIONS}
+
+
+def option_error(exc: BaseException, default_option: str | None = None) -> CliError:
+    """A :class:`CliError` naming the option behind a library ``ValueError``/``TypeError`` (any
+    of :data:`OPTION_OF`), else ``default_option``."""
+    return _option_error(exc, OPTION_OF, default_option)
+
+
+def model_parameters(args: argparse.Namespace) -> Any:
+    """The :class:`~analysis.experiments.models.ModelParameters` given by the options."""
+    spins = args.spins[0] if isinstance(args.spins, list) else args.spins
+    fields = None
+    if getattr(args, "fields", None) is not None:
+        fields = tuple(zip(args.fields[0::2], args.fields[1::2], strict=True))
+    return ModelParameters(
+        spins=spins,
+        seed=args.seed,
+        width=args.width,
+        spread=args.spread,
+        spin_coupling=args.spin_coupling,
+        width_spread=args.width_spread,
+        fields=fields,
+        alpha=args.alpha,
+        beta=args.beta,
+        plays=args.plays,
+        # set by commands that give preisach-uniform its half-extent (hyst identify --saturation)
+        half_extent=getattr(args, "half_extent", None),
+    )
+
+
+def check_model_options(args: argparse.Namespace) -> None:
+    """Cross-option checks that one option's type cannot express; raises :class:`CliError`."""
+    model = args.model
+    spec = MODELS[model]
+    fields = getattr(args, "fields", None)
+    if fields is not None:
+        if model != "dimers":
+            raise CliError("argument --fields: only for --model dimers")
+        if len(fields) % 2:
+            raise CliError(f"argument --fields: needs pairs b1 b2 (got {len(fields)} values)")
+    spins = args.spins if isinstance(args.spins, list) else [args.spins]
+    if model == "dimers" and fields is None:
+        for n in spins:
+            if n < 2 or n % 2:
+                raise CliError(f"argument --spins: dimers need an even N >= 2, got {n}")
+        if not args.width < 2.0 * args.spin_coupling:
+            raise CliError(
+                f"argument --width: dimers need p < 2J = {2.0 * args.spin_coupling:g} "
+                f"(--spin-coupling), got {args.width:g}"
+            )
+    if model == "relay":
+        alpha = 0.5 * args.width if args.alpha is None else args.alpha
+        beta = -0.5 * args.width if args.beta is None else args.beta
+        if alpha < beta:
+            raise CliError(f"argument --alpha: must be >= --beta, got {alpha:g} < {beta:g}")
+    elif args.alpha is not None or args.beta is not None:
+        raise CliError("argument --alpha/--beta: only for --model relay")
+    if model == "preisach-gauss" and args.width_spread <= 0:
+        raise CliError("argument --width-spread: preisach-gauss needs sigma_r > 0, got 0")
+    w0 = getattr(args, "w0", None)
+    if w0 is not None:
+        if not spec.play_type:
+            raise CliError(
+                f"argument --w0: only for play-type models (erf-play, play), not {model}"
+            )
+        if abs(args.q0 - w0) > 0.5 * args.width * (1.0 + 1e-12):
+            raise CliError(
+                f"argument --w0: needs |q0 - w0| <= p/2 = {0.5 * args.width:g}, "
+                f"got q0 = {args.q0:g}, w0 = {w0:g}"
+            )
+
+
+def model_record(args: argparse.Namespace) -> dict[str, Any]:
+    """The model and the parameters it reads, JSON-ready."""
+    return record_model(args.model, model_parameters(args))
+
+
+def initial_record(args: argparse.Namespace) -> dict[str, Any]:
+    """``q0``, ``v0`` and, for play-type models, the effective ``w0`` (default ``q0 - p/2``)."""
+    out: dict[str, Any] = {"q0": args.q0, "v0": args.v0}
+    if MODELS[args.model].play_type:
+        out["w0"] = args.q0 - 0.5 * args.width if args.w0 is None else args.w0
+    return out
+
+
+def build_operator(args: argparse.Namespace) -> Any:
+    """The operator of ``--model`` (library errors reported against the option)."""
+    with library_errors(MODEL_OPTIONS, "--model"):
+        return build_model(args.model, model_parameters(args))
+
+
+def build_system(
+    args: argparse.Namespace, operator: Any = None, coupling: float | None = None
+) -> Any:
+    """``ForcedOscillator(operator, C, zeta, Omega)`` from the options, built once: the library
+    checks C, zeta and Omega against its bounds and its message names the option."""
+    c = args.coupling if coupling is None else coupling
+    op = build_operator(args) if operator is None else operator
+    with library_errors(OSCILLATOR_OPTIONS, "--model"):
+        return ForcedOscillator(op, c, args.damping_ratio, args.frequency)
+
+
+def initial_operator_state(args: argparse.Namespace, operator: Any) -> Any:
+    """``None`` (the operator's ``initial_state(q0)``) or, with ``--w0``, the play state
+    ``operator.state(position=w0, input=q0)``."""
+    if getattr(args, "w0", None) is None:
+        return None
+    with library_errors(OSCILLATOR_OPTIONS, "--w0"):
+        return operator.state(position=args.w0, input=args.q0)
+
+
+def transient_time(args: argparse.Namespace, frequency: float | None = None) -> float:
+    """``--transient`` (forcing periods) as a time."""
+    omega = args.frequency if frequency is None else frequency
+    return float(args.transient) * 2.0 * math.pi / omega
+
+
+def check_run_length(args: argparse.Namespace, t_end: float, option: str = "--t-end") -> None:
+    """Refuse a run longer than :data:`MAX_PERIODS` forcing periods, naming the option."""
+    periods = (
+        t_end * args.frequency / (2.0 * math.pi) if not isinstance(args.frequency, list) else 0
+    )
+    if periods > MAX_PERIODS:
+        raise CliError(
+            f"argument {option}: {t_end:g} time units are {periods:.3g} forcing periods, more "
+            f"than the limit {MAX_PERIODS:.0e}"
+        )
+
+
+def check_transient(args: argparse.Namespace, t_end: float) -> float:
+    """``--transient`` as a time, checked to be shorter than ``t_end`` (and ``t_end`` against
+    :data:`MAX_PERIODS`)."""
+    check_run_length(args, t_end)
+    transient = transient_time(args)
+    if transient >= t_end:
+        raise CliError(
+            f"argument --transient: {args.transient:g} periods = {transient:g} time units must "
+            f"be shorter than --t-end {t_end:g}"
+        )
+    return transient
+
+
+def store_path(args: argparse.Namespace) -> Path:
+    """``--store``, or ``results.sqlite`` in ``--out``."""
+    return Path(args.store) if args.store is not None else Path(args.out) / "results.sqlite"
+
+
+def store_error(exc: BaseException) -> CliError:
+    """A :class:`CliError` naming ``--store`` for a
+    :class:`~analysis.experiments.store.StoreError` (the library's advice
+    ``allow_version_mismatch=True`` spelled as the option)."""
+    msg = str(exc).replace("pass allow_version_mismatch=True", "pass --allow-version-mismatch")
+    return CliError(f"argument --store: {msg}")
+
+
+def check_store(args: argparse.Namespace, experiments: Sequence[str] | None = None) -> Path:
+    """Refuse, before any work, a damaged or foreign ``--store`` file and (unless
+    ``--allow-version-mismatch``) one whose ``experiments`` hold results of other code versions
+    (``None``: every experiment in the store). A missing store is fine (a new one)."""
+    path = store_path(args)
+    if not path.exists():
+        return path
+    try:
+        with ResultStore(path) as store:
+            names = store.experiments() if experiments is None else list(experiments)
+            for name in names:
+                store.check_versions(name, args.allow_version_mismatch)
+    except StoreError as exc:
+        raise store_error(exc) from exc
+    return path

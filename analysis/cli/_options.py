@@ -1,0 +1,255 @@
+"""Conventions shared by every ``hyst`` subcommand (one place, so the commands cannot drift).
+
+* **Options.** Model options (``--model``, ``--spins``, ``--seed``, ``--width``, ``--spread``,
+  ``--spin-coupling``, ``--width-spread`` and the model-specific ``--fields``, ``--alpha``,
+  ``--beta``, ``--plays``), oscillator options (``--coupling``, ``--damping-ratio``,
+  ``--frequency``), the initial condition (``--q0``, ``--v0``, ``--w0``) and the output options
+  (``--out``, ``--json``, ``--quiet``) are defined here and added to each subcommand from here;
+  their defaults are the paper's (:mod:`analysis.experiments.parameters`), their bounds the
+  library's (a value out of range is reported with the library's message, naming the option).
+* **Units.** Times (``--t-end``) are in the oscillator's time unit (undamped natural period
+  2π); transients (``--transient``) are counted in forcing periods ``T = 2π/Ω``, as in the paper.
+* **Output.** ``--out`` defaults to :data:`DEFAULT_OUT` for every command. ``--json`` prints
+  exactly one JSON object on stdout; non-finite numbers are encoded as the strings ``"inf"``,
+  ``"-inf"`` and ``"nan"`` (:func:`to_json`), never as bare ``Infinity``/``NaN`` tokens (not
+  JSON) or ``null`` (ambiguous).
+* **Progress.** Progress bars go to stderr; they are on when stderr is a terminal and off with
+  ``--quiet`` or when stderr is not a TTY. Library functions are quiet by default.
+* **Errors.** Every option is validated before any work starts (model and oscillator values by the
+  library, when the command builds its system, which it does once, before any work). A bad value, or
+  an error raised later inside the library or a worker process, ends the command with one line
+  ``hyst COMMAND: error: ...`` on stderr and exit status 2, never a traceback (set the environment
+  variable ``HYST_DEBUG=1`` to see the traceback of an unexpected error).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from analysis.cli._parsing import (
+    finite_float,
+    int_at_least,
+    nonnegative_float,
+    positive_float,
+)
+from analysis.experiments.models import MODELS, ModelParameters, canonical_model_name
+from analysis.experiments.parameters import DAMPING_RATIO, DEFAULT_Q0, FREQUENCY, V0
+from hysteresis.spin_dimers import MAX_SPINS
+from oscillators import FREQUENCY_RANGE, MAX_COUPLING, MAX_DAMPING_RATIO, MAX_PERIODS
+
+__all__ = [
+    "DEFAULT_OUT",
+    "add_execution_options",
+    "add_initial_options",
+    "add_model_options",
+    "add_oscillator_options",
+    "add_output_options",
+    "add_store_options",
+    "add_transient_option",
+]
+
+#: the default output directory of every command (each writes its own file names into it)
+DEFAULT_OUT = "hyst-out"
+
+
+def add_model_options(
+    parser: argparse.ArgumentParser,
+    models: Sequence[str] | None = None,
+    default: str = "dimers",
+    multiple_spins: bool = False,
+) -> None:
+    """``--model`` and the model parameters (paper Table I defaults).
+
+    ``models`` restricts the choices (default: every registered model); ``multiple_spins``
+    makes ``--spins`` take one or more values (ensembles).
+    """
+    d = ModelParameters()
+    names = list(models) if models is not None else list(MODELS)
+    g = parser.add_argument_group("model (shared by every command; see docs: CLI)")
+    g.add_argument(
+        "--model",
+        type=_model_name(names),
+        default=default,
+        metavar="{" + ",".join(names) + "}",
+        help="hysteresis operator M: "
+        + "; ".join(f"{n}: {MODELS[n].description}" for n in names)
+        + " (erf_play is a deprecated spelling of erf-play)",
+    )
+    g.add_argument(
+        "--spins",
+        type=int_at_least(1, MAX_SPINS),
+        nargs="+" if multiple_spins else None,
+        default=[d.spins] if multiple_spins else d.spins,
+        help="N, number of spins (dimers: even, N/2 dimers) or relays (preisach)"
+        + ("; one or more values" if multiple_spins else ""),
+    )
+    g.add_argument("--seed", type=int_at_least(0), default=d.seed, help="disorder seed (>= 0)")
+    g.add_argument("--width", type=positive_float, default=d.width, help="p, loop width (> 0)")
+    g.add_argument(
+        "--spread", type=positive_float, default=d.spread, help="R, spread of loop centres (> 0)"
+    )
+    g.add_argument(
+        "--spin-coupling",
+        type=positive_float,
+        default=d.spin_coupling,
+        help="J, spin-spin coupling of the dimers (> 0, with p < 2J)",
+    )
+    g.add_argument(
+        "--width-spread",
+        type=nonnegative_float,
+        default=d.width_spread,
+        help="sigma_r, spread of the relay half-widths (preisach >= 0, preisach-gauss > 0)",
+    )
+    g.add_argument(
+        "--fields",
+        type=finite_float,
+        nargs="+",
+        default=None,
+        help="dimers: explicit local fields b1 b2 [b1 b2 ...], one pair per dimer "
+        "(overrides --spins/--width/--spread/--seed)",
+    )
+    g.add_argument(
+        "--alpha", type=finite_float, default=None, help="relay: upper threshold (default p/2)"
+    )
+    g.add_argument(
+        "--beta", type=finite_float, default=None, help="relay: lower threshold (default -p/2)"
+    )
+    g.add_argument(
+        "--plays", type=int_at_least(1, 10**5), default=d.plays, help="pi: number K of plays"
+    )
+
+
+def _model_name(names: Sequence[str]) -> Callable[[str], str]:
+    def parse(text: str) -> str:
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                name = canonical_model_name(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"must be one of {', '.join(names)}; got {text!r}"
+            ) from None
+        for w in caught:
+            print(f"hyst: warning: {w.message}", file=sys.stderr)
+        if name not in names:
+            raise argparse.ArgumentTypeError(
+                f"must be one of {', '.join(names)} for this command; got {text!r}"
+            )
+        return name
+
+    parse.__name__ = "model"
+    return parse
+
+
+def add_oscillator_options(parser: argparse.ArgumentParser, coupling: str = "required") -> None:
+    """``--coupling`` (``"required"``, ``"optional"`` or ``"multiple"``), ``--damping-ratio``,
+    ``--frequency`` (paper Table II defaults)."""
+    g = parser.add_argument_group("oscillator q'' + 2 zeta q' + q = cos(Omega t) + C M[q]")
+    kw: dict[str, Any] = {"type": finite_float}
+    if coupling == "required":
+        kw["required"] = True
+    elif coupling == "multiple":
+        kw.update(nargs="+", required=True)
+    else:
+        kw["default"] = None
+    g.add_argument(
+        "--coupling",
+        help=f"C, strength of the hysteresis force, |C| <= {MAX_COUPLING:g}"
+        + ("; one or more values" * (coupling == "multiple")),
+        **kw,
+    )
+    g.add_argument(
+        "--damping-ratio",
+        type=finite_float,
+        default=DAMPING_RATIO,
+        help=f"zeta, damping ratio in [0, {MAX_DAMPING_RATIO:g}] (< 1 for play-type models)",
+    )
+    g.add_argument(
+        "--frequency",
+        type=finite_float,
+        default=FREQUENCY,
+        help="Omega, forcing frequency in [{:g}, {:g}]".format(*FREQUENCY_RANGE),
+    )
+
+
+def add_initial_options(parser: argparse.ArgumentParser) -> None:
+    """``--q0``, ``--v0``, ``--w0`` (paper Table II: q0 = -1, v0 = 0.1)."""
+    g = parser.add_argument_group("initial condition")
+    g.add_argument("--q0", type=finite_float, default=DEFAULT_Q0, help="initial position q(0)")
+    g.add_argument("--v0", type=finite_float, default=V0, help="initial velocity q'(0)")
+    g.add_argument(
+        "--w0",
+        type=finite_float,
+        default=None,
+        help="play-type models: initial wagon position, |q0 - w0| <= p/2 (default: q0 - p/2, "
+        "the state after rising from -inf)",
+    )
+
+
+def add_output_options(parser: argparse.ArgumentParser, writes: str = "") -> None:
+    """``--out`` (default :data:`DEFAULT_OUT`), ``--json`` and ``--quiet``."""
+    g = parser.add_argument_group("output")
+    g.add_argument(
+        "--out",
+        type=Path,
+        default=Path(DEFAULT_OUT),
+        help="output directory" + (f" (writes {writes})" if writes else ""),
+    )
+    g.add_argument(
+        "--json",
+        action="store_true",
+        help='print one JSON object on stdout (non-finite numbers as "inf", "-inf", "nan")',
+    )
+    g.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bars or notices (they are on when stderr is a terminal)",
+    )
+
+
+def add_execution_options(group: Any) -> None:
+    """Where task sweeps run and are kept: :func:`add_store_options`, ``--workers`` (local
+    worker processes) and ``--scheduler`` (a Dask cluster)."""
+    add_store_options(group)
+    group.add_argument(
+        "--workers",
+        type=int_at_least(1, 1024),
+        default=None,
+        help="local worker processes (default: one per core)",
+    )
+    group.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
+
+
+def add_store_options(group: Any) -> None:
+    """``--store`` (default ``DIR/results.sqlite``) and ``--allow-version-mismatch``."""
+    group.add_argument(
+        "--store",
+        type=Path,
+        default=None,
+        help="SQLite results file; a rerun resumes from it (default: DIR/results.sqlite)",
+    )
+    group.add_argument(
+        "--allow-version-mismatch",
+        action="store_true",
+        help="reuse results that another code version stored in --store (refused by default: "
+        "it would mix results of different code)",
+    )
+
+
+def add_transient_option(
+    parser: argparse.ArgumentParser, default: float, *aliases: str, integer: bool = False
+) -> None:
+    """``--transient``: in forcing periods T = 2 pi/Omega (as the paper counts them)."""
+    parser.add_argument(
+        "--transient",
+        *aliases,
+        dest="transient",
+        type=int_at_least(0, MAX_PERIODS) if integer else nonnegative_float,
+        default=default,
+        help="transient skipped before measuring, in forcing periods T = 2 pi/Omega",
+    )

@@ -1,0 +1,7 @@
+"""Experiments over many systems: the paper's parameter values and run sizes
+(:mod:`~analysis.experiments.parameters`), the model registry (:mod:`~analysis.experiments.models`),
+ensembles (:mod:`~analysis.experiments.ensemble`, :mod:`~analysis.experiments.iid`), and running
+and keeping tasks (:mod:`~analysis.experiments.execution`, :mod:`~analysis.experiments.store`).
+
+The modules are imported on use (each pulls in the compiled kernels it needs).
+"""
