@@ -36,7 +36,7 @@ from numba import njit
 
 from analysis.dimensions import kaplan_yorke_dimension
 from hysteresis._validation import finite_scalar, positive_integer, time_window
-from oscillators.engine import DivergenceError, Engine
+from oscillators.engines import DivergenceError, Engine
 from oscillators.results import OscillatorState
 
 __all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]

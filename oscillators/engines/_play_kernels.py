@@ -1,4 +1,4 @@
-"""Compiled kernels of the play-limit flow (see :mod:`oscillators.play_flow` for the physics).
+"""Compiled kernels of the play-limit flow (see :mod:`oscillators.engines.play` for the physics).
 
 System (paper eqs. eom_smooth_4, limit_W_0, limit_W_1, salt_matrix_limit)::
 
@@ -32,10 +32,10 @@ import math
 import numpy as np
 from numba import njit
 
-from oscillators import _dop853 as _dop
+from oscillators.engines import _dop853_kernel as _dop
 
 # Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step
-# (coefficients carried in oscillators/_dop853.py with their citation).
+# (coefficients carried in oscillators/engines/_dop853_kernel.py with their citation).
 _N_STAGES = _dop.N_STAGES
 RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
