@@ -315,6 +315,26 @@ def _tangent_update(m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, 
     )
 
 
+@njit(cache=True, inline="always")
+def _hop_tangent(
+    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan, a0, a1, a2, b0, b1, b2, f0, f1, f2
+):
+    """The tangent update of one hop (every hop mode): [δq, δv] := Φ(h) [δq, δv] + (pq, pv) δφ
+    with the phase column (pq, pv) from the forcing phase (c, s) -> (c1, s1) when δφ is
+    tracked (``ntan == 3``); else the two (δq, δv) columns only (the third stays zero)."""
+    if ntan == 3:
+        pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
+        return _tangent_update(m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2)
+    return (
+        m00 * a0 + m01 * b0,
+        m00 * a1 + m01 * b1,
+        a2,
+        m10 * a0 + m11 * b0,
+        m10 * a1 + m11 * b1,
+        b2,
+    )
+
+
 # -- relay tables -------------------------------------------------------------------------------
 # The table is three flat arrays, tf (float), ti (int), lay (int), plus the mutable bitsets
 # ``bits`` (flat arrays, not tuples: inside the hot loop every array handle costs reference
@@ -652,19 +672,10 @@ def advance_table(
                         g = (g0 + g1 * hf) + hp2 * (g2 + g3 * hf) + hp4 * (g4 + g5 * hf + hp2 * g6)
                         gd = (d0 + d1 * hf) + hp2 * (d2 + d3 * hf) + hp4 * (d4 + d5 * hf + hp2 * d6)
                         m00 = gd + 2.0 * zeta * g
-                        if ntan == 3:
-                            pq, pv = phase_column(m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b)
-                            a0, a1, a2, b0, b1, b2 = _tangent_update(
-                                m00, g, -g, gd, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
-                            )
-                        else:
-                            # (δq, δv) columns only: no phase direction
-                            a0, a1, b0, b1 = (
-                                m00 * a0 + g * b0,
-                                m00 * a1 + g * b1,
-                                gd * b0 - g * a0,
-                                gd * b1 - g * a1,
-                            )
+                        a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                            m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                            a0, a1, a2, b0, b1, b2, f0, f1, f2,
+                        )  # fmt: skip
                     direction = 1 if v > 0.0 else -1
                     c = c1
                     s = s1
@@ -732,13 +743,10 @@ def advance_table(
                     m01 = m01 * hh + mp[n, 1]
                     m10 = m10 * hh + mp[n, 2]
                     m11 = m11 * hh + mp[n, 3]
-                pq = 0.0
-                pv = 0.0
-                if ntan == 3:
-                    pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
-                a0, a1, a2, b0, b1, b2 = _tangent_update(
-                    m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
-                )
+                a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                    a0, a1, a2, b0, b1, b2, f0, f1, f2,
+                )  # fmt: skip
             c = c1
             s = s1
             v = dp
@@ -762,13 +770,10 @@ def advance_table(
             q1, v1 = exact_step(q, v, c, s, c1, s1, force, hh, zeta, omega, amp_a, amp_b)
             if tan_on:
                 m00, m01, m10, m11 = hom_matrix(hh, zeta)
-                pq = 0.0
-                pv = 0.0
-                if ntan == 3:
-                    pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
-                a0, a1, a2, b0, b1, b2 = _tangent_update(
-                    m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
-                )
+                a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                    a0, a1, a2, b0, b1, b2, f0, f1, f2,
+                )  # fmt: skip
             c = c1
             s = s1
             v = v1
