@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from hysteresis.base import ContinuousHysteron
 from oscillators.engines.base import Engine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
@@ -22,6 +23,11 @@ def select_engine(operator: Any) -> type[Engine]:
     """
     if operator.piecewise_constant:
         return RelayEngine
+    if not isinstance(operator, ContinuousHysteron):
+        raise TypeError(
+            f"operator {type(operator).__name__} cannot be coupled to the oscillator: it is "
+            "neither a PiecewiseConstantHysteron nor a ContinuousHysteron (see hysteresis.base)"
+        )
     if operator.compiled_play() is not None:
         return PlayEngine
     return ContinuousEngine
