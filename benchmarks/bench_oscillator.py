@@ -299,7 +299,7 @@ def main() -> None:
 
 def continuous_engine_figures(c: float, erf_play_tangent_s: float) -> dict:
     """Seconds per 1000 time units with tangent flow on the generic continuous engine
-    (oscillators.continuous, DOP853 + events): a 10-play Prandtl–Ishlinskii operator (widths
+    (oscillators.engines.continuous, DOP853 + events): a 10-play Prandtl–Ishlinskii operator (widths
     0.4 ... 4.0, equal weights, coupling 0.8 < 1/Σweights so that the walls stay stable) and a
     continuous Preisach model tabulated on a 256 grid (density N(s; 0, R²)·N(r; p/2, 0.2²),
     coupling ``c``), next to the compiled erf-play kernel measured above (ratio = engine /

@@ -8,7 +8,7 @@ memory lives in a separate immutable *state* object, so
 
 never mutates anything and the memory never grows with the length of the input.
 
-Two families exist, and the forced-oscillator engines (:func:`oscillators.engine.select_engine`)
+Two families exist, and the forced-oscillator engines (:func:`oscillators.engines.select_engine`)
 treat them differently. The contract is exactly what those engines use; its required methods
 are abstract, so a class that misses one cannot be instantiated (Python's ``TypeError`` names
 the method).
@@ -157,7 +157,7 @@ class PiecewiseConstantHysteron(Hysteron):
 
     piecewise_constant = True
 
-    # -- what the oscillator's relay engine needs (oscillators.engine.select_engine) ----------
+    # -- what the oscillator's relay engine needs (oscillators.engines.select_engine) ----------
     @abstractmethod
     def relay_table(self) -> Any:
         """The operator as a table of relays (:class:`hysteresis.relay_table.RelayTable`):
@@ -211,7 +211,7 @@ class ContinuousHysteron(Hysteron):
             ),
         )
 
-    # -- what the oscillator's continuous engines need (oscillators.engine.select_engine) -----
+    # -- what the oscillator's continuous engines need (oscillators.engines.select_engine) -----
     @abstractmethod
     def branch_flow(self, state: Any, direction: int) -> BranchFlow:
         """The branch followed in ``direction`` (+1 rising, -1 falling) as a function of the

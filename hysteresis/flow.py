@@ -6,8 +6,8 @@ Preisach) is, for a fixed direction of input motion, a smooth function of the in
 <hysteresis.base.ContinuousHysteron.branch_flow>` describes that piece as a
 :class:`BranchFlow`: the operator's memory variables, the output as a function of the input with
 its partial derivatives, the next breakpoint and what happens to the memory there. The generic
-continuous engine of the oscillator (:mod:`oscillators.continuous`) integrates any operator that
-provides it, tangent flow included.
+continuous engine of the oscillator (:mod:`oscillators.engines.continuous`) integrates any
+operator that provides it, tangent flow included.
 
 Memory variables
 ----------------

@@ -24,7 +24,7 @@ import numpy as np
 
 from hysteresis._validation import finite_array, finite_scalar
 
-__all__ = ["NestedPlan", "RelayTable"]
+__all__ = ["HeapTable", "NestedPlan", "RelayTable"]
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -101,7 +101,7 @@ class RelayTable:
     The arrays are read-only copies. Instances are immutable.
     """
 
-    __slots__ = ("_alpha", "_beta", "_weights", "_plan", "_plan_done")
+    __slots__ = ("_alpha", "_beta", "_weights", "_plan", "_plan_done", "_positive", "_heap")
 
     def __init__(self, alpha, beta, weights) -> None:
         alpha = finite_array(alpha, "alpha", ndim=1)
@@ -126,6 +126,8 @@ class RelayTable:
         object.__setattr__(self, "_weights", _readonly(weights))
         object.__setattr__(self, "_plan", None)
         object.__setattr__(self, "_plan_done", False)
+        object.__setattr__(self, "_positive", None)
+        object.__setattr__(self, "_heap", None)
 
     def __setattr__(self, name, value):
         raise AttributeError("RelayTable is immutable")
@@ -231,3 +233,115 @@ class RelayTable:
         for arr in (up, down, mval, order, all_starts):
             arr.setflags(write=False)
         return NestedPlan(up=up, down=down, mval=mval, order=order, starts=all_starts)
+
+    # -- the plans of the oscillator's relay kernels (built once, cached: the table is immutable)
+    def positive_part(self) -> tuple[np.ndarray, RelayTable]:
+        """(indices, table) of the relays of positive weight (``self`` if every weight is
+        positive): relays of zero weight never change ``M`` and the kernels leave them out."""
+        if self._positive is None:
+            active = np.flatnonzero(self._weights > 0.0)
+            if active.size == 0:
+                raise ValueError("the relay table has no relay of positive weight")
+            active.setflags(write=False)
+            work = self
+            if active.size < self.n_relays:
+                work = RelayTable(self._alpha[active], self._beta[active], self._weights[active])
+            object.__setattr__(self, "_positive", (active, work))
+        return self._positive
+
+    def heap_plan(self) -> HeapTable:
+        """The bitset-heap plan (any relays, O(log₆₄ N) per switch) of a table whose weights
+        are all positive (see :meth:`positive_part`)."""
+        if self._heap is None:
+            object.__setattr__(self, "_heap", HeapTable(self._alpha, self._beta, self._weights))
+        return self._heap
+
+
+# -- the heap plan: two hierarchical 64-ary bitsets over the presorted thresholds -----------------
+def _bitset_layout(n: int) -> list[int]:
+    """Word counts per level of a 64-ary hierarchical bitset over n >= 1 items (top: 1 word)."""
+    sizes = [max(1, -(-n // 64))]
+    while sizes[-1] > 1:
+        sizes.append(-(-sizes[-1] // 64))
+    return sizes
+
+
+def _bitset_words(flags: np.ndarray) -> np.ndarray:
+    """All levels of the hierarchical bitset of boolean ``flags`` (layout of _bitset_layout)."""
+    levels = []
+    level = flags
+    for size in _bitset_layout(flags.size):
+        padded = np.zeros(64 * size, dtype=bool)
+        padded[: level.size] = level
+        words = np.packbits(padded, bitorder="little").view("<u8").astype(np.uint64)
+        levels.append(words)
+        level = words != 0
+    return np.concatenate(levels)
+
+
+class HeapTable:
+    """The bitset-heap form (kind 1) of relays of positive weight.
+
+    ``rank_a`` / ``rank_b`` map the alpha ranks (ascending) and beta ranks (descending) to the
+    indices of the given arrays. ``unit > 0`` when every weight is an integer multiple of
+    ``unit`` (then ``M`` is kept as integer units).
+    """
+
+    def __init__(self, alpha: np.ndarray, beta: np.ndarray, weights: np.ndarray) -> None:
+        if not np.all(weights > 0.0):
+            raise ValueError("the heap table takes relays of positive weight only")
+        n = int(alpha.size)
+        order_a = np.lexsort((-beta, alpha))  # ties in alpha: any order, kept deterministic
+        order_b = np.lexsort((alpha, -beta))
+        inv_b = np.empty(n, dtype=np.int64)
+        inv_b[order_b] = np.arange(n)
+        inv_a = np.empty(n, dtype=np.int64)
+        inv_a[order_a] = np.arange(n)
+        unit = float(weights.min())
+        units = np.rint(weights / unit)
+        if not (np.all(units * unit == weights) and units.max() * n < 2**52):
+            unit = 0.0
+            units = np.zeros(n)
+        units = units.astype(np.int64)
+        self.n = n
+        self.rank_a = order_a
+        self.rank_b = order_b
+        self.unit = unit
+        self.total_units = int(units.sum())
+        self.w_a = weights[order_a]
+        self.units_a = units[order_a]
+        self.tf = np.concatenate(
+            [alpha[order_a], beta[order_b], weights[order_a], weights[order_b]]
+        ).astype(np.float64)
+        self.ti = np.concatenate(
+            [inv_b[order_a], inv_a[order_b], units[order_a], units[order_b]]
+        ).astype(np.int64)
+        sizes = _bitset_layout(n)
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self.n_words = int(offsets[-1])
+        levels = len(sizes)
+        self.lay = np.concatenate([[levels, n], offsets[:-1], offsets[:-1] + self.n_words]).astype(
+            np.int64
+        )
+
+    def bits_from_outputs(self, outputs: np.ndarray) -> np.ndarray:
+        """The two bitsets for relay outputs ``outputs`` (±1, order of the given arrays)."""
+        down = np.asarray(outputs)[self.rank_a] < 0
+        up = np.asarray(outputs)[self.rank_b] > 0
+        return np.concatenate([_bitset_words(down), _bitset_words(up)])
+
+    def outputs_from_bits(self, bits: np.ndarray) -> np.ndarray:
+        """Relay outputs (±1, order of the given arrays) from the bitsets."""
+        leaf = bits[: -(-self.n // 64)]
+        flags = np.unpackbits(leaf.view(np.uint8), bitorder="little")[: self.n].astype(bool)
+        y = np.empty(self.n)
+        y[self.rank_a] = np.where(flags, -1.0, 1.0)
+        return y
+
+    def state_arrays(self, outputs: np.ndarray) -> tuple[np.ndarray, int, float, float]:
+        """(bits, units up, M, compensation) for relay outputs ``outputs``."""
+        bits = self.bits_from_outputs(outputs)
+        y = np.asarray(outputs)[self.rank_a]
+        units_up = int(self.units_a[y > 0].sum())
+        m = math.fsum(self.w_a * y)
+        return bits, units_up, m, 0.0

@@ -5,7 +5,7 @@ from hysteresis._version import __version__
 
 _check_import_name("oscillators")
 
-from oscillators.engine import DivergenceError, Engine, GrazingError, select_engine  # noqa: E402
+from oscillators.engines import DivergenceError, Engine, GrazingError, select_engine  # noqa: E402
 from oscillators.linear import forced_response, homogeneous_propagator, propagate, segment_jacobian
 from oscillators.results import OscillatorState, PoincareSection, Trajectory
 from oscillators.system import (

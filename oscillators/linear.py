@@ -21,8 +21,9 @@ The same closed forms give the tangent (variational) flow of a segment: ``Φ(h)`
 (δq, δv) block and, for a perturbation of the forcing phase, the column
 ``∂(q, v)(h)/∂φ_0 = P'(φ_0 + Ωh) − Φ(h) P'(φ_0)``.
 
-The numba functions here are shared by the event-driven kernels (``oscillators._pc_kernels``);
-the plain functions at the bottom are the validated public entry points.
+The numba functions here are shared by the event-driven kernels
+(``oscillators.engines._relay_kernels``); the plain functions at the bottom are the validated
+public entry points.
 """
 
 from __future__ import annotations

@@ -3,12 +3,13 @@
 Paper eq. (eom_2): ``q'' + 2ζ q' + q = cos φ + C·M[q]``, ``φ' = Ω``, state
 ``x = (q, v = q', φ)`` plus the operator's memory (its state object). The system holds the
 parameters and the operator; it asks the operator's contract once which engine integrates it
-(:func:`oscillators.engine.select_engine`) and writes every derived map once on top of the
-:class:`~oscillators.engine.Engine` interface: trajectories, Poincaré (stroboscopic) sections, the
-stroboscopic map and flow-map Jacobians. Lyapunov spectra live in :mod:`analysis.lyapunov`.
+(:func:`oscillators.engines.select_engine`) and writes every derived map once on top of the
+:class:`~oscillators.engines.base.Engine` interface: trajectories, Poincaré (stroboscopic)
+sections, the stroboscopic map and flow-map Jacobians. Lyapunov spectra live in
+:mod:`analysis.dynamics.lyapunov`.
 
 Every driver checks the state it reports: a non-finite or runaway state raises
-:class:`~oscillators.engine.DivergenceError` naming the time, never a number.
+:class:`~oscillators.engines.base.DivergenceError` naming the time, never a number.
 """
 
 from __future__ import annotations
@@ -21,12 +22,11 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
 from hysteresis.base import Hysteron
-from oscillators.engine import DivergenceError, Engine, select_engine, wrap_phase
+from oscillators.engines import DivergenceError, Engine, select_engine, wrap_phase
+from oscillators.engines.base import SWITCH_DTYPE
 from oscillators.results import OscillatorState, PoincareSection, Trajectory
 
 __all__ = ["ForcedOscillator"]
-
-_SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8")])
 
 #: Largest number of forcing periods / samples a single call may demand (a guard against
 #: parameters such as Ω = 1e-300 that would make a run last forever).
@@ -71,10 +71,10 @@ class ForcedOscillator:
     An operator with unbounded output and slope ``s`` on a branch gives the stiffness
     ``1 − C·s`` there; for ``C·s >= 1`` the coupled motion is a positive-feedback instability
     (the plain play at ``C >= 1``). Such systems are accepted with a ``RuntimeWarning`` and any
-    run that diverges raises :class:`~oscillators.engine.DivergenceError`.
+    run that diverges raises :class:`~oscillators.engines.base.DivergenceError`.
     """
 
-    #: ``|q|`` or ``|v|`` above this counts as diverged (:meth:`check_finite`)
+    #: ``|q|`` or ``|v|`` above this counts as diverged (:meth:`check_finite`), in every engine
     divergence_bound = 1e12
 
     def __init__(
@@ -108,11 +108,10 @@ class ForcedOscillator:
         self._coupling = coupling
         self._zeta = zeta
         self._omega = omega
+        # the engine class, once, from the operator's contract; it refuses what it cannot
+        # integrate (parameters, an incomplete contract) here, without integrating
         self._engine_cls = select_engine(operator)
-        check = getattr(self._engine_cls, "check_system", None)
-        if check is not None:
-            check(self)
-        self._probe_engine()
+        self._engine_cls.check_system(self)
         lo, hi = operator.output_range
         if (math.isinf(lo) or math.isinf(hi)) and coupling >= 1.0:
             warnings.warn(
@@ -123,24 +122,6 @@ class ForcedOscillator:
                 RuntimeWarning,
                 stacklevel=2,
             )
-
-    def _probe_engine(self) -> None:
-        """Refuse, at construction, an operator whose contract the engine cannot use.
-
-        A short step from ``q = 0`` exercises everything the engine asks of the operator
-        (relay table or switching inputs; branch flow and linearization), so an operator that
-        does not honour the contract fails here with the reason, not first at integration time.
-        """
-        try:
-            probe = self._engine_cls(self, self.initial_state(0.0, 0.0))
-            probe.advance(np.array([1e-6 * self.period]))
-        except NotImplementedError as exc:
-            raise TypeError(
-                f"operator {self._operator!r} cannot be coupled to the oscillator: its contract "
-                f"is incomplete ({exc or 'a contract method is not implemented'}); a "
-                "piecewise-constant operator needs switching() and relay_table(), a continuous "
-                "one branch_flow() (see hysteresis.base)"
-            ) from None
 
     # -- parameters --------------------------------------------------------------------------
     @property
@@ -218,24 +199,11 @@ class ForcedOscillator:
     ) -> None:
         """Raise :class:`DivergenceError` if ``values`` (rows of states just computed, first
         columns q and v) are not finite or have run away (``|q|`` or ``|v|`` above
-        :attr:`divergence_bound`).
+        :attr:`divergence_bound`): :meth:`Engine.check_finite`, the one divergence test.
 
         ``times`` (elapsed, one per row) locate the first bad row in the message.
         """
-        values = np.asarray(values, dtype=np.float64)
-        good = np.isfinite(values) & (np.abs(values) <= self.divergence_bound)
-        if good.all():
-            return
-        rows = good.reshape(values.shape[0], -1).all(axis=1) if values.ndim > 1 else good
-        first = int(np.argmin(rows)) if values.ndim > 1 else 0
-        elapsed = engine.elapsed if times is None else float(np.asarray(times)[first])
-        t = engine.start.t + elapsed
-        raise DivergenceError(
-            f"the motion diverged by t = {t:.6g} (non-finite or |q|, |v| > "
-            f"{self.divergence_bound:.0e}) for {self!r}; "
-            "an unbounded operator with C·slope >= 1 is a positive-feedback instability",
-            time=t,
-        )
+        engine.check_finite(values, times)
 
     # -- derived maps --------------------------------------------------------------------------
     def trajectory(
@@ -283,7 +251,7 @@ class ForcedOscillator:
             v=out[:, 1].copy(),
             phi=np.mod(start.phi + self._omega * times, 2.0 * math.pi),
             M=out[:, 2].copy(),
-            switches=rec.get("switches", np.empty(0, dtype=_SWITCH_DTYPE)),
+            switches=rec.get("switches", np.empty(0, dtype=SWITCH_DTYPE)),
             final=eng.state(),
             w=out[:, cols.index("w")].copy() if "w" in cols else None,
             events=rec.get("events"),

@@ -108,7 +108,7 @@ def test_lyapunov_relay_and_bad_input(capsys):
 
 
 def test_lyapunov_play_limit_minus_inf(capsys):
-    pytest.importorskip("oscillators.play_flow")
+    pytest.importorskip("oscillators.engines.play")
     code = main(
         ["lyapunov", "--model", "erf-play", "--coupling", "4.0", "--t-end", "100", "--json"]
     )

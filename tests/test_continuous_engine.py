@@ -1,4 +1,4 @@
-"""The generic continuous engine (oscillators.continuous) against independent truths.
+"""The generic continuous engine (oscillators.engines.continuous) against independent truths.
 
 * the compiled play-limit kernel (``PlayEngine``, an independent implementation) through the
   public API (``ForcedOscillator`` picks the engine, ``lyapunov_spectrum``): a user-supplied erf
@@ -20,9 +20,7 @@ from scipy.special import erf
 
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii
-from oscillators.continuous import ContinuousEngine
-from oscillators.engine import DivergenceError
-from oscillators.play_flow import PlayEngine
+from oscillators.engines import ContinuousEngine, DivergenceError, PlayEngine
 from oscillators.results import OscillatorState
 from oscillators.system import ForcedOscillator
 
@@ -355,7 +353,7 @@ def test_bad_input_raises():
 def test_negative_stiffness_diverges():
     # PI with total weight 1 and C = 2: on the walls q'' = ... + (C − 1) q grows without bound
     with pytest.warns(RuntimeWarning, match="unbounded"):
-        engine = _engine(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), 2.0, runaway=1e4)
+        engine = _engine(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), 2.0)
     with pytest.raises(DivergenceError):
         engine.advance(200.0)
 

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from oscillators import _dop853 as dop
+from oscillators.engines import _dop853_kernel as dop
 
 
 def test_quadrature_and_row_sum_conditions():

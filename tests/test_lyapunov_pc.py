@@ -17,8 +17,8 @@ from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis.play import GeneralizedPlay
 from hysteresis.spin_dimers import SpinDimerEnsemble
 from oscillators import ForcedOscillator
-from oscillators import piecewise_constant as pc
-from oscillators.engine import GrazingError
+from oscillators.engines import GrazingError
+from oscillators.engines import _relay_kernels as relay_kernels
 
 ZETA = 0.05
 T = 2.0 * math.pi
@@ -189,7 +189,7 @@ def test_generic_engine_grazing_switch_raises(monkeypatch):
     from hysteresis.relay import Relay
 
     sysm = ForcedOscillator(Relay(0.5, -0.5), 2.0)
-    scan = pc.kern.scan_crossing
+    scan = relay_kernels.scan_crossing
     calls = []
 
     def switch_here_once(par, force, q, v, c, s, tau, horizon, up, down):
@@ -198,7 +198,7 @@ def test_generic_engine_grazing_switch_raises(monkeypatch):
             return 0.0, 1  # the crossing is the current point, where v = 0
         return scan(par, force, q, v, c, s, tau, horizon, up, down)
 
-    monkeypatch.setattr(pc.kern, "scan_crossing", switch_here_once)
+    monkeypatch.setattr(relay_kernels, "scan_crossing", switch_here_once)
     with pytest.raises(GrazingError, match="grazing"):
         pc_jacobian(sysm, 1.0, q0=0.0, v0=0.0, engine="generic")
     # the trajectory itself is defined there: the relay switches (u >= alpha), no error

@@ -162,7 +162,7 @@ def test_taylor_tables_against_the_exact_propagator():
     """The hop tables give q's Taylor coefficients as linear forms in (q, v, F, cos φ, sin φ);
     summed at h = 1e-2 they must reproduce the closed-form solution (truncation h^9/9! ~ 3e-24),
     for several damping ratios and forcing frequencies."""
-    from oscillators import _pc_kernels as kern
+    from oscillators.engines import _relay_kernels as kern
     from oscillators.linear import exact_step, particular_amplitudes
 
     rng = np.random.default_rng(5)
@@ -230,7 +230,7 @@ def test_grazing_maximum_against_brute_force(offset, switches):
     """A maximum that just reaches alpha switches the relay (u >= alpha); just short: no switch.
 
     Exact tangency (maximum == alpha in floating point) follows the same rule on the computed
-    maximum: it switches up with v* = 0 (see ``oscillators._pc_kernels``).
+    maximum: it switches up with v* = 0 (see ``oscillators.engines._relay_kernels``).
     """
     c = 1.0
     t_max, q_max, _ = first_maximum_relay_down(c)

@@ -1,4 +1,4 @@
-"""Play-limit trajectories (oscillators.play_flow) against independent scipy integrations.
+"""Play-limit trajectories (oscillators.engines.play) against independent scipy integrations.
 
 The reference integrates the same piecewise system with ``solve_ivp`` (DOP853) and its event
 location: inside the play with the constant force ``C f(w)`` until ``q = w ± p/2``; on a wall with
@@ -18,7 +18,7 @@ from scipy.special import erf
 
 from hysteresis.play import GeneralizedPlay, PlayOperator, PlayState
 from oscillators import ForcedOscillator
-from oscillators.play_flow import EVENT_DTYPE
+from oscillators.engines.play import EVENT_DTYPE
 from oscillators.results import PoincareSection, Trajectory
 
 ZETA = 0.05

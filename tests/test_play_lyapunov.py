@@ -1,4 +1,4 @@
-"""Tangent flow and Lyapunov spectrum of the play limit (oscillators.play_flow).
+"""Tangent flow and Lyapunov spectrum of the play limit (oscillators.engines.play).
 
 Truths used: finite differences of the flow map; the damped linear oscillator (C = 0, or an
 input that never reaches a wall); Liouville's formula for the 2-area on the wall plus the closed

@@ -18,8 +18,7 @@ from relay_test_support import relay_brute_force
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis import PreisachModel, Relay, SpinDimerEnsemble
 from oscillators import ForcedOscillator
-from oscillators.engine import GrazingError
-from oscillators.piecewise_constant import RelayEngine
+from oscillators.engines import GrazingError, RelayEngine
 from oscillators.results import OscillatorState
 
 ZETA = 0.05
@@ -288,7 +287,7 @@ def test_set_deviations_is_linear():
 
 def test_generic_grazing_switch_raises(monkeypatch):
     """A switch found at a turning point (v* = 0) has an infinite saltation: a clear error."""
-    from oscillators import _pc_kernels as kern
+    from oscillators.engines import _relay_kernels as kern
 
     sysm = ForcedOscillator(Relay(0.5, -0.5), 2.0)
     scan = kern.scan_crossing

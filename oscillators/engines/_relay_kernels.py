@@ -315,6 +315,26 @@ def _tangent_update(m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, 
     )
 
 
+@njit(cache=True, inline="always")
+def _hop_tangent(
+    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan, a0, a1, a2, b0, b1, b2, f0, f1, f2
+):
+    """The tangent update of one hop (every hop mode): [δq, δv] := Φ(h) [δq, δv] + (pq, pv) δφ
+    with the phase column (pq, pv) from the forcing phase (c, s) -> (c1, s1) when δφ is
+    tracked (``ntan == 3``); else the two (δq, δv) columns only (the third stays zero)."""
+    if ntan == 3:
+        pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
+        return _tangent_update(m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2)
+    return (
+        m00 * a0 + m01 * b0,
+        m00 * a1 + m01 * b1,
+        a2,
+        m10 * a0 + m11 * b0,
+        m10 * a1 + m11 * b1,
+        b2,
+    )
+
+
 # -- relay tables -------------------------------------------------------------------------------
 # The table is three flat arrays, tf (float), ti (int), lay (int), plus the mutable bitsets
 # ``bits`` (flat arrays, not tuples: inside the hot loop every array handle costs reference
@@ -652,19 +672,10 @@ def advance_table(
                         g = (g0 + g1 * hf) + hp2 * (g2 + g3 * hf) + hp4 * (g4 + g5 * hf + hp2 * g6)
                         gd = (d0 + d1 * hf) + hp2 * (d2 + d3 * hf) + hp4 * (d4 + d5 * hf + hp2 * d6)
                         m00 = gd + 2.0 * zeta * g
-                        if ntan == 3:
-                            pq, pv = phase_column(m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b)
-                            a0, a1, a2, b0, b1, b2 = _tangent_update(
-                                m00, g, -g, gd, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
-                            )
-                        else:
-                            # (δq, δv) columns only: no phase direction
-                            a0, a1, b0, b1 = (
-                                m00 * a0 + g * b0,
-                                m00 * a1 + g * b1,
-                                gd * b0 - g * a0,
-                                gd * b1 - g * a1,
-                            )
+                        a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                            m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                            a0, a1, a2, b0, b1, b2, f0, f1, f2,
+                        )  # fmt: skip
                     direction = 1 if v > 0.0 else -1
                     c = c1
                     s = s1
@@ -732,13 +743,10 @@ def advance_table(
                     m01 = m01 * hh + mp[n, 1]
                     m10 = m10 * hh + mp[n, 2]
                     m11 = m11 * hh + mp[n, 3]
-                pq = 0.0
-                pv = 0.0
-                if ntan == 3:
-                    pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
-                a0, a1, a2, b0, b1, b2 = _tangent_update(
-                    m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
-                )
+                a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                    a0, a1, a2, b0, b1, b2, f0, f1, f2,
+                )  # fmt: skip
             c = c1
             s = s1
             v = dp
@@ -762,13 +770,10 @@ def advance_table(
             q1, v1 = exact_step(q, v, c, s, c1, s1, force, hh, zeta, omega, amp_a, amp_b)
             if tan_on:
                 m00, m01, m10, m11 = hom_matrix(hh, zeta)
-                pq = 0.0
-                pv = 0.0
-                if ntan == 3:
-                    pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
-                a0, a1, a2, b0, b1, b2 = _tangent_update(
-                    m00, m01, m10, m11, pq, pv, a0, a1, a2, b0, b1, b2, f0, f1, f2
-                )
+                a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                    a0, a1, a2, b0, b1, b2, f0, f1, f2,
+                )  # fmt: skip
             c = c1
             s = s1
             v = v1
@@ -880,100 +885,11 @@ def run_table(
 
 
 # -- building the kernel tables (Python) ----------------------------------------------------------
-def _bitset_layout(n: int) -> list[int]:
-    """Word counts per level of a 64-ary hierarchical bitset over n >= 1 items (top: 1 word)."""
-    sizes = [max(1, -(-n // 64))]
-    while sizes[-1] > 1:
-        sizes.append(-(-sizes[-1] // 64))
-    return sizes
-
-
-def _bitset_words(flags: np.ndarray) -> np.ndarray:
-    """All levels of the hierarchical bitset of boolean ``flags`` (layout of _bitset_layout)."""
-    levels = []
-    level = flags
-    for size in _bitset_layout(flags.size):
-        padded = np.zeros(64 * size, dtype=bool)
-        padded[: level.size] = level
-        words = np.packbits(padded, bitorder="little").view("<u8").astype(np.uint64)
-        levels.append(words)
-        level = words != 0
-    return np.concatenate(levels)
-
-
 def nested_kernel_table(plan) -> tuple:
     """(tf, ti, bits, lay) for a :class:`~hysteresis.relay_table.NestedPlan` (kind 0)."""
     tf = np.concatenate([plan.up, plan.down, plan.mval]).astype(np.float64)
     lay = np.array([plan.up.size], dtype=np.int64)
     return tf, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.uint64), lay
-
-
-class HeapTable:
-    """The bitset-heap form (kind 1) of relays of positive weight.
-
-    ``rank_a`` / ``rank_b`` map the alpha ranks (ascending) and beta ranks (descending) to the
-    indices of the given arrays. ``unit > 0`` when every weight is an integer multiple of
-    ``unit`` (then ``M`` is kept as integer units).
-    """
-
-    def __init__(self, alpha: np.ndarray, beta: np.ndarray, weights: np.ndarray) -> None:
-        if not np.all(weights > 0.0):
-            raise ValueError("the heap table takes relays of positive weight only")
-        n = int(alpha.size)
-        order_a = np.lexsort((-beta, alpha))  # ties in alpha: any order, kept deterministic
-        order_b = np.lexsort((alpha, -beta))
-        inv_b = np.empty(n, dtype=np.int64)
-        inv_b[order_b] = np.arange(n)
-        inv_a = np.empty(n, dtype=np.int64)
-        inv_a[order_a] = np.arange(n)
-        unit = float(weights.min())
-        units = np.rint(weights / unit)
-        if not (np.all(units * unit == weights) and units.max() * n < 2**52):
-            unit = 0.0
-            units = np.zeros(n)
-        units = units.astype(np.int64)
-        self.n = n
-        self.rank_a = order_a
-        self.rank_b = order_b
-        self.unit = unit
-        self.total_units = int(units.sum())
-        self.w_a = weights[order_a]
-        self.units_a = units[order_a]
-        self.tf = np.concatenate(
-            [alpha[order_a], beta[order_b], weights[order_a], weights[order_b]]
-        ).astype(np.float64)
-        self.ti = np.concatenate(
-            [inv_b[order_a], inv_a[order_b], units[order_a], units[order_b]]
-        ).astype(np.int64)
-        sizes = _bitset_layout(n)
-        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-        self.n_words = int(offsets[-1])
-        levels = len(sizes)
-        self.lay = np.concatenate([[levels, n], offsets[:-1], offsets[:-1] + self.n_words]).astype(
-            np.int64
-        )
-
-    def bits_from_outputs(self, outputs: np.ndarray) -> np.ndarray:
-        """The two bitsets for relay outputs ``outputs`` (±1, order of the given arrays)."""
-        down = np.asarray(outputs)[self.rank_a] < 0
-        up = np.asarray(outputs)[self.rank_b] > 0
-        return np.concatenate([_bitset_words(down), _bitset_words(up)])
-
-    def outputs_from_bits(self, bits: np.ndarray) -> np.ndarray:
-        """Relay outputs (±1, order of the given arrays) from the bitsets."""
-        leaf = bits[: -(-self.n // 64)]
-        flags = np.unpackbits(leaf.view(np.uint8), bitorder="little")[: self.n].astype(bool)
-        y = np.empty(self.n)
-        y[self.rank_a] = np.where(flags, -1.0, 1.0)
-        return y
-
-    def state_arrays(self, outputs: np.ndarray) -> tuple[np.ndarray, int, float, float]:
-        """(bits, units up, M, compensation) for relay outputs ``outputs``."""
-        bits = self.bits_from_outputs(outputs)
-        y = np.asarray(outputs)[self.rank_a]
-        units_up = int(self.units_a[y > 0].sum())
-        m = math.fsum(self.w_a * y)
-        return bits, units_up, m, 0.0
 
 
 # One compiled entry point per table kind: the kind is a compile-time constant inside each, so

@@ -4,19 +4,21 @@
 (:mod:`hysteresis.base`). It asks the operator once what it can hand over and picks the engine
 from the answer (:func:`select_engine`), never by ``isinstance`` on operator classes:
 
-* ``operator.piecewise_constant`` and ``operator.relay_table()`` -> :class:`RelayEngine`
+* ``operator.piecewise_constant`` -> :class:`~oscillators.engines.relay.RelayEngine`
   (exact event-driven integration: closed-form propagation between switches, saltation
   ``C·ΔM/v*`` at each switch; an O(1) kernel when the thresholds nest, an O(log N) heap kernel
   for arbitrary relays);
-* ``operator.compiled_play()`` not ``None`` -> the compiled play-limit engine (plain play and
+* ``operator.compiled_play()`` not ``None`` -> the compiled play-limit engine
+  (:class:`~oscillators.engines.play.PlayEngine`; plain play and
   ``GeneralizedPlay.erf``: the paper's thermodynamic limit, a fast path);
-* any other continuous operator -> the generic continuous engine over
+* any other continuous operator -> the generic continuous engine
+  (:class:`~oscillators.engines.continuous.ContinuousEngine`) over
   ``operator.branch_flow(state, direction)`` (play with any shape, Prandtl–Ishlinskii,
   continuous Preisach).
 
 Everything above an engine — trajectories, Poincaré sections, the stroboscopic map, flow-map
 Jacobians (:mod:`oscillators.system`) and the one Benettin/QR loop of
-:mod:`analysis.lyapunov` — is written once against :class:`Engine`.
+:mod:`analysis.dynamics.lyapunov` — is written once against :class:`Engine`.
 
 Engine contract
 ---------------
@@ -48,6 +50,13 @@ Tangent flow
     extremum removes its direction. The QR loop records exactly ``-inf`` for the directions
     beyond that bound (the paper's ``λ = -∞``) instead of the log of a round-off remainder.
 
+What every engine shares lives here, in :class:`Engine`: the clock (period index and time in the
+period, the forcing phase, ``elapsed``), the checks of requested times (one tolerance,
+:data:`TIME_TOLERANCE`), the divergence test (one bound, the system's
+``ForcedOscillator.divergence_bound``) and the tangent bookkeeping (the flow is on, the shape of
+``set_deviations``). This module never imports an engine; :mod:`oscillators.engines.select`
+does.
+
 Engines raise :class:`DivergenceError` when the state becomes non-finite or runs away, and
 :class:`GrazingError` (piecewise-constant operators) when a switch happens at a turning point
 while the tangent flow is on.
@@ -67,10 +76,18 @@ __all__ = [
     "DivergenceError",
     "Engine",
     "GrazingError",
-    "select_engine",
+    "SWITCH_DTYPE",
+    "TIME_TOLERANCE",
     "split_times",
     "wrap_phase",
 ]
+
+#: Relative tolerance of :meth:`Engine.advance` for a requested time before the current one
+#: (``t < now - TIME_TOLERANCE·max(1, |now|)`` is refused; later rounding is accepted).
+TIME_TOLERANCE = 1e-12
+#: Fields of ``records()["switches"]`` of piecewise-constant engines (and of
+#: ``Trajectory.switches``): time, q, v and the jump ΔM of the output.
+SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8")])
 
 
 class DivergenceError(RuntimeError):
@@ -122,6 +139,14 @@ class Engine(ABC):
 
     Subclasses implement the motion and tangent-flow primitives below; see the module docstring
     for the contract. Engines are created by :meth:`ForcedOscillator.engine`.
+
+    The clock: an engine reports its time as (period index ``n``, time ``tau`` since the start
+    of that period) through :meth:`_clock`; ``elapsed = n·T + tau`` and the forcing phase
+    ``φ0 + Ω·tau`` (mod 2π) follow here, so the phase never loses digits on long runs. The
+    tangent flow: :meth:`start_tangent` records the number of tracked vectors (0: off);
+    :meth:`deviations`, :meth:`set_deviations` and :meth:`rank_bound` check that it is on and
+    the shape of what is set, then call the engine's ``_deviations``, ``_set_deviations``,
+    ``_rank_bound``.
     """
 
     #: Short name reported in results (``"relay kernel"``, ``"play kernel"``, ...).
@@ -130,17 +155,90 @@ class Engine(ABC):
     def __init__(self, system: Any, state: OscillatorState) -> None:
         self.system = system
         self.start = state
+        self._omega = float(system.frequency)
+        self._period = 2.0 * math.pi / self._omega
+        self._phi0 = float(state.phi)
+        self._ntan = 0  # tracked tangent vectors; 0: the tangent flow is off
+
+    @classmethod
+    def check_system(cls, system: Any) -> None:
+        """Refuse, at the system's construction, parameters or an operator this engine class
+        cannot integrate (default: no requirement)."""
+        return None
+
+    # -- the clock -----------------------------------------------------------------------------
+    @abstractmethod
+    def _clock(self) -> tuple[int, float]:
+        """(period index, time since the start of that period) now."""
+
+    @property
+    def period(self) -> float:
+        """Forcing period T = 2π/Ω."""
+        return self._period
+
+    @property
+    def elapsed(self) -> float:
+        """Time since the start state."""
+        n, tau = self._clock()
+        return n * self._period + tau
+
+    def phase(self) -> float:
+        """Forcing phase now, in [0, 2π)."""
+        return wrap_phase(self._phi0 + self._omega * self._clock()[1])
+
+    def _check_first_time(self, first: float) -> None:
+        """Refuse a first requested time before now (beyond :data:`TIME_TOLERANCE`)."""
+        now = self.elapsed
+        if first < now - TIME_TOLERANCE * max(1.0, abs(now)):
+            raise ValueError(f"times must be >= the current elapsed time {now!r}, got {first!r}")
+
+    def _target_times(self, times: np.ndarray | float) -> np.ndarray:
+        """``times`` as a checked 1-D array: finite, sorted, not before now (may be empty)."""
+        times = np.asarray(times, dtype=np.float64)
+        if times.ndim > 1:
+            raise ValueError("times must be a scalar or a 1-D array")
+        times = np.atleast_1d(times)
+        if times.size == 0:
+            return times
+        if not np.all(np.isfinite(times)):
+            raise ValueError("times must be finite")
+        if np.any(np.diff(times) < 0.0):
+            raise ValueError("times must be sorted")
+        self._check_first_time(float(times[0]))
+        return times
+
+    def _check_out(self, out: np.ndarray | None, n_rows: int) -> None:
+        if out is not None and (out.ndim != 2 or out.shape[0] != n_rows or out.shape[1] < 3):
+            raise ValueError(f"out must have shape ({n_rows}, >= 3), got {out.shape}")
+
+    # -- divergence ----------------------------------------------------------------------------
+    def check_finite(self, values: np.ndarray, times: np.ndarray | None = None) -> None:
+        """Raise :class:`DivergenceError` if ``values`` (rows of states, first columns q and v)
+        are not finite or have run away (above the system's ``divergence_bound``).
+
+        ``times`` (elapsed, one per row) locate the first bad row in the message.
+        """
+        values = np.asarray(values, dtype=np.float64)
+        bound = self.system.divergence_bound
+        good = np.isfinite(values) & (np.abs(values) <= bound)
+        if good.all():
+            return
+        rows = good.reshape(values.shape[0], -1).all(axis=1) if values.ndim > 1 else good
+        first = int(np.argmin(rows)) if values.ndim > 1 else 0
+        elapsed = self.elapsed if times is None else float(np.asarray(times)[first])
+        t = self.start.t + elapsed
+        raise DivergenceError(
+            f"the motion diverged by t = {t:.6g} (non-finite or |q|, |v| > "
+            f"{bound:.0e}) for {self.system!r}; "
+            "an unbounded operator with C·slope >= 1 is a positive-feedback instability",
+            time=t,
+        )
 
     # -- motion --------------------------------------------------------------------------------
     @property
     def sample_columns(self) -> tuple[str, ...]:
         """Names of the columns :meth:`advance` writes: ``("q", "v", "M", ...)``."""
         return ("q", "v", "M")
-
-    @property
-    @abstractmethod
-    def elapsed(self) -> float:
-        """Time since the start state."""
 
     @abstractmethod
     def advance(
@@ -177,48 +275,52 @@ class Engine(ABC):
         """Number of events (switches, wall hits, reversals) since the start."""
 
     # -- tangent flow --------------------------------------------------------------------------
-    @abstractmethod
     def start_tangent(self, include_phase: bool = False) -> None:
         """Switch the variational flow on; deviations := identity on :attr:`tangent_space`."""
+        self._ntan = self._start_tangent(bool(include_phase))
+
+    @abstractmethod
+    def _start_tangent(self, include_phase: bool) -> int:
+        """Set the deviations to the identity; returns the number of tracked vectors."""
 
     @property
     @abstractmethod
     def tangent_space(self) -> tuple[str, ...]:
         """Names of the rows of :meth:`deviations` now."""
 
-    @abstractmethod
     def deviations(self) -> np.ndarray:
         """Current deviation vectors as columns (a copy)."""
+        self._need_tangent()
+        return self._deviations()
 
-    @abstractmethod
     def set_deviations(self, y: np.ndarray) -> None:
         """Replace the deviation vectors (same shape as :meth:`deviations`)."""
+        self._need_tangent()
+        y = np.asarray(y, dtype=np.float64)
+        shape = (len(self.tangent_space), self._ntan)
+        if y.shape != shape:
+            raise ValueError(f"deviations must have shape {shape}, got {y.shape}")
+        self._set_deviations(y)
 
-    @abstractmethod
     def rank_bound(self) -> int:
         """Structural bound of the tangent map's rank since the last start/set (see module)."""
+        self._need_tangent()
+        return self._rank_bound()
+
+    @abstractmethod
+    def _deviations(self) -> np.ndarray: ...
+
+    @abstractmethod
+    def _set_deviations(self, y: np.ndarray) -> None: ...
+
+    @abstractmethod
+    def _rank_bound(self) -> int: ...
+
+    def _need_tangent(self) -> None:
+        if self._ntan == 0:
+            raise TangentFlowOff("the tangent flow is off: call start_tangent() first")
 
 
-def select_engine(operator: Any) -> type[Engine]:
-    """The engine class for ``operator``, chosen from what its contract hands over."""
-    if getattr(operator, "piecewise_constant", False):
-        from oscillators.piecewise_constant import RelayEngine
-
-        return RelayEngine
-    compiled = getattr(operator, "compiled_play", None)
-    if compiled is not None and compiled() is not None:
-        from oscillators.play_flow import PlayEngine
-
-        return PlayEngine
-    if callable(getattr(operator, "branch_flow", None)):
-        try:
-            from oscillators.continuous import ContinuousEngine
-        except ImportError:  # pragma: no cover - the generic engine is part of the package
-            ContinuousEngine = None
-        if ContinuousEngine is not None:
-            return ContinuousEngine
-    raise TypeError(
-        f"operator {type(operator).__name__} cannot be coupled to the oscillator: a "
-        "piecewise-constant operator must provide relay_table(), a continuous one "
-        "branch_flow(state, direction) (see hysteresis.base)"
-    )
+class TangentFlowOff(RuntimeError, ValueError):
+    """Deviations asked for before :meth:`Engine.start_tangent` (a ``RuntimeError`` and, as
+    the relay engine raised before, a ``ValueError``)."""

@@ -1,4 +1,4 @@
-"""Compiled kernels of the play-limit flow (see :mod:`oscillators.play_flow` for the physics).
+"""Compiled kernels of the play-limit flow (see :mod:`oscillators.engines.play` for the physics).
 
 System (paper eqs. eom_smooth_4, limit_W_0, limit_W_1, salt_matrix_limit)::
 
@@ -20,7 +20,7 @@ right wall moving right (w = q - hp, v > 0), -1 on the left wall moving left (w 
 flow off. ``diag``: [exits, entries, -, -] counted while accumulating.
 ``flags`` = [accumulate, qr_mode]: qr_mode 0 applies V_out as a plain matrix (the tangent flow
 between the Lyapunov loop's re-orthonormalisations); qr_mode 2 omits V_out (a diagnostic
-showing that the saltation is needed). The QR itself lives once, in analysis/lyapunov.py.
+showing that the saltation is needed). The QR itself lives once, in analysis/dynamics/lyapunov.py.
 ``ev`` (cap, 5): events [t, q, v, kind, w] (kind +1 leaving the play, -1 entering), ``cnt[0]``
 counts all events (also those beyond ``cap``).
 """
@@ -32,10 +32,10 @@ import math
 import numpy as np
 from numba import njit
 
-from oscillators import _dop853 as _dop
+from oscillators.engines import _dop853_kernel as _dop
 
 # Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step
-# (coefficients carried in oscillators/_dop853.py with their citation).
+# (coefficients carried in oscillators/engines/_dop853_kernel.py with their citation).
 _N_STAGES = _dop.N_STAGES
 RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)

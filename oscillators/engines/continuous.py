@@ -18,8 +18,9 @@ While the input ``q`` moves in one direction the operator follows one smooth bra
 Preisach extremum). At every event the operator state is advanced through ``operator.apply`` to
 the event input (exact: the input moved monotonically since the last event) and the next branch
 is asked for. ``advance`` stops exactly at the requested times; samples in between come from the
-integrator's 7th-order dense output. A state that becomes non-finite or exceeds ``runaway`` in
-``|q|`` or ``|v|`` raises :class:`~oscillators.engine.DivergenceError`.
+integrator's 7th-order dense output. A state that becomes non-finite or exceeds the system's
+``divergence_bound`` in ``|q|`` or ``|v|`` raises
+:class:`~oscillators.engines.base.DivergenceError`.
 
 Tangent space
 -------------
@@ -58,7 +59,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from hysteresis._validation import finite_scalar, positive_scalar
-from oscillators.engine import DivergenceError, Engine, split_times, wrap_phase
+from hysteresis.base import ContinuousHysteron
+from oscillators.engines.base import DivergenceError, Engine, split_times, wrap_phase
 from oscillators.results import OscillatorState
 
 __all__ = ["ContinuousEngine", "EVENT_DTYPE"]
@@ -67,7 +69,6 @@ __all__ = ["ContinuousEngine", "EVENT_DTYPE"]
 #: ``M`` the operator output at the event.
 EVENT_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("kind", "i1"), ("M", "f8")])
 
-_TWO_PI = 2.0 * math.pi
 #: Longest stretch integrated by one solve_ivp call (divergence is checked between calls).
 _MAX_CALL = 20.0
 
@@ -87,8 +88,11 @@ class ContinuousEngine(Engine):
         Tolerances of the DOP853 integration (state and deviations), in [1e-13, 1e-3].
     max_step:
         Largest integration step (time units, > 0).
-    runaway:
-        ``|q|`` or ``|v|`` above this raises :class:`DivergenceError`.
+
+    Notes
+    -----
+    A state that is non-finite or above the system's ``divergence_bound`` raises
+    :class:`DivergenceError`.
     """
 
     name = "continuous engine"
@@ -101,21 +105,17 @@ class ContinuousEngine(Engine):
         rtol: float = 1e-11,
         atol: float = 1e-11,
         max_step: float = 1.0,
-        runaway: float = 1e6,
     ) -> None:
         super().__init__(system, state)
         op = system.operator
-        if not callable(getattr(op, "branch_flow", None)):
+        if not isinstance(op, ContinuousHysteron):
             raise TypeError(f"operator {type(op).__name__} provides no branch_flow()")
         self._op = op
         self._rtol = _tolerance(rtol, "rtol")
         self._atol = _tolerance(atol, "atol")
         self._max_step = positive_scalar(max_step, "max_step")
-        self._runaway = positive_scalar(runaway, "runaway")
         self._zeta = finite_scalar(system.damping_ratio, "damping_ratio")
-        self._omega = positive_scalar(system.frequency, "frequency")
         self._coupling = finite_scalar(system.coupling, "coupling")
-        self._period = _TWO_PI / self._omega
         self._q = finite_scalar(state.q, "state.q")
         self._v = finite_scalar(state.v, "state.v")
         self._phi0 = wrap_phase(finite_scalar(state.phi, "state.phi"))
@@ -135,18 +135,31 @@ class ContinuousEngine(Engine):
         self._direction = self._initial_direction()
         self._flow = op.branch_flow(op_state, self._direction)
         self._has_w = tuple(self._flow.labels) == ("w",)
-        self._tangent = False
         self._include_phase = False
-        self._k = 0
         self._dqv = np.zeros((2, 0))
         self._dphi: np.ndarray | None = None
         self._dm = np.zeros((0, 0))
         self._free: set[str] = set()
         self._stuck = 0
 
+    @classmethod
+    def check_system(cls, system: Any) -> None:
+        """The operator must hand over its branches (``branch_flow``, checked once here)."""
+        op = system.operator
+        if not isinstance(op, ContinuousHysteron):
+            raise TypeError(f"operator {type(op).__name__} provides no branch_flow()")
+        try:
+            op.branch_flow(op.initial_state(0.0), 1)
+        except NotImplementedError as exc:
+            raise TypeError(
+                f"operator {op!r} cannot be coupled to the oscillator: its contract is "
+                f"incomplete ({exc}); a continuous operator needs branch_flow() (see "
+                "hysteresis.base)"
+            ) from None
+
     # -- helpers -------------------------------------------------------------------------------
-    def _phase(self) -> float:
-        return wrap_phase(self._phi0 + self._omega * self._tau)
+    def _clock(self) -> tuple[int, float]:
+        return self._n, self._tau
 
     def _initial_direction(self) -> int:
         if self._v > 0.0:
@@ -174,21 +187,12 @@ class ContinuousEngine(Engine):
                 self._tau = 0.0
 
     def _check(self) -> None:
-        q, v = self._q, self._v
-        if not (math.isfinite(q) and math.isfinite(v)) or max(abs(q), abs(v)) > self._runaway:
-            t = self.start.t + self.elapsed
-            raise DivergenceError(
-                f"continuous engine: state diverged (q={q}, v={v}) at t={t}", time=t
-            )
+        self.check_finite(np.array([self._q, self._v]))
 
     # -- motion --------------------------------------------------------------------------------
     @property
     def sample_columns(self) -> tuple[str, ...]:
         return ("q", "v", "M", "w") if self._has_w else ("q", "v", "M")
-
-    @property
-    def elapsed(self) -> float:
-        return self._n * self._period + self._tau
 
     @property
     def n_events(self) -> int:
@@ -209,18 +213,10 @@ class ContinuousEngine(Engine):
     def advance(
         self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
     ) -> None:
-        times = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        times = self._target_times(times)
         if times.size == 0:
             return
-        if not np.all(np.isfinite(times)):
-            raise ValueError("times must be finite")
-        if np.any(np.diff(times) < 0):
-            raise ValueError("times must be sorted")
-        if times[0] < self.elapsed - 1e-9 * max(1.0, self.elapsed):
-            raise ValueError(f"times must be >= the current elapsed time {self.elapsed}")
-        ncol = len(self.sample_columns)
-        if out is not None and (out.ndim != 2 or out.shape[0] < times.size or out.shape[1] < 3):
-            raise ValueError(f"out must have shape ({times.size}, {ncol})")
+        self._check_out(out, times.size)
         self._record = bool(record)
         chunk = 2048
         for i0 in range(0, times.size, chunk):
@@ -270,10 +266,10 @@ class ContinuousEngine(Engine):
         flow = self._flow
         d = self._direction
         zeta, omega, coupling = self._zeta, self._omega, self._coupling
-        phi_s = self._phase()
+        phi_s = self.phase()
         output = flow.output
-        tangent = self._tangent
-        k = self._k
+        tangent = self._ntan > 0
+        k = self._ntan
         y0 = [self._q, self._v]
         if tangent:
             y0 = np.concatenate([[self._q, self._v], self._dqv[0], self._dqv[1]])
@@ -416,7 +412,7 @@ class ContinuousEngine(Engine):
                     float(new.output(self._q)),
                 )
             )
-        if self._tangent:
+        if self._ntan:
             self._reconcile(old, new)
         self._flow = new
 
@@ -424,7 +420,7 @@ class ContinuousEngine(Engine):
         """Saltation at an event: carry, reset (δm := δq) or drop memory rows by label."""
         index = {lab: i for i, lab in enumerate(old.labels)}
         dq = self._dqv[0]
-        dm = np.empty((new.n_memory, self._k))
+        dm = np.empty((new.n_memory, self._ntan))
         for i, lab in enumerate(new.labels):
             j = index.get(lab)
             if j is None or new.pushed[i]:
@@ -446,7 +442,7 @@ class ContinuousEngine(Engine):
         return OscillatorState(
             q=self._q,
             v=self._v,
-            phi=self._phase(),
+            phi=self.phase(),
             operator_state=op_state,
             t=self.start.t + self.elapsed,
         )
@@ -463,14 +459,13 @@ class ContinuousEngine(Engine):
         return {"events": arr}
 
     # -- tangent flow --------------------------------------------------------------------------
-    def start_tangent(self, include_phase: bool = False) -> None:
+    def _start_tangent(self, include_phase: bool) -> int:
         flow = self._flow
-        self._include_phase = bool(include_phase)
+        self._include_phase = include_phase
         base = 3 if self._include_phase else 2
         n = flow.n_memory
         k = base + n
         eye = np.eye(k)
-        self._k = k
         self._dqv = eye[:2].copy()
         self._dphi = eye[2].copy() if self._include_phase else None
         self._dm = eye[base:].copy()
@@ -480,19 +475,14 @@ class ContinuousEngine(Engine):
             if flow.slaved[i] or (flow.pushed[i] and at_branch_start):
                 self._dm[i] = self._dqv[0]
                 self._free.discard(lab)
-        self._tangent = True
+        return k
 
     @property
     def tangent_space(self) -> tuple[str, ...]:
         base = ("q", "v", "phi") if self._include_phase else ("q", "v")
         return base + tuple(self._flow.labels)
 
-    def _require_tangent(self) -> None:
-        if not self._tangent:
-            raise RuntimeError("start_tangent() must be called first")
-
-    def deviations(self) -> np.ndarray:
-        self._require_tangent()
+    def _deviations(self) -> np.ndarray:
         rows = [self._dqv]
         if self._dphi is not None:
             rows.append(self._dphi[None, :])
@@ -501,12 +491,7 @@ class ContinuousEngine(Engine):
         rows.append(dm)
         return np.vstack(rows)
 
-    def set_deviations(self, y: np.ndarray) -> None:
-        self._require_tangent()
-        y = np.asarray(y, dtype=np.float64)
-        n_rows = len(self.tangent_space)
-        if y.shape != (n_rows, self._k):
-            raise ValueError(f"deviations must have shape ({n_rows}, {self._k}), got {y.shape}")
+    def _set_deviations(self, y: np.ndarray) -> None:
         if not np.all(np.isfinite(y)):
             raise ValueError("deviations must be finite")
         self._dqv = y[:2].copy()
@@ -520,10 +505,9 @@ class ContinuousEngine(Engine):
         self._dm[slaved] = self._dqv[0]
         self._free = {lab for i, lab in enumerate(self._flow.labels) if not slaved[i]}
 
-    def rank_bound(self) -> int:
-        self._require_tangent()
+    def _rank_bound(self) -> int:
         base = 3 if self._include_phase else 2
-        return min(self._k, base + len(self._free))
+        return min(self._ntan, base + len(self._free))
 
 
 def _tolerance(x: Any, name: str) -> float:

@@ -36,7 +36,7 @@ to ``v``) gives exactly the paper's ``V_out``: ``δw := δq``, (δq, δv, δφ) 
 time-lag correction in (q, v). The tests check this against finite differences of the
 stroboscopic map.
 
-Lyapunov spectrum: the one Benettin/QR loop of :mod:`analysis.lyapunov` drives
+Lyapunov spectrum: the one Benettin/QR loop of :mod:`analysis.dynamics.lyapunov` drives
 :class:`PlayEngine`. ``V_out`` has rank k-1 (kernel: the pure-δw direction), so after an exit
 the last diagonal element of R is exactly 0; the engine reports it through ``rank_bound()`` and
 the loop records ``log R_kk = -inf`` structurally (the paper's ``λ_4 = -∞``), not the log of a
@@ -60,8 +60,8 @@ from typing import Any
 import numpy as np
 
 from hysteresis._validation import finite_scalar
-from oscillators import _play_kernels as _k
-from oscillators.engine import Engine, wrap_phase
+from oscillators.engines import _play_kernels as _k
+from oscillators.engines.base import Engine
 from oscillators.linear import particular_amplitudes
 from oscillators.results import OscillatorState
 
@@ -70,7 +70,6 @@ __all__ = ["EVENT_DTYPE", "PlayEngine", "make_parameters"]
 #: Fields of ``Trajectory.events``: kind +1 = the input leaves the play onto a wall (hit),
 #: -1 = it enters the play (reversal on a wall); ``w`` is the wagon position at the event.
 EVENT_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("kind", "i1"), ("w", "f8")])
-_SWITCH_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("jump", "f8")])
 
 #: RK8 step on a wall and scan step inside the play (time units).
 OUTSIDE_STEP = 0.05
@@ -83,7 +82,7 @@ _EPS = np.finfo(np.float64).eps
 # --------------------------------------------------------------------------------------------
 def _shape_code(operator: Any) -> tuple[float, float]:
     """(kind, spread) from the operator's ``compiled_play()``: 0 identity, 1 erf."""
-    spec = operator.compiled_play() if callable(getattr(operator, "compiled_play", None)) else None
+    spec = operator.compiled_play()
     if spec is None:
         raise ValueError(
             f"{operator!r} has no compiled play description (compiled_play() is None); the "
@@ -102,7 +101,7 @@ def make_parameters(
     outside_step: float = OUTSIDE_STEP,
     inside_step: float = INSIDE_STEP,
 ) -> np.ndarray:
-    """Flat parameter array of the kernels (layout in :mod:`oscillators._play_kernels`)."""
+    """Flat parameter array of the kernels (layout in :mod:`oscillators.engines._play_kernels`)."""
     kind, spread = _shape_code(system.operator)
     zeta = finite_scalar(system.damping_ratio, "damping_ratio")
     omega = finite_scalar(system.frequency, "frequency")
@@ -193,14 +192,6 @@ def _initial_state(
     return st, mode != 0.0
 
 
-def _play_state(q: float, w: float) -> Any:
-    try:
-        from hysteresis.play import PlayState
-    except ImportError:  # pragma: no cover - play.py is part of the package
-        return (w, q)
-    return PlayState(float(w), float(q))
-
-
 def _events_array(ev: np.ndarray) -> np.ndarray:
     arr = np.empty(ev.shape[0], dtype=EVENT_DTYPE)
     arr["time"] = ev[:, 0]
@@ -258,14 +249,18 @@ class PlayEngine(Engine):
     def sample_columns(self) -> tuple[str, ...]:
         return ("q", "v", "M", "w")
 
-    @property
-    def elapsed(self) -> float:
-        return float(self._st[0])
+    def _clock(self) -> tuple[int, float]:
+        # the kernel counts time from the start as one float (period index 0): elapsed and the
+        # forcing phase are computed from it exactly as the kernel does
+        return 0, float(self._st[0])
 
     def advance(
         self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
     ) -> None:
-        times = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        times = self._target_times(times)
+        if times.size == 0:
+            return
+        self._check_out(out, times.size)
         buf = np.empty((times.size, 3))
         span = float(times[-1] - self._st[0]) if times.size else 0.0
         cap = int(20.0 * max(span, 0.0) + 100) if record else 0
@@ -301,11 +296,13 @@ class PlayEngine(Engine):
 
     def state(self) -> OscillatorState:
         st = self._st
+        q, v = float(st[1]), float(st[2])
+        self.check_finite(np.array([q, v]))  # the operator builds finite states only
         return OscillatorState(
-            q=float(st[1]),
-            v=float(st[2]),
-            phi=wrap_phase(float(self._par[6] + self._par[1] * st[0])),
-            operator_state=_play_state(st[1], st[3]),
+            q=q,
+            v=v,
+            phi=self.phase(),
+            operator_state=self.system.operator.state(position=float(st[3]), input=q),
             t=float(self.start.t + st[0]),
         )
 
@@ -318,7 +315,7 @@ class PlayEngine(Engine):
         return self._n_events
 
     # -- tangent flow
-    def start_tangent(self, include_phase: bool = False) -> None:
+    def _start_tangent(self, include_phase: bool) -> int:
         self._rows = [0, 1, 2, 3] if include_phase else [0, 1, 3]
         k = len(self._rows)
         self._T = np.zeros((4, k))
@@ -331,28 +328,21 @@ class PlayEngine(Engine):
             # on a wall moving outward: w is slaved from the start (one-sided derivative)
             _k.leave_play(self._T, int(self._flags[1]))
             self._w_reset = True
+        return k
 
     @property
     def tangent_space(self) -> tuple[str, ...]:
         return ("q", "v", "phi", "w") if len(self._rows) == 4 else ("q", "v", "w")
 
-    def deviations(self) -> np.ndarray:
-        if not self._rows:
-            raise RuntimeError("start_tangent() first")
+    def _deviations(self) -> np.ndarray:
         return self._T[self._rows, :].copy()
 
-    def set_deviations(self, y: np.ndarray) -> None:
-        if not self._rows:
-            raise RuntimeError("start_tangent() first")
-        y = np.asarray(y, dtype=np.float64)
-        k = len(self._rows)
-        if y.shape != (k, k):
-            raise ValueError(f"deviations must have shape {(k, k)}, got {y.shape}")
+    def _set_deviations(self, y: np.ndarray) -> None:
         self._T[:] = 0.0
         self._T[self._rows, :] = y
         self._exits_at_set = float(self._diag[0])
         self._w_reset = False
 
-    def rank_bound(self) -> int:
+    def _rank_bound(self) -> int:
         lost = self._w_reset or self._diag[0] > self._exits_at_set
         return len(self._rows) - (1 if lost else 0)

@@ -1,0 +1,41 @@
+"""The engines integrating the forced oscillator (the seam: :mod:`oscillators.engines.base`).
+
+* :mod:`~oscillators.engines.base` — :class:`Engine` (clock, time checks, divergence test,
+  tangent bookkeeping), :class:`DivergenceError`, :class:`GrazingError`;
+* :mod:`~oscillators.engines.relay` — :class:`RelayEngine`: :class:`RelayKernelEngine`
+  (compiled, nested or heap plan) and :class:`RelayReferenceEngine` (Python reference path);
+* :mod:`~oscillators.engines.play` — :class:`PlayEngine` (compiled play limit);
+* :mod:`~oscillators.engines.continuous` — :class:`ContinuousEngine` (solve_ivp over
+  ``branch_flow``);
+* :mod:`~oscillators.engines.select` — :func:`select_engine` (from the operator's contract).
+
+Compiled kernels: ``_relay_kernels.py``, ``_play_kernels.py``, ``_dop853_kernel.py``.
+"""
+
+from oscillators.engines.base import (
+    TIME_TOLERANCE,
+    DivergenceError,
+    Engine,
+    GrazingError,
+    split_times,
+    wrap_phase,
+)
+from oscillators.engines.continuous import ContinuousEngine
+from oscillators.engines.play import PlayEngine
+from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayReferenceEngine
+from oscillators.engines.select import select_engine
+
+__all__ = [
+    "TIME_TOLERANCE",
+    "ContinuousEngine",
+    "DivergenceError",
+    "Engine",
+    "GrazingError",
+    "PlayEngine",
+    "RelayEngine",
+    "RelayKernelEngine",
+    "RelayReferenceEngine",
+    "select_engine",
+    "split_times",
+    "wrap_phase",
+]

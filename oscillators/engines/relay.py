@@ -1,0 +1,468 @@
+"""The relay engines: exact event-driven integration of the oscillator with relay operators.
+
+The operator hands over its relays through the contract of :mod:`hysteresis.base`
+(``relay_table()``, ``relay_outputs(state)``, ``state_from_relay_outputs(outputs, input)``);
+between switches ``q'' + 2ζq' + q = cos φ + C·M`` is linear and solved in closed form, every
+threshold crossing is located on that solution (:mod:`oscillators.engines._relay_kernels`:
+algorithm, grazing convention, short-hop Taylor expansion) and the tangent flow gets the
+saltation ``δv += C·ΔM/v*·δq`` at each switch. Methods (``engine_options={"method": ...}``):
+
+* ``"nested"`` — O(1) per switch, when the table's thresholds nest
+  (:meth:`hysteresis.relay_table.RelayTable.nested_plan`: equal widths, the paper's dimers);
+* ``"heap"`` — any relays (random widths, identified densities, ties, zero widths, weights):
+  the next up switch is the smallest ``alpha`` of the down relays, the next down switch the
+  largest ``beta`` of the up relays, each kept in a priority queue over the presorted thresholds
+  (a 64-ary bitset tree, :meth:`hysteresis.relay_table.RelayTable.heap_plan`: O(log₆₄ N) per
+  switched relay); relays at one threshold switch together; ``M`` in integer weight units when
+  the weights are multiples of one unit, else compensated (Neumaier) sums;
+* ``"generic"`` — the Python reference path through ``switching(state)`` / ``apply``;
+* ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"`` for
+  an operator that implements ``switching()``/``apply()`` but not the relay contract.
+
+Two classes: :class:`RelayKernelEngine` (the compiled kernels, nested or heap) and
+:class:`RelayReferenceEngine` (the Python reference path). :class:`RelayEngine`, their common
+base, is what :func:`~oscillators.engines.select.select_engine` hands out:
+``RelayEngine(system, state, method=...)`` builds the one the method names.
+
+Relays of zero weight never change ``M`` and are left out of the kernels (the operator state
+returned rebuilds them from the staircase).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from hysteresis.base import PiecewiseConstantHysteron
+from oscillators.engines import _relay_kernels as kern
+from oscillators.engines.base import SWITCH_DTYPE, Engine, GrazingError, split_times
+from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
+from oscillators.results import OscillatorState
+
+__all__ = [
+    "GrazingError",
+    "METHODS",
+    "RelayEngine",
+    "RelayKernelEngine",
+    "RelayReferenceEngine",
+    "SWITCH_DTYPE",
+]
+
+METHODS = ("auto", "nested", "heap", "generic")
+
+
+def _grazing_message(t: float | None = None) -> str:
+    where = f" at t = {t!r}" if t is not None else ""
+    return (
+        f"grazing switch{where}: a threshold was reached exactly at a turning point (v* = 0), "
+        "so the saltation C·ΔM/v* is infinite and the tangent flow is undefined on this orbit; "
+        "perturb the initial condition or the parameters"
+    )
+
+
+def _has_relay_table(op: Any) -> bool:
+    """True if the operator implements the relay contract (not the base-class stub)."""
+    return type(op).relay_table is not PiecewiseConstantHysteron.relay_table
+
+
+class RelayEngine(Engine):
+    """Event-driven engine for piecewise-constant operators (see the module docstring).
+
+    ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or,
+    for ``method="generic"`` (or ``"auto"`` with an operator without relay table), a
+    :class:`RelayReferenceEngine`.
+
+    Parameters
+    ----------
+    system:
+        The :class:`~oscillators.system.ForcedOscillator`.
+    state:
+        Start state; ``state.operator_state=None`` means ``operator.initial_state(q)``.
+    method:
+        ``"auto"``, ``"nested"``, ``"heap"`` or ``"generic"`` (module docstring).
+    taylor:
+        Use the short-hop Taylor expansion (default); ``False`` locates every switch by the
+        exact scan (slower; for checks).
+    """
+
+    def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **_: Any):
+        if cls is RelayEngine:
+            if method not in METHODS:
+                raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+            generic = method == "generic" or (
+                method == "auto" and not _has_relay_table(system.operator)
+            )
+            cls = RelayReferenceEngine if generic else RelayKernelEngine
+        return super().__new__(cls)
+
+    @classmethod
+    def check_system(cls, system: Any) -> None:
+        """An operator without relay table runs on the reference path, which needs
+        ``switching()`` (checked once here)."""
+        op = system.operator
+        if _has_relay_table(op):
+            return
+        try:
+            op.switching(op.initial_state(0.0))
+        except NotImplementedError as exc:
+            raise TypeError(
+                f"operator {op!r} cannot be coupled to the oscillator: its contract is "
+                f"incomplete ({exc or 'switching() is not implemented'}); a piecewise-constant "
+                "operator needs relay_table() or switching() (see hysteresis.base)"
+            ) from None
+
+    def __init__(
+        self, system: Any, state: OscillatorState, method: str = "auto", taylor: bool = True
+    ) -> None:
+        super().__init__(system, state)
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        q0, v0, t0 = float(state.q), float(state.v), float(state.t)
+        if not all(math.isfinite(x) for x in (q0, v0, self._phi0, t0)):
+            raise ValueError("the start state (q, v, phi, t) must be finite")
+        op = system.operator
+        self._op = op
+        opstate = state.operator_state
+        if opstate is None:
+            opstate = op.initial_state(q0)
+        _, opstate = op.apply(np.array([q0]), opstate)
+        self._opstate0 = opstate
+        zeta = float(system.damping_ratio)
+        amp_a, amp_b = particular_amplitudes(zeta, self._omega)
+        self._par = kern.make_params(
+            zeta, self._omega, float(system.coupling), self._phi0, amp_a, amp_b, t0, taylor
+        )
+        self._t0 = t0
+        self._y = np.zeros((3, 3))
+        self._chunks: list[np.ndarray] = []
+        self._state_cache: OscillatorState | None = None
+
+    def _now(self) -> tuple[float, float, Any]:
+        """(q, v, operator state) now."""
+        raise NotImplementedError
+
+    def state(self) -> OscillatorState:
+        if self._state_cache is None:
+            q, v, opstate = self._now()
+            self._state_cache = OscillatorState(
+                q=q, v=v, phi=self.phase(), operator_state=opstate, t=self._t0 + self.elapsed
+            )
+        return self._state_cache
+
+    def records(self) -> dict[str, np.ndarray]:
+        sw = np.concatenate(self._chunks) if self._chunks else np.empty((0, 4))
+        rec = np.empty(sw.shape[0], dtype=SWITCH_DTYPE)
+        for j, name in enumerate(SWITCH_DTYPE.names):
+            rec[name] = sw[:, j]
+        return {"switches": rec}
+
+    # -- tangent flow: (δq, δv[, δφ]) columns in the 3×3 buffer the kernels update in place ----
+    def _start_tangent(self, include_phase: bool) -> int:
+        k = 3 if include_phase else 2
+        self._y[:, :] = 0.0
+        for j in range(k):
+            self._y[j, j] = 1.0
+        return k
+
+    @property
+    def tangent_space(self) -> tuple[str, ...]:
+        return ("q", "v", "phi")[: self._ntan]
+
+    def _deviations(self) -> np.ndarray:
+        return self._y[: self._ntan, : self._ntan].copy()
+
+    def _set_deviations(self, y: np.ndarray) -> None:
+        self._y[: self._ntan, : self._ntan] = y
+
+    def _rank_bound(self) -> int:
+        # relays have no memory directions and every saltation matrix is invertible
+        return self._ntan
+
+
+class RelayKernelEngine(RelayEngine):
+    """The compiled relay engine: ``method`` ``"auto"``, ``"nested"`` or ``"heap"``."""
+
+    def __init__(
+        self, system: Any, state: OscillatorState, method: str = "auto", taylor: bool = True
+    ) -> None:
+        super().__init__(system, state, method, taylor)
+        if method == "generic":
+            raise ValueError("method='generic' is the Python reference path (RelayEngine)")
+        op = self._op
+        q0, v0 = float(state.q), float(state.v)
+        table = op.relay_table()
+        y0 = table.check_outputs(op.relay_outputs(self._opstate0), q0)
+        self._table = table
+        self._active, work = table.positive_part()
+        self._work = work
+        ya = y0[self._active]
+        self._mp = kern.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
+        self._tn1 = np.zeros(1, dtype=np.int64)
+        self._tt1 = np.zeros(1)
+        self._nobuf = np.empty((0, 3))
+        self._nosw = np.empty((1, 4))
+        self._cnt = np.zeros(1, dtype=np.int64)
+        st = np.zeros(kern.N_ST)
+        st[: kern.S_SIN + 1] = (q0, v0, 0.0, math.cos(self._phi0), math.sin(self._phi0))
+        ist = np.zeros(kern.N_IST, dtype=np.int64)
+        plan = work.nested_plan() if method in ("auto", "nested") else None
+        k = plan.index_of(ya) if plan is not None else None
+        if method == "nested" and k is None:
+            raise ValueError(
+                "method='nested' needs relays whose upper and lower thresholds increase together "
+                "(RelayTable.nested_plan() is None for this operator)"
+            )
+        if k is not None:
+            self._kind = kern.KIND_NESTED
+            self._plan = plan
+            self._tf, self._ti, self._bits, self._lay = kern.nested_kernel_table(plan)
+            ist[kern.I_K] = k
+            self.method = "nested"
+            self.name = "relay kernel (nested, O(1))"
+        else:
+            self._kind = kern.KIND_HEAP
+            heap = work.heap_plan()
+            self._heap = heap
+            bits, units_up, m, mc = heap.state_arrays(ya)
+            self._par[kern.P_UNIT] = heap.unit
+            self._tf, self._ti, self._bits, self._lay = heap.tf, heap.ti, bits, heap.lay
+            ist[kern.I_UP] = units_up
+            ist[kern.I_TOT] = heap.total_units
+            st[kern.S_M] = m
+            st[kern.S_MC] = mc
+            self.method = "heap"
+            self.name = "relay kernel (heap, O(log N))"
+        self._run = kern.run_nested if self._kind == kern.KIND_NESTED else kern.run_heap
+        kern._table_refresh(
+            self._par, self._kind, self._tf, self._ti, self._bits, self._lay, st, ist
+        )
+        self._st = st
+        self._ist = ist
+
+    def _clock(self) -> tuple[int, float]:
+        return int(self._ist[kern.I_N]), float(self._st[kern.S_TAU])
+
+    @property
+    def output(self) -> float:
+        """Operator output ``M`` now."""
+        return float(self._st[kern.S_MV])
+
+    def output_integral(self) -> float:
+        """``∫ M dt`` since the start, exact: ``M`` is constant between switches, so the kernel
+        adds ``M·h`` for every hop ``h``."""
+        return float(self._st[kern.S_IM])
+
+    @property
+    def n_events(self) -> int:
+        return int(self._ist[kern.I_NSW])
+
+    def advance(
+        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
+    ) -> None:
+        if type(times) is float or np.size(times) == 1:
+            # one target (the Lyapunov stepper's case): no array bookkeeping on the way in
+            if type(times) is not float:
+                if np.ndim(times) > 1:
+                    raise ValueError("times must be a scalar or a 1-D array")
+                times = float(np.reshape(times, -1)[0])
+            t = times
+            if not math.isfinite(t):
+                raise ValueError("times must be finite")
+            self._check_first_time(t)
+            tgt_n, tgt_tau = self._tn1, self._tt1
+            n = math.floor(t / self._period)
+            tau = t - n * self._period
+            if tau >= self._period:
+                n, tau = n + 1, 0.0
+            tgt_n[0], tgt_tau[0] = n, max(tau, 0.0)
+        else:
+            times = self._target_times(times)
+            if times.size == 0:
+                return
+            tgt_n, tgt_tau = split_times(times, self._period)
+        self._check_out(out, tgt_n.size)
+        self._state_cache = None
+        # the kernel writes straight into ``out`` when it has its layout (the stepper's buffer)
+        direct = (
+            out is not None
+            and out.shape[1] == 3
+            and out.dtype == np.float64
+            and out.flags.c_contiguous
+        )
+        if direct:
+            buf = out
+        else:
+            buf = np.empty((tgt_n.size, 3)) if out is not None else self._nobuf
+        tan_on = self._ntan > 0
+        cap = 1 << 12 if record else 1
+        sw = np.empty((cap, 4)) if record else self._nosw
+        cnt = self._cnt
+        i = 0
+        while True:
+            cnt[0] = 0
+            status, i = self._run(
+                self._par, self._tf, self._ti, self._bits, self._lay, self._st,
+                self._ist, tgt_n, tgt_tau, i, buf, record, sw, cnt, tan_on, self._y, self._ntan,
+                self._mp,
+            )  # fmt: skip
+            if record and cnt[0]:
+                self._chunks.append(sw[: cnt[0]].copy())
+            if status == 2:
+                raise GrazingError(_grazing_message(self._t0 + self.elapsed))
+            if status == 0:
+                break
+            cap = min(cap * 4, 1 << 20)
+            sw = np.empty((cap, 4))
+        if out is not None and not direct:
+            out[:, :3] = buf
+
+    def relay_outputs(self) -> np.ndarray:
+        """Relay outputs now (order of the operator's relay table; zero-weight relays: 0)."""
+        if self._kind == kern.KIND_NESTED:
+            ya = self._plan.outputs(int(self._ist[kern.I_K]), self._work.n_relays)
+        else:
+            ya = self._heap.outputs_from_bits(self._bits)
+        y = np.zeros(self._table.n_relays)
+        y[self._active] = ya
+        return y
+
+    def _now(self) -> tuple[float, float, Any]:
+        q = float(self._st[kern.S_Q])
+        v = float(self._st[kern.S_V])
+        y = self.relay_outputs()
+        table = self._table
+        zero = y == 0.0
+        u = q
+        # right after a down switch q sits on the threshold that the input has just left
+        # below: a zero-width relay there is down although alpha <= q
+        if np.any(~zero & (table.alpha <= u) & (y < 0.0)):
+            u = float(np.nextafter(q, -np.inf))
+        y[zero] = table.initial_outputs(u)[zero]
+        return q, v, self._op.state_from_relay_outputs(y, u)
+
+
+class RelayReferenceEngine(RelayEngine):
+    """The Python reference loop (``method="generic"``): thresholds from
+    ``operator.switching(state)``, switches through ``operator.apply``."""
+
+    def __init__(
+        self, system: Any, state: OscillatorState, method: str = "generic", taylor: bool = True
+    ) -> None:
+        super().__init__(system, state, method, taylor)
+        if method not in ("auto", "generic"):
+            raise ValueError(f"the reference path is method='generic', got {method!r}")
+        self.method = "generic"
+        self.name = "relay generic (Python)"
+        self._q = float(state.q)
+        self._v = float(state.v)
+        self._n = 0
+        self._tau = 0.0
+        self._opstate = self._opstate0
+        self._n_switches = 0
+        self._switches: list[tuple[float, float, float, float]] = []
+        self._integral = 0.0  # ∫M dt since the start
+
+    def _clock(self) -> tuple[int, float]:
+        return self._n, self._tau
+
+    @property
+    def output(self) -> float:
+        """Operator output ``M`` now."""
+        return float(self._op.output(self._opstate))
+
+    def output_integral(self) -> float:
+        """``∫ M dt`` since the start (``M·h`` summed over the hops)."""
+        return self._integral
+
+    @property
+    def n_events(self) -> int:
+        return self._n_switches
+
+    def advance(
+        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
+    ) -> None:
+        times = self._target_times(times)
+        if times.size == 0:
+            return
+        self._check_out(out, times.size)
+        self._state_cache = None
+        tgt_n, tgt_tau = split_times(times, self._period)
+        y = self._y if self._ntan else None
+        for i in range(tgt_n.size):
+            while self._n < tgt_n[i]:
+                self._hop_to(self._period, y, record)
+                self._tau = 0.0
+                self._n += 1
+            self._hop_to(float(tgt_tau[i]), y, record)
+            if out is not None:
+                out[i, :3] = (self._q, self._v, self.output)
+        if record and self._switches:
+            self._chunks.append(np.array(self._switches, dtype=float).reshape(-1, 4))
+            self._switches.clear()
+
+    def _hop_to(self, tau_stop: float, y: np.ndarray | None, record: bool) -> None:
+        """Advance to period time ``tau_stop`` switch by switch."""
+        par = self._par
+        ntan = self._ntan
+        zeta, omega, coupling = par[kern.P_ZETA], par[kern.P_OMEGA], par[kern.P_C]
+        amp_a, amp_b, phi0 = par[kern.P_A], par[kern.P_B], par[kern.P_PHI0]
+        op = self._op
+        while True:
+            horizon = tau_stop - self._tau
+            if horizon <= 0.0:
+                return
+            sw = op.switching(self._opstate)
+            m_old = self.output
+            force = coupling * m_old
+            ph = phi0 + omega * self._tau
+            c, s = math.cos(ph), math.sin(ph)
+            up, down = float(sw.upper), float(sw.lower)
+            hc, direction = kern.scan_crossing(
+                par, force, self._q, self._v, c, s, self._tau, horizon, up, down
+            )
+            hh = hc if direction != 0 else horizon
+            ph1 = phi0 + omega * (self._tau + hh)
+            c1, s1 = math.cos(ph1), math.sin(ph1)
+            q1, v1 = exact_step(
+                self._q, self._v, c, s, c1, s1, force, hh, zeta, omega, amp_a, amp_b
+            )
+            if y is not None:
+                m00, m01, m10, m11 = hom_matrix(hh, zeta)
+                pq, pv = (0.0, 0.0)
+                if ntan == 3:
+                    pq, pv = phase_column(m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b)
+                phi_h = np.array([[m00, m01], [m10, m11]])
+                y[:2, :ntan] = phi_h @ y[:2, :ntan] + np.outer((pq, pv), y[2, :ntan])
+            self._v = v1
+            self._integral += m_old * hh
+            if direction == 0:
+                self._q = q1
+                self._tau = tau_stop
+                return
+            self._tau += hh
+            if direction > 0:
+                self._q = up
+                _, self._opstate = op.apply(np.array([self._q]), self._opstate)
+            else:
+                self._q = down
+                below = np.nextafter(self._q, -np.inf)
+                _, self._opstate = op.apply(np.array([below]), self._opstate)
+            jump = self.output - m_old
+            self._n_switches += 1
+            t = par[kern.P_TBASE] + self._n * par[kern.P_T] + self._tau
+            if record:
+                self._switches.append((t, self._q, self._v, jump))
+            if y is not None:
+                if self._v == 0.0 and coupling * jump != 0.0:
+                    raise GrazingError(_grazing_message(float(t)))
+                sal = coupling * jump / self._v if coupling * jump != 0.0 else 0.0
+                y[1, :ntan] += sal * y[0, :ntan]
+
+    def relay_outputs(self) -> np.ndarray:
+        """Relay outputs now (order of the operator's relay table)."""
+        return self._op.relay_outputs(self._opstate)
+
+    def _now(self) -> tuple[float, float, Any]:
+        return self._q, self._v, self._opstate
