@@ -43,6 +43,7 @@ from hysteresis._validation import (
     scalar_in_open_interval,
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
+from hysteresis.preisach import PreisachModel
 
 __all__ = ["SpinDimerEnsemble", "DimerThresholds", "MAX_SPINS"]
 
@@ -285,8 +286,6 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron):
     def to_preisach(self):
         """The discrete Preisach model ``PreisachModel.from_relays(*self.relays())`` (cached)."""
         if self._preisach is None:
-            from hysteresis.preisach import PreisachModel
-
             self._preisach = PreisachModel.from_relays(*self.relays())
         return self._preisach
 

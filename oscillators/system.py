@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._progress import progress_bar
 from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
 from hysteresis.base import Hysteron
 from oscillators.engines import DivergenceError, Engine, select_engine, wrap_phase
@@ -349,8 +350,6 @@ class ForcedOscillator:
         bounds = np.linspace(0, times.size, n_chunks + 1).astype(int)
         bar = None
         if progress and desc:
-            from hysteresis._progress import progress_bar
-
             bar = progress_bar(total=times.size, desc=desc, unit="pt", leave=False)
         for i0, i1 in zip(bounds[:-1], bounds[1:], strict=True):
             if i1 <= i0:

@@ -16,6 +16,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from analysis.cli._build import (
     check_model_options,
     model_parameters,
@@ -39,6 +41,21 @@ from analysis.cli._parsing import (
     add_subcommand,
     positive_float,
 )
+from analysis.experiments.models import build_operator
+from analysis.identification import (
+    auto_grid,
+    compare_with_ridge,
+    identify_from_curves,
+    identify_preisach,
+    protocol_lattice,
+)
+from analysis.identification.forc_io import detect_format, read_forc_file
+from analysis.identification.plots import (
+    figure_forc,
+    figure_preisach_density,
+    figure_single_density,
+)
+from hysteresis._validation import check_grid_nodes
 
 __all__ = ["register", "run"]
 
@@ -177,10 +194,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _prepare_model(args: argparse.Namespace) -> tuple[Any, Any, float, Any]:
     """The operator, its thresholds (dimers), the grid's half-extent and the smoothing."""
-    import numpy as np
-
-    from analysis.experiments.models import build_operator
-    from hysteresis._validation import check_grid_nodes
 
     check_model_options(args)
     smoothing = _smoothing(args, None)
@@ -216,9 +229,6 @@ def _run_model(
     saturation: float,
     smoothing: tuple[float, float] | None,
 ) -> int:
-    from analysis.experiments.models import build_operator
-    from analysis.identification import compare_with_ridge, identify_preisach
-    from analysis.identification.plots import figure_preisach_density, figure_single_density
 
     centres = None if thresholds is None else thresholds.centre
     ident = identify_preisach(
@@ -301,7 +311,6 @@ def _run_model(
 def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, float]]:
     """Check ``--input`` and the options that go with it and read the file (before any output
     is written); errors name the option (and the file and line)."""
-    from analysis.identification.forc_io import detect_format, read_forc_file
 
     path = Path(args.input)
     if not path.exists():
@@ -337,7 +346,6 @@ def _check_grid_step(args: argparse.Namespace, curves: Any) -> None:
     """``--grid-step`` applies to the protocol lattice only (fields that differ from curve to
     curve); refuse it on data whose fields share one grid (it would be ignored) and refuse a
     lattice too fine or too coarse for the data, before any output is written."""
-    from analysis.identification import auto_grid, protocol_lattice
 
     # the rule of identify_from_curves(grid="auto"): measured fields -> protocol lattice
     if auto_grid(curves) == "native":
@@ -360,10 +368,6 @@ def _run_measured(
     smoothing: tuple[float, float],
 ) -> int:
     """Measured FORC data: data-driven summaries only (no paper overlay)."""
-    import numpy as np
-
-    from analysis.identification import identify_from_curves
-    from analysis.identification.plots import figure_forc
 
     try:
         ident = identify_from_curves(

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from analysis.experiments.store import ResultStore, code_version, task_key
+from hysteresis._progress import progress_bar
 from hysteresis._validation import bounded_work, nonnegative_integer
 
 __all__ = ["run_tasks", "spawn_seeds", "TaskError"]
@@ -200,8 +201,6 @@ def run_tasks(
                 f"{sorted(other_versions)} (now {current!r}); use a new store to recompute them",
                 stacklevel=2,
             )
-
-        from hysteresis._progress import progress_bar
 
         bar = progress_bar(
             total=len(results) + len(pending),

@@ -12,13 +12,13 @@ import math
 
 import numpy as np
 
+from analysis.experiments.models import build_operator
+from analysis.experiments.parameters import SPIN_COUPLING, SPREAD, WIDTH
+from analysis.identification import compare_with_ridge, identify_preisach
+from analysis.identification.plots import plot_density_rs, plot_s_marginal
 from analysis.paper.context import Claim, FigureSpec, PaperContext, reading, verdict
 
 __all__ = ["FIGURES"]
-
-WIDTH = 2.0  # p
-SPREAD = 1.0  # R
-COUPLING = 2.0  # J (any J > p/2 gives the same loops)
 
 
 def _ridge_bin_probabilities(alpha: np.ndarray, width: float, spread: float) -> np.ndarray:
@@ -34,16 +34,17 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
     """Paper fig:preis_dens: (a) μ(s) vs N(s; 0, R²), (b) erf play (N → ∞), (c) N dimers."""
     import matplotlib.pyplot as plt
 
-    from analysis.experiments.models import build_operator
-    from analysis.identification import compare_with_ridge, identify_preisach
-    from analysis.identification.plots import plot_density_rs, plot_s_marginal
-
     n_spins = ctx.size.identification_spins
     step = ctx.size.identification_step
     # the model registry builds both systems, as the CLI does (one definition of each model)
     play = build_operator("erf-play", width=WIDTH, spread=SPREAD)
     dimers = build_operator(
-        "dimers", spins=n_spins, width=WIDTH, spread=SPREAD, spin_coupling=COUPLING, seed=ctx.seed
+        "dimers",
+        spins=n_spins,
+        width=WIDTH,
+        spread=SPREAD,
+        spin_coupling=SPIN_COUPLING,
+        seed=ctx.seed,
     )
     th = dimers.thresholds()
     # the grid must hold every relay of the ensemble and 5R + p/2 of the erf play's tails
@@ -89,7 +90,7 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
     run = (
         f"FORCs on a regular grid Δ={step:g}, |q| <= {saturation:.2f}; "
         f"GeneralizedPlay.erf(p={WIDTH:g}, R={SPREAD:g}) and "
-        f"SpinDimerEnsemble.random(N={n_spins}, p={WIDTH:g}, R={SPREAD:g}, J={COUPLING:g}, "
+        f"SpinDimerEnsemble.random(N={n_spins}, p={WIDTH:g}, R={SPREAD:g}, J={SPIN_COUPLING:g}, "
         f"seed={ctx.seed})"
     )
     paper_stmt = "μ(r,s) = N(s; 0, R²) δ(r − p/2) 'within numerical accuracy' for both systems"

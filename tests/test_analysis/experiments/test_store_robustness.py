@@ -12,11 +12,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support_paths import ROOT
 
 from analysis.experiments.execution import TaskError, run_tasks
 from analysis.experiments.store import ResultStore, StoreError, task_key
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = ROOT
 
 WRITER = textwrap.dedent(
     """

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.stats import norm
+from support_paths import DATA
 
 from analysis.identification import (
     identify_from_curves,
@@ -23,8 +23,6 @@ from analysis.identification.forc_io import (
     write_micromag,
 )
 from hysteresis.play import GeneralizedPlay
-
-DATA = Path(__file__).parent / "data"
 
 
 def _maker():

@@ -15,10 +15,9 @@ import time
 from pathlib import Path
 
 import pytest
+from support_paths import DATA
 
 from analysis.cli import main
-
-DATA = Path(__file__).parent / "data"
 
 #: (argv, text the one stderr line must contain)
 CASES: list[tuple[list[str], str]] = [

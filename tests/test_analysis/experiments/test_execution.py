@@ -15,11 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support_paths import ROOT
 
 from analysis.experiments.execution import TaskError, run_tasks, spawn_seeds
 from analysis.experiments.store import ResultStore, StoreError
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = ROOT
 
 # A task module written to a temporary directory so that the killed subprocess, the process-pool
 # workers and this process all import the very same top-level function.

@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.stats import norm
+from support_paths import DATA
 
 from analysis.identification import (
     ReversalCurves,
@@ -471,7 +472,7 @@ def test_cli_identify_from_file(tmp_path, capsys):
 
     from analysis.cli import main
 
-    data = Path(__file__).parent / "data"
+    data = DATA
     assert (
         main(
             [

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy.stats import norm
+from support_paths import DATA
 
 from analysis.identification import ReversalCurves, identify_from_curves
 from analysis.identification.forc_io import (
@@ -19,8 +20,6 @@ from analysis.identification.forc_io import (
     read_lakeshore_csv,
     read_micromag,
 )
-
-DATA = Path(__file__).parent / "data"
 
 
 def _maker():
