@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support_paths import ROOT
+from support_paths import ROOT, TESTS
 
 from analysis.experiments.execution import TaskError, run_tasks
 from analysis.experiments.store import ResultStore, StoreError, task_key
@@ -72,7 +72,7 @@ def test_two_concurrent_run_tasks_agree(tmp_path):
     code = textwrap.dedent(
         f"""
         import sys, json
-        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        sys.path[:0] = [{str(Path(__file__).parent)!r}, {str(TESTS)!r}]
         from test_store_robustness import _square
         from analysis.experiments.execution import run_tasks
         res = run_tasks("sq", [dict(x=i) for i in range(60)], _square,
