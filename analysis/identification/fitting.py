@@ -32,7 +32,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.optimize import nnls
 
 from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
 from hysteresis.preisach import DiscretePreisachModel
@@ -223,6 +222,8 @@ def _bounded_lstsq(design: np.ndarray, y: np.ndarray, lower: np.ndarray) -> np.n
     """
     shifted = y - design[:, 1:] @ lower
     aug = np.column_stack([design[:, :1], -design[:, :1], design[:, 1:]])
+    from scipy.optimize import nnls  # heavy at import: loaded where used (fast `hyst` start)
+
     z, _ = nnls(aug, shifted, maxiter=50 * aug.shape[1])
     return np.concatenate([[z[0] - z[1]], lower + z[2:]])
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.stats import norm
+from scipy.special import ndtr
 
 from analysis.identification._checks import positive_number
 from analysis.identification.result import PreisachIdentification
@@ -113,7 +113,7 @@ def compare_with_ridge(
     within = float(m[near].sum() / total)
 
     def gauss(x: np.ndarray) -> np.ndarray:
-        return norm.cdf(x, loc=centre, scale=spread)
+        return ndtr((np.asarray(x, dtype=float) - centre) / spread)  # the normal CDF
 
     d_gauss = s_cdf_distance(ident, gauss)
     d_emp = bound = n = None

@@ -27,7 +27,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import norm
 
 from analysis.identification.result import PreisachIdentification
 
@@ -119,6 +118,8 @@ def plot_s_marginal(
         ax.plot(s, dens, mk, ms=3, mfc="none", label=label)
         lo, hi = min(lo, s.min()), max(hi, s.max())
     grid = np.linspace(lo, hi, 600)
+    from scipy.stats import norm  # heavy at import: loaded where used (fast `hyst` start)
+
     ax.plot(grid, norm.pdf(grid, loc=centre, scale=spread), "k-", lw=1, label="N(s; 0, R²)")
     ax.set_xlabel("s")
     ax.set_ylabel("μ(s)")
@@ -207,6 +208,8 @@ def figure_single_density(
         s, dens = ident.s_density()
         axes[0].plot(s, dens, "o", ms=3, mfc="none", label="identified")
         if spread is not None:
+            from scipy.stats import norm  # heavy at import: loaded where used
+
             axes[0].plot(s, norm.pdf(s, scale=spread), "k-", lw=1, label="N(s; 0, R²)")
         axes[0].set_xlabel("s")
         axes[0].set_ylabel("μ(s)")

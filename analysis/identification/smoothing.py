@@ -12,8 +12,6 @@ import math
 from typing import Any
 
 import numpy as np
-from scipy.signal import fftconvolve
-from scipy.spatial import cKDTree
 
 from analysis.identification._checks import positive_number
 
@@ -95,6 +93,10 @@ def grid_quadratic_density(
     ve = np.where(v, E, 0.0)
 
     def corr(img: np.ndarray, kern: np.ndarray) -> np.ndarray:
+        from scipy.signal import (
+            fftconvolve,  # heavy at import: loaded where used (fast `hyst` start)
+        )
+
         return fftconvolve(img, kern[::-1, ::-1], mode="same")
 
     targets = np.flatnonzero(ev)
@@ -167,6 +169,8 @@ def local_quadratic_density(
     # scaled rotated coordinates: the window is the unit Chebyshev ball
     pts = np.column_stack([0.5 * (a - b) / hr, 0.5 * (a + b) / hs])
     qpts = np.column_stack([0.5 * (qa - qb) / hr, 0.5 * (qa + qb) / hs])
+    from scipy.spatial import cKDTree  # heavy at import: loaded where used (fast `hyst` start)
+
     tree = cKDTree(pts)
     groups = tree.query_ball_point(qpts, r=1.0 + 1e-9, p=np.inf)
     scale = max(hr, hs)

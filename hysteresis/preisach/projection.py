@@ -31,8 +31,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.optimize import nnls
-from scipy.sparse.linalg import LinearOperator, lsmr
 
 from hysteresis.preisach.base import PreisachModel
 
@@ -168,6 +166,9 @@ def project_identification(
         return _everett_adjoint(full)[cells]
 
     if n_cells <= _DENSE_LIMIT:
+        # scipy.optimize costs ~0.2 s at import: loaded where used (fast `hyst` start)
+        from scipy.optimize import nnls
+
         mat = np.empty((n_rows, n_cells))
         unit = np.zeros(n_cells)
         for c in range(n_cells):
@@ -212,6 +213,9 @@ def _block_pivoting_nnls(
     without progress only the one of largest index (this rule makes the method terminate).
     Stops when the KKT conditions hold to :data:`KKT_TOLERANCE` relative to ``‖Aᵀb‖∞``.
     """
+    # scipy.sparse.linalg is heavy at import: loaded where used (fast `hyst` start)
+    from scipy.sparse.linalg import LinearOperator, lsmr
+
     limit = 200 if max_iter is None else int(max_iter)
     if limit < 1:
         raise ValueError(f"max_iter must be a positive integer, got {max_iter!r}")
