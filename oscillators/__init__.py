@@ -7,20 +7,26 @@ _check_import_name("oscillators")
 
 from oscillators.engines import DivergenceError, Engine, GrazingError, select_engine  # noqa: E402
 from oscillators.linear import forced_response, homogeneous_propagator, propagate, segment_jacobian
-from oscillators.results import OscillatorState, PoincareSection, Trajectory
-from oscillators.system import (
+from oscillators.parameters import (
+    DEFAULT_DAMPING_RATIO,
+    DEFAULT_FREQUENCY,
     DEFAULT_Q0,
+    DEFAULT_V0,
     FREQUENCY_RANGE,
     MAX_COUPLING,
     MAX_DAMPING_RATIO,
     MAX_PERIODS,
     MAX_SAMPLES,
-    ForcedOscillator,
 )
+from oscillators.results import OscillatorState, PoincareSection, Trajectory
+from oscillators.system import ForcedOscillator
 
 __all__ = [
     "__version__",
+    "DEFAULT_DAMPING_RATIO",
+    "DEFAULT_FREQUENCY",
     "DEFAULT_Q0",
+    "DEFAULT_V0",
     "FREQUENCY_RANGE",
     "MAX_COUPLING",
     "MAX_DAMPING_RATIO",

@@ -33,6 +33,8 @@ import math
 import numpy as np
 from numba import njit
 
+from oscillators.parameters import DEFAULT_DAMPING_RATIO, DEFAULT_FREQUENCY, check_oscillator
+
 __all__ = [
     "forced_response",
     "homogeneous_propagator",
@@ -122,29 +124,15 @@ def phase_column(
 
 
 # -- validated public functions ------------------------------------------------------------------
-def _check(damping_ratio: float, frequency: float) -> tuple[float, float]:
-    zeta = float(damping_ratio)
-    omega = float(frequency)
-    if not math.isfinite(zeta) or zeta < 0.0:
-        raise ValueError(f"damping_ratio must be finite and >= 0, got {damping_ratio}")
-    if not math.isfinite(omega) or omega <= 0.0:
-        raise ValueError(f"frequency must be finite and > 0, got {frequency}")
-    if zeta == 0.0 and omega == 1.0:
-        raise ValueError(
-            "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
-        )
-    return zeta, omega
-
-
 def forced_response(damping_ratio: float, frequency: float) -> tuple[float, float]:
     """Amplitudes (A, B) of the periodic response ``A cos φ + B sin φ`` to ``cos φ``."""
-    zeta, omega = _check(damping_ratio, frequency)
+    zeta, omega = check_oscillator(damping_ratio, frequency)
     return particular_amplitudes(zeta, omega)
 
 
 def homogeneous_propagator(h: float, damping_ratio: float) -> np.ndarray:
     """The 2×2 matrix ``Φ(h) = exp(h·[[0, 1], [−1, −2ζ]])`` (closed form)."""
-    zeta, _ = _check(damping_ratio, 2.0)
+    zeta, _ = check_oscillator(damping_ratio, 2.0)
     m00, m01, m10, m11 = hom_matrix(float(h), zeta)
     return np.array([[m00, m01], [m10, m11]])
 
@@ -155,14 +143,14 @@ def propagate(
     phi: float,
     h: float,
     force: float = 0.0,
-    damping_ratio: float = 0.05,
-    frequency: float = 1.0,
+    damping_ratio: float = DEFAULT_DAMPING_RATIO,
+    frequency: float = DEFAULT_FREQUENCY,
 ) -> tuple[float, float, float]:
     """Exact solution of ``q'' + 2ζq' + q = cos(φ) + F``, ``φ' = Ω`` after time ``h``.
 
     Returns ``(q, v, φ + Ωh)``. ``force`` is the constant ``F`` (``C·M`` in the oscillator).
     """
-    zeta, omega = _check(damping_ratio, frequency)
+    zeta, omega = check_oscillator(damping_ratio, frequency)
     amp_a, amp_b = particular_amplitudes(zeta, omega)
     phi1 = phi + omega * h
     q1, v1 = exact_step(
@@ -183,10 +171,13 @@ def propagate(
 
 
 def segment_jacobian(
-    phi: float, h: float, damping_ratio: float = 0.05, frequency: float = 1.0
+    phi: float,
+    h: float,
+    damping_ratio: float = DEFAULT_DAMPING_RATIO,
+    frequency: float = DEFAULT_FREQUENCY,
 ) -> np.ndarray:
     """3×3 Jacobian of the segment flow in (q, v, φ) over time ``h`` (no switch inside)."""
-    zeta, omega = _check(damping_ratio, frequency)
+    zeta, omega = check_oscillator(damping_ratio, frequency)
     amp_a, amp_b = particular_amplitudes(zeta, omega)
     m00, m01, m10, m11 = hom_matrix(float(h), zeta)
     phi1 = phi + omega * h

@@ -21,33 +21,24 @@ from typing import Any
 import numpy as np
 
 from hysteresis._progress import progress_bar
-from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
+from hysteresis._validation import nonnegative_integer, positive_integer
 from hysteresis.base import Hysteron
 from oscillators.engines import DivergenceError, Engine, select_engine, wrap_phase
 from oscillators.engines.base import SWITCH_DTYPE
+from oscillators.parameters import (
+    DEFAULT_DAMPING_RATIO,
+    DEFAULT_FREQUENCY,
+    DEFAULT_Q0,
+    DEFAULT_V0,
+    MAX_PERIODS,
+    MAX_SAMPLES,
+    check_coupling,
+    check_oscillator,
+    real_parameter,
+)
 from oscillators.results import OscillatorState, PoincareSection, Trajectory
 
 __all__ = ["ForcedOscillator"]
-
-#: Largest number of forcing periods / samples a single call may demand (a guard against
-#: parameters such as Ω = 1e-300 that would make a run last forever).
-MAX_PERIODS = 10**8
-MAX_SAMPLES = 10**8
-#: Bounds of the system parameters, validated once, here (the CLI and the analyses report this
-#: module's messages): ``abs(C) <= MAX_COUPLING``, ``0 <= ζ <= MAX_DAMPING_RATIO``, Ω in
-#: ``FREQUENCY_RANGE``.
-MAX_COUPLING = 1e6
-MAX_DAMPING_RATIO = 1e6
-FREQUENCY_RANGE = (1e-6, 1e6)
-#: The paper's initial condition (q(0) = −1 at rest, all spins down): the default start of every
-#: trajectory, section and analysis.
-DEFAULT_Q0 = -1.0
-
-
-def _real_parameter(value: Any, name: str) -> float:
-    if isinstance(value, (str, bytes)) or value is None or isinstance(value, complex):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
-    return finite_scalar(value, name)
 
 
 class ForcedOscillator:
@@ -82,29 +73,13 @@ class ForcedOscillator:
         self,
         operator: Hysteron,
         coupling: float,
-        damping_ratio: float = 0.05,
-        frequency: float = 1.0,
+        damping_ratio: float = DEFAULT_DAMPING_RATIO,
+        frequency: float = DEFAULT_FREQUENCY,
     ) -> None:
         if not isinstance(operator, Hysteron):
             raise TypeError(f"operator must be a Hysteron, got {type(operator).__name__}")
-        coupling = _real_parameter(coupling, "coupling")
-        if abs(coupling) > MAX_COUPLING:
-            raise ValueError(
-                f"coupling must lie in [-{MAX_COUPLING:g}, {MAX_COUPLING:g}], got {coupling}"
-            )
-        zeta = _real_parameter(damping_ratio, "damping_ratio")
-        if not 0.0 <= zeta <= MAX_DAMPING_RATIO:
-            raise ValueError(
-                f"damping_ratio must lie in [0, {MAX_DAMPING_RATIO:g}], got {damping_ratio}"
-            )
-        omega = _real_parameter(frequency, "frequency")
-        f_lo, f_hi = FREQUENCY_RANGE
-        if not f_lo <= omega <= f_hi:
-            raise ValueError(f"frequency must lie in [{f_lo:g}, {f_hi:g}], got {frequency}")
-        if zeta == 0.0 and omega == 1.0:
-            raise ValueError(
-                "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
-            )
+        coupling = check_coupling(coupling)
+        zeta, omega = check_oscillator(damping_ratio, frequency)
         self._operator = operator
         self._coupling = coupling
         self._zeta = zeta
@@ -165,7 +140,7 @@ class ForcedOscillator:
     def initial_state(
         self,
         q0: float = DEFAULT_Q0,
-        v0: float = 0.1,
+        v0: float = DEFAULT_V0,
         operator_state: Any = None,
         phi0: float = 0.0,
         t0: float = 0.0,
@@ -177,10 +152,10 @@ class ForcedOscillator:
         ``w0 = q0 − p/2``). Any other memory is passed as an explicit operator state, e.g.
         ``play.state(position=w0, input=q0)``.
         """
-        q0 = _real_parameter(q0, "q0")
-        v0 = _real_parameter(v0, "v0")
-        phi0 = _real_parameter(phi0, "phi0")
-        t0 = _real_parameter(t0, "t0")
+        q0 = real_parameter(q0, "q0")
+        v0 = real_parameter(v0, "v0")
+        phi0 = real_parameter(phi0, "phi0")
+        t0 = real_parameter(t0, "t0")
         if operator_state is None:
             operator_state = self._operator.initial_state(q0)
         return OscillatorState(
@@ -211,7 +186,7 @@ class ForcedOscillator:
         self,
         t_end: float,
         q0: float = DEFAULT_Q0,
-        v0: float = 0.1,
+        v0: float = DEFAULT_V0,
         operator_state: Any = None,
         sample_dt: float = 0.01,
         phi0: float = 0.0,
@@ -225,8 +200,8 @@ class ForcedOscillator:
         operators; ``events`` the wall hits / reversals of play-type engines; ``w`` the sampled
         wagon position where the engine reports it.
         """
-        t_end = _real_parameter(t_end, "t_end")
-        sample_dt = _real_parameter(sample_dt, "sample_dt")
+        t_end = real_parameter(t_end, "t_end")
+        sample_dt = real_parameter(sample_dt, "sample_dt")
         if not t_end > 0.0:
             raise ValueError(f"t_end must be > 0, got {t_end}")
         if not sample_dt > 0.0:
@@ -263,7 +238,7 @@ class ForcedOscillator:
         n_periods: int,
         transient_periods: int = 0,
         q0: float = DEFAULT_Q0,
-        v0: float = 0.1,
+        v0: float = DEFAULT_V0,
         operator_state: Any = None,
         *,
         engine_options: dict | None = None,
@@ -318,7 +293,7 @@ class ForcedOscillator:
         play. A start on a play wall moving outward is a wall hit at t = 0 (one-sided
         derivative: the ``w`` column is then ``δw := δq``).
         """
-        duration = _real_parameter(duration, "duration")
+        duration = real_parameter(duration, "duration")
         if not duration > 0.0:
             raise ValueError(f"duration must be > 0, got {duration}")
         self._check_periods(duration, "duration")

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from oscillators import DEFAULT_Q0
+from oscillators import DEFAULT_DAMPING_RATIO, DEFAULT_FREQUENCY, DEFAULT_Q0, DEFAULT_V0
 
 __all__ = [
     "DAMPING_RATIO",
@@ -52,12 +52,13 @@ WIDTH_SPREAD = 0.2
 PLAYS = 10
 
 # -- Table II: the oscillator and its initial condition ---------------------------------------
+# (defined once, as the oscillator's defaults, in oscillators/parameters.py)
 #: ζ, the damping ratio
-DAMPING_RATIO = 0.05
+DAMPING_RATIO = DEFAULT_DAMPING_RATIO
 #: Ω, the forcing frequency
-FREQUENCY = 1.0
+FREQUENCY = DEFAULT_FREQUENCY
 #: q'(0), the initial velocity (q(0) is :data:`DEFAULT_Q0` = -1, all spins down)
-V0 = 0.1
+V0 = DEFAULT_V0
 
 # -- the ensembles (fig:dim, fig:sap, fig:mag, fig:mag_his) -----------------------------------
 #: the two couplings C of the paper's ensemble section
