@@ -31,7 +31,7 @@ def measure() -> dict:
     import math
     import time
 
-    from analysis.dynamics.lyapunov import lyapunov_spectrum
+    from analysis import lyapunov_spectrum  # public path: the same in every version
     from hysteresis.spin_dimers import SpinDimerEnsemble
     from oscillators import ForcedOscillator
 
