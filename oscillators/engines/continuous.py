@@ -141,21 +141,6 @@ class ContinuousEngine(Engine):
         self._free: set[str] = set()
         self._stuck = 0
 
-    @classmethod
-    def check_system(cls, system: Any) -> None:
-        """The operator must hand over its branches (``branch_flow``, checked once here)."""
-        op = system.operator
-        if not isinstance(op, ContinuousHysteron):
-            raise TypeError(f"operator {type(op).__name__} provides no branch_flow()")
-        try:
-            op.branch_flow(op.initial_state(0.0), 1)
-        except NotImplementedError as exc:
-            raise TypeError(
-                f"operator {op!r} cannot be coupled to the oscillator: its contract is "
-                f"incomplete ({exc}); a continuous operator needs branch_flow() (see "
-                "hysteresis.base)"
-            ) from None
-
     # -- helpers -------------------------------------------------------------------------------
     def _clock(self) -> tuple[int, float]:
         return self._n, self._tau

@@ -35,7 +35,6 @@ from typing import Any
 
 import numpy as np
 
-from hysteresis.base import PiecewiseConstantHysteron
 from oscillators.engines import _relay_kernels as kern
 from oscillators.engines.base import SWITCH_DTYPE, Engine, GrazingError, split_times
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
@@ -62,17 +61,12 @@ def _grazing_message(t: float | None = None) -> str:
     )
 
 
-def _has_relay_table(op: Any) -> bool:
-    """True if the operator implements the relay contract (not the base-class stub)."""
-    return type(op).relay_table is not PiecewiseConstantHysteron.relay_table
-
-
 class RelayEngine(Engine):
     """Event-driven engine for piecewise-constant operators (see the module docstring).
 
     ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or,
-    for ``method="generic"`` (or ``"auto"`` with an operator without relay table), a
-    :class:`RelayReferenceEngine`.
+    for ``method="generic"``, a :class:`RelayReferenceEngine` (every piecewise-constant
+    operator has a relay table: the contract makes it abstract).
 
     Parameters
     ----------
@@ -91,27 +85,8 @@ class RelayEngine(Engine):
         if cls is RelayEngine:
             if method not in METHODS:
                 raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-            generic = method == "generic" or (
-                method == "auto" and not _has_relay_table(system.operator)
-            )
-            cls = RelayReferenceEngine if generic else RelayKernelEngine
+            cls = RelayReferenceEngine if method == "generic" else RelayKernelEngine
         return super().__new__(cls)
-
-    @classmethod
-    def check_system(cls, system: Any) -> None:
-        """An operator without relay table runs on the reference path, which needs
-        ``switching()`` (checked once here)."""
-        op = system.operator
-        if _has_relay_table(op):
-            return
-        try:
-            op.switching(op.initial_state(0.0))
-        except NotImplementedError as exc:
-            raise TypeError(
-                f"operator {op!r} cannot be coupled to the oscillator: its contract is "
-                f"incomplete ({exc or 'switching() is not implemented'}); a piecewise-constant "
-                "operator needs relay_table() or switching() (see hysteresis.base)"
-            ) from None
 
     def __init__(
         self, system: Any, state: OscillatorState, method: str = "auto", taylor: bool = True
