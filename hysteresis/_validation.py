@@ -62,8 +62,9 @@ def real_array(x: Any, name: str) -> np.ndarray:
     """``x`` as a float64 array (a new copy) of real numbers, without any silent coercion.
 
     Refused with :class:`ParameterTypeError`: strings and bytes (also numeric ones such as
-    ``'1'``), complex values (even with zero imaginary part), booleans, ``None`` and other
-    non-numbers. Ragged nested sequences raise ``ValueError``. Finiteness is not checked here.
+    ``'1'``), complex values (even with zero imaginary part), booleans, ``None``, masked arrays
+    (``numpy.asarray`` would drop the mask) and other non-numbers. Ragged nested sequences
+    raise ``ValueError``. Finiteness is not checked here.
     """
     if isinstance(x, str | bytes):
         raise ParameterTypeError(
@@ -71,6 +72,11 @@ def real_array(x: Any, name: str) -> np.ndarray:
         )
     if x is None:
         raise ParameterTypeError(f"{name} must be real numbers, got None")
+    if isinstance(x, np.ma.MaskedArray):
+        raise ParameterTypeError(
+            f"{name} must not be a masked array (its mask would be ignored); pass "
+            f"{name}.filled(...) or {name}.compressed()"
+        )
     try:
         arr = np.asarray(x)
     except (TypeError, ValueError) as exc:
@@ -313,3 +319,4 @@ def readonly_array(a: Any, dtype: Any = np.float64) -> np.ndarray:
     arr = np.array(a, dtype=dtype)
     arr.setflags(write=False)
     return arr
+
