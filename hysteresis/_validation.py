@@ -13,6 +13,7 @@ that arithmetic can overflow to ``inf``, which the compiled kernels must never s
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from numbers import Integral, Real
 from typing import Any
@@ -320,3 +321,16 @@ def readonly_array(a: Any, dtype: Any = np.float64) -> np.ndarray:
     arr.setflags(write=False)
     return arr
 
+
+def frozen_state_reduce(state: Any) -> tuple:
+    """``__reduce__`` of an immutable state dataclass holding read-only arrays: rebuilt from
+    its fields with the arrays read-only again (pickle protocols < 5 drop that flag)."""
+    values = tuple(getattr(state, f.name) for f in dataclasses.fields(state))
+    return (_frozen_state, (type(state), values))
+
+
+def _frozen_state(cls: type, values: tuple) -> Any:
+    for value in values:
+        if isinstance(value, np.ndarray):
+            value.setflags(write=False)
+    return cls(*values)

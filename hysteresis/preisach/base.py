@@ -43,7 +43,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from hysteresis._validation import as_input_sequence, check_state_type, readonly_array
+from hysteresis._validation import (
+    as_input_sequence,
+    check_state_type,
+    frozen_state_reduce,
+    readonly_array,
+)
 from hysteresis.base import Hysteron
 
 __all__ = ["PreisachModel", "PreisachState"]
@@ -112,6 +117,9 @@ class PreisachState:
         return self.output == other.output and np.array_equal(self.extrema, other.extrema)
 
     __hash__ = None  # type: ignore[assignment]
+
+    def __reduce__(self) -> tuple:
+        return frozen_state_reduce(self)
 
 
 def _stack(state: PreisachState) -> np.ndarray:
