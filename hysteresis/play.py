@@ -396,6 +396,10 @@ class GeneralizedPlay(_PlayBase):
     name:
         Optional label.
 
+    The operator pickles (worker processes, saved runs) when ``shape`` and
+    ``shape_derivative`` do: module-level functions or :class:`ErfShape`-like objects, not
+    lambdas or closures.
+
     Attributes
     ----------
     shape_kind:

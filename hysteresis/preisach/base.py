@@ -200,6 +200,9 @@ class PreisachModel(Hysteron):
         ``E(α, β) = (f_α − f_αβ)/2`` (vectorised callable); ``E(α, α) = 0`` and
         ``E(upper, lower) = 1`` (total mass) are checked. ``everett_gradient(a, b)`` may return
         ``(∂E/∂α, ∂E/∂β)``; otherwise central differences are used.
+
+        The model pickles when its callables do (module-level functions, not lambdas); the
+        same holds for the ``density`` of :meth:`from_density`.
         """
         kind = PreisachModel._kinds["continuous"]
         return kind._from_everett(everett, lower, upper, everett_gradient)
