@@ -13,6 +13,7 @@ that arithmetic can overflow to ``inf``, which the compiled kernels must never s
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from numbers import Integral, Real
 from typing import Any
@@ -62,8 +63,9 @@ def real_array(x: Any, name: str) -> np.ndarray:
     """``x`` as a float64 array (a new copy) of real numbers, without any silent coercion.
 
     Refused with :class:`ParameterTypeError`: strings and bytes (also numeric ones such as
-    ``'1'``), complex values (even with zero imaginary part), booleans, ``None`` and other
-    non-numbers. Ragged nested sequences raise ``ValueError``. Finiteness is not checked here.
+    ``'1'``), complex values (even with zero imaginary part), booleans, ``None``, masked arrays
+    (``numpy.asarray`` would drop the mask) and other non-numbers. Ragged nested sequences
+    raise ``ValueError``. Finiteness is not checked here.
     """
     if isinstance(x, str | bytes):
         raise ParameterTypeError(
@@ -71,6 +73,11 @@ def real_array(x: Any, name: str) -> np.ndarray:
         )
     if x is None:
         raise ParameterTypeError(f"{name} must be real numbers, got None")
+    if isinstance(x, np.ma.MaskedArray):
+        raise ParameterTypeError(
+            f"{name} must not be a masked array (its mask would be ignored); pass "
+            f"{name}.filled(...) or {name}.compressed()"
+        )
     try:
         arr = np.asarray(x)
     except (TypeError, ValueError) as exc:
@@ -313,3 +320,17 @@ def readonly_array(a: Any, dtype: Any = np.float64) -> np.ndarray:
     arr = np.array(a, dtype=dtype)
     arr.setflags(write=False)
     return arr
+
+
+def frozen_state_reduce(state: Any) -> tuple:
+    """``__reduce__`` of an immutable state dataclass holding read-only arrays: rebuilt from
+    its fields with the arrays read-only again (pickle protocols < 5 drop that flag)."""
+    values = tuple(getattr(state, f.name) for f in dataclasses.fields(state))
+    return (_frozen_state, (type(state), values))
+
+
+def _frozen_state(cls: type, values: tuple) -> Any:
+    for value in values:
+        if isinstance(value, np.ndarray):
+            value.setflags(write=False)
+    return cls(*values)

@@ -151,6 +151,33 @@ class Hysteron(ABC):
         """Saturation values (negative, positive) of the output."""
         return (-1.0, 1.0)
 
+    # -- pickling (worker processes, saved runs) -------------------------------------------
+    #: attributes left out of a pickle: caches rebuilt on demand
+    _transient_attributes: tuple[str, ...] = ()
+
+    def __reduce__(self) -> tuple:
+        """Pickle the attributes as they are (the parameters and the state-ownership
+        fingerprint are copied, not recomputed: the copy gives the same outputs bit for bit
+        and accepts the original's states), noting which arrays are read-only (pickle
+        protocols < 5 drop that flag; :meth:`__setstate__` sets it again)."""
+        attrs = {k: v for k, v in vars(self).items() if k not in self._transient_attributes}
+        readonly = tuple(
+            k for k, v in attrs.items() if isinstance(v, np.ndarray) and not v.flags.writeable
+        )
+        return (_new_instance, (type(self),), (attrs, readonly))
+
+    def __setstate__(self, state: tuple[dict[str, Any], tuple[str, ...]]) -> None:
+        attrs, readonly = state
+        for name in readonly:
+            attrs[name].setflags(write=False)
+        self.__dict__.update(attrs)
+
+
+def _new_instance(cls: type) -> Any:
+    """An uninitialised instance of ``cls`` (unpickling: :meth:`Hysteron.__setstate__` fills
+    it)."""
+    return cls.__new__(cls)
+
 
 class PiecewiseConstantHysteron(Hysteron):
     """Operator whose output is constant between switching inputs (relay-type)."""

@@ -43,7 +43,15 @@ from hysteresis._validation import (
 from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
 
-__all__ = ["CompiledPlay", "PlayState", "PlayOperator", "GeneralizedPlay", "play_positions"]
+__all__ = [
+    "CompiledPlay",
+    "ErfShape",
+    "ErfShapeDerivative",
+    "PlayState",
+    "PlayOperator",
+    "GeneralizedPlay",
+    "play_positions",
+]
 
 _EPS = np.finfo(np.float64).eps
 
@@ -281,18 +289,34 @@ class PlayOperator(_PlayBase):
         return f"PlayOperator(width={self._width!r})"
 
 
-def _erf_shape(spread: float) -> tuple[Callable, Callable]:
-    scale = math.sqrt(2.0) * spread
-    norm = math.sqrt(2.0 / math.pi) / spread
+class ErfShape:
+    """The erf shape ``f(w) = erf(w / (sqrt(2) R))`` of :meth:`GeneralizedPlay.erf`, a
+    picklable callable (``spread`` = R > 0, not validated here)."""
 
-    def shape(w):
-        return erf(np.asarray(w, dtype=np.float64) / scale)[()]
+    def __init__(self, spread: float) -> None:
+        self.spread = spread
+        self._scale = math.sqrt(2.0) * spread
 
-    def shape_derivative(w):
+    def __call__(self, w):
+        return erf(np.asarray(w, dtype=np.float64) / self._scale)[()]
+
+    def __reduce__(self) -> tuple:
+        return (type(self), (self.spread,))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.spread!r})"
+
+
+class ErfShapeDerivative(ErfShape):
+    """``f'(w) = sqrt(2/π)/R · exp(−w²/(2R²))``, the derivative of :class:`ErfShape`."""
+
+    def __init__(self, spread: float) -> None:
+        super().__init__(spread)
+        self._norm = math.sqrt(2.0 / math.pi) / spread
+
+    def __call__(self, w):
         w = np.asarray(w, dtype=np.float64)
-        return (norm * np.exp(-0.5 * (w / spread) ** 2))[()]
-
-    return shape, shape_derivative
+        return (self._norm * np.exp(-0.5 * (w / self.spread) ** 2))[()]
 
 
 #: probe points of the shape check: both signs, scales from 1e-3 to 1e3
@@ -372,6 +396,10 @@ class GeneralizedPlay(_PlayBase):
     name:
         Optional label.
 
+    The operator pickles (worker processes, saved runs) when ``shape`` and
+    ``shape_derivative`` do: module-level functions or :class:`ErfShape`-like objects, not
+    lambdas or closures.
+
     Attributes
     ----------
     shape_kind:
@@ -415,7 +443,7 @@ class GeneralizedPlay(_PlayBase):
         coordinates (paper eqs. pdens_sr, prob_mag).
         """
         spread = positive_scalar(spread, "spread", MAX_MAGNITUDE)
-        shape, derivative = _erf_shape(spread)
+        shape, derivative = ErfShape(spread), ErfShapeDerivative(spread)
         # the closed form needs no probe check (and a very small R would defeat the finite
         # differences of the check)
         op = cls.__new__(cls)

@@ -40,6 +40,7 @@ from hysteresis._validation import (
     direction_sign,
     finite_array,
     finite_scalar,
+    frozen_state_reduce,
     readonly_array,
 )
 from hysteresis.base import ContinuousHysteron
@@ -56,6 +57,9 @@ class PIState:
 
     positions: np.ndarray
     input: float
+
+    def __reduce__(self) -> tuple:
+        return frozen_state_reduce(self)
 
 
 @njit(cache=True)

@@ -132,6 +132,10 @@ class RelayTable:
     def __setattr__(self, name, value):
         raise AttributeError("RelayTable is immutable")
 
+    def __reduce__(self) -> tuple:
+        """Pickled as its thresholds and weights (the cached plans are rebuilt on demand)."""
+        return (RelayTable, (self._alpha, self._beta, self._weights))
+
     # -- parameters -----------------------------------------------------------------------------
     @property
     def alpha(self) -> np.ndarray:

@@ -112,6 +112,12 @@ CASES: list[Case] = [
     C("relay-string-inputs", "relay.apply(['1', '2'])", "inputs"),
     C("relay-complex-inputs", "relay.apply([1 + 1j])", "inputs"),
     C("relay-none-inputs", "relay.apply(None)", "inputs"),
+    C(
+        "relay-masked-inputs",
+        "relay.apply(np.ma.masked_array([0.0, 5.0, 1.0], mask=[0, 1, 0]))",
+        "inputs",
+    ),
+    C("relay-masked-threshold", "Relay(np.ma.masked, 0.0)", "alpha"),
     C("relay-state-half", "relay.apply([0.0], RelayState(0.5, 0.0))", "state"),
     C("relay-play-state", "relay.apply([0.0], play.initial_state(0.0))", "state"),
     C("relay-string-state", "relay.apply([0.0], 'up')", "state"),
@@ -127,6 +133,11 @@ CASES: list[Case] = [
     C("play-position-out-of-reach", "play.apply([0.0], PlayState(5.0, 0.0))", "state"),
     C("play-relay-state", "play.apply([0.0], relay.initial_state(0.0))", "state"),
     C("play-2d-inputs", "play.apply(np.zeros((2, 2)))", "inputs"),
+    C(
+        "play-masked-inputs",
+        "play.apply(np.ma.masked_array([0.0, 5.0, 1.0], mask=[0, 1, 0]))",
+        "inputs",
+    ),
     C("play-complex-inputs", "play.apply(np.array([1.0, 2.0], dtype=complex))", "inputs"),
     C("play-huge-inputs", "play.apply([1e308, -1e308])", "inputs"),
     C("play-explicit-state", "play.state(10.0, 0.0)", "position"),
@@ -169,6 +180,11 @@ CASES: list[Case] = [
     ),
     C("pi-inverse-bad-weights", "PrandtlIshlinskii([0.0, 1.0], [-1.0, 0.5]).inverse()", "weights"),
     C("pi-2d-widths", "PrandtlIshlinskii([[0.0, 1.0]], [[1.0, 1.0]])", "widths"),
+    C(
+        "pi-masked-weights",
+        "PrandtlIshlinskii([0.0, 1.0, 2.0], np.ma.masked_array([0.0, 5.0, 1.0], mask=[0, 1, 0]))",
+        "weights",
+    ),
     # --- discrete Preisach
     C(
         "preisach-issue-segfault",
@@ -219,6 +235,11 @@ CASES: list[Case] = [
     ),
     C("preisach-switching-relay-state", "disc.switching(RelayState(1.0, 0.0))", "state"),
     C("preisach-saturation-name", "disc.state_from_extrema([1.0], saturation='up')", "saturation"),
+    C(
+        "disc-masked-alpha",
+        "PreisachModel.from_relays(np.ma.masked_array([1.0, 2.0], mask=[0, 1]), [0.0, 0.0])",
+        "alpha",
+    ),
     # --- continuous Preisach
     C("everett-negative-density", "PreisachModel.from_everett(E_nonmono, -1.0, 1.0)", "everett"),
     C(
@@ -253,6 +274,11 @@ CASES: list[Case] = [
     ),
     C("continuous-discrete-state", "cont.apply([0.0], disc.initial_state(0.0))", "state"),
     C("continuous-other-model-state", "cont.apply([0.0], cont2.initial_state(0.0))", "state"),
+    C(
+        "cont-masked-inputs",
+        "cont.apply(np.ma.masked_array([0.0, 5.0, 1.0], mask=[0, 1, 0]))",
+        "inputs",
+    ),
     # --- spin dimers
     C("dimers-odd-spins", "SpinDimerEnsemble.random(101, 1.0, 1.0, 2.0, seed=0)", "n_spins"),
     C("dimers-no-seed", "SpinDimerEnsemble.random(100, 1.0, 1.0, 2.0, seed=None)", "seed"),
@@ -270,6 +296,11 @@ CASES: list[Case] = [
         "SpinDimerEnsemble.random(10**12, 1.0, 1.0, 2.0, seed=0)",
         "n_spins",
         isolate=True,
+    ),
+    C(
+        "dimers-masked-fields",
+        "SpinDimerEnsemble(np.ma.masked_array([[1.0, 0.0]], mask=[[0, 1]]), 2.0)",
+        "fields",
     ),
     # --- dimensions and statistics
     C("ky-empty", "kaplan_yorke_dimension([])", "exponents"),

@@ -238,17 +238,24 @@ def uniform_half_extent(p: ModelParameters) -> float:
     return 5.0 * spread + 0.5 * width
 
 
-def _preisach_uniform(p: ModelParameters) -> Any:
-    h = uniform_half_extent(p)
-    area = 2.0 * h**2  # the triangle β <= α inside [-H, H]²
+class _UniformTriangleDensity:
+    """Uniform density ``1/(2H²)`` on the triangle ``-H <= β <= α <= H`` (a module-level
+    class, not a closure, so that the model pickles)."""
 
-    def density(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    def __init__(self, h: float) -> None:
+        self.h = h
+        self.area = 2.0 * h**2  # the triangle β <= α inside [-H, H]²
+
+    def __call__(self, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
         a = np.asarray(alpha, dtype=float)
         b = np.asarray(beta, dtype=float)
-        inside = (b <= a) & (a <= h) & (b >= -h)
-        return np.where(inside, 1.0 / area, 0.0)
+        inside = (b <= a) & (a <= self.h) & (b >= -self.h)
+        return np.where(inside, 1.0 / self.area, 0.0)
 
-    return PreisachModel.from_density(density, -h, h, int(p.resolution))
+
+def _preisach_uniform(p: ModelParameters) -> Any:
+    h = uniform_half_extent(p)
+    return PreisachModel.from_density(_UniformTriangleDensity(h), -h, h, int(p.resolution))
 
 
 _SPECS = (

@@ -43,7 +43,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from hysteresis._validation import as_input_sequence, check_state_type, readonly_array
+from hysteresis._validation import (
+    as_input_sequence,
+    check_state_type,
+    frozen_state_reduce,
+    readonly_array,
+)
 from hysteresis.base import Hysteron
 
 __all__ = ["PreisachModel", "PreisachState"]
@@ -112,6 +117,9 @@ class PreisachState:
         return self.output == other.output and np.array_equal(self.extrema, other.extrema)
 
     __hash__ = None  # type: ignore[assignment]
+
+    def __reduce__(self) -> tuple:
+        return frozen_state_reduce(self)
 
 
 def _stack(state: PreisachState) -> np.ndarray:
@@ -192,6 +200,9 @@ class PreisachModel(Hysteron):
         ``E(α, β) = (f_α − f_αβ)/2`` (vectorised callable); ``E(α, α) = 0`` and
         ``E(upper, lower) = 1`` (total mass) are checked. ``everett_gradient(a, b)`` may return
         ``(∂E/∂α, ∂E/∂β)``; otherwise central differences are used.
+
+        The model pickles when its callables do (module-level functions, not lambdas); the
+        same holds for the ``density`` of :meth:`from_density`.
         """
         kind = PreisachModel._kinds["continuous"]
         return kind._from_everett(everett, lower, upper, everett_gradient)

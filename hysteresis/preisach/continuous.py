@@ -8,7 +8,6 @@ width-disorder density of :meth:`ContinuousPreisachModel.gaussian` is built in
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
 import numpy as np
@@ -27,6 +26,7 @@ from hysteresis._validation import (
 from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
 from hysteresis.preisach import _kernels as _k
+from hysteresis.preisach import _scalar
 from hysteresis.preisach.base import (
     PreisachModel,
     PreisachState,
@@ -40,6 +40,24 @@ __all__ = ["ContinuousPreisachModel"]
 
 #: largest ``resolution`` of :meth:`PreisachModel.from_density` (memory ~ 16·resolution²/2)
 _MAX_RESOLUTION = 4096
+#: inputs per chunk of :meth:`ContinuousPreisachModel.apply`: its working memory (the Everett
+#: quadrature holds chunk × nodes floats) is bounded by this, not by the length of the input
+_APPLY_CHUNK = 8192
+
+
+class _FloatEverett:
+    """``everett`` with its values as a float64 array (a picklable wrapper)."""
+
+    def __init__(self, everett: Callable) -> None:
+        self.everett = everett
+
+    def __call__(self, a, b) -> np.ndarray:
+        return np.asarray(self.everett(a, b), dtype=np.float64)
+
+
+def _gaussian_model(width: float, spread: float, width_spread: float, nodes: int):
+    """:meth:`ContinuousPreisachModel.gaussian` (unpickling rebuilds the model from these)."""
+    return ContinuousPreisachModel.gaussian(width, spread, width_spread, nodes)
 
 
 class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuous"):
@@ -71,6 +89,18 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
 
     def __repr__(self) -> str:
         return f"ContinuousPreisachModel(lower={self._lower}, upper={self._upper})"
+
+    #: the scalar copy of the Everett table (rebuilt on demand) is not pickled
+    _transient_attributes = ("_table_rows",)
+
+    def __reduce__(self) -> tuple:
+        """A :meth:`gaussian` model is pickled as its parameters and rebuilt (deterministic:
+        same Everett function, same fingerprint, so the original's states are accepted);
+        any other model as its attributes (its callables must be picklable)."""
+        gaussian = self.__dict__.get("_gaussian_arguments")
+        if gaussian is not None:
+            return (_gaussian_model, gaussian)
+        return super().__reduce__()
 
     # -- construction ------------------------------------------------------------------------
     @classmethod
@@ -159,7 +189,7 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         x = np.linspace(lo, up, 11)
         if np.max(np.abs(np.asarray(everett(x, x), dtype=np.float64))) > 1e-9:
             raise ValueError("everett must vanish on the diagonal, E(a, a) = 0")
-        model._everett_fn = lambda a, b: np.asarray(everett(a, b), dtype=np.float64)
+        model._everett_fn = _FloatEverett(everett)
         model._gradient_fn = everett_gradient
         model._check_everett_probe()
         model._set_fingerprint()
@@ -340,9 +370,24 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         return _stack(state), prefix
 
     def apply(self, inputs, state: PreisachState | None = None) -> tuple[np.ndarray, PreisachState]:
+        """Outputs for ``inputs`` from ``state`` (default ``initial_state(inputs[0])``) and the
+        final state. Long inputs run in chunks of :data:`_APPLY_CHUNK`, each continuing the
+        state of the previous one (exact: the same arithmetic as one pass), so the working
+        memory does not grow with the length of the input."""
         u = as_input_sequence(inputs)
         if state is None:
             state = self.initial_state(float(u[0]))
+        chunk = _APPLY_CHUNK
+        if u.size <= chunk:
+            return self._apply_chunk(u, state)
+        outputs = np.empty(u.size)
+        for start in range(0, u.size, chunk):
+            outputs[start : start + chunk], state = self._apply_chunk(
+                u[start : start + chunk], state
+            )
+        return outputs, state
+
+    def _apply_chunk(self, u: np.ndarray, state: PreisachState) -> tuple[np.ndarray, PreisachState]:
         stack, prefix = self._unpack(state)
         top = stack.size - 1
         vals = np.empty(stack.size + u.size + 2)  # at most one new entry per input
@@ -459,97 +504,12 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         )
 
     def _scalar_everett(self) -> Callable:
-        """``everett`` with a fast path for scalar arguments (same arithmetic as the tabulated
-        bilinear interpolation, so the result is identical; the engine calls it per stage)."""
-        vector = self.everett
-        fast = getattr(self, "_fast_scalar", None)
-        if fast is not None:
-            everett_scalar = fast[0]
-
-            def everett_fast(a, b):
-                if isinstance(a, float) and isinstance(b, float):
-                    return everett_scalar(a, b)
-                return vector(a, b)[()]
-
-            return everett_fast
-        if getattr(self, "_table", None) is None:
-
-            def everett_any(a, b):
-                return vector(a, b)[()]
-
-            return everett_any
-        rows = self.__dict__.get("_table_rows")
-        if rows is None:
-            rows = self._table.tolist()
-            self._table_rows = rows
-        lo, up, h, n = self._lower, self._upper, self._h, self._n
-
-        def everett(a, b):
-            if not (isinstance(a, float) and isinstance(b, float)):
-                return vector(a, b)[()]
-            a = min(max(a, lo), up)
-            b = min(max(b, lo), up)
-            if not a > b:
-                return 0.0
-            fa = (a - lo) / h
-            fb = (b - lo) / h
-            i = min(max(math.floor(fa), 0), n - 1)
-            j = min(max(math.floor(fb), 0), n - 1)
-            ta = fa - i
-            tb = fb - j
-            r0, r1 = rows[i], rows[i + 1]
-            e = (
-                r0[j] * (1 - ta) * (1 - tb)
-                + r1[j] * ta * (1 - tb)
-                + r0[j + 1] * (1 - ta) * tb
-                + r1[j + 1] * ta * tb
-            )
-            return max(e, 0.0)
-
-        return everett
+        """``everett`` with a fast path for scalar arguments (:mod:`._scalar`)."""
+        return _scalar.scalar_everett(self)
 
     def _scalar_gradient(self) -> Callable:
-        """``everett_gradient`` with a fast path for scalar arguments of a density model."""
-        vector = self.everett_gradient
-
-        def gradient_any(a, b):
-            da, db = vector(a, b)
-            return da[()], db[()]
-
-        fast = getattr(self, "_fast_scalar", None)
-        if fast is not None:
-            gradient_scalar = fast[1]
-
-            def gradient_fast(a, b):
-                if isinstance(a, float) and isinstance(b, float):
-                    return gradient_scalar(a, b)
-                return gradient_any(a, b)
-
-            return gradient_fast
-        if self._density_fn is None or self._gradient_fn != self._gradient_from_density:
-            return gradient_any
-        nodes, weights = _gauss(64)
-        mu = self._density_fn
-        lo, up, scale = self._lower, self._upper, self._mass_scale
-
-        def gradient(a0, b0):
-            if not (isinstance(a0, float) and isinstance(b0, float)):
-                return gradient_any(a0, b0)
-            a = min(max(a0, lo), up)
-            b = min(max(b0, lo), up)
-            if not a > b:
-                return 0.0, 0.0
-            span = a - b
-            pts = b + span * nodes
-            da = 0.0
-            db = 0.0
-            if lo <= a0 <= up:
-                da = float(np.dot(np.asarray(mu(np.full(pts.shape, a), pts)), weights))
-            if lo <= b0 <= up:
-                db = -float(np.dot(np.asarray(mu(pts, np.full(pts.shape, b))), weights))
-            return da * scale * span, db * scale * span
-
-        return gradient
+        """``everett_gradient`` with a fast path for scalar arguments (:mod:`._scalar`)."""
+        return _scalar.scalar_gradient(self)
 
     @classmethod
     def gaussian(
@@ -578,5 +538,6 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         law = gaussian_everett(width, spread, width_spread, nodes)
         model = cls._from_everett(law.everett, -law.bound, law.bound, law.gradient)
         model._gaussian = law.parameters
+        model._gaussian_arguments = (*law.parameters, positive_integer(nodes, "nodes", 4))
         model._fast_scalar = (law.everett_scalar, law.gradient_scalar)
         return model
