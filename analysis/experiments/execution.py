@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.experiments.store import ResultStore, code_version, task_key
+from analysis.experiments.store import ResultStore, StoreError, code_version, task_key
 from hysteresis._progress import progress_bar
 from hysteresis._validation import bounded_work, nonnegative_integer
 
@@ -251,6 +251,11 @@ def run_tasks(
                     other_versions.add(str(stored.code_version))
             else:
                 pending[key] = task
+        if pending and store is not None and store.read_only:
+            raise StoreError(
+                f"{store.path}: read-only (file or directory not writable), and {len(pending)} "
+                f"of {len(results) + len(pending)} tasks are not stored in it; nothing was run"
+            )
         if other_versions:
             # Resuming across code changes mixes results; say so instead of silently reusing.
             warnings.warn(

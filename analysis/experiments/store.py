@@ -57,6 +57,7 @@ from analysis.experiments.store_format import (
     _array_from_bytes,
     _array_to_bytes,
     _canonical_numbers,
+    _column,
     _decode_results,
     _encode_results,
     _plain,
@@ -580,17 +581,3 @@ class ResultStore:
             except KeyError:
                 raise KeyError(f"result field {name!r} missing in some tasks") from None
         return out
-
-
-def _column(values: list) -> np.ndarray:
-    """Stack values into an array when they share a shape, else an object array."""
-    try:
-        arrs = [np.asarray(v) for v in values]
-        if all(a.shape == arrs[0].shape for a in arrs) and all(a.dtype != object for a in arrs):
-            return np.stack(arrs)
-    except (ValueError, TypeError):
-        pass
-    col = np.empty(len(values), dtype=object)
-    for i, v in enumerate(values):
-        col[i] = v
-    return col

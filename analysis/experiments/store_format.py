@@ -194,3 +194,17 @@ def task_checksum(fields: Sequence[Any], blobs: Iterable[tuple[str, bytes]]) -> 
     for name, data in sorted(blobs, key=lambda nb: str(nb[0])):
         h.update(_field_bytes(name) + _field_bytes(data))
     return h.hexdigest()
+
+
+def _column(values: list) -> np.ndarray:
+    """Stack values into an array when they share a shape, else an object array."""
+    try:
+        arrs = [np.asarray(v) for v in values]
+        if all(a.shape == arrs[0].shape for a in arrs) and all(a.dtype != object for a in arrs):
+            return np.stack(arrs)
+    except (ValueError, TypeError):
+        pass
+    col = np.empty(len(values), dtype=object)
+    for i, v in enumerate(values):
+        col[i] = v
+    return col

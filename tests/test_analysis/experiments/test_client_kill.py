@@ -113,3 +113,41 @@ def test_copy_of_the_sqlite_file_alone_holds_every_stored_task(killed_client, tm
             key = task_key("kill", {"x": i, "pids": str(store.parent / "pids")})
             if key in committed:
                 assert copied.get(key).results == {"x2": i * i}
+
+
+WATCH = textwrap.dedent(
+    """
+    import os, sys
+    from analysis.experiments.execution import _watch_client
+    if sys.argv[2] == "poll":
+        del os.pidfd_open  # the portable fallback: polling the client's pid
+    print("watching", flush=True)
+    _watch_client(int(sys.argv[1]), os.getppid())
+    """
+)
+
+
+@pytest.mark.parametrize("how", ["pidfd", "poll"])
+def test_worker_watch_ends_the_process_when_the_client_exits(how):
+    if how == "pidfd" and not hasattr(os, "pidfd_open"):
+        pytest.skip("no pidfd_open on this platform")
+    client = subprocess.Popen(["sleep", "60"])
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    watcher = subprocess.Popen(
+        [sys.executable, "-c", WATCH, str(client.pid), how],
+        env=env,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert watcher.stdout.readline().strip() == "watching"
+        time.sleep(0.3)
+        assert watcher.poll() is None  # the client lives: the watcher waits
+        client.kill()
+        client.wait()
+        assert watcher.wait(timeout=5) == 1  # the client is gone: so is the watcher
+    finally:
+        for p in (client, watcher):
+            if p.poll() is None:
+                p.kill()
+                p.wait()

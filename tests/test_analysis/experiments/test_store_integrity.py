@@ -211,6 +211,9 @@ def test_complete_store_on_read_only_media_is_read_and_aggregated(tmp_path, monk
                 store.put("agg", {"i": 9}, {"y": 81})
         got = run_tasks("agg", tasks, _never_called, store=path, workers=1, progress=False)
         assert got == expected
+        more = [*tasks, {"i": 3}]  # a task missing: refused before anything is computed
+        with pytest.raises(StoreError, match="1 of 4 tasks are not stored"):
+            run_tasks("agg", more, _never_called, store=path, workers=1, progress=False)
     finally:
         media.chmod(0o755)
         path.chmod(0o644)
@@ -230,3 +233,31 @@ def test_read_only_opening_writes_nothing(tmp_path):
 
 def _square(i):
     return {"y": i * i}
+
+
+def test_schema1_store_killed_with_tasks_in_its_write_ahead_log(tmp_path):
+    # what the previous version left after a SIGKILL: tasks committed only to the -wal file
+    live = tmp_path / "live" / "old.sqlite"
+    live.parent.mkdir()
+    keys = _schema1_store(live)
+    con = sqlite3.connect(live, isolation_level=None)
+    con.execute("PRAGMA wal_autocheckpoint=0")
+    con.execute(
+        """INSERT INTO tasks VALUES (?, 'e', '{"i": 9}', '{"y": 81}', ?, 0.5, 'now')""",
+        (task_key("e", {"i": 9}), store_module.code_version()),
+    )
+    killed = tmp_path / "killed"
+    killed.mkdir()
+    for name in ("old.sqlite", "old.sqlite-wal"):  # the files as a kill leaves them
+        shutil.copyfile(live.parent / name, killed / name)
+    con.close()
+    ro = tmp_path / "ro"
+    shutil.copytree(killed, ro)
+    # read-only, the log cannot be folded in: refused rather than read without those tasks
+    with pytest.raises(StoreError, match="write-ahead log"):
+        ResultStore(ro / "old.sqlite", read_only=True)
+    # writable: folded into the file, which then holds all three tasks by itself
+    with ResultStore(killed / "old.sqlite") as store:
+        assert set(store.keys("e")) == {*keys, task_key("e", {"i": 9})}
+        assert store.get(task_key("e", {"i": 9})).results == {"y": 81}
+    assert not (killed / "old.sqlite-wal").exists()
