@@ -17,6 +17,11 @@ open the store. So there is exactly one writer (no SQLite locking across machine
 unreliable on network filesystems), and the workers of a cluster need no shared filesystem and
 no write access anywhere: only the client machine holds the file.
 
+The workers of a local process pool end with the client: each watches the client process
+(``prctl(PR_SET_PDEATHSIG)`` on Linux, plus a thread that waits on a pidfd of the client or
+polls its pid elsewhere) and exits when it dies, so a killed ``hyst`` leaves no orphaned
+workers computing for nobody.
+
 On a Dask cluster a worker that dies (killed, machine lost) costs only the tasks it held: the
 scheduler reruns them on the surviving workers and their futures still complete, so the run
 finishes by itself, with every task stored once. Losing the scheduler (or the client's
@@ -26,7 +31,12 @@ the same sweep again against a new scheduler computes only the rest.
 
 from __future__ import annotations
 
+import ctypes
 import os
+import select
+import signal
+import sys
+import threading
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -36,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.experiments.store import ResultStore, code_version, task_key
+from analysis.experiments.store import ResultStore, StoreError, code_version, task_key
 from hysteresis._progress import progress_bar
 from hysteresis._validation import bounded_work, nonnegative_integer
 
@@ -90,6 +100,53 @@ def _timed_call(func: Callable[..., Mapping[str, Any]], task: dict) -> tuple[dic
     if not isinstance(result, Mapping):
         raise TypeError(f"task function must return a dict, got {type(result).__name__}")
     return dict(result), wall
+
+
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by another user
+        return True
+    return True
+
+
+def _watch_client(client_pid: int, parent_pid: int) -> None:
+    """Thread of a pool worker: end the worker as soon as the client process is gone."""
+    pidfd_open = getattr(os, "pidfd_open", None)
+    if pidfd_open is not None:
+        try:
+            fd = pidfd_open(client_pid)
+        except OSError:
+            fd = None
+        if fd is not None:
+            select.select([fd], [], [])  # readable once the client has exited
+            os._exit(1)
+    # portable fallback: a client that exited leaves this worker to another parent (fork), or
+    # its pid vanishes (a zombie client still answers os.kill, hence the parent check too)
+    while os.getppid() == parent_pid and _alive(client_pid):
+        time.sleep(0.25)
+    os._exit(1)
+
+
+def _end_with_client(client_pid: int) -> None:
+    """Initializer of the pool's workers: a worker exits when the client process dies."""
+    parent_pid = os.getppid()
+    if sys.platform.startswith("linux") and parent_pid == client_pid:
+        try:  # the kernel kills this worker when its parent (the client) dies
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if not _alive(client_pid) or os.getppid() != parent_pid:  # died before we watched
+        os._exit(1)
+    threading.Thread(
+        target=_watch_client, args=(client_pid, parent_pid), name="watch-client", daemon=True
+    ).start()
 
 
 def _dask_client(scheduler: str) -> Any:
@@ -194,6 +251,11 @@ def run_tasks(
                     other_versions.add(str(stored.code_version))
             else:
                 pending[key] = task
+        if pending and store is not None and store.read_only:
+            raise StoreError(
+                f"{store.path}: read-only (file or directory not writable), and {len(pending)} "
+                f"of {len(results) + len(pending)} tasks are not stored in it; nothing was run"
+            )
         if other_versions:
             # Resuming across code changes mixes results; say so instead of silently reusing.
             warnings.warn(
@@ -263,7 +325,11 @@ def _run_pending(
         ex, shutdown = client.get_executor(pure=False), client.close
     else:
         n = workers if workers is not None else (os.cpu_count() or 1)
-        ex = ProcessPoolExecutor(max_workers=min(n, len(pending)))
+        ex = ProcessPoolExecutor(
+            max_workers=min(n, len(pending)),
+            initializer=_end_with_client,
+            initargs=(os.getpid(),),
+        )
         shutdown = ex.shutdown
     futures: dict[Future, str] = {}
     try:

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from support_paths import ROOT
 
+import analysis.experiments.store as store_module
 from analysis.experiments.execution import TaskError, run_tasks, spawn_seeds
 from analysis.experiments.store import ResultStore, StoreError
 
@@ -228,12 +229,14 @@ def test_duplicate_tasks_run_once_and_wall_time_recorded(tmp_path, helpers):
     assert len(walls) == 3 and all(w is not None and w >= 0 for w in walls)
 
 
-def test_resume_across_code_versions_refused_unless_allowed(tmp_path, helpers):
+def test_resume_across_code_versions_refused_unless_allowed(tmp_path, helpers, monkeypatch):
     path = tmp_path / "s.sqlite"
     tasks = _tasks(2)
-    first = run_tasks("sweep", tasks, helpers.task, store=path, workers=1, progress=False)
-    with sqlite3.connect(path) as conn:
-        conn.execute("UPDATE tasks SET code_version = 'hysteresis-toolkit 0.0.1'")
+    # stored by another code version (written by it, so sealed with that version: a version
+    # changed afterwards inside the file would be damage, see test_store_integrity)
+    with monkeypatch.context() as m:
+        m.setattr(store_module, "code_version", lambda: "hysteresis-toolkit 0.0.1")
+        first = run_tasks("sweep", tasks, helpers.task, store=path, workers=1, progress=False)
     helpers.CALLS.clear()
     before = path.read_bytes()
     with pytest.raises(StoreError, match="allow_version_mismatch"):

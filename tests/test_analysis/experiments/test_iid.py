@@ -74,18 +74,17 @@ def test_iid_magnetization_reproducible_and_input_modes():
         iid_inputs(10, 0.0, 1)
 
 
-def test_store_of_another_code_version_is_reused_only_when_allowed(tmp_path):
+def test_store_of_another_code_version_is_reused_only_when_allowed(tmp_path, monkeypatch):
     # the iid ensemble honours allow_version_mismatch like every other run_tasks caller (hyst
     # paper --allow-version-mismatch passes it through): refused by default, reused when told
-    import sqlite3
-
+    import analysis.experiments.store as store_module
     from analysis.experiments.iid import iid_magnetization
     from analysis.experiments.store import StoreError
 
     store = tmp_path / "s.sqlite"
-    first = iid_magnetization(20, 200, 3, seed=1, store=store)
-    with sqlite3.connect(store) as conn:
-        conn.execute("UPDATE tasks SET code_version = 'hysteresis-toolkit 0.0.1 (git 0000000)'")
+    with monkeypatch.context() as m:  # written (and sealed) by another code version
+        m.setattr(store_module, "code_version", lambda: "hysteresis-toolkit 0.0.1 (git 0000000)")
+        first = iid_magnetization(20, 200, 3, seed=1, store=store)
     with pytest.raises(StoreError, match="allow_version_mismatch|other code versions"):
         iid_magnetization(20, 200, 3, seed=1, store=store)
     with pytest.warns(UserWarning, match="other code versions"):
