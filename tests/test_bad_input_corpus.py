@@ -421,6 +421,51 @@ CASES: list[Case] = [
         "line",
     ),
     C("forc-unknown-format", "read_forc(write('x.csv', b'1,1,1\\n'), format='xyz')", "format"),
+    # issue 21: binary, compressed, UTF-16 without BOM, no FORC format, absurd values, rows out
+    # of measurement order
+    C(
+        "forc-gzip",
+        "read_forc(write('g.frc', __import__('gzip').compress(b'MicroMag 2900\\n')), 'auto')",
+        "not a text FORC file (gzip",
+    ),
+    C(
+        "forc-png",
+        "read_micromag(write('p.frc', b'\\x89PNG\\r\\n\\x1a\\n' + b'MicroMag\\n' * 20))",
+        "not a text FORC file (a PNG",
+    ),
+    C(
+        "forc-utf16-without-bom",
+        "read_csv(write('u.csv', '1,1,0.5\\n0,0,0.1\\n0,1,0.5\\n'.encode('utf-16-le')))",
+        "not a text FORC file (UTF-16",
+    ),
+    C(
+        "forc-readme-text",
+        "read_forc(write('README.md', b'# Tool\\n\\nPlots moment (emu), field (Oe).\\n'), 'auto')",
+        "not a FORC file this toolkit recognises",
+    ),
+    C(
+        "forc-absurd-moment",
+        "read_csv(write('huge.csv', b'1,1,1e300\\n0.5,0.5,0.1\\n0.5,1,0.2\\n'))",
+        "line 1: moment 1e+300 is absurd",
+    ),
+    C(
+        "forc-exponent-typo-field",
+        "read_csv(write('typo.csv', (''.join(f'-1,{h / 10},{h / 100}\\n' for h in range(-10, 30))"
+        " + '-1,4e9,0.3\\n').encode()))",
+        "line 41: field 4e+09 is absurd",
+    ),
+    C(
+        "forc-lakeshore-time-out-of-order",
+        "read_forc(write('t.csv', b'Time [s],Field [mT],Moment [emu]\\n0,10,1\\n1,11,2\\n'"
+        " b'0.5,12,3\\n'), 'lakeshore')",
+        "line 4: time stamp 0.5",
+    ),
+    C(
+        "forc-lakeshore-curves-out-of-order",
+        "read_forc(write('c.csv', ('Field [mT],Moment [emu]\\n' + ''.join(f'{h},{h}\\n' for r in"
+        " (10, 8, 6, 7, 4) for h in range(r, 13))).encode()), 'lakeshore')",
+        "line 17: a curve starts at 7 mT",
+    ),
 ]
 
 CASE_BY_ID = {c.id: c for c in CASES}

@@ -323,7 +323,7 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
     try:
         fmt = detect_format(path) if args.format == "auto" else args.format
     except (ValueError, OSError) as exc:
-        raise CliError(f"argument --input: {path}: {exc}") from exc
+        raise CliError(f"argument --input: {_about(path, exc)}") from exc
     kwargs: dict[str, Any] = {}
     if args.drift_correction != "none":
         if fmt not in ("micromag", "lakeshore"):
@@ -336,10 +336,16 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
         data = read_forc_file(path, fmt, **kwargs)
     except (ValueError, OSError) as exc:
         # a user's file: one line naming the problem (and its line), not a traceback
-        raise CliError(f"argument --input: {path}: {exc}") from exc
+        raise CliError(f"argument --input: {_about(path, exc)}") from exc
     if args.grid_step is not None:
         _check_grid_step(args, data.curves)
     return fmt, data, smoothing  # type: ignore[return-value]
+
+
+def _about(path: Path, exc: Exception) -> str:
+    """``PATH: message``, the path once (the readers' messages may start with it)."""
+    msg = str(exc)
+    return msg if msg.startswith(f"{path}: ") else f"{path}: {msg}"
 
 
 def _check_grid_step(args: argparse.Namespace, curves: Any) -> None:

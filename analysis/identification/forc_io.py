@@ -7,9 +7,14 @@ identify with :func:`analysis.identification.identify_from_curves`. Every reader
 the data set (an aborted instrument run is returned as far as it was measured, flagged
 ``complete=False``) or raises a one-line :class:`ValueError` naming the (1-based) line that is
 wrong and what was expected: missing or inconsistent header fields, ragged rows, non-numeric
-values, NaN/inf, curves that do not start at their reversal field or whose fields are not
-monotone, unknown units, or an export variant that is not supported. Text is decoded as UTF-8
-or else cp1252/Latin-1, never with a ``UnicodeDecodeError``.
+values, NaN/inf, absurd values (beyond 1e30, or a million robust spreads from the median of the
+file's fields or moments: :func:`~analysis.identification.forc_files.common.check_magnitudes`),
+curves that do not start at their reversal field or whose fields are not monotone, Lake Shore
+rows out of measurement order, unknown units, or an export variant that is not supported.
+Text is decoded as UTF-8 or else cp1252/Latin-1 (UTF-16/UTF-32 with a byte-order mark as
+such), never with a ``UnicodeDecodeError``; binary, compressed or BOM-less UTF-16 content is
+refused as ``"PATH: not a text FORC file (WHAT)"``, and with format detection a text file that
+is none of the formats as ``"PATH: not a FORC file this toolkit recognises; ..."``.
 
 Formats (one module each in :mod:`analysis.identification.forc_files`):
 :mod:`~analysis.identification.forc_files.csv_format` (three columns
@@ -27,6 +32,7 @@ constant after the last; the calibration field's own drift is neglected. Off by 
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -49,21 +55,49 @@ __all__ = [
 ]
 
 FORMATS = ("auto", "csv", "micromag", "lakeshore")
+#: the formats :func:`detect_format` recognises, as its refusal names them
+KNOWN_FORMATS = (
+    "MicroMag 2900/3900 FORC text export (line 1 starts with 'MicroMag'), "
+    "Lake Shore 8600 FORC CSV (a column-title row naming a field and a moment column with "
+    "units, then data rows) or three-column CSV 'reversal_field,field,moment'"
+)
+
+_UNIT_CELL = re.compile(r"[\[(][^\])]*[\])]")
+
+
+def _content(lines: list[str]) -> list[str]:
+    return [raw.strip() for raw in lines if raw.strip() and not raw.lstrip().startswith("#")]
 
 
 def detect_format(path: str | Path) -> str:
-    """``"micromag"`` (first line starts with ``MicroMag``), ``"lakeshore"`` (a column-title
-    row names a field and a moment column before any data), else ``"csv"``."""
+    """``"micromag"`` (first line starts with ``MicroMag``), ``"lakeshore"`` (before any data,
+    a column-title row with one cell naming a field and another naming a moment, each with a
+    unit in brackets or parentheses, followed by a data row), ``"csv"`` (the first line that is
+    not blank or a ``#`` comment, or the one after it, is a ``number, ...`` data row) or an
+    empty file (``"csv"``, whose reader says it is empty).
+
+    Raises a one-line ``ValueError`` for a file that is none of these (``"PATH: not a FORC
+    file ..."`` naming the known formats) or not text at all (``"PATH: not a text FORC file
+    (WHAT)"``, from the decoding).
+    """
     lines = decode(path).splitlines()[:200]
     if lines and lines[0].lstrip().startswith("MicroMag"):
         return "micromag"
-    for raw in lines:
-        low = raw.lower()
-        if "field" in low and "moment" in low and ("[" in low or "(" in low):
-            return "lakeshore"
+    for k, raw in enumerate(lines):
         if DATA_LINE.match(raw.strip()):
             break
-    return "csv"
+        # titles with units: "Field (µ0H) [T]", "Moment (m) [A·m²]", in two different cells,
+        # followed by a data row
+        cells = [c.lower() for c in raw.split(",") if _UNIT_CELL.search(c)]
+        fields = {i for i, c in enumerate(cells) if "field" in c}
+        moments = {i for i, c in enumerate(cells) if "moment" in c}
+        after = _content(lines[k + 1 :])[:1]
+        if any(i != j for i in fields for j in moments) and after and DATA_LINE.match(after[0]):
+            return "lakeshore"
+    content = _content(lines)
+    if not content or any(DATA_LINE.match(line) for line in content[:2]):
+        return "csv"
+    raise ValueError(f"{path}: not a FORC file this toolkit recognises; it reads {KNOWN_FORMATS}")
 
 
 def read_forc_file(path: str | Path, format: str = "auto", **kwargs: Any) -> MicroMagData:

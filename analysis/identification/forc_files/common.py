@@ -108,17 +108,152 @@ class MicroMagData:
     calibration_fields: np.ndarray | None = None
 
 
+#: leading bytes of the binary and compressed formats a FORC file gets mistaken for
+_MAGIC = (
+    (b"\x1f\x8b", "gzip-compressed data; decompress it first"),
+    (b"PK\x03\x04", "a zip archive or Office document; extract or export the FORC text file"),
+    (b"PK\x05\x06", "an empty zip archive"),
+    (b"BZh", "bzip2-compressed data; decompress it first"),
+    (b"\xfd7zXZ\x00", "xz-compressed data; decompress it first"),
+    (b"\x28\xb5\x2f\xfd", "zstd-compressed data; decompress it first"),
+    (b"7z\xbc\xaf\x27\x1c", "a 7-Zip archive; extract the FORC text file"),
+    (b"\x89PNG\r\n\x1a\n", "a PNG image"),
+    (b"\xff\xd8\xff", "a JPEG image"),
+    (b"GIF8", "a GIF image"),
+    (b"II*\x00", "a TIFF image"),
+    (b"MM\x00*", "a TIFF image"),
+    (b"%PDF-", "a PDF document"),
+    (
+        b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1",
+        "a legacy Office document (e.g. .xls); export it as text",
+    ),
+    (b"\x89HDF\r\n\x1a\n", "an HDF5 file"),
+)
+#: byte-order marks of UTF-32/UTF-16 (UTF-32 first: its LE mark starts with UTF-16's)
+_BOMS = (
+    (b"\xff\xfe\x00\x00", "utf-32"),
+    (b"\x00\x00\xfe\xff", "utf-32"),
+    (b"\xff\xfe", "utf-16"),
+    (b"\xfe\xff", "utf-16"),
+)
+_SNIFF = 65536  # bytes (characters) examined for the binary checks
+#: C0 control characters that text files do hold (tab, LF, VT, FF, CR, DOS end-of-file)
+_TEXT_CONTROLS = frozenset("\t\n\v\f\r\x1a")
+
+
+def _not_text(path: str | Path, what: str) -> ValueError:
+    return ValueError(f"{path}: not a text FORC file ({what})")
+
+
+def _binary_kind(raw: bytes) -> str | None:
+    """What a file that is not text is (magic number, NUL bytes), or ``None``."""
+    for magic, what in _MAGIC:
+        if raw.startswith(magic):
+            if magic == b"BZh" and not raw[4:10] == b"1AY&SY":
+                continue  # "BZh" alone could start a text line
+            return what
+    head = raw[:_SNIFF]
+    nul = head.find(b"\x00")
+    if nul < 0:
+        return None
+    even, odd = head[0::2], head[1::2]
+    if odd and odd.count(0) > 0.9 * len(odd) and even.count(0) < 0.1 * len(even):
+        return "UTF-16 text without a byte-order mark; save it as UTF-8"
+    if even and even.count(0) > 0.9 * len(even) and odd.count(0) < 0.1 * len(odd):
+        return "UTF-16 text without a byte-order mark; save it as UTF-8"
+    return f"binary data: NUL byte at offset {nul}"
+
+
 def decode(path: str | Path) -> str:
-    """File text: UTF-8 if valid, else cp1252 (Latin-1 for bytes cp1252 leaves undefined)."""
+    """File text: UTF-8 if valid, else cp1252 (Latin-1 for bytes cp1252 leaves undefined);
+    UTF-16 and UTF-32 with a byte-order mark are decoded as such.
+
+    Raises a one-line ``ValueError`` ``"PATH: not a text FORC file (WHAT)"`` for content that
+    is not text: a compressed, archive, image or document format (by its magic number), NUL
+    bytes (UTF-16 without a byte-order mark is named as such), more than 30 % non-ASCII bytes
+    in a file that is not UTF-8, or more than 1 % control characters (tab, line ends, form
+    feed and the DOS end-of-file mark excepted); the first 64 KiB decide.
+    """
     raw = Path(path).read_bytes()
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        pass
-    try:
-        return raw.decode("cp1252")
-    except UnicodeDecodeError:
-        return raw.decode("latin-1")
+    text = None
+    for bom, codec in _BOMS:
+        if raw.startswith(bom):
+            try:
+                text = raw.decode(codec)
+            except UnicodeDecodeError:
+                raise _not_text(
+                    path, f"{codec.upper()} byte-order mark, but not {codec.upper()}"
+                ) from None
+            text = text.lstrip("\ufeff")
+            break
+    if text is None:
+        kind = _binary_kind(raw)
+        if kind is not None:
+            raise _not_text(path, kind)
+        try:
+            text = raw.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            head = raw[:_SNIFF]
+            high = sum(b >= 0x80 for b in head)
+            if high > 0.3 * len(head):
+                raise _not_text(
+                    path,
+                    f"binary data: not UTF-8 and {100 * high / len(head):.0f} % non-ASCII bytes",
+                ) from None
+            try:
+                text = raw.decode("cp1252")
+            except UnicodeDecodeError:
+                text = raw.decode("latin-1")
+    head_text = text[:_SNIFF]
+    controls = sum(ch < " " and ch not in _TEXT_CONTROLS for ch in head_text)
+    if "\x00" in head_text or controls > 0.01 * len(head_text):
+        raise _not_text(path, "binary data: control characters")
+    return text
+
+
+#: a value farther than this many robust spreads from the file's median is refused (see
+#: :func:`check_magnitudes`)
+ABSURD_SPREADS = 1e6
+#: no field (mT, Oe, T, A/m) or moment (A·m², emu) of any instrument comes near this
+ABSURD_MAGNITUDE = 1e30
+
+
+def check_magnitudes(columns: list[tuple[str, list[float] | np.ndarray]], lines: list[int]) -> None:
+    """Refuse absurd values: one line naming the first one in file order.
+
+    ``columns`` are ``(name, values)`` of one quantity each (fields, moments: every point,
+    calibration points included) as written in the file, ``lines`` the points' line numbers.
+    A value is absurd when its magnitude exceeds :data:`ABSURD_MAGNITUDE`, or when it lies more
+    than :data:`ABSURD_SPREADS` robust spreads from its column's median, the spread being the
+    larger of the interquartile range and the median magnitude (a quarter of the points may be
+    wild before it moves). Measured moments stay within a few saturation moments and fields
+    within the saturation (or calibration) field, a spread or two from the median; an exponent
+    typed wrong (``E+06`` for ``E-06``) is 10¹² away.
+    """
+    first: tuple[int, str] | None = None
+    for name, col in columns:
+        values = np.asarray(col, dtype=float)
+        if values.size == 0:
+            continue
+        med = float(np.median(values))
+        q25, q75 = np.percentile(values, [25.0, 75.0])
+        spread = max(float(q75 - q25), float(np.median(np.abs(values))))
+        huge = np.abs(values) > ABSURD_MAGNITUDE
+        far = np.abs(values - med) > ABSURD_SPREADS * spread if spread > 0 else huge
+        bad = np.flatnonzero(huge | far)
+        if bad.size == 0 or (first is not None and lines[bad[0]] >= first[0]):
+            continue
+        k = int(bad[0])
+        if huge[k]:
+            why = f"beyond {ABSURD_MAGNITUDE:.0e} in magnitude"
+        else:
+            why = (
+                f"more than {ABSURD_SPREADS:.0e} times the spread ({spread:.3g}) of the file's "
+                f"{name}s from their median ({med:.3g})"
+            )
+        first = (int(lines[k]), f"line {lines[k]}: {name} {values[k]:.6g} is absurd: {why}")
+    if first is not None:
+        raise ValueError(first[1])
 
 
 def drift_mode(drift_correction: DriftMode) -> str | None:

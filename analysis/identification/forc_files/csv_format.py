@@ -19,6 +19,7 @@ import numpy as np
 from analysis.identification.curves import CONVENTIONS, ReversalCurves
 from analysis.identification.forc_files.common import (
     check_curve,
+    check_magnitudes,
     decode,
     infer_convention,
     is_number,
@@ -70,6 +71,13 @@ def read_csv(path: str | Path, convention: str | None = None) -> ReversalCurves:
         rows.append((rev, h, mom, lineno))
     if not rows:
         raise ValueError(f"{path}: no data rows")
+    check_magnitudes(
+        [
+            (name, [r[k] for r in rows])
+            for k, name in enumerate(("reversal field", "field", "moment"))
+        ],
+        [r[3] for r in rows],
+    )
     curves: list[tuple[float, list[float], list[float], list[int]]] = []
     for rev, h, mom, lineno in rows:
         if curves and rev == curves[-1][0]:

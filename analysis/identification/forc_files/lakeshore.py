@@ -8,6 +8,11 @@ Units ``T``, ``mT``, ``Oe``, ``A/m`` (fields) and ``A·m²``/``Am²``, ``emu`` (
 converted to mT and A·m². Curves are split where the field falls; a single point within 5 % of
 the calibration field (header ``Calibration field``, else the first point when it is followed
 by a fall) is a calibration point, usable for the same drift correction.
+
+Rows must be in measurement order; rows out of order are refused (not sorted) in one line
+naming the first one: a numeric time stamp earlier than the row before, or (with or without
+time stamps) a curve whose reversal field steps against the way the reversal fields step from
+curve to curve (a FORC measurement steps them one way).
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from analysis.identification.forc_files.common import (
     DriftMode,
     MicroMagData,
     build_curves,
+    check_magnitudes,
     decode,
     drift_mode,
     header_number,
@@ -47,6 +53,37 @@ def _column_unit(title: str, table: dict[str, float], lineno: int, what: str) ->
         f"line {lineno}: cannot tell the unit of the {what} column {title!r} "
         f"(expected one of {', '.join(table)} in brackets)"
     )
+
+
+def _check_time_order(stamps: list[str], lines: list[int]) -> None:
+    """Rows in measurement order: a time stamp never earlier than the row before. Stamps that
+    are not all numbers (a clock time, say) are not checked."""
+    try:
+        times = [float(t) for t in stamps]
+    except ValueError:
+        return
+    for k in range(1, len(times)):
+        if times[k] < times[k - 1]:
+            raise ValueError(
+                f"line {lines[k]}: time stamp {stamps[k]} is earlier than {stamps[k - 1]} on line "
+                f"{lines[k - 1]}: rows out of measurement order (sort them by the time stamp)"
+            )
+
+
+def _check_curve_order(curves: list[list[tuple[float, float, int, bool]]]) -> None:
+    """Rows in measurement order: the reversal fields of a FORC measurement step one way from
+    curve to curve (the way most steps go); the first curve that steps back is refused."""
+    revs = [c[0][0] for c in curves]
+    steps = np.sign(np.diff(revs))
+    way = 1.0 if np.sum(steps) > 0 else -1.0
+    for k in np.flatnonzero(steps != way):
+        k = int(k)
+        trend = "rise" if way > 0 else "fall"
+        raise ValueError(
+            f"line {curves[k + 1][0][2]}: a curve starts at {revs[k + 1]:.6g} mT after the curve "
+            f"at {revs[k]:.6g} mT (line {curves[k][0][2]}), but the reversal fields {trend} from "
+            "curve to curve: rows out of measurement order"
+        )
 
 
 def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) -> MicroMagData:
@@ -80,7 +117,10 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     i_m = next(i for i, c in enumerate(titles) if "moment" in c.lower())
     f_fac = _column_unit(titles[i_h], _FIELD_UNITS, ln_t, "field")
     m_fac = _column_unit(titles[i_m], _MOMENT_UNITS, ln_t, "moment")
+    i_t = next((i for i, c in enumerate(titles) if "time" in c.lower()), None)
     pts: list[tuple[float, float, int]] = []
+    written: list[tuple[float, float]] = []  # as written, for check_magnitudes
+    stamps: list[str] = []
     for idx in range(title_line + 1, len(lines)):
         line = lines[idx].strip()
         if not line:
@@ -91,15 +131,19 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
                 f"line {idx + 1}: expected {len(titles)} columns like the title row, "
                 f"got {len(cells)}"
             )
-        pts.append(
-            (
-                parse_float(cells[i_h], idx + 1, "field") * f_fac,
-                parse_float(cells[i_m], idx + 1, "moment") * m_fac,
-                idx + 1,
-            )
-        )
+        h_w = parse_float(cells[i_h], idx + 1, "field")
+        m_w = parse_float(cells[i_m], idx + 1, "moment")
+        written.append((h_w, m_w))
+        pts.append((h_w * f_fac, m_w * m_fac, idx + 1))
+        if i_t is not None:
+            stamps.append(cells[i_t])
     if not pts:
         raise ValueError(f"{path}: no data rows after the column titles (line {ln_t})")
+    point_lines = [p[2] for p in pts]
+    check_magnitudes(
+        [("field", [w[0] for w in written]), ("moment", [w[1] for w in written])], point_lines
+    )
+    _check_time_order(stamps, point_lines)
     h_cal: float | None = None
     for k, v in header.items():
         if k.lower().startswith("calibration field"):
@@ -129,6 +173,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
         if is_cal or not blocks or p[0] < blocks[-1][-1][0] or blocks[-1][-1][3]:
             blocks.append([])
         blocks[-1].append((*p, is_cal))
+    _check_curve_order([b for b in blocks if not b[0][3]])
     blocks = [[q[:3] for q in b] for b in blocks]
     curves, cal_m, cal_h = build_curves(blocks, h_cal, drift, None, CAL_ABS_TOL_MT)
     notes = []

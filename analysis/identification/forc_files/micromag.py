@@ -52,6 +52,7 @@ from analysis.identification.forc_files.common import (
     DriftMode,
     MicroMagData,
     build_curves,
+    check_magnitudes,
     decode,
     drift_mode,
     header_number,
@@ -165,6 +166,7 @@ def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> Micr
 
     blocks: list[list[tuple[float, float, int]]] = []
     current: list[tuple[float, float, int]] = []
+    written: list[tuple[float, float, int]] = []  # as written, for check_magnitudes
     ended = False
     for idx in range(first_data, len(lines)):
         lineno = idx + 1
@@ -183,13 +185,18 @@ def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> Micr
                 f"line {lineno}: expected 'field,moment' (optionally a third column), "
                 f"got {len(tokens)} columns"
             )
-        h = parse_float(tokens[0], lineno, "field") * f_fac
-        mom = parse_float(tokens[1], lineno, "moment") * m_fac
+        h = parse_float(tokens[0], lineno, "field")
+        mom = parse_float(tokens[1], lineno, "moment")
         if len(tokens) == 3 and tokens[2]:
             parse_float(tokens[2], lineno, "third column")
-        current.append((h, mom, lineno))
+        written.append((h, mom, lineno))
+        current.append((h * f_fac, mom * m_fac, lineno))
     if current:
         blocks.append(current)
+    check_magnitudes(
+        [("field", [p[0] for p in written]), ("moment", [p[1] for p in written])],
+        [p[2] for p in written],
+    )
     cal = h_cal * f_fac if h_cal is not None else None
     # with known units a calibration field drifting by a few mT is recognised at any HCal
     curves, cal_m, cal_h = build_curves(
