@@ -27,7 +27,9 @@ the method).
   monotone branch between breakpoints. Required: :meth:`~ContinuousHysteron.branch_flow` (the
   branch as a function of the input, with its memory variables and breakpoint,
   :class:`hysteresis.flow.BranchFlow`), which the generic continuous engine integrates.
-  Optional: :meth:`~ContinuousHysteron.compiled_play` (a fast path). ``branch`` (value, slope,
+  Optional: :meth:`~ContinuousHysteron.compiled_play` (a fast path) and
+  :attr:`~Hysteron.max_slope` (the largest branch slope, for the oscillator's instability
+  warning). ``branch`` (value, slope,
   breakpoint) and ``linearize`` (derivatives with respect to the input and the memory
   variables) are not part of what an operator must provide: they are derived from
   ``branch_flow`` once, here.
@@ -150,6 +152,19 @@ class Hysteron(ABC):
     def output_range(self) -> tuple[float, float]:
         """Saturation values (negative, positive) of the output."""
         return (-1.0, 1.0)
+
+    @property
+    def max_slope(self) -> float | None:
+        """Largest slope ``dy/du`` on any branch of any state of the operator, or ``None``
+        (the default) when the operator does not know it.
+
+        Optional. The forced oscillator reads it for operators with an unbounded
+        :attr:`output_range`: the stiffness on a branch of slope ``s`` is ``1 − C·s``, so it
+        warns of a positive-feedback instability only when ``C·max_slope >= 1`` (with ``None``
+        it assumes slope 1, the plain play's). ``PlayOperator``: 1; ``PrandtlIshlinskii``: the
+        sum of its positive weights.
+        """
+        return None
 
     # -- pickling (worker processes, saved runs) -------------------------------------------
     #: attributes left out of a pickle: caches rebuilt on demand

@@ -281,6 +281,11 @@ class PlayOperator(_PlayBase):
     def output_range(self) -> tuple[float, float]:
         return (-np.inf, np.inf)
 
+    @property
+    def max_slope(self) -> float:
+        """1: the output follows the input on a wall (0 inside the play)."""
+        return 1.0
+
     def compiled_play(self) -> CompiledPlay:
         """The plain play runs on the compiled play-limit kernel (identity shape)."""
         return CompiledPlay(width=self._width, shape="identity")

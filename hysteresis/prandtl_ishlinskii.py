@@ -143,6 +143,17 @@ class PrandtlIshlinskii(ContinuousHysteron):
     def output_range(self) -> tuple[float, float]:
         return (-np.inf, np.inf)
 
+    @property
+    def max_slope(self) -> float:
+        """Largest branch slope: the sum of the positive weights.
+
+        On a branch the slope is the sum of the weights of the plays dragged at their wall
+        (:meth:`branch_flow`); an explicit :meth:`state` may put any subset of plays on a wall,
+        so the largest slope is the sum of the positive weights (on the states reached from
+        :meth:`initial_state`, where the dragged plays are the narrowest ones, it is the largest
+        partial sum ``a_0 + ... + a_i``, which is the same when all weights are >= 0)."""
+        return float(np.sum(np.maximum(self._weights, 0.0)))
+
     def __repr__(self) -> str:
         return (
             f"PrandtlIshlinskii(widths={self._widths.tolist()}, weights={self._weights.tolist()})"

@@ -62,8 +62,10 @@ class ForcedOscillator:
     -----
     An operator with unbounded output and slope ``s`` on a branch gives the stiffness
     ``1 − C·s`` there; for ``C·s >= 1`` the coupled motion is a positive-feedback instability
-    (the plain play at ``C >= 1``). Such systems are accepted with a ``RuntimeWarning`` and any
-    run that diverges raises :class:`~oscillators.engines.base.DivergenceError`.
+    (the plain play at ``C >= 1``). Such systems (``C·max_slope >= 1`` with the operator's
+    :attr:`~hysteresis.base.Hysteron.max_slope`, slope 1 assumed when it is ``None``) are
+    accepted with a ``RuntimeWarning`` and any run that diverges raises
+    :class:`~oscillators.engines.base.DivergenceError`.
     """
 
     #: ``|q|`` or ``|v|`` above this counts as diverged (:meth:`check_finite`), in every engine
@@ -89,15 +91,20 @@ class ForcedOscillator:
         self._engine_cls = select_engine(operator)
         self._engine_cls.check_system(self)
         lo, hi = operator.output_range
-        if (math.isinf(lo) or math.isinf(hi)) and coupling >= 1.0:
-            warnings.warn(
-                f"{operator!r} has an unbounded output; with coupling C = {coupling} >= 1 the "
-                "stiffness 1 − C·slope can vanish or turn negative on a branch of slope 1 "
-                "(positive-feedback instability): runs may diverge and then raise "
-                "DivergenceError",
-                RuntimeWarning,
-                stacklevel=2,
-            )
+        if math.isinf(lo) or math.isinf(hi):
+            slope = operator.max_slope
+            known = slope is not None
+            slope = float(slope) if known else 1.0
+            if coupling * slope >= 1.0:
+                warnings.warn(
+                    f"{operator!r} has an unbounded output; with coupling C = {coupling} and "
+                    f"largest branch slope {slope:g}{'' if known else ' (assumed)'}, "
+                    f"C·slope = {coupling * slope:g} >= 1: the stiffness 1 − C·slope vanishes "
+                    "or turns negative on that branch (positive-feedback instability): runs may "
+                    "diverge and then raise DivergenceError",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
 
     # -- parameters --------------------------------------------------------------------------
     @property

@@ -11,9 +11,12 @@ parser pieces in :mod:`analysis.cli._parsing`, the building of library objects f
 
 from __future__ import annotations
 
+import argparse
+import contextlib
 import os
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Iterator, Sequence
 
 from analysis import __version__
 from analysis.cli import (
@@ -26,8 +29,17 @@ from analysis.cli import (
     poincare,
     trajectory,
 )
-from analysis.cli._parsing import EXIT_USAGE, CliError, HelpFormatter, HystArgumentParser, fail
+from analysis.cli._build import last_system
+from analysis.cli._parsing import (
+    EXIT_USAGE,
+    CliError,
+    HelpFormatter,
+    HystArgumentParser,
+    fail,
+    one_line,
+)
 from analysis.experiments.execution import TaskError
+from oscillators.engines import DivergenceError
 
 __all__ = ["COMMANDS", "main", "build_parser"]
 
@@ -54,7 +66,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run ``hyst``; returns the exit status (0 success, 2 any error, 130 interrupted).
 
     Errors — bad options, and errors raised later inside the library or a worker process — are
-    reported as one line on stderr without a traceback; ``HYST_DEBUG=1`` re-raises them.
+    reported as one line on stderr without a traceback; ``HYST_DEBUG=1`` re-raises them. A
+    :class:`~oscillators.engines.base.DivergenceError` names the system's parameters (C, ζ, Ω).
+    Warnings of the library are one line each on stderr, ``hyst COMMAND: warning: <message>``,
+    without source location, and each kind (category and place of origin) once per run.
     """
     parser = build_parser()
     try:
@@ -65,6 +80,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 0
     prog = f"hyst {args.command}"
+    with one_line_warnings(prog):
+        return _run(prog, args)
+
+
+def _run(prog: str, args: argparse.Namespace) -> int:
     try:
         return int(args.func(args) or 0)
     except CliError as exc:
@@ -79,7 +99,39 @@ def main(argv: Sequence[str] | None = None) -> int:
             # a worker's error: name the task and the original exception, not the wrapper
             cause = exc.__cause__
             return fail(prog, f"task {exc.task} failed: {_describe(cause)}")
-        return fail(prog, _describe(exc))
+        message = _describe(exc)
+        if isinstance(exc, DivergenceError):
+            message += _parameters(last_system())
+        return fail(prog, message)
+
+
+@contextlib.contextmanager
+def one_line_warnings(prog: str) -> Iterator[None]:
+    """Within the block, show each warning as one line ``<prog>: warning: <message>`` on stderr
+    (no source path, no source line), each kind — category and place of origin — once."""
+    seen: set[tuple[type, str, int]] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        key = (category, str(filename), int(lineno))
+        if key in seen:
+            return
+        seen.add(key)
+        text = one_line(str(message))
+        print(f"{prog}: warning: {text}", file=file or sys.stderr, flush=True)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        warnings.showwarning = show
+        yield
+
+
+def _parameters(system: object) -> str:
+    """`` (coupling C = 3, ζ = 0.05, Ω = 1)`` for the system, or ``""``."""
+    try:
+        c, zeta, omega = system.coupling, system.damping_ratio, system.frequency  # type: ignore[attr-defined]
+    except AttributeError:
+        return ""
+    return f" (coupling C = {c:g}, ζ = {zeta:g}, Ω = {omega:g})"
 
 
 def _describe(exc: BaseException) -> str:

@@ -169,7 +169,20 @@ def build_system(
     c = args.coupling if coupling is None else coupling
     op = build_operator(args) if operator is None else operator
     with library_errors(OSCILLATOR_OPTIONS, "--model"):
-        return ForcedOscillator(op, c, args.damping_ratio, args.frequency)
+        system = ForcedOscillator(op, c, args.damping_ratio, args.frequency)
+    _built.clear()
+    _built.append(system)
+    return system
+
+
+#: the system :func:`build_system` built last (a sweep builds one per value, in order)
+_built: list[Any] = []
+
+
+def last_system() -> Any:
+    """The system :func:`build_system` built last in this process, or ``None``: the one a
+    :class:`~oscillators.engines.base.DivergenceError` raised in this process came from."""
+    return _built[-1] if _built else None
 
 
 def initial_operator_state(args: argparse.Namespace, operator: Any) -> Any:

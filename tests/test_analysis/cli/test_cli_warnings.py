@@ -1,0 +1,61 @@
+"""Issue 21: the CLI's one-line promise with warnings, the instability warning's slope, and
+a divergence error that names C, ζ, Ω."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+from hysteresis import PlayOperator, PrandtlIshlinskii
+from oscillators import ForcedOscillator
+
+
+def test_warning_only_where_c_times_the_largest_slope_reaches_one():
+    pi = PrandtlIshlinskii([1.0, 2.0, 3.0], [0.2, 0.2, 0.2])
+    assert pi.max_slope == pytest.approx(0.6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ForcedOscillator(pi, 1.03)  # stiffness 1 - 1.03 * 0.6 > 0: stable, no warning
+    with pytest.warns(RuntimeWarning, match="positive-feedback"):
+        ForcedOscillator(pi, 1 / 0.6 + 0.01)
+    assert PlayOperator(1.0).max_slope == 1.0
+    with pytest.warns(RuntimeWarning, match="positive-feedback"):
+        ForcedOscillator(PlayOperator(1.0), 1.0)
+    # negative weights do not add to the largest slope
+    assert PrandtlIshlinskii([0.0, 1.0], [1.0, -0.5]).max_slope == 1.0
+
+
+def test_diverging_run_warns_and_fails_in_one_line_each(tmp_path):
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "analysis.cli",
+            "lyapunov",
+            "--model",
+            "play",
+            "--coupling",
+            "3",
+            "--t-end",
+            "100",
+            "--quiet",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=Path(tmp_path),
+    )
+    assert proc.returncode == 2
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 2, proc.stderr
+    assert lines[0].startswith("hyst lyapunov: warning: ") and "positive-feedback" in lines[0]
+    assert ".py" not in lines[0]  # no source path
+    assert lines[1].startswith("hyst lyapunov: error: DivergenceError")
+    assert lines[1].endswith("(coupling C = 3, ζ = 0.05, Ω = 1)")
+    assert proc.stdout == ""
