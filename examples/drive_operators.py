@@ -1,6 +1,6 @@
 """Drive every hysteresis operator with a decaying oscillation and plot all loops in one figure.
 
-    python examples/drive_operators.py --out out/
+    python examples/drive_operators.py [--out out/examples]
 
 Uses only the public API of ``hysteresis``. The Preisach panel is the spin-dimer ensemble's
 equivalent discrete Preisach model (``SpinDimerEnsemble.to_preisach``, built with
@@ -35,7 +35,7 @@ def decaying_oscillation(n: int = 4000, amplitude: float = 4.0, periods: float =
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="out", help="output directory (default: out/)")
+    parser.add_argument("--out", default="out/examples", help="output directory")
     args = parser.parse_args(argv)
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -1,13 +1,14 @@
 """Poincaré section of the oscillator driven by one spin dimer, on two sheets (fig:N=2_schema b).
 
-    python examples/fig_n2_section.py [--out out/examples] [--smoke] [--coupling 4.0]
+    python examples/fig_n2_section.py [--out out/examples] [--smoke] [--coupling 1.0]
 
 q'' + 2ζq' + q = cos(Ωt) + C·M[q] with M the magnetization of one dimer (N = 2, J = 2,
 b = (2, 0), so α = 0, β = -2, p = 2); Table II: ζ = 0.05, Ω = 1, q0 = -1, v0 = 0.1. The section
 φ = Ωt = 0 mod 2π is coloured by sheet: S1 (both spins down, M = -1) and S2 (M = +1). The paper
-gives no C for this figure; C = 4.0 is the coupling of its large-N comparison. At C = 4.0 the
-attractor avoids the bistable region -2 < q < 0; try ``--coupling 1.0`` to see both sheets
-overlap there, as in the paper's panel (b).
+states no C for this figure; its point, the two sheets' section points overlapping in the
+bistable region -2 < q < 0 (panel b), needs C = 1.0, the default here. At larger C (e.g.
+``--coupling 4.0``, the coupling of its large-N comparison) the orbit avoids that region and
+no point lies there.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="out/examples", help="output directory")
     parser.add_argument("--smoke", action="store_true", help="tiny sizes (for tests)")
-    parser.add_argument("--coupling", type=float, default=4.0, help="C")
+    parser.add_argument("--coupling", type=float, default=1.0, help="C (paper's panel b: 1)")
     parser.add_argument("--periods", type=int, default=3000)
     args = parser.parse_args(argv)
     out = Path(args.out)

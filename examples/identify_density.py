@@ -4,8 +4,10 @@
 
 Drives both operators through first-order reversal curves (rise from negative saturation to α,
 fall to β), prints the exact cell-mass statistics against the paper's density
-``N(s; 0, R²) δ(r − p/2)``, writes the figure (PNG, PDF, NPZ), and shows the FORC-file round trip:
-Pike curves of the ensemble written as a MicroMag file, read back and identified again.
+``N(s; 0, R²) δ(r − p/2)``, writes the figure (``identify_density.png``, PDF, NPZ; the paper
+figure itself, ``fig_preis_dens.*``, is ``examples/fig_preis_dens.py``'s), and shows the
+FORC-file round trip: Pike curves of the ensemble written as a MicroMag file, read back and
+identified again.
 
 Last, the measured-data path: the same Pike curves with measurement noise, identified on the
 protocol grid with local-regression smoothing (FORC diagram ``identify_noisy_forc.png``), then
@@ -61,7 +63,7 @@ def main() -> None:
         cmp = compare_with_ridge(ident, width, spread, centres=centres)
         print(f"{name:9s}", {k: f"{v:.3g}" for k, v in cmp.as_dict().items() if v is not None})
     paths = figure_preisach_density(
-        limit, finite, width, spread, out, finite_label=f"N = {args.spins}"
+        limit, finite, width, spread, out, stem="identify_density", finite_label=f"N = {args.spins}"
     )
     print("figure:", ", ".join(str(p) for p in paths))
 

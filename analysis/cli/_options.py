@@ -57,6 +57,19 @@ __all__ = [
 DEFAULT_OUT = "hyst-out"
 
 
+#: model option (its ``dest``) -> the models that read it, for the options that are not among
+#: the parameters of a :class:`~analysis.experiments.models.ModelSpec`
+_OPTION_MODELS = {"fields": ("dimers",), "alpha": ("relay",), "beta": ("relay",)}
+
+
+def models_reading(dest: str, names: Sequence[str]) -> list[str]:
+    """The models among ``names`` that read the model option ``dest`` (``"spins"``,
+    ``"width_spread"``, ``"alpha"``, ...)."""
+    if dest in _OPTION_MODELS:
+        return [n for n in names if n in _OPTION_MODELS[dest]]
+    return [n for n in names if dest in MODELS[n].parameters]
+
+
 def add_model_options(
     parser: argparse.ArgumentParser,
     models: Sequence[str] | None = None,
@@ -66,7 +79,9 @@ def add_model_options(
     """``--model`` and the model parameters (paper Table I defaults).
 
     ``models`` restricts the choices (default: every registered model); ``multiple_spins``
-    makes ``--spins`` take one or more values (ensembles).
+    makes ``--spins`` take one or more values (ensembles). Only the options that one of the
+    choices reads are offered (the others keep their default in the namespace), and each
+    option's help names the models that read it unless every choice does.
     """
     d = ModelParameters()
     names = list(models) if models is not None else list(MODELS)
@@ -80,48 +95,51 @@ def add_model_options(
         + "; ".join(f"{n}: {MODELS[n].description}" for n in names)
         + " (erf_play is a deprecated spelling of erf-play)",
     )
-    g.add_argument(
+
+    def add(option: str, default: Any, help: str, **kwargs: Any) -> None:
+        dest = option[2:].replace("-", "_")
+        readers = models_reading(dest, names)
+        if not readers:  # no model of this command reads it: not offered
+            parser.set_defaults(**{dest: default})
+            return
+        if len(readers) < len(names):
+            help = f"{help} [{', '.join(readers)}]"
+        g.add_argument(option, default=default, help=help, **kwargs)
+
+    add(
         "--spins",
+        [d.spins] if multiple_spins else d.spins,
+        "N, number of spins (dimers: even, N/2 dimers) or relays (preisach)"
+        + ("; one or more values" if multiple_spins else ""),
         type=int_at_least(1, MAX_SPINS),
         nargs="+" if multiple_spins else None,
-        default=[d.spins] if multiple_spins else d.spins,
-        help="N, number of spins (dimers: even, N/2 dimers) or relays (preisach)"
-        + ("; one or more values" if multiple_spins else ""),
     )
-    g.add_argument("--seed", type=int_at_least(0), default=d.seed, help="disorder seed (>= 0)")
-    g.add_argument("--width", type=positive_float, default=d.width, help="p, loop width (> 0)")
-    g.add_argument(
-        "--spread", type=positive_float, default=d.spread, help="R, spread of loop centres (> 0)"
-    )
-    g.add_argument(
+    add("--seed", d.seed, "disorder seed (>= 0)", type=int_at_least(0))
+    add("--width", d.width, "p, loop width (> 0)", type=positive_float)
+    add("--spread", d.spread, "R, spread of loop centres (> 0)", type=positive_float)
+    add(
         "--spin-coupling",
+        d.spin_coupling,
+        "J, spin-spin coupling of the dimers (> 0, with p < 2J)",
         type=positive_float,
-        default=d.spin_coupling,
-        help="J, spin-spin coupling of the dimers (> 0, with p < 2J)",
     )
-    g.add_argument(
+    add(
         "--width-spread",
+        d.width_spread,
+        "sigma_r, spread of the relay half-widths (preisach >= 0, preisach-gauss > 0)",
         type=nonnegative_float,
-        default=d.width_spread,
-        help="sigma_r, spread of the relay half-widths (preisach >= 0, preisach-gauss > 0)",
     )
-    g.add_argument(
+    add(
         "--fields",
+        None,
+        "dimers: explicit local fields b1 b2 [b1 b2 ...], one pair per dimer "
+        "(overrides --spins/--width/--spread/--seed)",
         type=finite_float,
         nargs="+",
-        default=None,
-        help="dimers: explicit local fields b1 b2 [b1 b2 ...], one pair per dimer "
-        "(overrides --spins/--width/--spread/--seed)",
     )
-    g.add_argument(
-        "--alpha", type=finite_float, default=None, help="relay: upper threshold (default p/2)"
-    )
-    g.add_argument(
-        "--beta", type=finite_float, default=None, help="relay: lower threshold (default -p/2)"
-    )
-    g.add_argument(
-        "--plays", type=int_at_least(1, 10**5), default=d.plays, help="pi: number K of plays"
-    )
+    add("--alpha", None, "relay: upper threshold (default p/2)", type=finite_float)
+    add("--beta", None, "relay: lower threshold (default -p/2)", type=finite_float)
+    add("--plays", d.plays, "pi: number K of plays", type=int_at_least(1, 10**5))
 
 
 def _model_name(names: Sequence[str]) -> Callable[[str], str]:

@@ -12,6 +12,7 @@ import pytest
 from analysis.cli import build_parser, main
 from analysis.cli._options import (
     DEFAULT_OUT,
+    models_reading,
 )
 from analysis.cli._output import (
     progress_enabled,
@@ -39,6 +40,25 @@ def _subparsers() -> dict[str, argparse.ArgumentParser]:
     return dict(action.choices)
 
 
+def _model_choices(command: str) -> list[str]:
+    action = next(a for a in _subparsers()[command]._actions if "--model" in a.option_strings)
+    return action.metavar.strip("{}").split(",")
+
+
+def test_identify_help_offers_only_the_options_its_models_read(capsys):
+    assert main(["identify", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert _model_choices("identify") == ["dimers", "erf-play", "play", "preisach-uniform"]
+    for opt in ("--width-spread", "--alpha", "--beta", "--plays"):
+        assert opt not in text, opt
+    # the options some of its models read name them
+    assert "R, spread of loop centres (> 0) [dimers, erf-play, preisach-uniform]" in text
+    assert "J, spin-spin coupling of the dimers (> 0, with p < 2J) [dimers]" in text
+    assert "--fields" in text and "--width" in text
+    # identify runs with the defaults of the options it does not offer
+    assert main(["identify", "--plays", "3"]) == 2
+
+
 def test_every_command_is_registered():
     assert set(_subparsers()) >= {*MODEL_COMMANDS, "paper", "identify"}
 
@@ -54,8 +74,11 @@ def test_help_of_every_command_shows_the_shared_options_defaults_and_help(comman
         assert opt in text, f"hyst {command} --help lacks {opt}"
     assert f"(default: {DEFAULT_OUT})" in text  # one --out default everywhere
     if command in MODEL_COMMANDS:
+        names = _model_choices(command)
         for opt in SHARED_MODEL_OPTIONS:
-            assert opt in text, f"hyst {command} --help lacks {opt}"
+            # offered exactly when one of the command's models reads it
+            read = opt == "--model" or models_reading(opt[2:].replace("-", "_"), names)
+            assert (opt in text) == bool(read), f"hyst {command} --help: {opt}"
     parser = _subparsers()[command]
     assert parser.formatter_class is HelpFormatter
     for action in parser._actions:
