@@ -34,7 +34,13 @@ def test_docs_build_with_warnings_as_errors(tmp_path):
     html = tmp_path / "html"
     for page in ("index", "contract", "oscillator", "analyses", "cli", "api"):
         assert (html / f"{page}.html").is_file(), page
-    for page in ("drive_operators", "couple_oscillator", "identify_density"):
+    for page in (
+        "drive_operators",
+        "couple_oscillator",
+        "identify_density",
+        "fit_and_compensate",
+        "bifurcation_sweep",
+    ):
         assert (html / "tutorials" / f"{page}.html").is_file(), page
     # the API reference is generated from the code: the registry and the oscillator are there
     api = html / "api" / "generated"
