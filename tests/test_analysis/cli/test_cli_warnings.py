@@ -59,3 +59,22 @@ def test_diverging_run_warns_and_fails_in_one_line_each(tmp_path):
     assert lines[1].startswith("hyst lyapunov: error: DivergenceError")
     assert lines[1].endswith("(coupling C = 3, ζ = 0.05, Ω = 1)")
     assert proc.stdout == ""
+
+
+def test_divergence_in_a_sweep_names_the_value_and_warns_once(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "analysis.cli", "bifurcation", "--model", "pi", "--plays", "2",
+         "--values", "0.5", "2.5", "3", "--periods", "5", "--transient", "5", "--lyapunov-t", "0",
+         "--quiet", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=Path(tmp_path),
+    )  # fmt: skip
+    assert proc.returncode == 2
+    lines = proc.stderr.splitlines()
+    # one warning line for the two unstable values (checked up front, then swept), one error
+    assert len(lines) == 2, proc.stderr
+    assert lines[0].startswith("hyst bifurcation: warning: ") and "C = 2.5" in lines[0]
+    assert lines[1].startswith("hyst bifurcation: error: DivergenceError")
+    assert lines[1].endswith("(coupling C = 2.5, ζ = 0.05, Ω = 1)")
