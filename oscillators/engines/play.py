@@ -130,7 +130,9 @@ def make_parameters(
         kind,
         spread,
         phi0,
-        outside_step,
+        # the RK8 step's local error scales as (ρh)^9 with ρ = max(1, Ω) (ζ < 1): the step
+        # shrinks with the forcing frequency; unchanged for Ω <= 1
+        outside_step / max(1.0, omega),
         inside_step,
         amp_a,
         amp_b,
