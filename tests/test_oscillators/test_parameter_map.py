@@ -19,6 +19,7 @@ carries ~1e-12 error, moved into q by at most |C ΔM| δt² / 2 ≪ 1e-12; the c
 from __future__ import annotations
 
 import math
+from decimal import Decimal, getcontext
 
 import numpy as np
 import pytest
@@ -27,6 +28,7 @@ from scipy.integrate import solve_ivp
 from hysteresis import GeneralizedPlay, PlayOperator, PreisachModel, Relay
 from oscillators import ForcedOscillator
 from oscillators.engines.continuous import ContinuousEngine
+from oscillators.linear import hom_matrix
 
 ZETAS = (0.0, 1e-12, 0.05, 1.0, 10.0, 1000.0)
 OMEGAS = (0.01, 0.7, 1.0 - 1e-14, 1.0, 1.0 + 1e-14, 100.0)
@@ -171,3 +173,27 @@ def test_strong_damping_relay():
     assert abs(osc.trajectory(5.0).q[-1] - ref) < 1e-9
     jac, _ = osc.jacobian(0.005)
     assert abs(jac[1, 1]) < 1e-4  # exact entry ≈ 4.5e-5 (was 1342.6)
+
+
+def test_overdamped_propagator_no_cancellation():
+    """Φ(h) at ζ up to 1e6 against its eigen form in 60-digit decimal arithmetic: the slow
+    eigenvalue −1/(ζ + √(ζ² − 1)) and expm1 keep it to a few ulp of ‖Φ‖ (ω_h − ζ lost 1e-4
+    relative at ζ = 1e6)."""
+    getcontext().prec = 60
+    for zeta in (1.0 + 1e-12, 1.5, 1e3, 1e6):
+        for h in (1e-9, 1e-4, 0.3, 5.0, 100.0):
+            z, t = Decimal(zeta), Decimal(h)
+            wh = ((z - 1) * (z + 1)).sqrt()
+            l1, l2 = -z + wh, -z - wh
+            a, b = (l1 * t).exp(), (l2 * t).exp()
+            ref = [
+                (-l2 * a + l1 * b) / (l1 - l2),
+                (a - b) / (l1 - l2),
+                (l1 * a - l2 * b) / (l1 - l2),
+            ]
+            m00, m01, _, m11 = hom_matrix(h, zeta)
+            scale = max(abs(x) for x in ref)
+            err = (
+                max(abs(Decimal(x) - r) for x, r in zip((m00, m01, m11), ref, strict=True)) / scale
+            )
+            assert err < 1e-13, (zeta, h, float(err))
