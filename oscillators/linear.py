@@ -62,10 +62,14 @@ def hom_cs(h: float, zeta: float) -> tuple[float, float]:
     if zeta == 1.0:
         e = math.exp(-h)
         return e, e * h
-    wh = math.sqrt(zeta * zeta - 1.0)
-    a = math.exp((wh - zeta) * h)
-    b = math.exp((-wh - zeta) * h)
-    return 0.5 * (a + b), 0.5 * (a - b) / wh
+    # ζ > 1: eigenvalues λ₁ = −1/(ζ + ω_h) (the slow one, not ω_h − ζ: that difference of two
+    # numbers ≈ ζ loses log10(ζ²) digits, 1e-4 relative at ζ = 1e6) and λ₂ = −(ζ + ω_h);
+    # e^{λ₁h} − e^{λ₂h} = −e^{λ₁h}·expm1(−2ω_h h) has no cancellation for small h or ω_h
+    wh = math.sqrt((zeta - 1.0) * (zeta + 1.0))
+    big = zeta + wh
+    a = math.exp(-h / big)
+    b = math.exp(-big * h)
+    return 0.5 * (a + b), -0.5 * a * math.expm1(-2.0 * wh * h) / wh
 
 
 @njit(cache=True)

@@ -5,6 +5,7 @@ closed forms of :mod:`oscillators.linear` and, through the library's messages, t
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from hysteresis._validation import finite_scalar
@@ -19,6 +20,8 @@ __all__ = [
     "MAX_DAMPING_RATIO",
     "MAX_PERIODS",
     "MAX_SAMPLES",
+    "RESONANCE_LIMIT",
+    "check_closed_form",
     "check_coupling",
     "check_oscillator",
     "real_parameter",
@@ -33,6 +36,15 @@ MAX_SAMPLES = 10**8
 MAX_COUPLING = 1e6
 MAX_DAMPING_RATIO = 1e6
 FREQUENCY_RANGE = (1e-6, 1e6)
+#: Smallest distance from resonance ``√D = |(1 − Ω²) + 2iζΩ|`` the closed-form engines (relay,
+#: play) accept. Their exact flights write the state as ``Φ(h)[x − P(φ₀)] + P(φ₁)`` with the
+#: particular solution ``P`` of amplitude ``R·max(1, Ω)``, ``R = 1/√D``: the bounded result is a
+#: difference of O(R) terms, so one flight carries a rounding error of about 20·ε·R (cos/sin of
+#: phases up to ~2π + |φ₀|, the products, the subtraction; ‖Φ‖ ≈ 1 near resonance, where ζ ≪ 1
+#: and Ω ≈ 1). At √D = 1e-6 that is ≤ 2.2e-9 per flight (< 1e-8 over the few closed-form
+#: flights of a typical switch interval); it grows as 1/√D, to O(1) at Ω = 1 ± 1e-14. The
+#: generic continuous engine integrates the equation itself and has no such limit.
+RESONANCE_LIMIT = 1e-6
 #: The paper's initial condition (q(0) = −1, all spins down; q'(0) = 0.1, Table II): the default
 #: start of every trajectory, section and analysis.
 DEFAULT_Q0 = -1.0
@@ -73,3 +85,20 @@ def check_oscillator(damping_ratio: Any, frequency: Any) -> tuple[float, float]:
             "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
         )
     return zeta, omega
+
+
+def check_closed_form(zeta: float, omega: float) -> None:
+    """Refuse (ζ, Ω) closer to the undamped resonance than :data:`RESONANCE_LIMIT`.
+
+    For the engines built on the closed-form particular solution (relay, play): its amplitude
+    ``1/√D``, ``√D = hypot(1 − Ω², 2ζΩ)``, bounds their rounding error (see the constant).
+    """
+    dist = math.hypot((1.0 - omega) * (1.0 + omega), 2.0 * zeta * omega)
+    if not dist >= RESONANCE_LIMIT:
+        raise ValueError(
+            f"damping_ratio = {zeta!r} with frequency = {omega!r} is too close to resonance for "
+            f"the closed-form engines: hypot(1 - frequency**2, 2*damping_ratio*frequency) = "
+            f"{dist:.3g} < {RESONANCE_LIMIT:g} (RESONANCE_LIMIT), where their rounding error "
+            "~20·eps/hypot(...) per exact flight exceeds 1e-8; move the parameters away from "
+            "resonance"
+        )

@@ -29,14 +29,14 @@ Plain-Python reading of one hop (``advance_table``)::
     F = C*M; e_n = q^(n)(0)/n! as linear forms in (q, v, F, cos φ, sin φ) (precomputed from the
         equation of motion, taylor_matrix_coefficients)
     theta = next threshold in the direction of v; x = (theta - q)/v (the linear estimate)
-    fast short hop, if |x| < h_s = 1e-3 (most hops of a dense ensemble; e_2..e_6 suffice):
+    fast short hop, if |x| < h_s = 1e-3/ρ (most hops of a dense ensemble; e_2..e_6 suffice):
         h0 = x - k2 x^2 + (2 k2^2 - k3) x^3        (series reversion, k_n = e_n/v)
         dh = (sum_{n>=1} e_n h0^n - (theta - q)) / q'(h0)    (one Newton step; 1/q'(h0) by
              its series in h0), h = h0 - dh
         v, cos φ, sin φ at h from their values at h0 corrected to first order in dh
         accepted if the step's error bound is < 1e-17 and q is provably monotone on [0, h]
         (|v(s) - v| < |v|/2 by the sum of |n e_n| h^(n-1)); else the general path below
-    general path, if the threshold is predicted within h_T = 0.02 (degree-8 polynomial):
+    general path, if the threshold is predicted within h_T = 0.02/ρ (degree-8 polynomial):
         Newton on sum e_n h^n = theta from the root of the quadratic; the same monotonicity test
     otherwise (long flight, turning point):
         scan [0, H] in sub-intervals with the exact propagator; inside each sub-interval split at
@@ -114,12 +114,20 @@ def make_params(
     par[P_A] = amp_a
     par[P_B] = amp_b
     par[P_T] = 2.0 * math.pi / omega
-    par[P_HT] = (0.02 / max(1.0, omega)) if taylor else 0.0
+    # Hop limits from the Taylor remainder. q^(n)(0)/n! is a linear form in (q, v, F, cos φ,
+    # sin φ) whose coefficients are bounded by ρ^n/n! times O(1), ρ = max(1, Ω, 2ζ) (the
+    # forcing contributes Ω^k, the homogeneous part ‖A^n‖ <= ‖A‖^n with ‖A‖ = max(1, 2ζ) up to
+    # a factor (1 + 1/(2ζ))^n, and its eigenvalues −ζ ± √(ζ² − 1) reach 2ζ). The degree-d
+    # polynomial then leaves a remainder <= (ρ h)^(d+1)/(d+1)! · e^(ρh) relative to the state's
+    # size, so the limits are h·ρ <= const: with d = 8, ρh <= 0.02 gives (0.02)^9/9! ≈ 1.4e-21
+    # (≤ 5e-20 with the factor 1.5^9 at ζ = 1); with d = 6 (fast hop), ρh <= 1e-3 gives
+    # 1e-21/5040 ≈ 2e-25. For ζ <= 1/2 this is the former limit 0.02/max(1, Ω) unchanged.
+    rho = max(1.0, omega, 2.0 * zeta)
+    par[P_HT] = (0.02 / rho) if taylor else 0.0
     par[P_DSUB] = 0.1 / max(1.0, omega)
     par[P_TBASE] = t_base
-    # short hops (most hops of a dense ensemble) take the fast path; its degree-6 polynomials
-    # leave a term ~|q^(7)| h^7/7! < 1e-20 for h below this (A^n grows like max(1, 2ζ)^n)
-    par[P_HS] = (1e-3 / max(1.0, omega, 2.0 * zeta)) if taylor else 0.0
+    # short hops (most hops of a dense ensemble) take the fast path (degree-6 polynomials)
+    par[P_HS] = (1e-3 / rho) if taylor else 0.0
     return par
 
 

@@ -63,6 +63,7 @@ from hysteresis._validation import finite_scalar
 from oscillators.engines import _play_kernels as _k
 from oscillators.engines.base import Engine
 from oscillators.linear import particular_amplitudes
+from oscillators.parameters import check_closed_form
 from oscillators.results import OscillatorState
 
 __all__ = ["EVENT_DTYPE", "PlayEngine", "make_parameters"]
@@ -118,10 +119,7 @@ def make_parameters(
         raise ValueError(f"width must be >= 0, got {width}")
     if kind == 1.0 and not spread > 0.0:
         raise ValueError(f"spread must be > 0, got {spread}")
-    if zeta == 0.0 and omega == 1.0:
-        raise ValueError(
-            "damping_ratio = 0 with frequency = 1 (undamped resonance) is not supported"
-        )
+    check_closed_form(zeta, omega)
     amp_a, amp_b = particular_amplitudes(zeta, omega)
     par = np.zeros(15)
     par[:15] = [
@@ -132,7 +130,9 @@ def make_parameters(
         kind,
         spread,
         phi0,
-        outside_step,
+        # the RK8 step's local error scales as (ρh)^9 with ρ = max(1, Ω) (ζ < 1): the step
+        # shrinks with the forcing frequency; unchanged for Ω <= 1
+        outside_step / max(1.0, omega),
         inside_step,
         amp_a,
         amp_b,

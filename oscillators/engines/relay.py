@@ -38,6 +38,7 @@ import numpy as np
 from oscillators.engines import _relay_kernels as kern
 from oscillators.engines.base import SWITCH_DTYPE, Engine, GrazingError, split_times
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
+from oscillators.parameters import check_closed_form
 from oscillators.results import OscillatorState
 
 __all__ = [
@@ -80,6 +81,11 @@ class RelayEngine(Engine):
         Use the short-hop Taylor expansion (default); ``False`` locates every switch by the
         exact scan (slower; for checks).
     """
+
+    @classmethod
+    def check_system(cls, system: Any) -> None:
+        """Refuse (ζ, Ω) within :data:`~oscillators.parameters.RESONANCE_LIMIT` of resonance."""
+        check_closed_form(float(system.damping_ratio), float(system.frequency))
 
     def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **_: Any):
         if cls is RelayEngine:
