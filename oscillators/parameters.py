@@ -40,7 +40,7 @@ FREQUENCY_RANGE = (1e-6, 1e6)
 #: play) accept. Their exact flights write the state as ``Φ(h)[x − P(φ₀)] + P(φ₁)`` with the
 #: particular solution ``P`` of amplitude ``R·max(1, Ω)``, ``R = 1/√D``: the bounded result is a
 #: difference of O(R) terms, so one flight carries a rounding error of about 20·ε·R (cos/sin of
-#: phases up to ~2π + |φ₀|, the products, the subtraction; ‖Φ‖ ≈ 1 near resonance, where ζ ≪ 1
+#: phases up to ~2π + abs(φ₀), the products, the subtraction; ‖Φ‖ ≈ 1 near resonance, where ζ ≪ 1
 #: and Ω ≈ 1). At √D = 1e-6 that is ≤ 2.2e-9 per flight (< 1e-8 over the few closed-form
 #: flights of a typical switch interval); it grows as 1/√D, to O(1) at Ω = 1 ± 1e-14. The
 #: generic continuous engine integrates the equation itself and has no such limit.
