@@ -50,6 +50,7 @@ from analysis.identification import (
     protocol_lattice,
 )
 from analysis.identification.forc_io import detect_format, read_forc_file
+from analysis.identification.memory import MemoryBoundError
 from analysis.identification.plots import (
     figure_forc,
     figure_preisach_density,
@@ -145,6 +146,14 @@ def register(subparsers: Any) -> None:
         help="--input: lattice step in the file's field unit after conversion (> 0; default: "
         "the median field step of the measurement)",
     )
+    g.add_argument(
+        "--max-memory",
+        type=positive_float,
+        default=None,
+        metavar="GB",
+        help="bound on the estimated peak memory of the identification in GB (> 0; default: "
+        "half the physical memory); a larger one is refused before it starts",
+    )
     add_output_options(p, writes="identify.json and the figure as PNG, PDF and NPZ")
     p.set_defaults(func=run)
 
@@ -158,6 +167,12 @@ def _smoothing(args: argparse.Namespace, default: float | None) -> tuple[float, 
             f"argument --smoothing: takes one factor SF or two, SF_R SF_S; got {len(sm)} values"
         )
     return (sm[0], sm[0]) if len(sm) == 1 else (sm[0], sm[1])
+
+
+def _max_memory(args: argparse.Namespace) -> float | None:
+    """``--max-memory`` in bytes (``None``: the library's default bound)."""
+    gb = getattr(args, "max_memory", None)
+    return None if gb is None else gb * 1e9
 
 
 def run(args: argparse.Namespace) -> int:
@@ -231,9 +246,17 @@ def _run_model(
 ) -> int:
 
     centres = None if thresholds is None else thresholds.centre
-    ident = identify_preisach(
-        operator, args.step, saturation, smoothing=smoothing, progress=progress_enabled(args)
-    )
+    try:
+        ident = identify_preisach(
+            operator,
+            args.step,
+            saturation,
+            smoothing=smoothing,
+            progress=progress_enabled(args),
+            max_memory=_max_memory(args),
+        )
+    except MemoryBoundError as exc:
+        raise CliError(f"argument --step: {exc}") from exc
     report: dict[str, Any] = model_record(args)
     report.update(step=args.step, saturation=saturation, grid_nodes=int(ident.alpha.size))
     # the paper's ridge metrics: only for the paper's models (dimers, erf play), never over
@@ -259,6 +282,7 @@ def _run_model(
             build_operator("erf-play", width=args.width, spread=args.spread),
             args.step,
             saturation,
+            max_memory=_max_memory(args),
         )
         report["erf_play"] = compare_with_ridge(limit, args.width, args.spread).as_dict()
         paths = figure_preisach_density(
@@ -383,7 +407,10 @@ def _run_measured(
             extend=args.reversible_ridge,
             step=args.grid_step,
             window=args.window,
+            max_memory=_max_memory(args),
         )
+    except MemoryBoundError as exc:
+        raise CliError(f"argument --input: {args.input}: {exc}") from exc
     except ValueError as exc:
         option = "--grid-step" if str(exc).startswith("step") else "--input"
         raise CliError(f"argument {option}: {args.input}: {exc}") from exc

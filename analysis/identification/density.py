@@ -22,6 +22,7 @@ from analysis.identification.curves import (
     regular_grid,
     rising_form,
 )
+from analysis.identification.memory import check_memory, estimate_identification_bytes
 from analysis.identification.result import PreisachIdentification
 from analysis.identification.smoothing import (
     WINDOWS,
@@ -30,7 +31,7 @@ from analysis.identification.smoothing import (
 )
 from hysteresis._validation import check_grid_nodes
 
-__all__ = ["identify_preisach", "identify_from_curves", "auto_grid"]
+__all__ = ["identify_preisach", "identify_from_curves", "auto_grid", "estimate_memory"]
 
 GRIDS = ("auto", "native", "protocol")
 
@@ -43,6 +44,7 @@ def identify_preisach(
     centre: float = 0.0,
     smoothing: float | tuple[float, float] | None = None,
     progress: bool = False,
+    max_memory: float | None = None,
 ) -> PreisachIdentification:
     """Identify the Preisach density of ``operator`` from reversal curves on a regular grid.
 
@@ -61,8 +63,17 @@ def identify_preisach(
         ``(SF_r, SF_s)``: local quadratic regression of ``E`` over the nodes with
         ``|Δr| <= SF_r·Δ`` and ``|Δs| <= SF_s·Δ`` (keep ``SF_r`` small across a ridge and
         ``SF_s`` larger along it); see :func:`local_quadratic_density`.
+    max_memory:
+        Bound in bytes on the estimated peak memory
+        (:func:`~analysis.identification.memory.estimate_identification_bytes`; default
+        :func:`~analysis.identification.memory.default_max_memory`): a larger grid is refused
+        with :class:`~analysis.identification.memory.MemoryBoundError` before the operator is
+        driven.
     """
-    check_grid_nodes(step, saturation)  # refuse an unbounded grid (MAX_GRID_NODES) up front
+    n = check_grid_nodes(step, saturation)  # refuse an unbounded grid (MAX_GRID_NODES) up front
+    sm = None if smoothing is None else _smoothing_factors(smoothing)
+    estimate = estimate_identification_bytes(n * (n + 1) // 2, n, smoothing=sm, grid="native")
+    check_memory(estimate, max_memory)
     grid = regular_grid(step, saturation, centre)
     curves = measure_reversal_curves(operator, grid, convention="mayergoyz", progress=progress)
     output_range = tuple(float(x) for x in getattr(operator, "output_range", (-1.0, 1.0)))
@@ -118,6 +129,7 @@ def identify_from_curves(
     grid: str = "auto",
     step: float | None = None,
     window: str = "rs",
+    max_memory: float | None = None,
 ) -> PreisachIdentification:
     """Identify from reversal-curve data (measured or simulated, regular or irregular).
 
@@ -158,6 +170,11 @@ def identify_from_curves(
         ``|Δr| <= SF_r·Δ`` and ``|Δs| <= SF_s·Δ``; ``"pike"``, Pike et al. (1999)'s square
         ``|Δα| <= SF·Δ`` and ``|ΔB_r| = |Δβ| <= SF·Δ`` (``(2 SF + 1)²`` points, ``SF = SF_r``).
         The native grid always uses ``"rs"``.
+    max_memory:
+        Bound in bytes on the estimated peak memory (default
+        :func:`~analysis.identification.memory.default_max_memory`); above it the identification
+        is refused with :class:`~analysis.identification.memory.MemoryBoundError` before the
+        lattice is allocated (:func:`estimate_memory` gives the estimate).
 
     Returns
     -------
@@ -173,6 +190,7 @@ def identify_from_curves(
         grid = auto_grid(curves)
     if window not in WINDOWS:
         raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
+    check_memory(estimate_memory(curves, smoothing=smoothing, grid=grid, step=step), max_memory)
     if grid == "protocol":
         ext = False if extend is None else bool(extend)
         return _identify_protocol(curves, smoothing, output_range, ext, step, window)
@@ -213,6 +231,28 @@ def identify_from_curves(
         reversible_ridge=extend,
         n_curves=curves.n_curves,
         n_points=curves.n_points,
+    )
+
+
+def estimate_memory(
+    curves: ReversalCurves,
+    *,
+    smoothing: float | tuple[float, float] | None = None,
+    grid: str = "auto",
+    step: float | None = None,
+) -> int:
+    """Estimated peak bytes of ``identify_from_curves(curves, smoothing=…, grid=…, step=…)``
+    from the sizes alone (:func:`~analysis.identification.memory.estimate_identification_bytes`;
+    the lattice's node count, nothing of its size is allocated)."""
+    if grid == "auto":
+        grid = auto_grid(curves)
+    sm = None if smoothing is None else _smoothing_factors(smoothing)
+    if grid == "protocol":
+        n = protocol_lattice(curves, step).size
+        return estimate_identification_bytes(curves.n_points, n, smoothing=sm, grid=grid)
+    n_union = np.unique(np.concatenate(curves.fields)).size
+    return estimate_identification_bytes(
+        curves.n_points, curves.n_curves, n_union, smoothing=sm, grid="native"
     )
 
 

@@ -1,0 +1,118 @@
+"""Memory bound of an identification: estimate the peak before allocating, refuse above a bound.
+
+Where memory scales (issue 21): every identification tabulates the Everett function on an
+``n_α × n_β`` lattice (protocol lattice of measured data, native grid of reversal fields × union
+of fields, or the operator's regular grid), with a handful of same-sized temporaries (the
+interpolation across reversal fields, the masks, the cell masses). The smoothing dominates:
+
+* protocol lattice (:func:`~analysis.identification.smoothing.grid_quadratic_density`): for every
+  evaluated node (up to half the lattice) 15 moment correlations, the 6×6 normal matrix, its
+  eigen-decomposition and right-hand side, about 1 kB per node;
+* native grid (:func:`~analysis.identification.smoothing.local_quadratic_density`): the k-d tree's
+  neighbour lists hold every sample of every window, ∝ the window's area in nodes.
+
+The estimate (:func:`estimate_identification_bytes`), in bytes, with ``N = n_α·n_β`` and ``P``
+the number of measured points::
+
+    peak ≈ 16·P + 40·N                                 (no smoothing)
+         + 520·N                                       (protocol lattice, smoothed)
+         + 44·N·(2·SF_r + 1)·(2·SF_s + 1)              (native grid, smoothed)
+
+Calibrated against ``tracemalloc`` peaks (``tests/test_analysis/identification/test_memory.py``):
+protocol lattice n = 101/201/401 measured 45/40/38 B·N unsmoothed and 440/484/508 B·N smoothed
+(SF 3); native grid of the erf play n = 221/369/551 unsmoothed 29/26/25 B·N, n = 111/185 smoothed
+960 B·N (SF 2) and 2930–2980 B·N (SF 4). The estimate is an upper bound: it lies between the
+measured peak and 1.75 times it (margin +0 % … +75 %; +65 % on the
+unsmoothed native grid, where the curves are half the lattice) on those cases.
+
+The bound (:func:`default_max_memory`) is :data:`MAX_MEMORY_FRACTION` of the physical memory
+(``os.sysconf``), or :data:`FALLBACK_MAX_MEMORY` where that is unavailable; ``max_memory=``
+(bytes) of the identification functions and ``hyst identify --max-memory GB`` override it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+__all__ = [
+    "MAX_MEMORY_FRACTION",
+    "FALLBACK_MAX_MEMORY",
+    "MemoryBoundError",
+    "default_max_memory",
+    "estimate_identification_bytes",
+    "check_memory",
+]
+
+#: fraction of the physical memory an identification may take by default
+MAX_MEMORY_FRACTION = 0.5
+#: default bound (bytes) where the physical memory cannot be read: 4 GiB
+FALLBACK_MAX_MEMORY = 4 * 2**30
+
+#: calibrated bytes per lattice node (see the module docstring)
+_BYTES_PER_POINT = 16
+_BYTES_PER_NODE = 40
+_BYTES_PER_NODE_PROTOCOL_SMOOTHING = 520
+_BYTES_PER_NODE_WINDOW_NATIVE = 44
+
+
+class MemoryBoundError(ValueError):
+    """An identification whose estimated peak memory exceeds the bound (refused up front)."""
+
+
+def default_max_memory() -> int:
+    """The default bound in bytes: :data:`MAX_MEMORY_FRACTION` of the physical memory, or
+    :data:`FALLBACK_MAX_MEMORY` where ``os.sysconf`` cannot tell."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return FALLBACK_MAX_MEMORY
+    if total <= 0:
+        return FALLBACK_MAX_MEMORY
+    return int(MAX_MEMORY_FRACTION * total)
+
+
+def estimate_identification_bytes(
+    n_points: int,
+    n_alpha: int,
+    n_beta: int | None = None,
+    *,
+    smoothing: tuple[float, float] | None = None,
+    grid: str = "protocol",
+) -> int:
+    """Estimated peak bytes of an identification (formula and margin: module docstring).
+
+    ``n_points``: measured points of all curves; ``n_alpha × n_beta``: the lattice (square when
+    ``n_beta`` is omitted); ``smoothing``: ``(SF_r, SF_s)`` or ``None``; ``grid``:
+    ``"protocol"`` (FFT normal equations) or ``"native"`` (scattered local regression).
+    """
+    nodes = float(n_alpha) * float(n_alpha if n_beta is None else n_beta)
+    total = _BYTES_PER_POINT * float(n_points) + _BYTES_PER_NODE * nodes
+    if smoothing is not None:
+        if grid == "protocol":
+            total += _BYTES_PER_NODE_PROTOCOL_SMOOTHING * nodes
+        else:
+            area = (2.0 * smoothing[0] + 1.0) * (2.0 * smoothing[1] + 1.0)
+            total += _BYTES_PER_NODE_WINDOW_NATIVE * nodes * area
+    return int(math.ceil(total)) if math.isfinite(total) else 2**63
+
+
+def _gb(n: float) -> str:
+    return f"{n / 1e9:.3g} GB"
+
+
+def check_memory(estimate: int, max_memory: Any = None, what: str = "identification") -> int:
+    """Refuse (:class:`MemoryBoundError`, one line naming the estimate, the bound and what to
+    change) an ``estimate`` in bytes above ``max_memory`` (bytes; default
+    :func:`default_max_memory`); returns the bound."""
+    bound = default_max_memory() if max_memory is None else float(max_memory)
+    if not (bound > 0):
+        raise ValueError(f"max_memory must be > 0 bytes, got {max_memory!r}")
+    if estimate > bound:
+        raise MemoryBoundError(
+            f"the {what} needs an estimated {_gb(estimate)} of memory, more than the bound "
+            f"{_gb(bound)}: refused before allocating; choose a coarser step (--step, "
+            "--grid-step), fewer curves, or raise the bound (--max-memory GB)"
+        )
+    return int(bound)
