@@ -357,7 +357,9 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
             )
         kwargs["drift_correction"] = args.drift_correction
     try:
-        data = read_forc_file(path, fmt, **kwargs)
+        data = read_forc_file(path, fmt, max_memory=_max_memory(args), **kwargs)
+    except MemoryBoundError as exc:
+        raise CliError(f"argument --input: {path}: {exc}") from exc
     except (ValueError, OSError) as exc:
         # a user's file: one line naming the problem (and its line), not a traceback
         raise CliError(f"argument --input: {_about(path, exc)}") from exc

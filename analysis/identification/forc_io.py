@@ -32,6 +32,7 @@ constant after the last; the calibration field's own drift is neglected. Off by 
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 from typing import Any
@@ -41,6 +42,7 @@ from analysis.identification.forc_files.common import DATA_LINE, MicroMagData, d
 from analysis.identification.forc_files.csv_format import read_csv, write_csv
 from analysis.identification.forc_files.lakeshore import read_lakeshore_csv
 from analysis.identification.forc_files.micromag import read_micromag, write_micromag
+from analysis.identification.memory import check_memory, estimate_read_bytes
 
 __all__ = [
     "read_csv",
@@ -100,8 +102,16 @@ def detect_format(path: str | Path) -> str:
     raise ValueError(f"{path}: not a FORC file this toolkit recognises; it reads {KNOWN_FORMATS}")
 
 
-def read_forc_file(path: str | Path, format: str = "auto", **kwargs: Any) -> MicroMagData:
-    """Read any supported FORC file into :class:`MicroMagData` (CSV files: no units)."""
+def read_forc_file(
+    path: str | Path, format: str = "auto", max_memory: float | None = None, **kwargs: Any
+) -> MicroMagData:
+    """Read any supported FORC file into :class:`MicroMagData` (CSV files: no units).
+
+    A file whose estimated reading memory (:func:`~analysis.identification.memory.
+    estimate_read_bytes` of its size) exceeds ``max_memory`` bytes (default
+    :func:`~analysis.identification.memory.default_max_memory`) is refused with
+    :class:`~analysis.identification.memory.MemoryBoundError` before it is read."""
+    check_memory(estimate_read_bytes(os.path.getsize(path)), max_memory, "reading of the file")
     if format not in FORMATS:
         raise ValueError(f"format must be one of {FORMATS}, got {format!r}")
     if format == "auto":

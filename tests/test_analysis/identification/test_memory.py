@@ -100,3 +100,20 @@ def test_cli_refuses_one_line_exit_2(tmp_path, capsys):
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(lines) == 1 and "estimated" in lines[0] and "bound 0.0001 GB" in lines[0]
+
+
+def test_file_reading_estimate_and_refusal(tmp_path, capsys):
+    from support_paths import DATA
+
+    from analysis.identification.forc_io import read_forc_file
+    from analysis.identification.memory import estimate_read_bytes
+
+    path = DATA / "forc_lakeshore_8600.csv"
+    size = path.stat().st_size
+    peak = _peak(lambda: read_forc_file(path))
+    assert peak <= estimate_read_bytes(size) <= 1.85 * peak, (estimate_read_bytes(size), peak)
+    with pytest.raises(MemoryBoundError, match="reading of the file"):
+        read_forc_file(path, max_memory=1000)
+    code = main(["identify", "--input", str(path), "--max-memory", "1e-6"])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "bound 1e-06 GB" in lines[0], lines
