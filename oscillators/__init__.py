@@ -5,7 +5,14 @@ from hysteresis._version import __version__
 
 _check_import_name("oscillators")
 
-from oscillators.engines import DivergenceError, Engine, GrazingError, select_engine  # noqa: E402
+from oscillators.engines import (  # noqa: E402
+    DivergenceError,
+    Engine,
+    GrazingError,
+    SlidingError,
+    SwitchBudgetError,
+    select_engine,
+)
 from oscillators.linear import forced_response, homogeneous_propagator, propagate, segment_jacobian
 from oscillators.parameters import (
     DEFAULT_DAMPING_RATIO,
@@ -35,6 +42,8 @@ __all__ = [
     "DivergenceError",
     "Engine",
     "GrazingError",
+    "SlidingError",
+    "SwitchBudgetError",
     "select_engine",
     "ForcedOscillator",
     "OscillatorState",

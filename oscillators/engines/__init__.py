@@ -1,7 +1,8 @@
 """The engines integrating the forced oscillator (the seam: :mod:`oscillators.engines.base`).
 
 * :mod:`~oscillators.engines.base` — :class:`Engine` (clock, time checks, divergence test,
-  tangent bookkeeping), :class:`DivergenceError`, :class:`GrazingError`;
+  tangent bookkeeping), :class:`DivergenceError`, :class:`GrazingError`,
+  :class:`SlidingError`, :class:`SwitchBudgetError` (the switch budget);
 * :mod:`~oscillators.engines.relay` — :class:`RelayEngine`: :class:`RelayKernelEngine`
   (compiled, nested or heap plan) and :class:`RelayReferenceEngine` (Python reference path);
 * :mod:`~oscillators.engines.play` — :class:`PlayEngine` (compiled play limit);
@@ -17,6 +18,8 @@ from oscillators.engines.base import (
     DivergenceError,
     Engine,
     GrazingError,
+    SlidingError,
+    SwitchBudgetError,
     split_times,
     wrap_phase,
 )
@@ -35,6 +38,8 @@ __all__ = [
     "RelayEngine",
     "RelayKernelEngine",
     "RelayReferenceEngine",
+    "SlidingError",
+    "SwitchBudgetError",
     "select_engine",
     "split_times",
     "wrap_phase",

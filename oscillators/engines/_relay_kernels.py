@@ -81,14 +81,16 @@ P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE, P_UNIT, P_HS
 N_PAR = 12
 # float state layout: q, v, tau, cos(phi), sin(phi), next up / down threshold, output M now,
 # compensated output (heap table, float weights: value and Neumaier compensation), the running
-# integral of M over the elapsed time (for exact time averages of the output)
-S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC, S_IM = range(11)
-N_ST = 11
+# integral of M over the elapsed time (for exact time averages of the output), the jump of M and
+# the direction (+1/-1) of the last switch (written only when the switch budget runs out)
+S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC, S_IM, S_JMP, S_DIR = range(13)
+N_ST = 13
 # int state layout: k (nested index), n (period), number of switches so far, weight units up and
 # in total (heap table, integer output), heap table: alpha rank of the next up switch and beta
-# rank of the next down switch (-1: none)
-I_K, I_N, I_NSW, I_UP, I_TOT, I_IA, I_IB = range(7)
-N_IST = 7
+# rank of the next down switch (-1: none), the switch count at which the kernel stops (the
+# switch budget, status 3)
+I_K, I_N, I_NSW, I_UP, I_TOT, I_IA, I_IB, I_MAXSW = range(8)
+N_IST = 8
 # columns of the hop tables (taylor_matrix_coefficients) holding q's Taylor coefficients as
 # linear forms in q, v, F = C·M, cos φ, sin φ; the q and v coefficients are [A^n]_00/n! and
 # [A^n]_01/n!, the first two propagator columns
@@ -532,9 +534,12 @@ def advance_table(
     Switch records go to ``sw`` (rows: time, q, v, ΔM) while ``rec_on``. Returns 0 when
     ``tau_stop`` was reached, 1 if the record buffer filled up (state left right after the last
     recorded switch; call again to continue), 2 at a grazing switch (v* = 0) while ``tan_on``
-    (state left right after that switch, tangent not updated by it). Tangent vectors (columns of
-    ``y``, rows δq, δv, δφ) are propagated while ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and
-    ``st[S_MV]`` must be current (:func:`_table_refresh`).
+    (state left right after that switch, tangent not updated by it), 3 when the switch count
+    reaches ``ist[I_MAXSW]`` (the switch budget; state right after that switch, which is neither
+    recorded nor applied to the tangent; its jump and direction in ``st[S_JMP]``,
+    ``st[S_DIR]``). Tangent vectors (columns of ``y``, rows δq, δv, δφ) are propagated while
+    ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and ``st[S_MV]`` must be current
+    (:func:`_table_refresh`).
     """
     zeta = par[P_ZETA]
     omega = par[P_OMEGA]
@@ -555,6 +560,7 @@ def advance_table(
     down = st[S_DN]
     mv = st[S_MV]
     nsw = ist[I_NSW]
+    nsw_max = ist[I_MAXSW]
     # the fast hop's coefficients as locals: loads from mp inside the loop would be repeated
     # after every store (numba arrays carry no aliasing information)
     t2q = mp[2, TC_Q]
@@ -798,6 +804,13 @@ def advance_table(
         down = st[S_DN]
         mv = st[S_MV]
         nsw += 1
+        if nsw >= nsw_max:
+            # switch budget spent (the caller raises SlidingError or SwitchBudgetError); the
+            # tangent and the record of this last switch are left out
+            st[S_JMP] = jump
+            st[S_DIR] = direction
+            status = 3
+            break
         if tan_on and coupling * jump != 0.0:
             if v == 0.0:
                 status = 2  # grazing: infinite saltation, the caller raises GrazingError
@@ -865,7 +878,7 @@ def run_table(
 
     Row i of ``out`` (if ``out`` has rows) receives (q, v, M) at target i. Returns (status,
     next target index); status as :func:`advance_table` (0 done, 1 record buffer full, 2
-    grazing switch with the tangent flow on).
+    grazing switch with the tangent flow on, 3 switch budget spent).
     """
     e = np.empty(ORDER + 1)
     period = par[P_T]

@@ -76,6 +76,10 @@ __all__ = [
     "DivergenceError",
     "Engine",
     "GrazingError",
+    "SWITCH_BUDGET_FLOOR",
+    "SWITCHES_PER_RELAY_AND_TIME",
+    "SlidingError",
+    "SwitchBudgetError",
     "SWITCH_DTYPE",
     "TIME_TOLERANCE",
     "split_times",
@@ -110,6 +114,45 @@ class GrazingError(ValueError):
     and Lyapunov exponents / Jacobians are undefined. A ``ValueError`` subclass so that callers
     reporting bad input also report this.
     """
+
+
+#: Work bound of the event-driven engines: switches allowed per relay and per unit of time
+#: (times ``max(1, Ω)``) in one ``advance`` call, plus :data:`SWITCH_BUDGET_FLOOR` per call.
+#: Ordinary motion switches a relay about ``Ω/π`` times per unit time; beyond this budget the
+#: call stops with :class:`SlidingError` (chattering on a threshold) or
+#: :class:`SwitchBudgetError`, so no call runs (or records switches) without bound.
+SWITCHES_PER_RELAY_AND_TIME = 1000
+#: Switches every ``advance`` call may make whatever its length (see above).
+SWITCH_BUDGET_FLOOR = 10_000
+
+
+class SwitchBudgetError(RuntimeError):
+    """An ``advance`` call exceeded the switch budget (:data:`SWITCHES_PER_RELAY_AND_TIME`).
+
+    ``time`` is the absolute time at which the budget ran out, ``budget`` the number of
+    switches the call was allowed.
+    """
+
+    def __init__(self, message: str, time: float | None = None, budget: int | None = None):
+        super().__init__(message)
+        self.time = time
+        self.budget = budget
+
+
+class SlidingError(ValueError):
+    """A Filippov sliding motion on a relay threshold, which the relay engines do not integrate.
+
+    On both sides of the threshold the flow pushes into it (q'' with the output below the
+    threshold points up, with the output above it points down, and v ≈ 0), so the exact
+    event-driven integration chatters across it with vanishing intervals. Detected when the
+    switch budget of the call runs out there. ``time`` is the absolute time, ``threshold`` the
+    value of q the motion slides along.
+    """
+
+    def __init__(self, message: str, time: float | None = None, threshold: float | None = None):
+        super().__init__(message)
+        self.time = time
+        self.threshold = threshold
 
 
 def wrap_phase(phi: float) -> float:

@@ -36,7 +36,16 @@ from typing import Any
 import numpy as np
 
 from oscillators.engines import _relay_kernels as kern
-from oscillators.engines.base import SWITCH_DTYPE, Engine, GrazingError, split_times
+from oscillators.engines.base import (
+    SWITCH_BUDGET_FLOOR,
+    SWITCH_DTYPE,
+    SWITCHES_PER_RELAY_AND_TIME,
+    Engine,
+    GrazingError,
+    SlidingError,
+    SwitchBudgetError,
+    split_times,
+)
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
 from oscillators.parameters import check_closed_form
 from oscillators.results import OscillatorState
@@ -48,6 +57,8 @@ __all__ = [
     "RelayKernelEngine",
     "RelayReferenceEngine",
     "SWITCH_DTYPE",
+    "SlidingError",
+    "SwitchBudgetError",
 ]
 
 METHODS = ("auto", "nested", "heap", "generic")
@@ -60,6 +71,59 @@ def _grazing_message(t: float | None = None) -> str:
         "so the saltation C·ΔM/v* is infinite and the tangent flow is undefined on this orbit; "
         "perturb the initial condition or the parameters"
     )
+
+
+def _budget_error(
+    par: np.ndarray,
+    t: float,
+    c: float,
+    q: float,
+    v: float,
+    m_now: float,
+    jump: float,
+    direction: int,
+    budget: int,
+) -> Exception:
+    """The error when an ``advance`` call spent its switch budget, right after a switch at
+    ``q`` (output ``m_now`` after it, ``m_now - jump`` before it, ``direction`` +1 up / -1 down;
+    ``c`` = cos φ now).
+
+    Sliding (Filippov): on the threshold the acceleration with the output of the side below
+    points up and the one with the output of the side above points down, so the motion is
+    pushed into the threshold from both sides and the exact integration chatters across it.
+    """
+    coupling = par[kern.P_C]
+    base = -2.0 * par[kern.P_ZETA] * v - q + c
+    a_now = base + coupling * m_now
+    a_before = base + coupling * (m_now - jump)
+    if direction != 0 and direction * a_before > 0.0 and direction * a_now < 0.0:
+        a_below, a_above = (a_before, a_now) if direction > 0 else (a_now, a_before)
+        return SlidingError(
+            f"sliding motion on the relay threshold q = {q!r} at t = {t!r}: the flow pushes "
+            f"into the threshold from both sides (q'' = {float(a_below)!r} with the output "
+            f"below it, {float(a_above)!r} with the output above it, v = {v!r}), so the motion "
+            "slides along the threshold (a Filippov sliding motion), which this event-driven "
+            f"engine does not integrate (it chatters: {budget} switches in this call)",
+            time=t,
+            threshold=q,
+        )
+    return SwitchBudgetError(
+        f"switch budget exceeded at t = {t!r} (q = {q!r}, v = {v!r}): more than {budget} "
+        f"switches in one advance call, the cap of {SWITCHES_PER_RELAY_AND_TIME} switches per "
+        f"relay and per unit time (times max(1, Ω)) plus {SWITCH_BUDGET_FLOOR} per call "
+        "(oscillators.engines.base.SWITCHES_PER_RELAY_AND_TIME)",
+        time=t,
+        budget=budget,
+    )
+
+
+def _switch_budget(n_relays: int, omega: float, span: float) -> int:
+    """Switches one ``advance`` call spanning ``span`` time units may make (module constants
+    :data:`~oscillators.engines.base.SWITCHES_PER_RELAY_AND_TIME`, ``SWITCH_BUDGET_FLOOR``)."""
+    b = SWITCH_BUDGET_FLOOR + SWITCHES_PER_RELAY_AND_TIME * max(1, n_relays) * max(
+        1.0, omega
+    ) * max(span, 0.0)
+    return int(min(b, 2.0**62))
 
 
 class RelayEngine(Engine):
@@ -178,6 +242,7 @@ class RelayKernelEngine(RelayEngine):
         self._table = table
         self._active, work = table.positive_part()
         self._work = work
+        self._n_relays = int(work.n_relays)
         ya = y0[self._active]
         self._mp = kern.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
         self._tn1 = np.zeros(1, dtype=np.int64)
@@ -277,6 +342,11 @@ class RelayKernelEngine(RelayEngine):
         else:
             buf = np.empty((tgt_n.size, 3)) if out is not None else self._nobuf
         tan_on = self._ntan > 0
+        n_now, tau_now = self._clock()
+        span = (int(tgt_n[-1]) - n_now) * self._period + (float(tgt_tau[-1]) - tau_now)
+        budget = _switch_budget(self._n_relays, self._omega, span)
+        nsw0 = int(self._ist[kern.I_NSW])
+        self._ist[kern.I_MAXSW] = nsw0 + budget
         cap = 1 << 12 if record else 1
         sw = np.empty((cap, 4)) if record else self._nosw
         cnt = self._cnt
@@ -292,6 +362,13 @@ class RelayKernelEngine(RelayEngine):
                 self._chunks.append(sw[: cnt[0]].copy())
             if status == 2:
                 raise GrazingError(_grazing_message(self._t0 + self.elapsed))
+            if status == 3:
+                st = self._st
+                raise _budget_error(
+                    self._par, self._t0 + self.elapsed, float(st[kern.S_COS]), float(st[kern.S_Q]),
+                    float(st[kern.S_V]), float(st[kern.S_MV]), float(st[kern.S_JMP]),
+                    int(st[kern.S_DIR]), budget,
+                )  # fmt: skip
             if status == 0:
                 break
             cap = min(cap * 4, 1 << 20)
@@ -371,6 +448,13 @@ class RelayReferenceEngine(RelayEngine):
         self._state_cache = None
         tgt_n, tgt_tau = split_times(times, self._period)
         y = self._y if self._ntan else None
+        span = (int(tgt_n[-1]) - self._n) * self._period + (float(tgt_tau[-1]) - self._tau)
+        try:
+            n_relays = int(self._op.relay_table().n_relays)
+        except (AttributeError, NotImplementedError, TypeError):
+            n_relays = 1  # an operator with switching()/apply() only
+        self._budget = _switch_budget(n_relays, self._omega, span)
+        self._max_switches = self._n_switches + self._budget
         for i in range(tgt_n.size):
             while self._n < tgt_n[i]:
                 self._hop_to(self._period, y, record)
@@ -435,6 +519,15 @@ class RelayReferenceEngine(RelayEngine):
             t = par[kern.P_TBASE] + self._n * par[kern.P_T] + self._tau
             if record:
                 self._switches.append((t, self._q, self._v, jump))
+            if self._n_switches >= self._max_switches:
+                if record and self._switches:
+                    self._chunks.append(np.array(self._switches, dtype=float).reshape(-1, 4))
+                    self._switches.clear()
+                c_now = math.cos(phi0 + omega * self._tau)
+                raise _budget_error(
+                    par, float(t), c_now, self._q, self._v, self.output, jump, direction,
+                    self._budget,
+                )  # fmt: skip
             if y is not None:
                 if self._v == 0.0 and coupling * jump != 0.0:
                     raise GrazingError(_grazing_message(float(t)))
