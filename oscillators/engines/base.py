@@ -283,11 +283,23 @@ class Engine(ABC):
         """Names of the columns :meth:`advance` writes: ``("q", "v", "M", ...)``."""
         return ("q", "v", "M")
 
-    @abstractmethod
     def advance(
         self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
     ) -> None:
-        """Move through the sorted elapsed ``times``; fill ``out`` rows (see module docstring)."""
+        """Move through the sorted elapsed ``times``; fill ``out`` rows (see module docstring).
+
+        The checks of ``times`` and ``out`` live here, once; engines implement :meth:`_advance`.
+        """
+        times = self._target_times(times)
+        if times.size == 0:
+            return
+        self._check_out(out, times.size)
+        self._advance(times, out, bool(record))
+
+    @abstractmethod
+    def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
+        """:meth:`advance` after the checks: ``times`` a non-empty sorted 1-D array not before
+        now, ``out`` ``None`` or of ``(times.size, >= 3)``."""
 
     @abstractmethod
     def state(self) -> OscillatorState:

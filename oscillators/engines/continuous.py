@@ -194,13 +194,7 @@ class ContinuousEngine(Engine):
             return (q, v, y, float(flow.memory_at(q)[0]))
         return (q, v, y)
 
-    def advance(
-        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
-    ) -> None:
-        times = self._target_times(times)
-        if times.size == 0:
-            return
-        self._check_out(out, times.size)
+    def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
         self._record = bool(record)
         chunk = 2048
         for i0 in range(0, times.size, chunk):

@@ -254,13 +254,7 @@ class PlayEngine(Engine):
         # forcing phase are computed from it exactly as the kernel does
         return 0, float(self._st[0])
 
-    def advance(
-        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
-    ) -> None:
-        times = self._target_times(times)
-        if times.size == 0:
-            return
-        self._check_out(out, times.size)
+    def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
         buf = np.empty((times.size, 3))
         span = float(times[-1] - self._st[0]) if times.size else 0.0
         cap = int(20.0 * max(span, 0.0) + 100) if record else 0

@@ -323,12 +323,19 @@ class RelayKernelEngine(RelayEngine):
             if tau >= self._period:
                 n, tau = n + 1, 0.0
             tgt_n[0], tgt_tau[0] = n, max(tau, 0.0)
+            self._check_out(out, 1)
+            self._run_targets(tgt_n, tgt_tau, out, bool(record))
         else:
-            times = self._target_times(times)
-            if times.size == 0:
-                return
-            tgt_n, tgt_tau = split_times(times, self._period)
-        self._check_out(out, tgt_n.size)
+            super().advance(times, out, record)
+
+    def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
+        tgt_n, tgt_tau = split_times(times, self._period)
+        self._run_targets(tgt_n, tgt_tau, out, record)
+
+    def _run_targets(
+        self, tgt_n: np.ndarray, tgt_tau: np.ndarray, out: np.ndarray | None, record: bool
+    ) -> None:
+        """Run the kernel through the target clock readings (period index, time in period)."""
         self._state_cache = None
         # the kernel writes straight into ``out`` when it has its layout (the stepper's buffer)
         direct = (
@@ -421,6 +428,7 @@ class RelayReferenceEngine(RelayEngine):
         self._n_switches = 0
         self._switches: list[tuple[float, float, float, float]] = []
         self._integral = 0.0  # ∫M dt since the start
+        self._n_relays = int(self._op.relay_table().n_relays)  # for the switch budget
 
     def _clock(self) -> tuple[int, float]:
         return self._n, self._tau
@@ -438,22 +446,12 @@ class RelayReferenceEngine(RelayEngine):
     def n_events(self) -> int:
         return self._n_switches
 
-    def advance(
-        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
-    ) -> None:
-        times = self._target_times(times)
-        if times.size == 0:
-            return
-        self._check_out(out, times.size)
+    def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
         self._state_cache = None
         tgt_n, tgt_tau = split_times(times, self._period)
         y = self._y if self._ntan else None
         span = (int(tgt_n[-1]) - self._n) * self._period + (float(tgt_tau[-1]) - self._tau)
-        try:
-            n_relays = int(self._op.relay_table().n_relays)
-        except (AttributeError, NotImplementedError, TypeError):
-            n_relays = 1  # an operator with switching()/apply() only
-        self._budget = _switch_budget(n_relays, self._omega, span)
+        self._budget = _switch_budget(self._n_relays, self._omega, span)
         self._max_switches = self._n_switches + self._budget
         for i in range(tgt_n.size):
             while self._n < tgt_n[i]:
