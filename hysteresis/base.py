@@ -272,3 +272,11 @@ class ContinuousHysteron(Hysteron):
         it (it does not construct the play's state class itself).
         """
         return None
+
+    def compiled_flow(self) -> Any:
+        """A description for the compiled continuous engine
+        (:class:`hysteresis.flow.CompiledFlow`: Prandtl–Ishlinskii plays, or a Preisach
+        model's compiled Everett function), else ``None`` (the default: the generic continuous
+        engine integrates the operator through :meth:`branch_flow`). A fast path only: the
+        compiled engine follows the same branches, events and memory labels."""
+        return None

@@ -64,7 +64,7 @@ import numpy as np
 
 from hysteresis._validation import readonly_array
 
-__all__ = ["BranchFlow"]
+__all__ = ["BranchFlow", "CompiledFlow"]
 
 
 @dataclass(frozen=True)
@@ -159,3 +159,38 @@ class BranchFlow:
         """Memory values at input ``u`` on this branch (slaved ones moved by ``u − u0``)."""
         u = np.asarray(u, dtype=np.float64)
         return self.memory + self.slaved * (u[..., None] - self.input)
+
+
+@dataclass(frozen=True, eq=False)
+class CompiledFlow:
+    """What the oscillator's compiled continuous engine needs (a fast path, see
+    :meth:`hysteresis.base.ContinuousHysteron.compiled_flow`).
+
+    ``kind`` ``"prandtl_ishlinskii"``: ``half_widths`` ``r_i`` and ``weights`` ``a_i`` of the
+    plays (the states have ``positions`` and ``input``; the operator rebuilds a state with
+    ``state(positions, input)``). ``kind`` ``"preisach"``: ``everett``, the model's Everett
+    function as a :class:`~hysteresis.preisach.everett_table.CompiledEverett` (the states have
+    ``extrema``; the operator rebuilds a state with ``state_from_extrema(extrema)``).
+    ``label(i)`` names memory variable ``i`` as :meth:`BranchFlow.labels` does (``"w3"``,
+    ``"m2"``, ...), so that both engines name the tangent space alike.
+    """
+
+    kind: str
+    label: Callable[[int], str]
+    half_widths: np.ndarray | None = None
+    weights: np.ndarray | None = None
+    everett: object | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind == "prandtl_ishlinskii":
+            hw = readonly_array(self.half_widths)
+            wt = readonly_array(self.weights)
+            if hw.ndim != 1 or hw.shape != wt.shape or hw.size == 0:
+                raise ValueError("half_widths and weights must be 1-D of one (non-zero) length")
+            object.__setattr__(self, "half_widths", hw)
+            object.__setattr__(self, "weights", wt)
+        elif self.kind == "preisach":
+            if self.everett is None:
+                raise ValueError("a 'preisach' CompiledFlow needs its compiled Everett function")
+        else:
+            raise ValueError(f"kind must be 'prandtl_ishlinskii' or 'preisach', got {self.kind!r}")

@@ -44,7 +44,7 @@ from hysteresis._validation import (
     readonly_array,
 )
 from hysteresis.base import ContinuousHysteron
-from hysteresis.flow import BranchFlow
+from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.play import _touches_wall, _wall_tolerance
 
 __all__ = ["PrandtlIshlinskii", "PIState"]
@@ -88,6 +88,11 @@ def _pi_kernel(inputs, half_widths, weights, positions):  # pragma: no cover - c
             y += weights[i] * w[i]
         out[k] = y
     return out, w
+
+
+def _wagon_label(index: int) -> str:
+    """Memory label of wagon ``index`` (order of increasing width)."""
+    return f"w{index}"
 
 
 class PrandtlIshlinskii(ContinuousHysteron):
@@ -272,6 +277,17 @@ class PrandtlIshlinskii(ContinuousHysteron):
         tail = np.cumsum(aw[::-1])[::-1] - aw  # Σ_{j>i} a_j w_j
         return PIState(readonly_array(partial * w + tail), self.output(state))
 
+    # -- compiled engine --------------------------------------------------------------------
+    def compiled_flow(self) -> CompiledFlow:
+        """The plays for the oscillator's compiled continuous engine (half-widths, weights;
+        memory labels ``w0 ... w{K-1}`` as in :meth:`branch_flow`)."""
+        return CompiledFlow(
+            kind="prandtl_ishlinskii",
+            label=_wagon_label,
+            half_widths=self._half,
+            weights=self._weights,
+        )
+
     # -- branch flow (branch() and linearize() derive from it, hysteresis.base) -------------
     def _walls(self, state: PIState, direction: int) -> np.ndarray:
         check_state_type(state, PIState, self)  # O(1); the size is checked by zip(strict)
@@ -306,7 +322,7 @@ class PrandtlIshlinskii(ContinuousHysteron):
         direction = direction_sign(direction)
         walls = self._walls(state, direction)
         bp, reset = self._breakpoint(state, direction, walls)
-        labels = tuple(f"w{i}" for i in range(self._widths.size))
+        labels = tuple(_wagon_label(i) for i in range(self._widths.size))
         u0 = float(state.input)
         y0 = self.output(state)
         dragged = float(np.sum(self._weights[walls]))

@@ -8,9 +8,12 @@
 * :mod:`~oscillators.engines.play` — :class:`PlayEngine` (compiled play limit);
 * :mod:`~oscillators.engines.continuous` — :class:`ContinuousEngine` (solve_ivp over
   ``branch_flow``);
+* :mod:`~oscillators.engines.compiled_continuous` — :class:`CompiledContinuousEngine`
+  (compiled RK8 for Prandtl–Ishlinskii and continuous Preisach, ``compiled_flow()``);
 * :mod:`~oscillators.engines.select` — :func:`select_engine` (from the operator's contract).
 
-Compiled kernels: ``_relay_kernels.py``, ``_play_kernels.py``, ``_dop853_kernel.py``.
+Compiled kernels: ``_relay_kernels.py``, ``_play_kernels.py``, ``_continuous_kernels.py``,
+``_dop853_kernel.py``.
 """
 
 from oscillators.engines.base import (
@@ -23,6 +26,7 @@ from oscillators.engines.base import (
     split_times,
     wrap_phase,
 )
+from oscillators.engines.compiled_continuous import CompiledContinuousEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayReferenceEngine
@@ -30,6 +34,7 @@ from oscillators.engines.select import select_engine
 
 __all__ = [
     "TIME_TOLERANCE",
+    "CompiledContinuousEngine",
     "ContinuousEngine",
     "DivergenceError",
     "Engine",

@@ -87,6 +87,10 @@ class ContinuousEngine(Engine):
         Tolerances of the DOP853 integration (state and deviations), in [1e-13, 1e-3].
     max_step:
         Largest integration step (time units, > 0).
+    method:
+        ``"generic"`` (or ``"auto"``): this engine is the generic path (the option exists so
+        that ``engine_options={"method": "generic"}`` selects it for every continuous operator,
+        also those with a compiled engine).
 
     Notes
     -----
@@ -104,7 +108,13 @@ class ContinuousEngine(Engine):
         rtol: float = 1e-11,
         atol: float = 1e-11,
         max_step: float = 1.0,
+        method: str = "generic",
     ) -> None:
+        if method not in ("auto", "generic"):
+            raise ValueError(
+                f"method must be 'auto' or 'generic' for the generic continuous engine, got "
+                f"{method!r}"
+            )
         super().__init__(system, state)
         op = system.operator
         if not isinstance(op, ContinuousHysteron):

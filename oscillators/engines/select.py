@@ -6,6 +6,7 @@ from typing import Any
 
 from hysteresis.base import ContinuousHysteron
 from oscillators.engines.base import Engine
+from oscillators.engines.compiled_continuous import CompiledContinuousEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine
@@ -18,8 +19,9 @@ def select_engine(operator: Any) -> type[Engine]:
 
     ``operator.piecewise_constant`` -> :class:`RelayEngine` (the compiled kernels, or the Python
     reference path for ``method="generic"``); ``operator.compiled_play()`` not ``None`` ->
-    :class:`PlayEngine`; any other (continuous) operator -> :class:`ContinuousEngine` over its
-    ``branch_flow``.
+    :class:`PlayEngine`; else ``operator.compiled_flow()`` not ``None`` ->
+    :class:`CompiledContinuousEngine` (``method="generic"``: the generic engine); any other
+    (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow``.
     """
     if operator.piecewise_constant:
         return RelayEngine
@@ -30,4 +32,6 @@ def select_engine(operator: Any) -> type[Engine]:
         )
     if operator.compiled_play() is not None:
         return PlayEngine
+    if operator.compiled_flow() is not None:
+        return CompiledContinuousEngine
     return ContinuousEngine
