@@ -34,6 +34,7 @@ from hysteresis.preisach.base import (
     _gauss,
     _stack,
 )
+from hysteresis.preisach.everett_table import EMPTY_TABLE, CompiledEverett
 from hysteresis.preisach.gaussian import gaussian_everett
 
 __all__ = ["ContinuousPreisachModel"]
@@ -540,4 +541,12 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         model._gaussian = law.parameters
         model._gaussian_arguments = (*law.parameters, positive_integer(nodes, "nodes", 4))
         model._fast_scalar = (law.everett_scalar, law.gradient_scalar)
+        model._compiled_everett = CompiledEverett(0, law.kernel_params, EMPTY_TABLE)
         return model
+
+    def compiled_everett(self) -> CompiledEverett | None:
+        """The Everett function as arrays for the compiled kernel
+        :func:`~hysteresis.preisach._everett_kernels.everett_eval` (same values and gradient
+        as :meth:`everett` / :meth:`everett_gradient`): kind 0, the same quadrature, for
+        :meth:`gaussian`; ``None`` for other models."""
+        return self.__dict__.get("_compiled_everett")

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hysteresis._validation import positive_integer, positive_scalar
+from hysteresis._validation import positive_integer, positive_scalar, readonly_array
 from hysteresis.preisach.base import _gauss
 
 __all__ = ["GaussianEverett", "gaussian_everett"]
@@ -23,7 +23,9 @@ class GaussianEverett:
     ``everett``/``gradient`` are vectorised (arguments in the support), ``everett_scalar``/
     ``gradient_scalar`` their scalar fast paths with the semantics of the model's
     ``everett()``/``everett_gradient()`` (arguments clipped to the support, zero off the
-    triangle); ``parameters`` is ``(width, spread, width_spread)`` after validation.
+    triangle); ``parameters`` is ``(width, spread, width_spread)`` after validation;
+    ``kernel_params`` the same quadrature as the ``params`` of the compiled kernel
+    (:func:`hysteresis.preisach._everett_kernels.everett_eval`, kind 0).
     """
 
     everett: Callable
@@ -32,6 +34,7 @@ class GaussianEverett:
     gradient_scalar: Callable
     bound: float
     parameters: tuple[float, float, float]
+    kernel_params: np.ndarray
 
 
 def gaussian_everett(
@@ -114,4 +117,9 @@ def gaussian_everett(
         gradient_scalar=gradient_scalar,
         bound=bound,
         parameters=(width, spread, width_spread),
+        kernel_params=readonly_array(
+            [-bound, bound, half, width_spread, spread, r_lo, r_hi, norm_r, norm_s, total]
+            + list(g)
+            + list(gw)
+        ),
     )
