@@ -24,7 +24,7 @@ from hysteresis._validation import (
     readonly_array,
 )
 from hysteresis.base import ContinuousHysteron
-from hysteresis.flow import BranchFlow
+from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.preisach import _kernels as _k
 from hysteresis.preisach import _scalar
 from hysteresis.preisach.base import (
@@ -503,6 +503,15 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
             reversal_pushes=True,
             pushed=pushed,
         )
+
+    def compiled_flow(self) -> CompiledFlow | None:
+        """The staircase for the oscillator's compiled continuous engine: this model's
+        :meth:`compiled_everett` (``None`` if it has none: the generic engine integrates it)
+        and the memory labels of :meth:`extremum_label`."""
+        everett = self.compiled_everett()
+        if everett is None:
+            return None
+        return CompiledFlow(kind="preisach", label=self.extremum_label, everett=everett)
 
     def _scalar_everett(self) -> Callable:
         """``everett`` with a fast path for scalar arguments (:mod:`._scalar`)."""

@@ -499,7 +499,9 @@ def _to_target(
             y[1] = 0.0  # v := 0 exactly
         _store(st, Y, y, k)
         _sync(ist, st, hw, pos, slv, Y)
-        _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev)
+        _event(
+            par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev
+        )
         ist[11] = ist[11] + 1 if tau == 0.0 else 0
         if ist[11] > _MAX_STUCK:
             return STUCK

@@ -63,6 +63,8 @@ METHODS = ("auto", "compiled", "generic")
 DEFAULT_STEP = 0.05
 #: events kept per kernel call before the buffer is drained
 _EVENT_BUFFER = 4096
+#: smallest staircase capacity (entries; doubled when a push needs room)
+_MIN_CAPACITY = 64
 
 
 class CompiledContinuousEngine(Engine):
@@ -179,7 +181,7 @@ class CompiledContinuousEngine(Engine):
             top = extrema.size + 1
             reversing = (d > 0) != (top % 2 == 0)
             p = top if reversing else top - 1
-            cap = max(64, 2 * (top + 3))
+            cap = max(_MIN_CAPACITY, top + 4)
             self._stack = np.empty(cap)
             self._stack[:2] = (np.inf, -np.inf)
             self._stack[2 : top + 1] = extrema

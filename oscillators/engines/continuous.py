@@ -356,6 +356,23 @@ class ContinuousEngine(Engine):
                     y_hit = sol.y_events[j][0]
                     hit = kind
                     break
+            if hit == "reversal" and len(events) > 1 and d * (float(y_hit[0]) - bp) >= 0.0:
+                # the input passed the breakpoint and turned back inside one solver step (the
+                # event is seen only by its sign at the step end): the breakpoint comes first
+                sol_b = solve_ivp(
+                    rhs,
+                    (0.0, s_hit),
+                    np.asarray(y0, dtype=np.float64),
+                    method="DOP853",
+                    events=[breakpoint],
+                    rtol=self._rtol,
+                    atol=self._atol,
+                    max_step=self._max_step,
+                )
+                if sol_b.status == 1 and sol_b.t_events[0].size:
+                    s_hit = float(sol_b.t_events[0][0])
+                    y_hit = sol_b.y_events[0][0]
+                    hit = "breakpoint"
             if samples is not None:
                 samples = samples[:, sol_t < s_hit]
         if hit is None:

@@ -20,12 +20,19 @@ from scipy.special import erf
 
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii
-from oscillators.engines import ContinuousEngine, DivergenceError, PlayEngine
+from oscillators.engines import (
+    CompiledContinuousEngine,
+    ContinuousEngine,
+    DivergenceError,
+    PlayEngine,
+)
 from oscillators.results import OscillatorState
 from oscillators.system import ForcedOscillator
 
 ZETA = 0.05
 TIGHT = {"rtol": 1e-12, "atol": 1e-12}
+#: the generic engine also for operators that have the compiled one (this file tests the former)
+GENERIC = {"method": "generic"}
 
 
 def _erf_play_custom(width=2.0, spread=1.0):
@@ -98,9 +105,9 @@ def test_custom_erf_shape_gives_the_compiled_erf_section():
 def test_single_play_prandtl_ishlinskii_gives_the_play_section(coupling):
     play = ForcedOscillator(PlayOperator(2.0), coupling, ZETA, 1.0)
     pi = ForcedOscillator(PrandtlIshlinskii([2.0], [1.0]), coupling, ZETA, 1.0)
-    assert play.engine_class is PlayEngine and pi.engine_class is ContinuousEngine
+    assert play.engine_class is PlayEngine and pi.engine_class is CompiledContinuousEngine
     ref = play.poincare_section(25)
-    sec = pi.poincare_section(25, engine_options=TIGHT)
+    sec = pi.poincare_section(25, engine_options={**GENERIC, **TIGHT})
     np.testing.assert_allclose(sec.q, ref.q, atol=1e-6, rtol=0)
     np.testing.assert_allclose(sec.v, ref.v, atol=1e-6, rtol=0)
     np.testing.assert_allclose(sec.M, ref.M, atol=1e-6, rtol=0)
@@ -173,7 +180,7 @@ def test_pi_tangent_flow_matches_finite_differences():
     assert np.sum(kinds == -1) >= 2 and np.sum(kinds == 1) >= 4  # reversals and wall hits
     jac = eng.deviations()
     system = ForcedOscillator(op, coupling, ZETA, 1.0)
-    jac_api, labels = system.jacobian(duration, start, engine_options=TIGHT)
+    jac_api, labels = system.jacobian(duration, start, engine_options={**GENERIC, **TIGHT})
     assert labels == eng.tangent_space
     np.testing.assert_array_equal(jac_api, jac)
 
@@ -246,8 +253,9 @@ def test_preisach_tangent_flow_matches_finite_differences():
 )
 def test_zero_coupling_oscillator_exponents_are_minus_zeta(op):
     system = ForcedOscillator(op, 0.0, ZETA, 1.0)
-    assert system.engine_class is ContinuousEngine
-    res = lyapunov_spectrum(system, 300.0, engine_options={"rtol": 1e-10, "atol": 1e-10})
+    options = {**GENERIC, "rtol": 1e-10, "atol": 1e-10}
+    assert isinstance(system.engine(**options), ContinuousEngine)
+    res = lyapunov_spectrum(system, 300.0, engine_options=options)
     exps = res.exponents
     # the decoupled oscillator contributes -ζ twice (complex pair); memory directions are
     # frozen (0) or reset (-inf)
@@ -265,8 +273,10 @@ def test_zero_coupling_oscillator_exponents_are_minus_zeta(op):
 )
 def test_tanh_play_and_pi5_couple_with_finite_spectra(op, coupling, memory):
     system = ForcedOscillator(op, coupling, ZETA, 1.0)
-    res = lyapunov_spectrum(system, 200.0, engine_options={"rtol": 1e-10, "atol": 1e-10})
+    options = {**GENERIC, "rtol": 1e-10, "atol": 1e-10}
+    res = lyapunov_spectrum(system, 200.0, engine_options=options)
     exps = res.exponents
+    assert res.extra["engine"] == ContinuousEngine.name
     assert res.tangent_space == ("q", "v") + memory
     assert np.all(np.isfinite(exps[:2])), exps
     assert exps[0] < 1.0 and exps[1] < 0.0
@@ -371,7 +381,7 @@ def test_gaussian_preisach_approaches_the_erf_play_as_width_spread_shrinks():
     # along nearly one trajectory): differences then measure the model difference
     t_end = 40.0
     ref_max = lyapunov_spectrum(play_system, t_end).max_exponent
-    options = {"rtol": 1e-10, "atol": 1e-10}
+    options = {**GENERIC, "rtol": 1e-10, "atol": 1e-10}
     distances, gaps = [], []
     for width_spread in (0.1, 0.05, 0.025):
         model = ContinuousPreisachModel.gaussian(2.0, 1.0, width_spread)
