@@ -21,7 +21,12 @@ per-switch Python path (``engine_options={"method": "generic"}``) measured in th
 the heap kernel on the dimers next to the nested O(1) kernel.
 
     python benchmarks/bench_oscillator.py [--spins 20000] [--time 2000] [--baseline-spins 2000]
-        [--general-relays 10000] [--general-baseline-time 15]
+        [--general-relays 10000] [--general-baseline-time 15] [--continuous-only]
+
+Continuous operators (:func:`continuous_engine_figures`, also alone with ``--continuous-only``):
+seconds per 1000 time units with the tangent flow of the erf play, PI with 10 plays, continuous
+Preisach (grid 256 and Gaussian), the tanh play and the generic engine on the grid-256 model,
+measured interleaved in one run, with ratios to the erf-play kernel.
 """
 
 from __future__ import annotations
@@ -216,8 +221,16 @@ def main() -> None:
     ap.add_argument("--baseline-time", type=float, default=30.0)
     ap.add_argument("--general-relays", type=int, default=10000)
     ap.add_argument("--general-baseline-time", type=float, default=15.0)
+    ap.add_argument(
+        "--continuous-only",
+        action="store_true",
+        help="only the continuous operators (continuous_engine_figures), as one JSON line",
+    )
     args = ap.parse_args()
     c, t_run = args.coupling, args.time
+    if args.continuous_only:
+        print(json.dumps({"coupling": c, **continuous_engine_figures(c)}))
+        return
     period = 2 * math.pi / OMEGA
     n_periods = int(round(t_run / period))
     t_run = n_periods * period
@@ -297,41 +310,74 @@ def main() -> None:
     )
 
 
-def continuous_engine_figures(c: float, erf_play_tangent_s: float) -> dict:
-    """Seconds per 1000 time units with tangent flow on the generic continuous engine
-    (oscillators.engines.continuous, DOP853 + events): a 10-play Prandtl–Ishlinskii operator (widths
-    0.4 ... 4.0, equal weights, coupling 0.8 < 1/Σweights so that the walls stay stable) and a
-    continuous Preisach model tabulated on a 256 grid (density N(s; 0, R²)·N(r; p/2, 0.2²),
-    coupling ``c``), next to the compiled erf-play kernel measured above (ratio = engine /
-    kernel). Median of 3 runs each; run lengths are short because the engine is slow.
+def continuous_engine_figures(c: float, erf_play_tangent_s: float | None = None) -> dict:
+    """Seconds per 1000 time units WITH the tangent flow (``lyapunov_spectrum``, QR every
+    period) of every continuous operator on the engine its contract selects, next to the
+    compiled erf-play kernel measured in the same rounds (interleaved, median of 3; ratio =
+    operator / erf play):
+
+    * ``erf_play``: ``GeneralizedPlay.erf(p, R)`` (compiled play kernel), coupling ``c``;
+    * ``pi10``: a 10-play Prandtl–Ishlinskii operator (widths 0.4 ... 4.0, equal weights 0.1,
+      coupling 0.8 < 1/Σweights so that the walls stay stable);
+    * ``continuous_preisach``: a continuous Preisach model tabulated on a 256 grid by
+      ``from_density`` (density N(s; 0, R²)·N(r; p/2, 0.2²)), coupling ``c``, and
+      ``continuous_preisach_gaussian``: ``ContinuousPreisachModel.gaussian(p, R, 0.2)``;
+    * ``tanh_play``: ``GeneralizedPlay`` with the user shape tanh, coupling 2;
+    * ``continuous_preisach_generic``: the grid-256 model on the generic engine
+      (``engine_options={"method": "generic"}``), the baseline.
+
+    Run lengths differ (the generic engine is slow); each figure is normalised per 1000 tu.
+    ``erf_play_tangent_s`` (the main run's figure) is only printed for comparison.
     """
-    from hysteresis import PrandtlIshlinskii, PreisachModel
+    from hysteresis import ContinuousPreisachModel, PrandtlIshlinskii, PreisachModel
 
     def density(a, b):
         r, s = 0.5 * (a - b), 0.5 * (a + b)
         width = np.exp(-0.5 * ((r - 0.5 * P) / 0.2) ** 2) / (0.2 * math.sqrt(2 * math.pi))
         return 0.5 * width * np.exp(-0.5 * (s / R) ** 2) / (R * math.sqrt(2 * math.pi))
 
+    grid = PreisachModel.from_density(density, -7.0, 7.0, resolution=256)
+    tanh = GeneralizedPlay(P, np.tanh, lambda w: 1.0 / np.cosh(w) ** 2)
+    generic = {"method": "generic"}
     cases = {
-        "pi10": (PrandtlIshlinskii(np.linspace(0.4, 4.0, 10), np.full(10, 0.1)), 0.8, 100.0),
-        "preisach256": (PreisachModel.from_density(density, -7.0, 7.0, resolution=256), c, 10.0),
+        "erf_play": (GeneralizedPlay.erf(P, R), c, 1000.0, {}),
+        "pi10": (PrandtlIshlinskii(np.linspace(0.4, 4.0, 10), np.full(10, 0.1)), 0.8, 1000.0, {}),
+        "continuous_preisach": (grid, c, 200.0, {}),
+        "continuous_preisach_gaussian": (ContinuousPreisachModel.gaussian(P, R, 0.2), c, 200.0, {}),
+        "tanh_play": (tanh, 2.0, 100.0, {}),
+        "continuous_preisach_generic": (grid, c, 10.0, generic),
     }
-    figures = {}
-    for name, (operator, coupling, t_run) in cases.items():
+    runs, engines = {}, {}
+    for name, (operator, coupling, t_run, options) in cases.items():
         system = ForcedOscillator(operator, coupling, ZETA, OMEGA)
-        runs = []
-        for _ in range(3):
-            t0 = time.perf_counter()
-            res = lyapunov_spectrum(system, t_run, progress=False)
-            runs.append(1000 * (time.perf_counter() - t0) / t_run)
-        sec = float(np.median(runs))
-        figures[f"continuous_{name}_tangent_s_per_1000tu"] = sec
-        figures[f"continuous_{name}_vs_erf_play_kernel"] = sec / erf_play_tangent_s
+        engines[name] = type(system.engine(**options)).__name__
+        if engines[name] == "ContinuousEngine":
+            # the generic engine: seconds per time unit, a short run suffices
+            t_run = min(t_run, 10.0)
+            cases[name] = (operator, coupling, t_run, options)
+        # compile (and warm caches) outside the timing
+        lyapunov_spectrum(system, min(t_run, 10.0), engine_options=options, progress=False)
+
+        def run(system=system, t_run=t_run, options=options):
+            return lyapunov_spectrum(system, t_run, engine_options=options, progress=False)
+
+        runs[name] = run
+    timed = _interleaved(runs, rounds=3)
+    base = 1000.0 * timed["erf_play"][0] / cases["erf_play"][2]
+    figures = {}
+    for name, (seconds, res) in timed.items():
+        sec = 1000.0 * seconds / cases[name][2]
+        figures[f"{name}_s_per_1000tu_tangent"] = sec
+        figures[f"{name}_engine"] = engines[name]
+        if name != "erf_play":
+            figures[f"{name}_vs_erf_play"] = sec / base
         print(
-            f"continuous engine, {name}: {sec:.2f} s per 1000 tu (tangent, median of 3, "
-            f"{t_run:g} tu each) = {sec / erf_play_tangent_s:.0f} x the erf-play kernel; "
-            f"lambda = {res.exponents[:3]}"
+            f"{name} ({engines[name]}): {sec:.4f} s per 1000 tu with tangent flow (median of 3, "
+            f"{cases[name][2]:g} tu each) = {sec / base:.1f} x the erf-play kernel; "
+            f"lambda = {np.round(res.exponents[:3], 4)}"
         )
+    if erf_play_tangent_s is not None:
+        print(f"  (erf-play kernel in the main run: {erf_play_tangent_s:.4f} s per 1000 tu)")
     return figures
 
 
