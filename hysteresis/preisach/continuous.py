@@ -44,7 +44,9 @@ from hysteresis.preisach.gaussian import gaussian_everett
 
 __all__ = ["ContinuousPreisachModel"]
 
-#: largest ``resolution`` of :meth:`PreisachModel.from_density` (memory ~ 16·resolution²/2)
+#: largest ``resolution`` of :meth:`PreisachModel.from_density` and of a compiled table: the
+#: quadrature holds ~16·resolution²/2 density values while it runs, the Hermite table keeps
+#: 4·(resolution + 1)² floats (537 MB at the limit)
 _MAX_RESOLUTION = 4096
 #: grid cells per side of the table :meth:`ContinuousPreisachModel.compiled_everett` builds for
 #: a :meth:`PreisachModel.from_everett` model
@@ -118,7 +120,8 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
             raise ParameterTypeError("density must be a vectorised callable density(alpha, beta)")
         model = cls(lower, upper)
         n = positive_integer(resolution, "resolution", minimum=2)
-        # the quadrature holds 16 resolution²/2 density values: bound the memory up front
+        # the quadrature holds 16 resolution²/2 density values and the table 4 (n+1)² floats:
+        # bound the memory up front
         bounded_work(n, "resolution", _MAX_RESOLUTION, "grid cells per side")
         mass_tolerance = positive_scalar(mass_tolerance, "mass_tolerance")
         table, model._mass_scale = density_table(
