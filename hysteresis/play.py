@@ -42,6 +42,7 @@ from hysteresis._validation import (
 )
 from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
+from hysteresis.shape_table import ShapeTable, ShapeTableError, tabulate_shape
 
 __all__ = [
     "CompiledPlay",
@@ -75,14 +76,18 @@ class CompiledPlay:
     width:
         Wagon length p.
     shape:
-        ``"identity"`` (plain play, output ``w``) or ``"erf"`` (output ``erf(w/(√2 R))``).
+        ``"identity"`` (plain play, output ``w``), ``"erf"`` (output ``erf(w/(√2 R))``) or
+        ``"table"`` (output the piecewise cubic Hermite interpolant ``table`` of a user shape).
     spread:
-        R of the erf shape (1.0 for the identity).
+        R of the erf shape (1.0 otherwise).
+    table:
+        The :class:`~hysteresis.shape_table.ShapeTable` of shape ``"table"`` (else ``None``).
     """
 
     width: float
     shape: str
     spread: float = 1.0
+    table: ShapeTable | None = None
 
 
 @njit(cache=True)
@@ -517,12 +522,35 @@ class GeneralizedPlay(_PlayBase):
             hi = float(self._shape(np.array(np.inf)))
         return (lo if not math.isnan(lo) else -np.inf, hi if not math.isnan(hi) else np.inf)
 
+    #: the shape table (built on the first compiled_play() call) is rebuilt, not pickled
+    _transient_attributes = ("_shape_table",)
+
+    def shape_table(self) -> ShapeTable:
+        """The piecewise cubic Hermite table of a custom shape that the compiled play kernel
+        integrates (:func:`~hysteresis.shape_table.tabulate_shape`: ``|f − table| <= 1e-10`` of
+        the output range, verified; beyond the shape's transition range the saturation value).
+        Built once and kept. :class:`~hysteresis.shape_table.ShapeTableError` if the shape
+        does not saturate (an infinite ``output_range``) or needs more than
+        :data:`~hysteresis.shape_table.MAX_KNOTS` knots."""
+        table = self.__dict__.get("_shape_table")
+        if table is None:
+            table = tabulate_shape(self._shape, self._shape_derivative, self.output_range)
+            self._shape_table = table
+        return table
+
     def compiled_play(self) -> CompiledPlay | None:
-        """``GeneralizedPlay.erf`` runs on the compiled play-limit kernel; a custom shape has no
+        """The compiled play-limit kernel's description: ``GeneralizedPlay.erf`` in closed
+        form; a custom shape as its :meth:`shape_table` (shape ``"table"``; the kernel
+        integrates the table, within 1e-10 of the output range). A shape that cannot be
+        tabulated (no saturation, or too many knots: :meth:`shape_table` says why) has no
         compiled description (``None``) and is integrated by the generic continuous engine."""
         if self._shape_kind == "erf":
             return CompiledPlay(width=self._width, shape="erf", spread=float(self._spread))
-        return None
+        try:
+            table = self.shape_table()
+        except ShapeTableError:
+            return None
+        return CompiledPlay(width=self._width, shape="table", table=table)
 
     def __repr__(self) -> str:
         if self.shape_kind == "erf":

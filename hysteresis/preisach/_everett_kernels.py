@@ -40,7 +40,13 @@ shape ``(n + 1, n + 1, 4)`` with ``table[i, j] = (E, ∂E/∂a, ∂E/∂b, ∂²
 
 with the cubic Hermite basis ``A_0 = 1 − 3s² + 2s³``, ``A_1 = 3s² − 2s³``,
 ``B_0 = s − 2s² + s³``, ``B_1 = s³ − s²``; the gradient is the exact derivative of this
-polynomial (one C¹ function: E and its gradient are consistent).
+polynomial (one C¹ function: E and its gradient are consistent). In a diagonal cell
+``i == j`` (its part ``a > b``) the polynomial's trace on the diagonal, ``T(s) = P(s, s)``, is
+subtracted through ``D(s, t) = t²(1 − s)² T(t)/(t²(1 − t)²)`` (a polynomial: ``T`` has double
+zeros at 0 and 1 because the nodal values and gradients vanish on the diagonal), so that
+``E → 0`` exactly as ``b → a`` while ``D`` and its gradient vanish on the cell's edges ``t = 0``
+and ``s = 1`` (the result stays C¹ across cells). The table's construction and error bounds:
+:mod:`hysteresis.preisach.everett_table`.
 """
 
 from __future__ import annotations
@@ -50,7 +56,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["KIND_GAUSSIAN", "KIND_TABLE", "GAUSSIAN_HEADER", "everett_eval"]
+__all__ = ["KIND_GAUSSIAN", "KIND_TABLE", "GAUSSIAN_HEADER", "everett_eval", "everett_many"]
 
 #: ``kind`` of the Gaussian width-disorder Everett function (quadrature)
 KIND_GAUSSIAN = 0
@@ -154,7 +160,8 @@ def _hermite_cell(table: np.ndarray, i: int, j: int, s: float, t: float, h: floa
 
 @njit(cache=True)
 def _tabulated(params: np.ndarray, table: np.ndarray, a: float, b: float):
-    """Kind 1 at clipped ``a > b`` (cell indices clamped to the grid)."""
+    """Kind 1 at clipped ``a > b`` (cell indices clamped to the grid); in a diagonal cell
+    ``i == j`` minus the correction ``D`` that makes the interpolant vanish on ``a = b``."""
     lower = params[0]
     upper = params[1]
     n = table.shape[0] - 1
@@ -163,7 +170,32 @@ def _tabulated(params: np.ndarray, table: np.ndarray, a: float, b: float):
     fb = (b - lower) / h
     i = min(max(int(math.floor(fa)), 0), n - 1)
     j = min(max(int(math.floor(fb)), 0), n - 1)
-    return _hermite_cell(table, i, j, fa - i, fb - j, h)
+    s = fa - i
+    t = fb - j
+    value, ga, gb = _hermite_cell(table, i, j, s, t, h)
+    if i != j:
+        return value, ga, gb
+    # diagonal cell: the trace T(x) = P(x, x) of the interpolant P (degree 6, double zeros at
+    # x = 0 and 1) is T = x²(1 − x)² R(x) with R quadratic; R from T at x = 1/4, 1/2, 3/4
+    r1 = _hermite_cell(table, i, j, 0.25, 0.25, h)[0] / (0.0625 * 0.5625)
+    r2 = _hermite_cell(table, i, j, 0.5, 0.5, h)[0] / 0.0625
+    r3 = _hermite_cell(table, i, j, 0.75, 0.75, h)[0] / (0.5625 * 0.0625)
+    # Lagrange basis on the nodes 1/4, 1/2, 3/4 (spacing 1/4): R(t) and R'(t)
+    u1 = (t - 0.5) * (t - 0.75) * 8.0
+    u2 = (t - 0.25) * (t - 0.75) * -16.0
+    u3 = (t - 0.25) * (t - 0.5) * 8.0
+    du1 = (2.0 * t - 1.25) * 8.0
+    du2 = (2.0 * t - 1.0) * -16.0
+    du3 = (2.0 * t - 0.75) * 8.0
+    rt = r1 * u1 + r2 * u2 + r3 * u3
+    drt = r1 * du1 + r2 * du2 + r3 * du3
+    # D(s, t) = t²(1 − s)² R(t): D = T on the diagonal, D and ∇D vanish on t = 0 and s = 1
+    # (the edges shared with the neighbouring cells, so the result stays C¹)
+    w = (1.0 - s) * (1.0 - s)
+    d = t * t * w * rt
+    dds = -2.0 * t * t * (1.0 - s) * rt
+    ddt = w * (2.0 * t * rt + t * t * drt)
+    return value - d, ga - dds / h, gb - ddt / h
 
 
 @njit(cache=True)
@@ -189,4 +221,16 @@ def everett_eval(kind: int, params: np.ndarray, table: np.ndarray, a: float, b: 
         da = 0.0
     if not grad_b:
         db = 0.0
+    return e, da, db
+
+
+@njit(cache=True)
+def everett_many(kind: int, params: np.ndarray, table: np.ndarray, a: np.ndarray, b: np.ndarray):
+    """:func:`everett_eval` at every pair ``(a[k], b[k])`` (1-D arrays of one length): the
+    arrays ``(E, ∂E/∂a, ∂E/∂b)``."""
+    e = np.empty(a.size)
+    da = np.empty(a.size)
+    db = np.empty(a.size)
+    for k in range(a.size):
+        e[k], da[k], db[k] = everett_eval(kind, params, table, a[k], b[k])
     return e, da, db

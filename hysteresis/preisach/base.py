@@ -178,10 +178,14 @@ class PreisachModel(Hysteron):
 
         ``density`` is a vectorised callable ``(alpha, beta) -> μ``; its mass on the triangle
         must be 1 within ``mass_tolerance`` (otherwise ``ValueError``; the remaining quadrature
-        defect is divided out so that saturation is exactly ±1). The Everett function
-        is tabulated on a ``resolution × resolution`` grid (Gauss–Legendre cell masses) and
-        interpolated bilinearly (error O(h²), ``h = (upper − lower)/resolution``); branch slopes
-        use a 1-D Gauss–Legendre quadrature of ``μ`` along the moving edge.
+        defect is divided out so that saturation is exactly ±1). The Everett function is
+        tabulated on a ``resolution × resolution`` grid (nodal ``E``, ``∂E/∂α``, ``∂E/∂β`` by
+        Gauss–Legendre quadrature, ``∂²E/∂α∂β = −μ``) and interpolated by C¹ bicubic Hermite
+        polynomials: ``everett`` and ``everett_gradient`` are one function (the gradient is the
+        derivative of ``E``), with error ``O(h⁴)`` off the diagonal cells and ``O(h³)`` in them
+        (``h = (upper − lower)/resolution``; the bounds in
+        :mod:`hysteresis.preisach.everett_table`), ``E → 0`` exactly as ``β → α``. The same
+        table is the model's :meth:`compiled_everett`. Memory ``32 (resolution + 1)²`` bytes.
         """
         return PreisachModel._kinds["continuous"]._from_density(
             density, lower, upper, resolution, mass_tolerance

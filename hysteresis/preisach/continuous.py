@@ -27,20 +27,30 @@ from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.preisach import _kernels as _k
 from hysteresis.preisach import _scalar
+from hysteresis.preisach._everett_kernels import KIND_TABLE, everett_many
 from hysteresis.preisach.base import (
     PreisachModel,
     PreisachState,
     _fingerprint,
-    _gauss,
     _stack,
 )
-from hysteresis.preisach.everett_table import EMPTY_TABLE, CompiledEverett
+from hysteresis.preisach.everett_table import (
+    EMPTY_TABLE,
+    CompiledEverett,
+    density_table,
+    everett_function_table,
+)
 from hysteresis.preisach.gaussian import gaussian_everett
 
 __all__ = ["ContinuousPreisachModel"]
 
-#: largest ``resolution`` of :meth:`PreisachModel.from_density` (memory ~ 16·resolution²/2)
+#: largest ``resolution`` of :meth:`PreisachModel.from_density` and of a compiled table: the
+#: quadrature holds ~16·resolution²/2 density values while it runs, the Hermite table keeps
+#: 4·(resolution + 1)² floats (537 MB at the limit)
 _MAX_RESOLUTION = 4096
+#: grid cells per side of the table :meth:`ContinuousPreisachModel.compiled_everett` builds for
+#: a :meth:`PreisachModel.from_everett` model
+COMPILED_RESOLUTION = 512
 #: inputs per chunk of :meth:`ContinuousPreisachModel.apply`: its working memory (the Everett
 #: quadrature holds chunk × nodes floats) is bounded by this, not by the length of the input
 _APPLY_CHUNK = 8192
@@ -91,8 +101,8 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
     def __repr__(self) -> str:
         return f"ContinuousPreisachModel(lower={self._lower}, upper={self._upper})"
 
-    #: the scalar copy of the Everett table (rebuilt on demand) is not pickled
-    _transient_attributes = ("_table_rows",)
+    #: the table of a from_everett model's compiled_everett() (rebuilt on demand) is not pickled
+    _transient_attributes = ("_compiled_tables",)
 
     def __reduce__(self) -> tuple:
         """A :meth:`gaussian` model is pickled as its parameters and rebuilt (deterministic:
@@ -110,56 +120,19 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
             raise ParameterTypeError("density must be a vectorised callable density(alpha, beta)")
         model = cls(lower, upper)
         n = positive_integer(resolution, "resolution", minimum=2)
-        # the quadrature holds 16 resolution²/2 density values: bound the memory up front
+        # the quadrature holds 16 resolution²/2 density values and the table 4 (n+1)² floats:
+        # bound the memory up front
         bounded_work(n, "resolution", _MAX_RESOLUTION, "grid cells per side")
         mass_tolerance = positive_scalar(mass_tolerance, "mass_tolerance")
-        lo, up = model._lower, model._upper
-        h = (up - lo) / n
-        nodes = lo + h * np.arange(n + 1)
-        g, gw = _gauss(4)
-        # square cells (alpha-cell i > beta-cell j): tensor Gauss
-        ii, jj = np.tril_indices(n, -1)
-        qa = nodes[ii][:, None, None] + h * g[None, :, None]
-        qb = nodes[jj][:, None, None] + h * g[None, None, :]
-        mu = np.asarray(density(*np.broadcast_arrays(qa, qb)), dtype=np.float64)
-        if mu.shape != qa.shape[:1] + (g.size, g.size):
-            mu = np.broadcast_to(mu, (ii.size, g.size, g.size))
-        if not np.all(np.isfinite(mu)) or np.any(mu < 0):
-            raise ValueError("density must be finite and >= 0 on lower <= beta <= alpha <= upper")
-        sq = h * h * np.einsum("kij,i,j->k", mu, gw, gw)
-        # diagonal cells: triangle beta <= alpha, collapsed coordinates
-        # alpha = x + h*xi, beta = x + h*xi*eta, Jacobian h^2 xi
-        d = np.arange(n)
-        ta = nodes[d][:, None, None] + h * g[None, :, None] + 0.0 * g[None, None, :]
-        tb = nodes[d][:, None, None] + h * g[None, :, None] * g[None, None, :]
-        mu_t = np.asarray(density(ta, tb), dtype=np.float64)
-        mu_t = np.broadcast_to(mu_t, ta.shape)
-        if not np.all(np.isfinite(mu_t)) or np.any(mu_t < 0):
-            raise ValueError("density must be finite and >= 0 on lower <= beta <= alpha <= upper")
-        tri = h * h * np.einsum("kij,i,j,i->k", mu_t, gw, gw, g)
-        cell = np.zeros((n, n))
-        cell[ii, jj] = sq
-        cell[d, d] = tri
-        total = float(cell.sum())
-        if abs(total - 1.0) > mass_tolerance:
-            raise ValueError(
-                f"density must have mass 1 on the triangle lower <= beta <= alpha <= upper "
-                f"(within mass_tolerance={mass_tolerance}), got {total!r}"
-            )
-        # within the tolerance the small mass defect is quadrature error: divide it out so that
-        # saturation is exactly M = ±1
-        cell /= total
-        model._mass_scale = 1.0 / total
-        # E(x_i, x_j) = sum of cells with alpha-cell < i and beta-cell >= j
-        table = np.zeros((n + 1, n + 1))
-        suffix = np.cumsum(cell[:, ::-1], axis=1)[:, ::-1]  # sum over beta-cells >= j
-        table[1:, :n] = np.cumsum(suffix, axis=0)
-        model._table = table
-        model._h = h
-        model._n = n
+        table, model._mass_scale = density_table(
+            density, model._lower, model._upper, n, mass_tolerance
+        )
+        model._compiled_everett = CompiledEverett(
+            KIND_TABLE, np.array([model._lower, model._upper]), table
+        )
         model._density_fn = density
         model._everett_fn = model._everett_from_table
-        model._gradient_fn = model._gradient_from_density
+        model._gradient_fn = model._gradient_from_table
         model._set_fingerprint()
         return model
 
@@ -251,31 +224,12 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         return out
 
     def _everett_from_table(self, a, b):
-        fa = (a - self._lower) / self._h
-        fb = (b - self._lower) / self._h
-        i = np.clip(np.floor(fa).astype(np.int64), 0, self._n - 1)
-        j = np.clip(np.floor(fb).astype(np.int64), 0, self._n - 1)
-        ta = fa - i
-        tb = fb - j
-        t = self._table
-        e = (
-            t[i, j] * (1 - ta) * (1 - tb)
-            + t[i + 1, j] * ta * (1 - tb)
-            + t[i, j + 1] * (1 - ta) * tb
-            + t[i + 1, j + 1] * ta * tb
-        )
-        return np.maximum(e, 0.0)
+        c = self._compiled_everett
+        return everett_many(c.kind, c.params, c.table, a, b)[0]
 
-    def _gradient_from_density(self, a, b):
-        # dE/da = ∫_b^a μ(a, β) dβ ; dE/db = -∫_b^a μ(α, b) dα (Gauss–Legendre, 64 points)
-        g, gw = _gauss(64)
-        span = (a - b)[..., None]
-        pts = b[..., None] + span * g
-        mu = self._density_fn
-        da = np.sum(np.asarray(mu(np.broadcast_to(a[..., None], pts.shape), pts)) * gw, -1)
-        db = -np.sum(np.asarray(mu(pts, np.broadcast_to(b[..., None], pts.shape))) * gw, -1)
-        scale = self._mass_scale * span[..., 0]
-        return da * scale, db * scale
+    def _gradient_from_table(self, a, b):
+        c = self._compiled_everett
+        return everett_many(c.kind, c.params, c.table, a, b)[1:]
 
     def everett_gradient(self, a, b) -> tuple[np.ndarray, np.ndarray]:
         """``(∂E/∂α, ∂E/∂β)`` at ``(a, b)``; zero outside the triangle's interior."""
@@ -553,9 +507,37 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         model._compiled_everett = CompiledEverett(0, law.kernel_params, EMPTY_TABLE)
         return model
 
-    def compiled_everett(self) -> CompiledEverett | None:
+    def compiled_everett(self, resolution: int | None = None) -> CompiledEverett:
         """The Everett function as arrays for the compiled kernel
-        :func:`~hysteresis.preisach._everett_kernels.everett_eval` (same values and gradient
-        as :meth:`everett` / :meth:`everett_gradient`): kind 0, the same quadrature, for
-        :meth:`gaussian`; ``None`` for other models."""
-        return self.__dict__.get("_compiled_everett")
+        :func:`~hysteresis.preisach._everett_kernels.everett_eval`.
+
+        :meth:`gaussian`: kind 0, the same quadrature as :meth:`everett` /
+        :meth:`everett_gradient` (agreement to rounding). :meth:`from_density`: kind 1, the
+        model's own C¹ bicubic Hermite table (the very function :meth:`everett` evaluates).
+        :meth:`from_everett`: kind 1, a table of the user's function on a ``resolution``-cell
+        grid (default :data:`COMPILED_RESOLUTION`; built on first call and kept) — the model
+        itself keeps evaluating the user's callable, the compiled engine integrates the table,
+        which differs from it by the interpolation error bound of
+        :mod:`hysteresis.preisach.everett_table` (plus the small error of the nodal
+        differences, see :func:`.everett_table.everett_function_table`).
+        ``resolution`` applies to :meth:`from_everett` models only.
+        """
+        built = self.__dict__.get("_compiled_everett")
+        if built is not None:
+            if resolution is not None:
+                raise ValueError(
+                    "resolution applies to from_everett models only (this model's Everett "
+                    "function is compiled as built)"
+                )
+            return built
+        n = COMPILED_RESOLUTION if resolution is None else resolution
+        n = positive_integer(n, "resolution", minimum=2)
+        bounded_work(n, "resolution", _MAX_RESOLUTION, "grid cells per side")
+        cache = self.__dict__.setdefault("_compiled_tables", {})
+        if n not in cache:
+            table = everett_function_table(
+                self._everett_fn, self._gradient_fn, self._lower, self._upper, n
+            )
+            cache.clear()  # keep one table (memory)
+            cache[n] = CompiledEverett(KIND_TABLE, np.array([self._lower, self._upper]), table)
+        return cache[n]

@@ -8,10 +8,15 @@ Everything lives in flat float64 arrays so that numba compiles one specialisatio
 
 ``par`` (see :func:`make_parameters` in play_flow)::
 
-    0 ζ   1 Ω   2 C   3 hp = p/2   4 shape kind (0 identity, 1 erf)   5 R (spread)
+    0 ζ   1 Ω   2 C   3 hp = p/2   4 shape kind (0 identity, 1 erf, 2 table)   5 R (spread)
     6 φ0  7 h_out (RK8 step outside)  8 h_in (scan step inside)
     9 A  10 B  (periodic particular solution q_p = A cos φ + B sin φ)
     11 ω_d = sqrt(1 - ζ²)   12 P = sqrt(A² + B²)   13 1/(√2 R)   14 sqrt(2/π)/R
+    kind 2 only: 15 lower knot w_0   16 step h   17 knots m   18 .. 18+m-1 f(w_k)
+    18+m .. 18+2m-1 f'(w_k)   (a :class:`hysteresis.shape_table.ShapeTable`: the piecewise
+    cubic Hermite interpolant; in knot interval k with s = (w − w_k)/h,
+    f = A₀(s) f_k + h B₀(s) f'_k + A₁(s) f_{k+1} + h B₁(s) f'_{k+1}, and beyond the knots the
+    end value with slope 0)
 
 ``st`` = [t, q, v, w, mode] with mode 0 inside the play (|q - w| < hp, w frozen), +1 on the
 right wall moving right (w = q - hp, v > 0), -1 on the left wall moving left (w = q + hp, v < 0).
@@ -41,6 +46,9 @@ RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
 RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
 
+#: index in ``par`` where a kind-2 shape table starts
+_TABLE = 15
+
 # Width of the interval on which a possible wall hit inside the play is resolved exactly
 # (there the input velocity has at most one zero and the Hermite error bound is ~1e-14).
 _RESOLVE = 1e-3
@@ -50,10 +58,49 @@ _RESOLVE = 1e-3
 # shape of the generalized play
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
+def _table_eval(par, w):
+    """Kind 2: (f, f') of the cubic Hermite table ``par[15:]`` (layout in the module
+    docstring); beyond the last knot on either side that knot's value and slope 0."""
+    lower = par[_TABLE]
+    step = par[_TABLE + 1]
+    m = int(par[_TABLE + 2])
+    base = _TABLE + 3
+    x = (w - lower) / step
+    if not x > 0.0:  # also NaN: the kernel's divergence checks see q, not w
+        return par[base], 0.0
+    if x >= m - 1:
+        return par[base + m - 1], 0.0
+    k = int(x)
+    if k > m - 2:
+        k = m - 2
+    s = x - k
+    s2 = s * s
+    f0 = par[base + k]
+    f1 = par[base + k + 1]
+    d0 = par[base + m + k] * step
+    d1 = par[base + m + k + 1] * step
+    value = (
+        (1.0 - 3.0 * s2 + 2.0 * s2 * s) * f0
+        + (s - 2.0 * s2 + s2 * s) * d0
+        + (3.0 * s2 - 2.0 * s2 * s) * f1
+        + (s2 * s - s2) * d1
+    )
+    slope = (
+        (-6.0 * s + 6.0 * s2) * f0
+        + (1.0 - 4.0 * s + 3.0 * s2) * d0
+        + (6.0 * s - 6.0 * s2) * f1
+        + (3.0 * s2 - 2.0 * s) * d1
+    ) / step
+    return value, slope
+
+
+@njit(cache=True)
 def shape(par, w):
-    """f(w): identity (play) or erf(w / (√2 R)) (paper eq. prob_mag)."""
+    """f(w): identity (play), erf(w / (√2 R)) (paper eq. prob_mag) or the table (kind 2)."""
     if par[4] == 1.0:
         return math.erf(w * par[13])
+    if par[4] == 2.0:
+        return _table_eval(par, w)[0]
     return w
 
 
@@ -63,7 +110,18 @@ def shape_slope(par, w):
     if par[4] == 1.0:
         z = w / par[5]
         return par[14] * math.exp(-0.5 * z * z)
+    if par[4] == 2.0:
+        return _table_eval(par, w)[1]
     return 1.0
+
+
+@njit(cache=True)
+def shape_values(par, w):
+    """:func:`shape` at every element of the 1-D array ``w``."""
+    out = np.empty(w.size)
+    for i in range(w.size):
+        out[i] = shape(par, w[i])
+    return out
 
 
 # --------------------------------------------------------------------------------------------

@@ -4,8 +4,11 @@ System (paper eqs. eom_2, prob_mag, real_play)::
 
     q'' + 2ζ q' + q = cos φ + C f(w),   φ' = Ω,   w = play output of q (width p)
 
-with ``f(w) = erf(w / (√2 R))`` for ``GeneralizedPlay.erf(p, R)`` and ``f(w) = w`` for the plain
-``PlayOperator``. ``ζ`` = ``damping_ratio``, ``Ω`` = ``frequency``, ``C`` = ``coupling``.
+with ``f(w) = erf(w / (√2 R))`` for ``GeneralizedPlay.erf(p, R)``, ``f(w) = w`` for the plain
+``PlayOperator`` and, for a ``GeneralizedPlay`` with a user shape that saturates (e.g. ``tanh``),
+the piecewise cubic Hermite table of :mod:`hysteresis.shape_table` (``|f − table| <= 1e-10`` of
+the output range; the engine integrates the table). ``ζ`` = ``damping_ratio``, ``Ω`` =
+``frequency``, ``C`` = ``coupling``.
 
 Exact segmentation
 ------------------
@@ -81,8 +84,9 @@ _EPS = np.finfo(np.float64).eps
 # --------------------------------------------------------------------------------------------
 # parameters and initial state
 # --------------------------------------------------------------------------------------------
-def _shape_code(operator: Any) -> tuple[float, float]:
-    """(kind, spread) from the operator's ``compiled_play()``: 0 identity, 1 erf."""
+def _shape_code(operator: Any) -> tuple[float, float, np.ndarray | None]:
+    """(kind, spread, table array) from the operator's ``compiled_play()``: 0 identity, 1 erf,
+    2 a tabulated shape (:class:`hysteresis.shape_table.ShapeTable`)."""
     spec = operator.compiled_play()
     if spec is None:
         raise ValueError(
@@ -90,10 +94,15 @@ def _shape_code(operator: Any) -> tuple[float, float]:
             "generic continuous engine integrates it"
         )
     if spec.shape == "identity":
-        return 0.0, 1.0
+        return 0.0, 1.0, None
     if spec.shape == "erf":
-        return 1.0, float(spec.spread)
-    raise ValueError(f"compiled play shape must be 'identity' or 'erf', got {spec.shape!r}")
+        return 1.0, float(spec.spread), None
+    if spec.shape == "table" and spec.table is not None:
+        return 2.0, 1.0, spec.table.kernel_array()
+    raise ValueError(
+        f"compiled play shape must be 'identity', 'erf' or 'table' (with a table), got "
+        f"{spec.shape!r}"
+    )
 
 
 def make_parameters(
@@ -103,7 +112,7 @@ def make_parameters(
     inside_step: float = INSIDE_STEP,
 ) -> np.ndarray:
     """Flat parameter array of the kernels (layout in :mod:`oscillators.engines._play_kernels`)."""
-    kind, spread = _shape_code(system.operator)
+    kind, spread, table = _shape_code(system.operator)
     zeta = finite_scalar(system.damping_ratio, "damping_ratio")
     omega = finite_scalar(system.frequency, "frequency")
     coupling = finite_scalar(system.coupling, "coupling")
@@ -121,7 +130,9 @@ def make_parameters(
         raise ValueError(f"spread must be > 0, got {spread}")
     check_closed_form(zeta, omega)
     amp_a, amp_b = particular_amplitudes(zeta, omega)
-    par = np.zeros(15)
+    par = np.zeros(15 if table is None else 15 + table.size)
+    if table is not None:
+        par[15:] = table
     par[:15] = [
         zeta,
         omega,
@@ -145,12 +156,9 @@ def make_parameters(
 
 
 def _shape_value(par: np.ndarray, w: np.ndarray | float) -> np.ndarray:
-    from scipy.special import erf
-
+    """The kernel's shape ``f(w)`` (the same arithmetic: :func:`_play_kernels.shape`)."""
     w = np.asarray(w, dtype=np.float64)
-    if par[4] == 1.0:
-        return erf(w * par[13])
-    return w.copy()
+    return _k.shape_values(par, np.ascontiguousarray(w.ravel())).reshape(w.shape)
 
 
 def _initial_state(
@@ -206,7 +214,8 @@ def _events_array(ev: np.ndarray) -> np.ndarray:
 # the engine
 # --------------------------------------------------------------------------------------------
 class PlayEngine(Engine):
-    """Compiled play-limit engine: plain play and ``GeneralizedPlay.erf`` (the paper's limit).
+    """Compiled play-limit engine: plain play, ``GeneralizedPlay.erf`` (the paper's limit) and
+    a ``GeneralizedPlay`` with a tabulated user shape.
 
     Tangent space ``(q, v[, phi], w)``. Between the loop's re-orthonormalisations ``V_out``
     (``δw := δq`` at a wall hit) is applied as a plain matrix; every wall hit since the last
