@@ -20,6 +20,7 @@ Everything lives in flat arrays so that numba compiles one specialisation:
     4 free memory count (Preisach)   5 next sample index   6 events in ``ev``   7 record
     8 k (tangent columns, 0: off)   9 operator (OP_PI, OP_PREISACH)   10 Everett kind
     11 events at zero distance in a row   12 the branch began with a push (Preisach)
+    13 the current step lies beyond the support of a tabulated Everett function (slope 0)
 
 ``st`` (float64)::
 
@@ -91,6 +92,8 @@ RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
 
 OP_PI = 0
 OP_PREISACH = 1
+#: ``CompiledEverett.kind`` of a tabulated (C¹ bicubic Hermite) Everett function
+KIND_TABLE = 1
 
 DONE = 0
 GROW = 1
@@ -112,11 +115,17 @@ def _operator(ist, st, ep, et, q):
     if ist[9] == OP_PI:
         return st[5] + st[6] * (q - st[4]), st[6], 0.0
     m = st[7]
+    u = q
+    outside = ist[13] != 0
+    if ist[10] == KIND_TABLE:
+        # the step's side of the support bounds decides the slope (module docstring); E
+        # itself is clipped there anyway
+        u = min(max(q, ep[0]), ep[1])
     if ist[0] > 0:
-        e, ea, eb = everett_eval(ist[10], ep, et, q, m)
-        return st[5] + 2.0 * e, 2.0 * ea, 2.0 * eb
-    e, ea, eb = everett_eval(ist[10], ep, et, m, q)
-    return st[5] - 2.0 * e, -2.0 * eb, -2.0 * ea
+        e, ea, eb = everett_eval(ist[10], ep, et, u, m)
+        return st[5] + 2.0 * e, 0.0 if outside else 2.0 * ea, 2.0 * eb
+    e, ea, eb = everett_eval(ist[10], ep, et, m, u)
+    return st[5] - 2.0 * e, 0.0 if outside else -2.0 * eb, -2.0 * ea
 
 
 @njit(cache=True)
@@ -144,8 +153,15 @@ def _rhs(par, ist, st, F, ep, et, t, y, dy, k):
 @njit(cache=True)
 def _rk8(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k):
     """One 8th-order Dormand–Prince step from (t, y) over h into ``out`` (2 + 2k entries)."""
+    _stages(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k, 0)
+
+
+@njit(cache=True)
+def _stages(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k, first):
+    """The RK8 step with stages ``first``.. evaluated (``first = 1``: ``K[0] = f(t, y)`` is
+    already there)."""
     n = 2 + 2 * k
-    for i in range(_N_STAGES):
+    for i in range(first, _N_STAGES):
         for r in range(n):
             acc = 0.0
             for j in range(i):
@@ -365,6 +381,67 @@ def _locate(par, ist, st, F, ep, et, t, y, lo, hi, which, work):
 
 
 @njit(cache=True)
+def _to_grid_line(ep, et, d, q, v, a):
+    """(predicted time, position) of the next line ``lower + i·h_cell`` of a tabulated
+    Everett function ahead of the moving input: there its second derivatives jump (and at the
+    support bounds its first), so an RK8 step across a line loses order — a step that stages
+    at a distance τ from a slope jump J errs by O(h·J·τ). Time from ``q + v τ + a τ²/2``
+    (``inf`` if not reached); lines within ``1e-9·h_cell`` ahead count as passed."""
+    lower = ep[0]
+    upper = ep[1]
+    cell = (upper - lower) / (et.shape[0] - 1)
+    x = (q - lower) / cell
+    n = et.shape[0] - 1
+    if d > 0:
+        i = max(math.floor(x + 1e-9) + 1.0, 0.0)  # from below the support: its lower bound
+        if i > n:
+            return np.inf, np.inf
+    else:
+        i = min(math.ceil(x - 1e-9) - 1.0, float(n))
+        if i < 0.0:
+            return np.inf, np.inf
+    line = lower + i * cell
+    dist = d * (line - q)
+    s = d * v
+    al = d * a
+    disc = s * s + 2.0 * al * dist
+    if disc < 0.0:
+        return np.inf, line
+    den = s + math.sqrt(disc)
+    if den <= 0.0:
+        return np.inf, line
+    return 2.0 * dist / den, line
+
+
+@njit(cache=True)
+def _land(par, ist, st, F, ep, et, t, y, tau, line, work):
+    """Time at which the step from (t, y) reaches ``q = line``: Newton on the state-only RK8
+    map from the guess ``tau`` (converges to rounding in 2–3 iterations from the predictor);
+    −1 if it does not (the input turns back first)."""
+    d = ist[0]
+    z = work[0, :2]
+    tmp = work[2, :2]
+    K = work[4 : 4 + _N_STAGES, :2]
+    y2 = work[3, :2]
+    y2[0] = y[0]
+    y2[1] = y[1]
+    tol = 4.0 * _EPS * max(1.0, abs(line))
+    for _ in range(8):
+        _rk8(par, ist, st, F, ep, et, t, y2, tau, z, K, tmp, 0)
+        g = d * (z[0] - line)
+        dg = d * z[1]
+        if dg <= 0.0:
+            return -1.0
+        step = g / dg
+        tau -= step
+        if not tau > 0.0:
+            return -1.0
+        if abs(g) <= tol or abs(step) <= 4.0 * _EPS * tau:
+            return tau
+    return -1.0
+
+
+@njit(cache=True)
 def _add_time(par, ist, st, h):
     st[0] += h
     if st[0] >= par[5]:
@@ -437,7 +514,24 @@ def _to_target(
         h = rem if last else h_step
         t = st[0]
         d = ist[0]
-        _rk8(par, ist, st, F, ep, et, t, y, h, y1, K, tmp, k)
+        land = np.inf
+        if ist[9] == OP_PREISACH and ist[10] == KIND_TABLE:
+            # a C¹ table: end the step exactly on the next grid line of the moving input. At
+            # the support bounds the slope jumps: the step takes it on the side it moves into
+            # (its start nudged forward), in every stage (stage states may overshoot its end)
+            ahead = y[0] + d * 1e-12 * max(1.0, abs(y[0]))
+            ist[13] = 0 if ep[0] <= ahead <= ep[1] else 1
+            _rhs(par, ist, st, F, ep, et, t, y, K[0], k)
+            tp, line = _to_grid_line(ep, et, d, y[0], y[1], K[0, 1])
+            if tp < h:
+                tl = _land(par, ist, st, F, ep, et, t, y, tp, line, loc)
+                if 0.0 < tl < h:
+                    h = tl
+                    last = False
+                    land = line
+            _stages(par, ist, st, F, ep, et, t, y, h, y1, K, tmp, k, 1)
+        else:
+            _rk8(par, ist, st, F, ep, et, t, y, h, y1, K, tmp, k)
         if not (abs(y1[0]) <= bound and abs(y1[1]) <= bound):
             st[1] = y1[0]
             st[2] = y1[1]
@@ -483,6 +577,8 @@ def _to_target(
         if kind == 0:
             for r in range(n):
                 y[r] = y1[r]
+            if land != np.inf:
+                y[0] = land  # on the grid line (Newton-located to rounding)
             if last:
                 ist[1] = nt
                 st[0] = taut

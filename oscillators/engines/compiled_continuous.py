@@ -137,7 +137,7 @@ class CompiledContinuousEngine(Engine):
         u = getattr(op_state, "input", None)
         if u is not None and abs(float(u) - q) > 1e-12 * max(1.0, abs(q)):
             raise ValueError(f"state.operator_state.input ({float(u)}) must equal state.q ({q})")
-        self._ist = np.zeros(13, dtype=np.int64)
+        self._ist = np.zeros(14, dtype=np.int64)
         self._st = np.zeros(8)
         self._st[1] = q
         self._st[2] = v
