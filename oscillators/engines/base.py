@@ -11,10 +11,13 @@ from the answer (:func:`select_engine`), never by ``isinstance`` on operator cla
 * ``operator.compiled_play()`` not ``None`` -> the compiled play-limit engine
   (:class:`~oscillators.engines.play.PlayEngine`; plain play and
   ``GeneralizedPlay.erf``: the paper's thermodynamic limit, a fast path);
+* ``operator.compiled_flow()`` not ``None`` -> the compiled continuous engine
+  (:class:`~oscillators.engines.compiled_continuous.CompiledContinuousEngine`;
+  Prandtl–Ishlinskii, continuous Preisach: the generic engine's physics in a numba kernel);
 * any other continuous operator -> the generic continuous engine
   (:class:`~oscillators.engines.continuous.ContinuousEngine`) over
-  ``operator.branch_flow(state, direction)`` (play with any shape, Prandtl–Ishlinskii,
-  continuous Preisach).
+  ``operator.branch_flow(state, direction)`` (also reachable for the operators above with
+  ``engine_options={"method": "generic"}``, the reference).
 
 Everything above an engine — trajectories, Poincaré sections, the stroboscopic map, flow-map
 Jacobians (:mod:`oscillators.system`) and the one Benettin/QR loop of
