@@ -102,6 +102,11 @@ DIVERGED = 3
 STUCK = 4
 
 _EPS = 2.220446049250313e-16
+#: a grid line of a tabulated Everett function closer than this (in cells) ahead counts as
+#: passed: a step that crosses an interior (C¹) line at a distance τ from its start errs by
+#: O(h·J·τ²) with J the jump of the second derivative there (negligible for 1e-3 cell); the
+#: support bounds (slope jumps) are landed on to rounding
+_LINE_SKIP = 1e-3
 #: events at zero distance in a row before STUCK
 _MAX_STUCK = 50
 
@@ -386,18 +391,19 @@ def _to_grid_line(ep, et, d, q, v, a):
     Everett function ahead of the moving input: there its second derivatives jump (and at the
     support bounds its first), so an RK8 step across a line loses order — a step that stages
     at a distance τ from a slope jump J errs by O(h·J·τ). Time from ``q + v τ + a τ²/2``
-    (``inf`` if not reached); lines within ``1e-9·h_cell`` ahead count as passed."""
+    (``inf`` if not reached); lines within ``_LINE_SKIP·h_cell`` ahead count as passed (a
+    bound landed on to rounding is always passed)."""
     lower = ep[0]
     upper = ep[1]
     cell = (upper - lower) / (et.shape[0] - 1)
     x = (q - lower) / cell
     n = et.shape[0] - 1
     if d > 0:
-        i = max(math.floor(x + 1e-9) + 1.0, 0.0)  # from below the support: its lower bound
+        i = max(math.floor(x + _LINE_SKIP) + 1.0, 0.0)  # from below the support: its bound
         if i > n:
             return np.inf, np.inf
     else:
-        i = min(math.ceil(x - 1e-9) - 1.0, float(n))
+        i = min(math.ceil(x - _LINE_SKIP) - 1.0, float(n))
         if i < 0.0:
             return np.inf, np.inf
     line = lower + i * cell
@@ -524,11 +530,17 @@ def _to_target(
             _rhs(par, ist, st, F, ep, et, t, y, K[0], k)
             tp, line = _to_grid_line(ep, et, d, y[0], y[1], K[0, 1])
             if tp < h:
-                tl = _land(par, ist, st, F, ep, et, t, y, tp, line, loc)
-                if 0.0 < tl < h:
-                    h = tl
+                if line == ep[0] or line == ep[1]:
+                    # a support bound (the slope jumps): land on it exactly
+                    tl = _land(par, ist, st, F, ep, et, t, y, tp, line, loc)
+                    if 0.0 < tl < h:
+                        h = tl
+                        last = False
+                        land = line
+                else:
+                    # an interior line (E is C¹ there): ending the step near it suffices
+                    h = tp
                     last = False
-                    land = line
             _stages(par, ist, st, F, ep, et, t, y, h, y1, K, tmp, k, 1)
         else:
             _rk8(par, ist, st, F, ep, et, t, y, h, y1, K, tmp, k)
