@@ -26,12 +26,15 @@ While ``q`` moves one way the operator follows one smooth branch ``y(q)``:
   derivatives live in preallocated arrays, grown here when a push needs room.
 
 The motion is integrated with fixed-step 8th-order Dormand–Prince (step ``h = step/ρ``,
-``ρ = max(1, Ω, 2ζ)``, default ``step = 0.05`` as the play kernel on its walls), the tangent
-columns with the same stages. A step that contains the reversal ``v = 0`` or the breakpoint
-``q = bp`` (sign at the step end; a dip of ``v`` through zero inside the step by the cubic
-Hermite interpolant) is cut at the event, located by safeguarded Newton on the step's own RK8
-map (full RK8 accuracy); then ``v := 0`` or ``q := bp`` exactly, the direction flips at a
-reversal and the branch is rebuilt.
+``ρ = max(1, Ω, 2ζ, √(|C|·S))`` with ``S`` a bound of the branch slopes, default
+``step = 0.05`` as the play kernel on its walls), the tangent columns with the same stages. A
+step that contains the reversal ``v = 0`` or the breakpoint ``q = bp`` (sign at the step end;
+a dip of ``v`` through zero inside the step by the cubic Hermite interpolant) is cut at the
+event, located by safeguarded Newton on the step's own RK8 map (full RK8 accuracy); then
+``v := 0`` or ``q := bp`` exactly, the direction flips at a reversal and the branch is rebuilt.
+A tabulated (C¹ bicubic) Everett function has kinks on its grid lines: a step ends on the next
+line of the moving input (predicted from ``q + vτ + aτ²/2``), and exactly (Newton) on a support
+bound, where the branch slope jumps and each step takes it on the side it moves into.
 
 Tangent space and saltations: rows ``("q", "v"[, "phi"], *labels)`` with the labels of the
 generic engine (``w0 .. w{K-1}``; ``M1, m1, M2, ...``), the same saltations (a wagon that
@@ -59,12 +62,24 @@ __all__ = ["CompiledContinuousEngine", "METHODS"]
 
 #: ``method`` values: ``"auto"``/``"compiled"`` this engine, ``"generic"`` the reference path.
 METHODS = ("auto", "compiled", "generic")
-#: RK8 step (time units) for ρ = max(1, Ω, 2ζ) = 1.
+#: RK8 step (time units) for ρ = 1 (module docstring).
 DEFAULT_STEP = 0.05
 #: events kept per kernel call before the buffer is drained
 _EVENT_BUFFER = 4096
 #: smallest staircase capacity (entries; doubled when a push needs room)
 _MIN_CAPACITY = 64
+
+
+def _slope_bound(spec: Any) -> float:
+    """A bound of the branch slopes ``|dy/du|`` from the compiled description: ``Σ|a_i|`` of
+    a Prandtl–Ishlinskii operator, twice the largest nodal gradient of a tabulated Everett
+    function; 0 (not used) for the Gaussian quadrature, whose slopes are O(1/R)."""
+    if spec.kind == "prandtl_ishlinskii":
+        return float(np.sum(np.abs(spec.weights)))
+    table = np.asarray(spec.everett.table)
+    if table.ndim == 3 and table.shape[-1] >= 3 and table.size:
+        return 2.0 * float(np.max(np.abs(table[..., 1:3])))
+    return 0.0
 
 
 class CompiledContinuousEngine(Engine):
@@ -81,7 +96,8 @@ class CompiledContinuousEngine(Engine):
         ``"auto"`` or ``"compiled"`` (this engine), ``"generic"``: the generic
         :class:`~oscillators.engines.continuous.ContinuousEngine` (the reference path).
     step:
-        RK8 step in time units for ρ = max(1, Ω, 2ζ) = 1 (divided by ρ), in (0, 0.2].
+        RK8 step in time units for ρ = 1 (divided by ρ = max(1, Ω, 2ζ, √(|C|·S)), module
+        docstring), in (0, 0.2].
     **generic_options:
         ``rtol``, ``atol``, ``max_step`` of the generic engine (``method="generic"`` only).
     """
@@ -118,7 +134,9 @@ class CompiledContinuousEngine(Engine):
         v = finite_scalar(state.v, "state.v")
         t0 = finite_scalar(state.t, "state.t")
         self._phi0 = wrap_phase(finite_scalar(state.phi, "state.phi"))
-        rho = max(1.0, self._omega, 2.0 * zeta)
+        # the RK8 step's local error scales as (ρh)^9: ρ = the largest rate of the linearised
+        # motion (forcing, damping, the stiffness C·slope of the steepest branch)
+        rho = max(1.0, self._omega, 2.0 * zeta, math.sqrt(abs(coupling) * _slope_bound(spec)))
         self._par = np.array(
             [
                 zeta,

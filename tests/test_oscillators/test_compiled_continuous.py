@@ -13,6 +13,7 @@ truths.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -403,3 +404,27 @@ def test_bad_input_and_divergence_raise():
         unstable = ForcedOscillator(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), 2.0, ZETA, 1.0)
     with pytest.raises(DivergenceError):
         unstable.engine().advance(200.0)
+
+
+@pytest.mark.parametrize(
+    ("name", "zeta", "omega", "coupling"),
+    [
+        ("pi3", 2.0, 3.0, 0.5),  # overdamped, fast forcing
+        ("pi3", ZETA, 1.0, -400.0),  # stiff: 1 − C·slope ≈ 400
+        ("gaussian", 30.0, 0.3, 4.0),  # strongly overdamped
+        ("gaussian", ZETA, 8.0, 4.0),  # fast forcing
+    ],
+)
+def test_parameter_corners_agree_with_the_generic_engine(name, zeta, omega, coupling):
+    # the RK8 step scales with ρ = max(1, Ω, 2ζ, √(|C|·slope)): its local error (ρh)^9 stays
+    # put, so the agreement is the same (relative to the motion's size) as at Table II values
+    op = PrandtlIshlinskii([0.0, 1.0, 2.0], [0.3, 0.3, 0.4]) if name == "pi3" else _gaussian()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # C < 0: no positive feedback
+        system = ForcedOscillator(op, coupling, zeta, omega)
+    start = system.initial_state(-1.0, 0.1)
+    times = np.array([2.5, 5.0, 10.0])
+    reference = {**REFERENCE, "max_step": 0.05}
+    _, out = _run(system, start, times, {})
+    _, out_ref = _run(system, start, times, reference)
+    np.testing.assert_allclose(out, out_ref, atol=1e-10 * max(1.0, np.max(np.abs(out_ref))))
