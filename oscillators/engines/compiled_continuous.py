@@ -96,7 +96,7 @@ class CompiledContinuousEngine(Engine):
         ``"auto"`` or ``"compiled"`` (this engine), ``"generic"``: the generic
         :class:`~oscillators.engines.continuous.ContinuousEngine` (the reference path).
     step:
-        RK8 step in time units for ρ = 1 (divided by ρ = max(1, Ω, 2ζ, √(|C|·S)), module
+        RK8 step in time units for ρ = 1 (divided by ``ρ = max(1, Ω, 2ζ, √(|C|·S))``, module
         docstring), in (0, 0.2].
     **generic_options:
         ``rtol``, ``atol``, ``max_step`` of the generic engine (``method="generic"`` only).
