@@ -76,6 +76,10 @@ __all__ = [
     "DivergenceError",
     "Engine",
     "GrazingError",
+    "SLIDE_EXCURSION",
+    "STEPS_PER_TIME",
+    "STEP_BUDGET_FLOOR",
+    "StepBudgetError",
     "SWITCH_BUDGET_FLOOR",
     "SWITCHES_PER_RELAY_AND_TIME",
     "SlidingError",
@@ -139,20 +143,55 @@ class SwitchBudgetError(RuntimeError):
         self.budget = budget
 
 
-class SlidingError(ValueError):
-    """A Filippov sliding motion on a relay threshold, which the relay engines do not integrate.
+#: Relay engines: a chattering across a zero-width threshold that pushes in from both sides
+#: is set on the Filippov sliding set ``q = θ, v = 0`` once an excursion lasts at most
+#: ``SLIDE_EXCURSION/ρ`` (``ρ = max(1, Ω, 2ζ)``), i.e. ``|v| <= ½|q''|·SLIDE_EXCURSION/ρ``;
+#: that change of ``v`` is the error of entering the slide (:mod:`oscillators.engines._sliding`).
+SLIDE_EXCURSION = 1e-3
 
-    On both sides of the threshold the flow pushes into it (q'' with the output below the
-    threshold points up, with the output above it points down, and v ≈ 0), so the exact
-    event-driven integration chatters across it with vanishing intervals. Detected when the
-    switch budget of the call runs out there. ``time`` is the absolute time, ``threshold`` the
-    value of q the motion slides along.
+
+class SlidingError(ValueError):
+    """A chattering towards a Filippov sliding motion that did not settle within the budget.
+
+    The relay engines integrate sliding motions (:mod:`oscillators.engines._sliding`): the
+    chattering across a zero-width threshold is set on the sliding set once its excursions are
+    short (:data:`SLIDE_EXCURSION`). This error is left for a call whose switch budget runs out
+    while the flow pushes into a threshold from both sides before that happened (the
+    chattering decays too slowly, e.g. at very weak damping). ``time`` is the absolute time,
+    ``threshold`` the value of q.
     """
 
     def __init__(self, message: str, time: float | None = None, threshold: float | None = None):
         super().__init__(message)
         self.time = time
         self.threshold = threshold
+
+
+#: Work bound of the stepping engines (play kernel, continuous engine): steps and events
+#: allowed per unit of time (times ``max(1, Ω, 2ζ)``) in one ``advance`` call, plus
+#: :data:`STEP_BUDGET_FLOOR` per call; beyond it the call stops with :class:`StepBudgetError`.
+#: Ordinary motion takes a few hundred steps per unit time (the play kernel's fixed DOP853 step
+#: is 0.05/max(1, Ω); solve_ivp at rtol 1e-11 a few dozen), so the bound only ends runaway work.
+STEPS_PER_TIME = 100_000
+#: Steps and events every ``advance`` call of a stepping engine may make whatever its length.
+STEP_BUDGET_FLOOR = 100_000
+
+
+class StepBudgetError(RuntimeError):
+    """An ``advance`` call of a stepping engine exceeded its work budget
+    (:data:`STEPS_PER_TIME`). ``time`` is the absolute time at which it ran out, ``budget``
+    the number of steps and events the call was allowed."""
+
+    def __init__(self, message: str, time: float | None = None, budget: int | None = None):
+        super().__init__(message)
+        self.time = time
+        self.budget = budget
+
+
+def step_budget(omega: float, zeta: float, span: float) -> int:
+    """Steps and events one ``advance`` call of a stepping engine spanning ``span`` may make."""
+    b = STEP_BUDGET_FLOOR + STEPS_PER_TIME * max(1.0, omega, 2.0 * zeta) * max(span, 0.0)
+    return int(min(b, 2.0**62))
 
 
 def wrap_phase(phi: float) -> float:

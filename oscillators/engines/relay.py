@@ -36,7 +36,9 @@ from typing import Any
 import numpy as np
 
 from oscillators.engines import _relay_kernels as kern
+from oscillators.engines import _sliding as slide
 from oscillators.engines.base import (
+    SLIDE_EXCURSION,
     SWITCH_BUDGET_FLOOR,
     SWITCH_DTYPE,
     SWITCHES_PER_RELAY_AND_TIME,
@@ -45,6 +47,7 @@ from oscillators.engines.base import (
     SlidingError,
     SwitchBudgetError,
     split_times,
+    wrap_phase,
 )
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
 from oscillators.parameters import check_closed_form
@@ -99,11 +102,12 @@ def _budget_error(
     if direction != 0 and direction * a_before > 0.0 and direction * a_now < 0.0:
         a_below, a_above = (a_before, a_now) if direction > 0 else (a_now, a_before)
         return SlidingError(
-            f"sliding motion on the relay threshold q = {q!r} at t = {t!r}: the flow pushes "
-            f"into the threshold from both sides (q'' = {float(a_below)!r} with the output "
-            f"below it, {float(a_above)!r} with the output above it, v = {v!r}), so the motion "
-            "slides along the threshold (a Filippov sliding motion), which this event-driven "
-            f"engine does not integrate (it chatters: {budget} switches in this call)",
+            f"chattering towards a sliding motion on the relay threshold q = {q!r} at t = {t!r}: "
+            f"the flow pushes into the threshold from both sides (q'' = {float(a_below)!r} with "
+            f"the output below it, {float(a_above)!r} with the output above it, v = {v!r}), but "
+            f"the excursions did not shrink to SLIDE_EXCURSION = {SLIDE_EXCURSION:g} (times "
+            "1/max(1, Ω, 2ζ)), where the Filippov sliding motion takes over, within the "
+            f"budget of {budget} switches of this call",
             time=t,
             threshold=q,
         )
@@ -124,6 +128,22 @@ def _switch_budget(n_relays: int, omega: float, span: float) -> int:
         1.0, omega
     ) * max(span, 0.0)
     return int(min(b, 2.0**62))
+
+
+class _Slide:
+    """A sliding motion in progress: threshold, the output of the relays as they are
+    (``m_table``) and with the zero-width group switched in direction ``to_other``
+    (``m_other``), the exit clock (period index, period time; None: never) and output."""
+
+    __slots__ = ("theta", "m_table", "m_other", "to_other", "exit_clock", "m_end")
+
+    def __init__(self, theta, m_table, m_other, to_other, exit_clock, m_end) -> None:
+        self.theta = theta
+        self.m_table = m_table
+        self.m_other = m_other
+        self.to_other = to_other
+        self.exit_clock = exit_clock
+        self.m_end = m_end
 
 
 class RelayEngine(Engine):
@@ -177,12 +197,17 @@ class RelayEngine(Engine):
         zeta = float(system.damping_ratio)
         amp_a, amp_b = particular_amplitudes(zeta, self._omega)
         self._par = kern.make_params(
-            zeta, self._omega, float(system.coupling), self._phi0, amp_a, amp_b, t0, taylor
-        )
+            zeta, self._omega, float(system.coupling), self._phi0, amp_a, amp_b, t0, taylor,
+            SLIDE_EXCURSION,
+        )  # fmt: skip
         self._t0 = t0
         self._y = np.zeros((3, 3))
         self._chunks: list[np.ndarray] = []
         self._state_cache: OscillatorState | None = None
+        # the sliding motion in progress (None: ordinary motion) and the slide records
+        self._slide: _Slide | None = None
+        self._slide_events: list[tuple[float, float, float, int, float]] = []
+        self._collapsed = False  # a slide collapsed (δq, δv) since the last start/set
 
     def _now(self) -> tuple[float, float, Any]:
         """(q, v, operator state) now."""
@@ -197,11 +222,92 @@ class RelayEngine(Engine):
         return self._state_cache
 
     def records(self) -> dict[str, np.ndarray]:
+        """``{"switches": time, q, v, jump}`` and ``{"slides": time, q, v, kind, M}``
+        (:data:`~oscillators.engines._sliding.SLIDE_DTYPE`: kind +1 slide-in, -1 slide-out;
+        ``v`` the speed set to 0 at slide-in; ``M`` the equivalent output then)."""
         sw = np.concatenate(self._chunks) if self._chunks else np.empty((0, 4))
         rec = np.empty(sw.shape[0], dtype=SWITCH_DTYPE)
         for j, name in enumerate(SWITCH_DTYPE.names):
             rec[name] = sw[:, j]
-        return {"switches": rec}
+        slides = np.array(self._slide_events, dtype=slide.SLIDE_DTYPE)
+        return {"switches": rec, "slides": slides}
+
+    # -- sliding motion (oscillators/engines/_sliding.py) --------------------------------------
+    @property
+    def sliding(self) -> bool:
+        """The motion slides along a relay threshold now (``q = θ, v = 0``, ``M = M_eq``)."""
+        return self._slide is not None
+
+    def _slide_output(self, tau: float) -> float:
+        """``M_eq`` at period time ``tau`` of the slide in progress."""
+        ph = self._phi0 + self._omega * tau
+        return slide.equivalent_output(self._slide.theta, float(self._par[kern.P_C]), math.cos(ph))
+
+    def _enter_slide(
+        self, theta: float, v: float, m_table: float, m_other: float, to_other: int, record: bool
+    ) -> None:
+        """Set the motion on the sliding set ``q = θ, v = 0`` now. ``m_table`` is the output of
+        the relays as they are, ``m_other`` the output after switching the zero-width group at
+        ``θ`` in direction ``to_other``."""
+        n, tau = self._clock()
+        m_below, m_above = (m_table, m_other) if to_other > 0 else (m_other, m_table)
+        coupling = float(self._par[kern.P_C])
+        phi = wrap_phase(self._phi0 + self._omega * tau)
+        delta, m_end = slide.slide_exit(
+            phi, theta, coupling, min(m_below, m_above), max(m_below, m_above), self._omega
+        )
+        exit_clock = None
+        if math.isfinite(delta):
+            n_e, tau_e = n, tau + delta
+            while tau_e >= self._period:
+                tau_e -= self._period
+                n_e += 1
+            exit_clock = (n_e, tau_e)
+        self._slide = _Slide(theta, m_table, m_other, to_other, exit_clock, m_end)
+        if self._ntan:
+            # every orbit reaching the sliding set is on q = θ, v = 0: (δq, δv) collapse
+            self._y[:2, :] = 0.0
+            self._collapsed = True
+        if record:
+            t = self._t0 + n * self._period + tau
+            self._slide_events.append((t, theta, v, 1, self._slide_output(tau)))
+        self._slide_set_clock(n, tau, 0.0)
+
+    def _slide_move(self, n: int, tau: float) -> None:
+        """Slide on to clock (n, tau) (not past the exit): the clock, q = θ, v = 0, ∫M dt."""
+        n0, tau0 = self._clock()
+        delta = (n - n0) * self._period + (tau - tau0)
+        sin_a = math.sin(self._phi0 + self._omega * tau0)
+        sin_b = math.sin(self._phi0 + self._omega * tau)
+        c = float(self._par[kern.P_C])
+        self._slide_set_clock(
+            n, tau, slide.slide_integral(self._slide.theta, c, self._omega, sin_a, sin_b, delta)
+        )
+
+    def _slide_to(self, n: int, tau: float, record: bool) -> bool:
+        """Slide towards clock (n, tau); at the exit (if it comes first) leave the slide.
+        Returns True if (n, tau) was reached while still sliding."""
+        ex = self._slide.exit_clock
+        if ex is None or (n, tau) <= ex:
+            self._slide_move(n, tau)
+            return True
+        self._slide_move(*ex)
+        sl = self._slide
+        if sl.m_end != sl.m_table:
+            self._slide_switch(sl.to_other)
+        if record:
+            t = self._t0 + ex[0] * self._period + ex[1]
+            self._slide_events.append((t, sl.theta, 0.0, -1, sl.m_end))
+        self._slide = None
+        return False
+
+    def _slide_set_clock(self, n: int, tau: float, integral: float) -> None:
+        """Clock := (n, tau), q := θ, v := 0, ∫M dt += integral (engine-specific)."""
+        raise NotImplementedError
+
+    def _slide_switch(self, direction: int) -> None:
+        """Switch the zero-width group at the threshold in ``direction`` (engine-specific)."""
+        raise NotImplementedError
 
     # -- tangent flow: (δq, δv[, δφ]) columns in the 3×3 buffer the kernels update in place ----
     def _start_tangent(self, include_phase: bool) -> int:
@@ -209,6 +315,10 @@ class RelayEngine(Engine):
         self._y[:, :] = 0.0
         for j in range(k):
             self._y[j, j] = 1.0
+        self._collapsed = False
+        if self._slide is not None:  # started on the sliding set
+            self._y[:2, :] = 0.0
+            self._collapsed = True
         return k
 
     @property
@@ -220,10 +330,12 @@ class RelayEngine(Engine):
 
     def _set_deviations(self, y: np.ndarray) -> None:
         self._y[: self._ntan, : self._ntan] = y
+        self._collapsed = False
 
     def _rank_bound(self) -> int:
-        # relays have no memory directions and every saltation matrix is invertible
-        return self._ntan
+        # relays have no memory directions and every saltation matrix is invertible; a slide
+        # collapses (δq, δv) (only the phase direction, if tracked, survives it)
+        return self._ntan - 2 if self._collapsed else self._ntan
 
 
 class RelayKernelEngine(RelayEngine):
@@ -286,14 +398,78 @@ class RelayKernelEngine(RelayEngine):
         )
         self._st = st
         self._ist = ist
+        self._start_on_sliding_set(q0, v0)
+
+    def _switched_copy(self, direction: int) -> tuple[float, float, float]:
+        """(output, next up, next down threshold) after switching the relays at the current
+        threshold in ``direction``, on a copy of the table state."""
+        st, ist, bits = self._st.copy(), self._ist.copy(), self._bits.copy()
+        kern._table_switch(
+            self._par, self._kind, self._tf, self._ti, bits, self._lay, st, ist, direction
+        )
+        return float(st[kern.S_MV]), float(st[kern.S_UP]), float(st[kern.S_DN])
+
+    def _start_on_sliding_set(self, q: float, v: float) -> None:
+        """A start on a zero-width threshold where the flow pushes in from both sides (e.g. a
+        state taken during a slide) starts sliding."""
+        st = self._st
+        m_now = float(st[kern.S_MV])
+        for direction, theta in ((1, float(st[kern.S_UP])), (-1, float(st[kern.S_DN]))):
+            if q != theta:
+                continue
+            m_other, up, down = self._switched_copy(direction)
+            if (down if direction > 0 else up) != theta:
+                continue  # not a zero-width group: no chattering at this threshold
+            below, above = (m_now, m_other) if direction > 0 else (m_other, m_now)
+            if slide.should_slide(
+                q, v, float(st[kern.S_COS]), float(self._par[kern.P_ZETA]),
+                float(self._par[kern.P_C]), below, above, m_now, float(self._par[kern.P_SL]),
+            ):  # fmt: skip
+                self._enter_slide(theta, v, m_now, m_other, direction, False)
+                return
 
     def _clock(self) -> tuple[int, float]:
         return int(self._ist[kern.I_N]), float(self._st[kern.S_TAU])
 
     @property
     def output(self) -> float:
-        """Operator output ``M`` now."""
+        """Operator output ``M`` now (``M_eq`` while sliding)."""
+        if self._slide is not None:
+            return self._slide_output(float(self._st[kern.S_TAU]))
         return float(self._st[kern.S_MV])
+
+    def _slide_set_clock(self, n: int, tau: float, integral: float) -> None:
+        st = self._st
+        self._ist[kern.I_N] = n
+        ph = self._phi0 + self._omega * tau
+        st[kern.S_TAU] = tau
+        st[kern.S_COS] = math.cos(ph)
+        st[kern.S_SIN] = math.sin(ph)
+        st[kern.S_Q] = self._slide.theta
+        st[kern.S_V] = 0.0
+        st[kern.S_IM] += integral
+
+    def _slide_switch(self, direction: int) -> None:
+        kern._table_switch(
+            self._par, self._kind, self._tf, self._ti, self._bits, self._lay, self._st,
+            self._ist, direction,
+        )  # fmt: skip
+
+    def _slide_targets(self, tgt_n: np.ndarray, tgt_tau: np.ndarray, i: int, buf, record) -> int:
+        """Slide through the targets from ``i`` (rows of ``buf``: θ, 0, M_eq) until the exit;
+        returns the first target not reached."""
+        theta = self._slide.theta
+        sample = buf.shape[0] > 0
+        while i < tgt_n.size:
+            tau = float(tgt_tau[i])
+            if not self._slide_to(int(tgt_n[i]), tau, record):
+                return i
+            if sample:
+                buf[i, 0] = theta
+                buf[i, 1] = 0.0
+                buf[i, 2] = self._slide_output(tau)
+            i += 1
+        return i
 
     def output_integral(self) -> float:
         """``∫ M dt`` since the start, exact: ``M`` is constant between switches, so the kernel
@@ -358,7 +534,9 @@ class RelayKernelEngine(RelayEngine):
         sw = np.empty((cap, 4)) if record else self._nosw
         cnt = self._cnt
         i = 0
-        while True:
+        if self._slide is not None:
+            i = self._slide_targets(tgt_n, tgt_tau, 0, buf, record)
+        while i < tgt_n.size:
             cnt[0] = 0
             status, i = self._run(
                 self._par, self._tf, self._ti, self._bits, self._lay, self._st,
@@ -376,6 +554,17 @@ class RelayKernelEngine(RelayEngine):
                     float(st[kern.S_V]), float(st[kern.S_MV]), float(st[kern.S_JMP]),
                     int(st[kern.S_DIR]), budget,
                 )  # fmt: skip
+            if status == 4:
+                st = self._st
+                m_now, jump, direction = (
+                    float(st[kern.S_MV]), float(st[kern.S_JMP]), int(st[kern.S_DIR])
+                )  # fmt: skip
+                self._enter_slide(
+                    float(st[kern.S_Q]), float(st[kern.S_V]), m_now, m_now - jump, -direction,
+                    record,
+                )  # fmt: skip
+                i = self._slide_targets(tgt_n, tgt_tau, i, buf, record)
+                continue
             if status == 0:
                 break
             cap = min(cap * 4, 1 << 20)
@@ -429,13 +618,52 @@ class RelayReferenceEngine(RelayEngine):
         self._switches: list[tuple[float, float, float, float]] = []
         self._integral = 0.0  # ∫M dt since the start
         self._n_relays = int(self._op.relay_table().n_relays)  # for the switch budget
+        self._prev_switch = (math.nan, 0.0)  # (threshold, jump) of the previous switch
+        self._start_on_sliding_set(self._q, self._v)
+
+    def _other_side(self, theta: float, direction: int) -> tuple[Any, float, float]:
+        """(operator state, output, reverse threshold) after moving the input across ``theta``
+        in ``direction`` (+1: to θ, switching relays with α = θ up; -1: just below θ)."""
+        u = theta if direction > 0 else float(np.nextafter(theta, -np.inf))
+        _, st = self._op.apply(np.array([u]), self._opstate)
+        sw = self._op.switching(st)
+        return st, float(self._op.output(st)), float(sw.lower if direction > 0 else sw.upper)
+
+    def _start_on_sliding_set(self, q: float, v: float) -> None:
+        """As :meth:`RelayKernelEngine._start_on_sliding_set`, through ``switching()``."""
+        sw = self._op.switching(self._opstate)
+        m_now = self.output
+        for direction, theta in ((1, float(sw.upper)), (-1, float(sw.lower))):
+            if q != theta:
+                continue
+            _, m_other, back = self._other_side(theta, direction)
+            if back != theta:
+                continue
+            below, above = (m_now, m_other) if direction > 0 else (m_other, m_now)
+            c = math.cos(self._phi0)
+            par = self._par
+            if slide.should_slide(
+                q, v, c, par[kern.P_ZETA], par[kern.P_C], below, above, m_now, par[kern.P_SL]
+            ):
+                self._enter_slide(theta, v, m_now, m_other, direction, False)
+                return
+
+    def _slide_set_clock(self, n: int, tau: float, integral: float) -> None:
+        self._n, self._tau = n, tau
+        self._q, self._v = self._slide.theta, 0.0
+        self._integral += integral
+
+    def _slide_switch(self, direction: int) -> None:
+        self._opstate = self._other_side(self._slide.theta, direction)[0]
 
     def _clock(self) -> tuple[int, float]:
         return self._n, self._tau
 
     @property
     def output(self) -> float:
-        """Operator output ``M`` now."""
+        """Operator output ``M`` now (``M_eq`` while sliding)."""
+        if self._slide is not None:
+            return self._slide_output(self._tau)
         return float(self._op.output(self._opstate))
 
     def output_integral(self) -> float:
@@ -473,6 +701,8 @@ class RelayReferenceEngine(RelayEngine):
         amp_a, amp_b, phi0 = par[kern.P_A], par[kern.P_B], par[kern.P_PHI0]
         op = self._op
         while True:
+            if self._slide is not None and self._slide_to(self._n, tau_stop, record):
+                return
             horizon = tau_stop - self._tau
             if horizon <= 0.0:
                 return
@@ -515,6 +745,18 @@ class RelayReferenceEngine(RelayEngine):
             jump = self.output - m_old
             self._n_switches += 1
             t = par[kern.P_TBASE] + self._n * par[kern.P_T] + self._tau
+            prev_q, prev_jump = self._prev_switch
+            self._prev_switch = (self._q, jump)
+            if jump != 0.0 and jump == -prev_jump and self._q == prev_q:
+                c_now = math.cos(phi0 + omega * self._tau)
+                m_now = self.output
+                below, above = (m_now - jump, m_now) if direction > 0 else (m_now, m_now - jump)
+                if slide.should_slide(
+                    self._q, self._v, c_now, zeta, coupling, below, above, m_now, par[kern.P_SL]
+                ):
+                    self._prev_switch = (math.nan, 0.0)
+                    self._enter_slide(self._q, self._v, m_now, m_now - jump, -direction, record)
+                    continue
             if record:
                 self._switches.append((t, self._q, self._v, jump))
             if self._n_switches >= self._max_switches:
