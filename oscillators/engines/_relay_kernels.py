@@ -44,7 +44,10 @@ Plain-Python reading of one hop (``advance_table``)::
         checkpoint at or past a threshold brackets the crossing, found by safeguarded Newton
         on the exact solution.
     at a switch: q := threshold exactly, the table switches, tangent vectors get the saltation
-        δv += C·ΔM/v* · δq  (paper eq. salt_matrix)
+        δv += C·ΔM/v* · δq  (paper eq. salt_matrix); a switch undoing the previous one at the
+        same threshold (a zero-width group) where the flow pushes in from both sides and the
+        new excursion lasts 2|v|/|q''| <= SLIDE_EXCURSION/ρ returns status 4: the caller
+        integrates the Filippov sliding motion in closed form (oscillators/engines/_sliding.py)
     tangent vectors between switches: Φ(h) = [[g' + 2ζg, g], [-g, g']], g = Φ_01(h), by its
         Taylor series on Taylor hops, in closed form on exact flights
 
@@ -547,8 +550,8 @@ def advance_table(
     into the threshold from both sides and the excursion just begun lasts ``2|v|/|q''| <=
     par[P_SL]``; state right after that switch, neither recorded nor applied to the tangent,
     its jump and direction in ``st[S_JMP]``, ``st[S_DIR]``; the caller integrates the slide,
-    :mod:`oscillators.engines._sliding`). Tangent vectors (columns of ``y``, rows δq, δv, δφ) are propagated while
-    ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and ``st[S_MV]`` must be current
+    :mod:`oscillators.engines._sliding`). Tangent vectors (columns of ``y``, rows δq, δv,
+    δφ) are propagated while ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and ``st[S_MV]`` must be current
     (:func:`_table_refresh`).
     """
     zeta = par[P_ZETA]

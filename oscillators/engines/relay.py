@@ -47,7 +47,6 @@ from oscillators.engines.base import (
     SlidingError,
     SwitchBudgetError,
     split_times,
-    wrap_phase,
 )
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
 from oscillators.parameters import check_closed_form
@@ -76,51 +75,6 @@ def _grazing_message(t: float | None = None) -> str:
     )
 
 
-def _budget_error(
-    par: np.ndarray,
-    t: float,
-    c: float,
-    q: float,
-    v: float,
-    m_now: float,
-    jump: float,
-    direction: int,
-    budget: int,
-) -> Exception:
-    """The error when an ``advance`` call spent its switch budget, right after a switch at
-    ``q`` (output ``m_now`` after it, ``m_now - jump`` before it, ``direction`` +1 up / -1 down;
-    ``c`` = cos φ now).
-
-    Sliding (Filippov): on the threshold the acceleration with the output of the side below
-    points up and the one with the output of the side above points down, so the motion is
-    pushed into the threshold from both sides and the exact integration chatters across it.
-    """
-    coupling = par[kern.P_C]
-    base = -2.0 * par[kern.P_ZETA] * v - q + c
-    a_now = base + coupling * m_now
-    a_before = base + coupling * (m_now - jump)
-    if direction != 0 and direction * a_before > 0.0 and direction * a_now < 0.0:
-        a_below, a_above = (a_before, a_now) if direction > 0 else (a_now, a_before)
-        return SlidingError(
-            f"chattering towards a sliding motion on the relay threshold q = {q!r} at t = {t!r}: "
-            f"the flow pushes into the threshold from both sides (q'' = {float(a_below)!r} with "
-            f"the output below it, {float(a_above)!r} with the output above it, v = {v!r}), but "
-            f"the excursions did not shrink to SLIDE_EXCURSION = {SLIDE_EXCURSION:g} (times "
-            "1/max(1, Ω, 2ζ)), where the Filippov sliding motion takes over, within the "
-            f"budget of {budget} switches of this call",
-            time=t,
-            threshold=q,
-        )
-    return SwitchBudgetError(
-        f"switch budget exceeded at t = {t!r} (q = {q!r}, v = {v!r}): more than {budget} "
-        f"switches in one advance call, the cap of {SWITCHES_PER_RELAY_AND_TIME} switches per "
-        f"relay and per unit time (times max(1, Ω)) plus {SWITCH_BUDGET_FLOOR} per call "
-        "(oscillators.engines.base.SWITCHES_PER_RELAY_AND_TIME)",
-        time=t,
-        budget=budget,
-    )
-
-
 def _switch_budget(n_relays: int, omega: float, span: float) -> int:
     """Switches one ``advance`` call spanning ``span`` time units may make (module constants
     :data:`~oscillators.engines.base.SWITCHES_PER_RELAY_AND_TIME`, ``SWITCH_BUDGET_FLOOR``)."""
@@ -130,23 +84,7 @@ def _switch_budget(n_relays: int, omega: float, span: float) -> int:
     return int(min(b, 2.0**62))
 
 
-class _Slide:
-    """A sliding motion in progress: threshold, the output of the relays as they are
-    (``m_table``) and with the zero-width group switched in direction ``to_other``
-    (``m_other``), the exit clock (period index, period time; None: never) and output."""
-
-    __slots__ = ("theta", "m_table", "m_other", "to_other", "exit_clock", "m_end")
-
-    def __init__(self, theta, m_table, m_other, to_other, exit_clock, m_end) -> None:
-        self.theta = theta
-        self.m_table = m_table
-        self.m_other = m_other
-        self.to_other = to_other
-        self.exit_clock = exit_clock
-        self.m_end = m_end
-
-
-class RelayEngine(Engine):
+class RelayEngine(slide.SlidingMixin, Engine):
     """Event-driven engine for piecewise-constant operators (see the module docstring).
 
     ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or,
@@ -205,7 +143,7 @@ class RelayEngine(Engine):
         self._chunks: list[np.ndarray] = []
         self._state_cache: OscillatorState | None = None
         # the sliding motion in progress (None: ordinary motion) and the slide records
-        self._slide: _Slide | None = None
+        self._slide: slide._Slide | None = None
         self._slide_events: list[tuple[float, float, float, int, float]] = []
         self._collapsed = False  # a slide collapsed (δq, δv) since the last start/set
 
@@ -231,83 +169,6 @@ class RelayEngine(Engine):
             rec[name] = sw[:, j]
         slides = np.array(self._slide_events, dtype=slide.SLIDE_DTYPE)
         return {"switches": rec, "slides": slides}
-
-    # -- sliding motion (oscillators/engines/_sliding.py) --------------------------------------
-    @property
-    def sliding(self) -> bool:
-        """The motion slides along a relay threshold now (``q = θ, v = 0``, ``M = M_eq``)."""
-        return self._slide is not None
-
-    def _slide_output(self, tau: float) -> float:
-        """``M_eq`` at period time ``tau`` of the slide in progress."""
-        ph = self._phi0 + self._omega * tau
-        return slide.equivalent_output(self._slide.theta, float(self._par[kern.P_C]), math.cos(ph))
-
-    def _enter_slide(
-        self, theta: float, v: float, m_table: float, m_other: float, to_other: int, record: bool
-    ) -> None:
-        """Set the motion on the sliding set ``q = θ, v = 0`` now. ``m_table`` is the output of
-        the relays as they are, ``m_other`` the output after switching the zero-width group at
-        ``θ`` in direction ``to_other``."""
-        n, tau = self._clock()
-        m_below, m_above = (m_table, m_other) if to_other > 0 else (m_other, m_table)
-        coupling = float(self._par[kern.P_C])
-        phi = wrap_phase(self._phi0 + self._omega * tau)
-        delta, m_end = slide.slide_exit(
-            phi, theta, coupling, min(m_below, m_above), max(m_below, m_above), self._omega
-        )
-        exit_clock = None
-        if math.isfinite(delta):
-            n_e, tau_e = n, tau + delta
-            while tau_e >= self._period:
-                tau_e -= self._period
-                n_e += 1
-            exit_clock = (n_e, tau_e)
-        self._slide = _Slide(theta, m_table, m_other, to_other, exit_clock, m_end)
-        if self._ntan:
-            # every orbit reaching the sliding set is on q = θ, v = 0: (δq, δv) collapse
-            self._y[:2, :] = 0.0
-            self._collapsed = True
-        if record:
-            t = self._t0 + n * self._period + tau
-            self._slide_events.append((t, theta, v, 1, self._slide_output(tau)))
-        self._slide_set_clock(n, tau, 0.0)
-
-    def _slide_move(self, n: int, tau: float) -> None:
-        """Slide on to clock (n, tau) (not past the exit): the clock, q = θ, v = 0, ∫M dt."""
-        n0, tau0 = self._clock()
-        delta = (n - n0) * self._period + (tau - tau0)
-        sin_a = math.sin(self._phi0 + self._omega * tau0)
-        sin_b = math.sin(self._phi0 + self._omega * tau)
-        c = float(self._par[kern.P_C])
-        self._slide_set_clock(
-            n, tau, slide.slide_integral(self._slide.theta, c, self._omega, sin_a, sin_b, delta)
-        )
-
-    def _slide_to(self, n: int, tau: float, record: bool) -> bool:
-        """Slide towards clock (n, tau); at the exit (if it comes first) leave the slide.
-        Returns True if (n, tau) was reached while still sliding."""
-        ex = self._slide.exit_clock
-        if ex is None or (n, tau) <= ex:
-            self._slide_move(n, tau)
-            return True
-        self._slide_move(*ex)
-        sl = self._slide
-        if sl.m_end != sl.m_table:
-            self._slide_switch(sl.to_other)
-        if record:
-            t = self._t0 + ex[0] * self._period + ex[1]
-            self._slide_events.append((t, sl.theta, 0.0, -1, sl.m_end))
-        self._slide = None
-        return False
-
-    def _slide_set_clock(self, n: int, tau: float, integral: float) -> None:
-        """Clock := (n, tau), q := θ, v := 0, ∫M dt += integral (engine-specific)."""
-        raise NotImplementedError
-
-    def _slide_switch(self, direction: int) -> None:
-        """Switch the zero-width group at the threshold in ``direction`` (engine-specific)."""
-        raise NotImplementedError
 
     # -- tangent flow: (δq, δv[, δφ]) columns in the 3×3 buffer the kernels update in place ----
     def _start_tangent(self, include_phase: bool) -> int:
@@ -549,7 +410,7 @@ class RelayKernelEngine(RelayEngine):
                 raise GrazingError(_grazing_message(self._t0 + self.elapsed))
             if status == 3:
                 st = self._st
-                raise _budget_error(
+                raise slide.budget_error(
                     self._par, self._t0 + self.elapsed, float(st[kern.S_COS]), float(st[kern.S_Q]),
                     float(st[kern.S_V]), float(st[kern.S_MV]), float(st[kern.S_JMP]),
                     int(st[kern.S_DIR]), budget,
@@ -764,7 +625,7 @@ class RelayReferenceEngine(RelayEngine):
                     self._chunks.append(np.array(self._switches, dtype=float).reshape(-1, 4))
                     self._switches.clear()
                 c_now = math.cos(phi0 + omega * self._tau)
-                raise _budget_error(
+                raise slide.budget_error(
                     par, float(t), c_now, self._q, self._v, self.output, jump, direction,
                     self._budget,
                 )  # fmt: skip
