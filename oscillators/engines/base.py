@@ -70,6 +70,7 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._validation import real_array
 from oscillators.results import OscillatorState
 
 __all__ = [
@@ -276,7 +277,7 @@ class Engine(ABC):
 
     def _target_times(self, times: np.ndarray | float) -> np.ndarray:
         """``times`` as a checked 1-D array: finite, sorted, not before now (may be empty)."""
-        times = np.asarray(times, dtype=np.float64)
+        times = real_array(times, "times")
         if times.ndim > 1:
             raise ValueError("times must be a scalar or a 1-D array")
         times = np.atleast_1d(times)

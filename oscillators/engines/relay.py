@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._validation import real_array
 from oscillators.engines import _relay_kernels as kern
 from oscillators.engines import _sliding as slide
 from oscillators.engines.base import (
@@ -347,6 +348,7 @@ class RelayKernelEngine(RelayEngine):
         if type(times) is float or np.size(times) == 1:
             # one target (the Lyapunov stepper's case): no array bookkeeping on the way in
             if type(times) is not float:
+                times = real_array(times, "times")
                 if np.ndim(times) > 1:
                     raise ValueError("times must be a scalar or a 1-D array")
                 times = float(np.reshape(times, -1)[0])
