@@ -59,11 +59,11 @@ does.
 
 Engines raise :class:`DivergenceError` when the state becomes non-finite or runs away, and
 :class:`GrazingError` (piecewise-constant operators) when a switch happens at a turning point
-while the tangent flow is on. Work per ``advance`` call is bounded, proportional to the advanced time:
-:class:`SwitchBudgetError` (relay engines, :data:`SWITCHES_PER_RELAY_AND_TIME`; a chattering
-towards a sliding motion that does not settle within it: :class:`SlidingError`) and
-:class:`StepBudgetError` (play kernel and continuous engine, :data:`STEPS_PER_TIME`). Filippov
-sliding on a relay threshold is integrated (:mod:`oscillators.engines._sliding`).
+while the tangent flow is on. Work per ``advance`` call is bounded, proportional to the
+advanced time: :class:`SwitchBudgetError` (relay engines, :data:`SWITCHES_PER_RELAY_AND_TIME`;
+a chattering towards a sliding motion that does not settle within it: :class:`SlidingError`)
+and :class:`StepBudgetError` (play kernel and continuous engine, :data:`STEPS_PER_TIME`).
+Filippov sliding on a relay threshold is integrated (:mod:`oscillators.engines._sliding`).
 """
 
 from __future__ import annotations
