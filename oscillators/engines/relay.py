@@ -26,6 +26,12 @@ base, is what :func:`~oscillators.engines.select.select_engine` hands out:
 
 Relays of zero weight never change ``M`` and are left out of the kernels (the operator state
 returned rebuilds them from the staircase).
+
+Filippov sliding (:mod:`oscillators.engines._sliding`, closed form, exit, tangent collapse):
+a chattering across a zero-width threshold pushing in from both sides is set on ``q = θ, v = 0``
+(kernel status 4) and slides with ``M = M_eq = (θ − cos φ)/C`` to its exit phase;
+``records()["slides"]`` lists slide-in (+1) / slide-out (−1); a state taken during a slide
+restarts sliding.
 """
 
 from __future__ import annotations
