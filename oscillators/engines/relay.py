@@ -278,8 +278,7 @@ class RelayKernelEngine(RelayEngine):
         return float(st[kern.S_MV]), float(st[kern.S_UP]), float(st[kern.S_DN])
 
     def _start_on_sliding_set(self, q: float, v: float) -> None:
-        """A start on a zero-width threshold where the flow pushes in from both sides (e.g. a
-        state taken during a slide) starts sliding."""
+        """A start on a zero-width threshold pushing in from both sides starts sliding."""
         st = self._st
         m_now = float(st[kern.S_MV])
         for direction, theta in ((1, float(st[kern.S_UP])), (-1, float(st[kern.S_DN]))):
