@@ -144,6 +144,41 @@ def test_slide_exit_and_smooth_arc_against_solve_ivp(method):
     assert abs(math.remainder(w * exit2 - 2 * math.pi / 3, 2 * math.pi)) < 1e-12
 
 
+def test_slide_is_the_limit_of_a_regularised_relay():
+    # independent of the closed form: the relay regularised as M = tanh((q − θ)/ε), integrated
+    # by a stiff solver, converges to the engine's slide + exit + smooth arc as ε → 0. Near the
+    # exit 1 − M_eq² ∝ (t_e − t), so the regularised motion stops tracking the slide when its
+    # relaxation time √(ε/(|C|(1 − M²))) reaches t_e − t: a time lag δt ~ ε^(1/3). The error
+    # must therefore fall at least like ε^(1/3): a factor 10^(1/3) ≈ 2.15 per decade of ε
+    # (observed ~6 in q, ~4 in v); asserted >= 2.
+    osc = _slide_exit_system()
+    z, w, c, th = osc.damping_ratio, osc.frequency, osc.coupling, 0.5
+    eng = osc.engine(OscillatorState(q=th, v=0.0, phi=0.0, operator_state=None, t=0.0))
+    times = np.linspace(0.5, 14.0, 28)  # slide until t_e ≈ 6.98, then the arc below θ
+    out = np.empty((times.size, 3))
+    eng.advance(times, out=out)
+    errors = []
+    for eps in (1e-2, 1e-3, 1e-4):
+
+        def rhs(t, y, eps=eps):
+            return [y[1], -2 * z * y[1] - y[0] + math.cos(w * t) + c * math.tanh((y[0] - th) / eps)]
+
+        def jac(t, y, eps=eps):
+            sech2 = 1.0 - math.tanh((y[0] - th) / eps) ** 2
+            return [[0.0, 1.0], [-1.0 + c * sech2 / eps, -2 * z]]
+
+        # start on the regularised slow manifold: tanh((q − θ)/ε) = M_eq(0) = 1/2
+        y0 = [th + eps * math.atanh(0.5), 0.0]
+        sol = solve_ivp(
+            rhs, (0.0, 14.0), y0, method="Radau", jac=jac, rtol=1e-8, atol=1e-11, t_eval=times
+        )
+        assert sol.success
+        errors.append([np.abs(sol.y[0] - out[:, 0]).max(), np.abs(sol.y[1] - out[:, 1]).max()])
+    errors = np.array(errors)
+    assert np.all(errors[:-1] / errors[1:] >= 2.0), errors
+    assert np.all(errors[0] < 0.05), errors  # and the coarsest is already close (q, v ~ 1)
+
+
 def test_tangent_through_a_slide_against_finite_differences():
     osc = _slide_exit_system()
     # start before the slide-in: off the threshold, reach it, chatter, slide, exit, smooth arc
