@@ -92,6 +92,7 @@ __all__ = [
     "SWITCH_DTYPE",
     "TIME_TOLERANCE",
     "split_times",
+    "step_budget",
     "wrap_phase",
 ]
 
