@@ -16,7 +16,7 @@ from scipy.integrate import solve_ivp
 import oscillators
 from analysis.cli import main as hyst_main
 from analysis.dynamics.lyapunov import lyapunov_spectrum
-from hysteresis import PreisachModel, Relay
+from hysteresis import PreisachModel, Relay, SpinDimerEnsemble
 from oscillators import ForcedOscillator, OscillatorState, SlidingError, SwitchBudgetError
 from oscillators.engines import base
 from oscillators.engines.relay import _switch_budget
@@ -253,6 +253,29 @@ def test_preisach_group_slides_over_the_combined_jump():
         sl = eng2.records()["slides"]
         assert list(sl["kind"]) == [-1]
         assert abs(sl["time"][0] - math.pi / 2 / w) < 1e-12 and abs(sl["M"][0]) < 1e-15
+
+
+def test_reversible_dimer_flip_slides():
+    # a non-hysteretic dimer (2J < b1 − b2) is two reversible single flips: zero-width relays
+    # at q = 0 and q = 2.9 (weights ½). On q = 0 the output ranges over [−1, 0] (spin 1 down or
+    # up, spin 2 down), so with C = −5 the slide holds M_eq = cos φ / 5 while cos φ < 0 and
+    # ends at cos φ = 0 (M = 0, spin 1 up) ahead.
+    osc = ForcedOscillator(SpinDimerEnsemble([[0.1, -3.0]], 0.1), coupling=-5, damping_ratio=0.5)
+    w = osc.frequency
+    phi0 = math.pi  # cos φ0 = −1: M_eq = −0.2, inside (−1, 0)
+    start = OscillatorState(q=0.0, v=0.0, phi=phi0, operator_state=None, t=0.0)
+    t_exit = (math.pi / 2) / w  # φ reaches 3π/2 (cos φ = 0)
+    for method in METHODS:
+        eng = osc.engine(start, method=method)
+        assert eng.sliding
+        times = np.linspace(0.0, t_exit, 9)[:-1]
+        out = np.empty((times.size, 3))
+        eng.advance(times, out=out)
+        np.testing.assert_allclose(out[:, 2], np.cos(phi0 + w * times) / 5, atol=1e-14)
+        eng.advance(t_exit + 0.1, record=True)
+        sl = eng.records()["slides"]
+        assert list(sl["kind"]) == [-1] and abs(sl["time"][0] - t_exit) < 1e-12
+        assert eng.output == 0.0 and eng.state().q > 0.0  # spin 1 up, q leaves θ upwards
 
 
 def test_sliding_error_is_exported_and_a_value_error():
