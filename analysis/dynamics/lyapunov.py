@@ -21,7 +21,10 @@ its tangent map can have kept since the last re-orthonormalisation (a play wall 
 beyond that bound are exactly zero in exact arithmetic: they are recorded as ``log R_jj = -inf``
 (the paper's ``λ = -∞``), not as the log of a round-off remainder. When the number of rows of the
 deviation matrix is smaller than the number of tracked vectors (memory removed), the missing
-directions are -inf and their columns are continued as zero vectors.
+directions are -inf and their columns are continued as zero vectors. Deviation vectors that an
+event set exactly to zero (a relay's Filippov slide collapses ``δq, δv``) are moved behind the
+others before the QR (a column permutation: an orthogonal change of the interval's start
+basis), so a surviving direction (the phase) keeps its exponent.
 """
 
 from __future__ import annotations
