@@ -216,6 +216,8 @@ def test_lyapunov_of_a_sliding_orbit_is_minus_infinity():
     res = lyapunov_spectrum(osc, t_end=16 * osc.period, transient=6 * osc.period,
                             include_phase=True)  # fmt: skip
     assert np.isneginf(res.exponents).sum() == 2
+    # the phase direction survives the slide unchanged (δφ = 1, δq = δv = 0 all along)
+    assert abs(res.exponents[0]) < 1e-12
 
 
 def test_cli_lyapunov_on_the_hang_case_answers(capsys, tmp_path):
