@@ -88,8 +88,12 @@ N_PAR = 13
 # compensated output (heap table, float weights: value and Neumaier compensation), the running
 # integral of M over the elapsed time (for exact time averages of the output), the jump of M and
 # the direction (+1/-1) of the last switch (written only when the kernel stops with status 3 or 4)
+# and the threshold and jump of the previous switch (a switch undoing it at the same threshold
+# is a zero-width group chattering: the candidate of a sliding motion; kept across calls so that
+# where a slide begins does not depend on the sampling)
 S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC, S_IM, S_JMP, S_DIR = range(13)
-N_ST = 13
+S_PQ, S_PJ = 13, 14
+N_ST = 15
 # int state layout: k (nested index), n (period), number of switches so far, weight units up and
 # in total (heap table, integer output), heap table: alpha rank of the next up switch and beta
 # rank of the next down switch (-1: none), the switch count at which the kernel stops (the
@@ -626,10 +630,10 @@ def advance_table(
     b0, b1, b2 = y[1, 0], y[1, 1], y[1, 2]
     f0, f1, f2 = y[2, 0], y[2, 1], y[2, 2]
     status = 0
-    # the previous switch of this call (threshold, jump): a switch undoing it at the same
-    # threshold is a zero-width group chattering, the candidate of a sliding motion
-    prev_q = np.nan
-    prev_jump = 0.0
+    # the previous switch (threshold, jump): a switch undoing it at the same threshold is a
+    # zero-width group chattering, the candidate of a sliding motion
+    prev_q = st[S_PQ]
+    prev_jump = st[S_PJ]
     while True:
         horizon = tau_stop - tau
         if horizon <= 0.0:
@@ -869,6 +873,8 @@ def advance_table(
     st[S_COS] = c
     st[S_SIN] = s
     st[S_IM] = integral
+    st[S_PQ] = prev_q
+    st[S_PJ] = prev_jump
     ist[I_NSW] = nsw
     if tan_on:
         y[0, 0], y[0, 1], y[0, 2] = a0, a1, a2

@@ -424,9 +424,9 @@ class RelayKernelEngine(RelayEngine):
                 )  # fmt: skip
             if status == 4:
                 st = self._st
-                m_now, jump, direction = (
-                    float(st[kern.S_MV]), float(st[kern.S_JMP]), int(st[kern.S_DIR])
-                )  # fmt: skip
+                st[kern.S_PJ] = 0.0  # the chattering ends here
+                m_now, jump = float(st[kern.S_MV]), float(st[kern.S_JMP])
+                direction = int(st[kern.S_DIR])
                 self._enter_slide(
                     float(st[kern.S_Q]), float(st[kern.S_V]), m_now, m_now - jump, -direction,
                     record,
