@@ -7,10 +7,11 @@ unit tangent ``τ_a`` a step of length ``ds`` is a predictor and a Newton correc
 
     F(x, λ) = 0,   c·(z − z_a − ds·τ_a) = 0
 
-* **pseudo-arclength** (default for continuous memory): ``c = τ_a``, the tangent being the null vector of
-  ``[J − I, ∂F/∂λ]`` (``∂F/∂λ`` by central differences of ``P^k`` in λ, step
+* **pseudo-arclength** (default for continuous memory): ``c = τ_a``, the tangent being the
+  null vector of ``[J − I, ∂F/∂λ]`` (``∂F/∂λ`` by central differences of ``P^k`` in λ, step
   ``1e-6·max(1, |λ|)``), oriented like the previous one: folds are passed;
-* **natural** (default for relay-type operators): ``c = e_λ`` (λ fixed at ``λ_a + ds``), the predictor extrapolating the last secant.
+* **natural** (default for relay-type operators): ``c = e_λ`` (λ fixed at ``λ_a + ds``), the
+  predictor extrapolating the last secant.
 
 The corrector stops when ``|F|_∞ <= tolerance·max(1, |x|_∞)`` (and the constraint holds to
 round-off); a step whose corrector fails is halved down to ``min_step``.
