@@ -417,6 +417,13 @@ def find_periodic_orbit(
     engine_options:
         Passed to the engine (e.g. ``{"method": "generic"}``).
 
+    Notes
+    -----
+    A candidate period detected at a loose tolerance (or the closest-return fallback) may lead
+    Newton to an *unstable* orbit that the motion shadows for a while (chaotic motion near a
+    periodic saddle): the result is then a genuine periodic orbit, but not an attractor —
+    :attr:`PeriodicOrbit.stable` says which.
+
     Raises
     ------
     OrbitNotFoundError
