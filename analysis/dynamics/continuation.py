@@ -379,7 +379,7 @@ def period_doubled_orbit(
     """Branch switching at a period doubling: the period-2k orbit near ``event``.
 
     Starts Newton (period 2k) at ``event.parameter ± offset`` (default ``1e3·|bracket|`` and at
-    least 1e-6·max(1, |λ|)) from the orbit point plus ``± amplitude`` times the eigenvector of
+    least ``1e-6·max(1, |λ|)``) from the orbit point plus ``± amplitude`` times the eigenvector of
     the multiplier closest to −1, and returns ``(parameter, orbit)`` for the first start that
     converges to an orbit of minimal period 2k (the two halves distinct beyond ``1e3·tolerance``).
     """

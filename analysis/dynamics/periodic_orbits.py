@@ -73,7 +73,7 @@ __all__ = [
 
 #: relative tolerances (of the section's extent) at which candidate periods are detected
 DETECTION_TOLERANCES = (1e-8, 1e-6, 1e-4, 1e-3)
-#: largest relative mismatch |x_{i+k} − x_i| / extent of a fallback candidate period
+#: largest relative mismatch ``|x_{i+k} − x_i| / extent`` of a fallback candidate period
 FALLBACK_MISMATCH = 0.05
 #: halvings of a Newton step whose residual does not decrease
 MAX_HALVINGS = 10

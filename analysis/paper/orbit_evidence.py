@@ -33,7 +33,7 @@ CASCADE_CLOSED_FORM = 1.0 / (2.0 * DAMPING_RATIO) + _BETA
 
 
 def stable_range(branch: Continuation) -> dict[str, Any]:
-    """From the branch's first point, the stretch of stable points (every |μ| < 1) in order:
+    """From the branch's first point, the stretch of stable points (every ``|μ| < 1``) in order:
     its farthest parameter in the continuation direction, the event that ends it (the last
     event before the first unstable point, if the branch turns unstable) and every event."""
     pts = branch.points
