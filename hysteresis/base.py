@@ -264,7 +264,9 @@ class ContinuousHysteron(Hysteron):
     def compiled_play(self) -> Any:
         """A description for the compiled play-limit kernel
         (:class:`hysteresis.play.CompiledPlay`) if this operator is a play with a shape the
-        kernel knows (identity, erf), else ``None`` (the default): a fast path only.
+        kernel knows (identity, erf, or a tabulated shape,
+        :class:`hysteresis.shape_table.ShapeTable`), else ``None`` (the default): a fast path
+        only.
 
         An operator whose ``compiled_play()`` is not ``None`` also offers
         ``state(position, input)``, the state with the wagon at ``position`` and the input at

@@ -22,6 +22,7 @@ from hysteresis._validation import (
     as_input_sequence,
     check_state_type,
     finite_scalar,
+    real_array,
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
 from hysteresis.relay_table import RelayTable
@@ -168,7 +169,7 @@ class Relay(PiecewiseConstantHysteron):
 
     def state_from_relay_outputs(self, outputs, input: float) -> RelayState:
         """The state with output ``outputs[0]`` at ``input`` (validated like :meth:`state`)."""
-        y = np.asarray(outputs, dtype=np.float64)
+        y = real_array(outputs, "outputs")
         if y.shape != (1,):
             raise ValueError(f"outputs must have length 1 for a Relay, got shape {y.shape}")
         return self.state(float(y[0]), input)

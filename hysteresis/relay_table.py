@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hysteresis._validation import finite_array, finite_scalar
+from hysteresis._validation import finite_array, finite_scalar, real_array
 
 __all__ = ["HeapTable", "NestedPlan", "RelayTable"]
 
@@ -171,7 +171,7 @@ class RelayTable:
         other configuration cannot be reached with the input at ``input``).
         """
         input = finite_scalar(input, "input")
-        y = np.asarray(outputs, dtype=np.float64)
+        y = real_array(outputs, "outputs")
         if y.shape != self._alpha.shape:
             raise ValueError(f"outputs must have length {self.n_relays}, got shape {y.shape}")
         if not np.all((y == 1.0) | (y == -1.0)):

@@ -10,6 +10,7 @@ from oscillators.engines import (  # noqa: E402
     Engine,
     GrazingError,
     SlidingError,
+    StepBudgetError,
     SwitchBudgetError,
     select_engine,
 )
@@ -43,6 +44,7 @@ __all__ = [
     "Engine",
     "GrazingError",
     "SlidingError",
+    "StepBudgetError",
     "SwitchBudgetError",
     "select_engine",
     "ForcedOscillator",

@@ -32,7 +32,10 @@ class Trajectory:
     ``switches`` is a structured array with fields ``time``, ``q``, ``v``, ``jump`` (ΔM) —
     empty for continuous operators, whose wall hits/reversals are in ``events`` (fields
     ``time``, ``q``, ``v``, ``kind``: +1 leaving the play onto a wall, -1 entering the play).
-    ``w`` is the play position for play-type operators, else ``None``.
+    ``w`` is the play position for play-type operators, else ``None``. ``slides`` (relay
+    engines) lists the Filippov sliding motions entered and left (fields ``time``, ``q``,
+    ``v``, ``kind`` +1 slide-in / -1 slide-out, ``M``); while sliding the samples are
+    ``q = θ``, ``v = 0`` and ``M = M_eq = (θ − cos φ)/C``.
     """
 
     t: np.ndarray
@@ -44,6 +47,7 @@ class Trajectory:
     final: OscillatorState
     w: np.ndarray | None = None
     events: np.ndarray | None = None
+    slides: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -238,6 +238,7 @@ class ForcedOscillator:
             final=eng.state(),
             w=out[:, cols.index("w")].copy() if "w" in cols else None,
             events=rec.get("events"),
+            slides=rec.get("slides"),
         )
 
     def poincare_section(

@@ -438,6 +438,49 @@ CASES: list[Case] = [
         "read_csv(write('u.csv', '1,1,0.5\\n0,0,0.1\\n0,1,0.5\\n'.encode('utf-16-le')))",
         "not a text FORC file (UTF-16",
     ),
+    # --- masked arrays at the remaining entry points (issue 21)
+    C(
+        "disc-masked-relay-outputs",
+        "disc.state_from_relay_outputs(np.ma.masked_array([1.0, 1.0, -1.0], mask=[0, 1, 0]), 1.0)",
+        "outputs",
+    ),
+    C(
+        "relay-masked-relay-outputs",
+        "relay.state_from_relay_outputs(np.ma.masked_array([1.0], mask=[1]), 0.0)",
+        "outputs",
+    ),
+    C(
+        "engine-masked-times",
+        "from oscillators import ForcedOscillator\n"
+        "osc = ForcedOscillator(relay, coupling=0.5)\n"
+        "osc.engine(osc.initial_state()).advance(np.ma.masked_array([1.0, 2.0], mask=[0, 1]))",
+        "times",
+    ),
+    C(
+        "fit-masked-record",
+        "from analysis.identification.fitting import fit_prandtl_ishlinskii\n"
+        "u = np.sin(np.linspace(0, 20, 50))\n"
+        "fit_prandtl_ishlinskii(np.ma.masked_array(u, mask=u > 0.9), u, [0.5, 1.0])",
+        "u",
+    ),
+    C(
+        "fit-masked-relay-thresholds",
+        "from analysis.identification.fitting import relay_outputs\n"
+        "relay_outputs([0.0, 1.0], np.ma.masked_array([0.5], mask=[1]), [0.0])",
+        "alpha",
+    ),
+    C(
+        "pike-masked-coordinates",
+        "from analysis.identification.curves import preisach_to_pike\n"
+        "preisach_to_pike(np.ma.masked_array([1.0, 2.0], mask=[0, 1]), [0.0, 0.0])",
+        "alpha",
+    ),
+    C(
+        "cdf-masked-samples",
+        "from analysis.identification.metrics import empirical_cdf\n"
+        "empirical_cdf(np.ma.masked_array([1.0, 2.0], mask=[0, 1]))",
+        "samples",
+    ),
     C(
         "forc-readme-text",
         "read_forc(write('README.md', b'# Tool\\n\\nPlots moment (emu), field (Oe).\\n'), 'auto')",

@@ -21,10 +21,12 @@ from collections.abc import Iterator, Sequence
 from analysis import __version__
 from analysis.cli import (
     bifurcation,
+    continuation,
     dimension,
     ensemble,
     identify,
     lyapunov,
+    orbit,
     paper,
     poincare,
     trajectory,
@@ -44,7 +46,18 @@ from oscillators.engines import DivergenceError
 __all__ = ["COMMANDS", "main", "build_parser"]
 
 #: the subcommands, in the order of ``hyst --help``
-COMMANDS = (bifurcation, dimension, ensemble, identify, lyapunov, paper, poincare, trajectory)
+COMMANDS = (
+    bifurcation,
+    continuation,
+    dimension,
+    ensemble,
+    identify,
+    lyapunov,
+    orbit,
+    paper,
+    poincare,
+    trajectory,
+)
 
 
 def build_parser() -> HystArgumentParser:

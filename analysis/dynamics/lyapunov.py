@@ -21,7 +21,10 @@ its tangent map can have kept since the last re-orthonormalisation (a play wall 
 beyond that bound are exactly zero in exact arithmetic: they are recorded as ``log R_jj = -inf``
 (the paper's ``λ = -∞``), not as the log of a round-off remainder. When the number of rows of the
 deviation matrix is smaller than the number of tracked vectors (memory removed), the missing
-directions are -inf and their columns are continued as zero vectors.
+directions are -inf and their columns are continued as zero vectors. Deviation vectors that an
+event set exactly to zero (a relay's Filippov slide collapses ``δq, δv``) are moved behind the
+others before the QR (a column permutation: an orthogonal change of the interval's start
+basis), so a surviving direction (the phase) keeps its exponent.
 """
 
 from __future__ import annotations
@@ -316,6 +319,14 @@ def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.nda
     Returns the new deviation matrix (same number of rows as ``y``, ``k`` columns) and whether a
     direction collapsed structurally in this interval.
     """
+    if rank < k:
+        # deviation vectors that collapsed exactly to zero (a relay slide sets δq = δv = 0)
+        # go last: a column permutation is an orthogonal change of the interval's start basis,
+        # and the surviving directions keep the first slots of R (else a zero first column
+        # would hide them behind log 0)
+        nonzero = np.any(y != 0.0, axis=0)
+        if not nonzero.all():
+            y = y[:, np.concatenate([np.flatnonzero(nonzero), np.flatnonzero(~nonzero)])]
     q, diag, finite = householder_qr(y if y.flags.c_contiguous else np.ascontiguousarray(y))
     if not finite:
         raise DivergenceError("the tangent flow became non-finite (deviation vectors overflow)")

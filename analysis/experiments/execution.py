@@ -157,7 +157,14 @@ def _dask_client(scheduler: str) -> Any:
             "a scheduler address needs Dask distributed: "
             "pip install 'hysteresis-toolkit[distributed]'"
         ) from exc
-    return Client(scheduler)
+    try:
+        return Client(scheduler)
+    except ValueError as exc:  # a malformed address (e.g. 'local': missing port number)
+        raise ValueError(
+            f"scheduler {scheduler!r} is not a Dask scheduler address ({exc}); give one such "
+            "as tcp://HOST:8786 (this toolkit starts no local cluster: use --workers for "
+            "local processes)"
+        ) from None
 
 
 def run_tasks(

@@ -46,6 +46,7 @@ import numpy as np
 
 from analysis.identification._checks import finite_number, positive_number
 from hysteresis._progress import progress_bar
+from hysteresis._validation import real_array
 
 __all__ = [
     "ReversalCurves",
@@ -73,12 +74,12 @@ def preisach_to_pike(alpha: Any, beta: Any) -> tuple[np.ndarray, np.ndarray]:
 
     ``H_r = β``, ``H = α``; the densities agree pointwise, ``ρ(H_r, H) = μ_αβ(α, β)``.
     """
-    return np.asarray(beta, dtype=float), np.asarray(alpha, dtype=float)
+    return real_array(beta, "beta"), real_array(alpha, "alpha")
 
 
 def pike_to_preisach(reversal_field: Any, field_: Any) -> tuple[np.ndarray, np.ndarray]:
     """Pike FORC coordinates (H_r, H) → Preisach thresholds (α, β) = (H, H_r)."""
-    return np.asarray(field_, dtype=float), np.asarray(reversal_field, dtype=float)
+    return real_array(field_, "field_"), real_array(reversal_field, "reversal_field")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._validation import real_array
 from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
 from hysteresis.preisach import DiscretePreisachModel
 
@@ -78,8 +79,8 @@ class RecordFit:
 
 
 def _record(u: Any, y: Any, train_fraction: float) -> tuple[np.ndarray, np.ndarray, int]:
-    u = np.asarray(u, dtype=float)
-    y = np.asarray(y, dtype=float)
+    u = real_array(u, "u")
+    y = real_array(y, "y")
     if u.ndim != 1 or y.shape != u.shape or u.size < 2:
         raise ValueError("u and y must be 1-D arrays of the same length (>= 2)")
     if not (np.all(np.isfinite(u)) and np.all(np.isfinite(y))):
@@ -99,9 +100,9 @@ def relay_outputs(u: Any, alpha: Any, beta: Any, initial: int = -1) -> np.ndarra
     value; ``initial`` (−1 or +1) before the first switching. Vectorised: the last up-event
     and the last down-event of every relay are running maxima over time.
     """
-    u = np.asarray(u, dtype=float)
-    a = np.asarray(alpha, dtype=float)
-    b = np.asarray(beta, dtype=float)
+    u = real_array(u, "u")
+    a = real_array(alpha, "alpha")
+    b = real_array(beta, "beta")
     if initial not in (-1, 1):
         raise ValueError(f"initial must be -1 or +1, got {initial!r}")
     t = np.arange(1, u.size + 1)[:, None]

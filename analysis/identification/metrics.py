@@ -16,18 +16,19 @@ from scipy.special import ndtr
 
 from analysis.identification._checks import positive_number
 from analysis.identification.result import PreisachIdentification
+from hysteresis._validation import real_array
 
 __all__ = ["RidgeComparison", "compare_with_ridge", "empirical_cdf", "s_cdf_distance"]
 
 
 def empirical_cdf(samples: Any) -> Callable[[np.ndarray], np.ndarray]:
     """Right-continuous empirical CDF of ``samples``."""
-    x = np.sort(np.asarray(samples, dtype=float).ravel())
+    x = np.sort(real_array(samples, "samples").ravel())
     if x.size == 0:
         raise ValueError("samples must be non-empty")
 
     def cdf(t: Any) -> np.ndarray:
-        return np.searchsorted(x, np.asarray(t, dtype=float), side="right") / x.size
+        return np.searchsorted(x, real_array(t, "t"), side="right") / x.size
 
     return cdf
 

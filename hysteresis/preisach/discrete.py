@@ -17,6 +17,7 @@ from hysteresis._validation import (
     finite_array,
     finite_scalar,
     readonly_array,
+    real_array,
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
 from hysteresis.preisach import _kernels as _k
@@ -379,7 +380,7 @@ class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="disc
         ``α <= input``).
         """
         input = finite_scalar(input, "input")
-        y = np.asarray(outputs, dtype=np.float64)
+        y = real_array(outputs, "outputs")
         if y.shape != self.alpha.shape:
             raise ValueError(f"outputs must have length {self.n_relays}, got shape {y.shape}")
         if not np.all((y == 1.0) | (y == -1.0)):

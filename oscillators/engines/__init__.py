@@ -2,7 +2,8 @@
 
 * :mod:`~oscillators.engines.base` — :class:`Engine` (clock, time checks, divergence test,
   tangent bookkeeping), :class:`DivergenceError`, :class:`GrazingError`,
-  :class:`SlidingError`, :class:`SwitchBudgetError` (the switch budget);
+  :class:`SlidingError`, :class:`SwitchBudgetError` (the switch budget),
+  :class:`StepBudgetError` (the step budget);
 * :mod:`~oscillators.engines.relay` — :class:`RelayEngine`: :class:`RelayKernelEngine`
   (compiled, nested or heap plan) and :class:`RelayReferenceEngine` (Python reference path);
 * :mod:`~oscillators.engines.play` — :class:`PlayEngine` (compiled play limit);
@@ -22,6 +23,7 @@ from oscillators.engines.base import (
     Engine,
     GrazingError,
     SlidingError,
+    StepBudgetError,
     SwitchBudgetError,
     split_times,
     wrap_phase,
@@ -44,6 +46,7 @@ __all__ = [
     "RelayKernelEngine",
     "RelayReferenceEngine",
     "SlidingError",
+    "StepBudgetError",
     "SwitchBudgetError",
     "select_engine",
     "split_times",

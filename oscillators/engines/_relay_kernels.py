@@ -44,7 +44,10 @@ Plain-Python reading of one hop (``advance_table``)::
         checkpoint at or past a threshold brackets the crossing, found by safeguarded Newton
         on the exact solution.
     at a switch: q := threshold exactly, the table switches, tangent vectors get the saltation
-        δv += C·ΔM/v* · δq  (paper eq. salt_matrix)
+        δv += C·ΔM/v* · δq  (paper eq. salt_matrix); a switch undoing the previous one at the
+        same threshold (a zero-width group) where the flow pushes in from both sides and the
+        new excursion lasts 2|v|/|q''| <= SLIDE_EXCURSION/ρ returns status 4: the caller
+        integrates the Filippov sliding motion in closed form (oscillators/engines/_sliding.py)
     tangent vectors between switches: Φ(h) = [[g' + 2ζg, g], [-g, g']], g = Φ_01(h), by its
         Taylor series on Taylor hops, in closed form on exact flights
 
@@ -77,14 +80,20 @@ _CONTRACT = {"contract"}
 ORDER = 8
 
 # parameter vector layout (P_UNIT: weight unit of the heap table's integer output, 0 = float)
-P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE, P_UNIT, P_HS = range(12)
-N_PAR = 12
+# P_SL: the longest excursion across a zero-width threshold before the motion is set on the
+# sliding set (status 4; oscillators/engines/_sliding.py)
+P_ZETA, P_OMEGA, P_C, P_PHI0, P_A, P_B, P_T, P_HT, P_DSUB, P_TBASE, P_UNIT, P_HS, P_SL = range(13)
+N_PAR = 13
 # float state layout: q, v, tau, cos(phi), sin(phi), next up / down threshold, output M now,
 # compensated output (heap table, float weights: value and Neumaier compensation), the running
 # integral of M over the elapsed time (for exact time averages of the output), the jump of M and
-# the direction (+1/-1) of the last switch (written only when the switch budget runs out)
+# the direction (+1/-1) of the last switch (written only when the kernel stops with status 3 or 4)
+# and the threshold and jump of the previous switch (a switch undoing it at the same threshold
+# is a zero-width group chattering: the candidate of a sliding motion; kept across calls so that
+# where a slide begins does not depend on the sampling)
 S_Q, S_V, S_TAU, S_COS, S_SIN, S_UP, S_DN, S_MV, S_M, S_MC, S_IM, S_JMP, S_DIR = range(13)
-N_ST = 13
+S_PQ, S_PJ = 13, 14
+N_ST = 15
 # int state layout: k (nested index), n (period), number of switches so far, weight units up and
 # in total (heap table, integer output), heap table: alpha rank of the next up switch and beta
 # rank of the next down switch (-1: none), the switch count at which the kernel stops (the
@@ -106,8 +115,10 @@ def make_params(
     amp_b: float,
     t_base: float,
     taylor: bool = True,
+    slide_excursion: float = 1e-3,
 ) -> np.ndarray:
-    """Pack the parameter vector used by the kernels."""
+    """Pack the parameter vector used by the kernels (``slide_excursion``: see
+    :data:`oscillators.engines.base.SLIDE_EXCURSION`; divided by ρ here)."""
     par = np.zeros(N_PAR)
     par[P_ZETA] = zeta
     par[P_OMEGA] = omega
@@ -130,6 +141,7 @@ def make_params(
     par[P_TBASE] = t_base
     # short hops (most hops of a dense ensemble) take the fast path (degree-6 polynomials)
     par[P_HS] = (1e-3 / rho) if taylor else 0.0
+    par[P_SL] = slide_excursion / rho
     return par
 
 
@@ -537,8 +549,13 @@ def advance_table(
     (state left right after that switch, tangent not updated by it), 3 when the switch count
     reaches ``ist[I_MAXSW]`` (the switch budget; state right after that switch, which is neither
     recorded nor applied to the tangent; its jump and direction in ``st[S_JMP]``,
-    ``st[S_DIR]``). Tangent vectors (columns of ``y``, rows δq, δv, δφ) are propagated while
-    ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and ``st[S_MV]`` must be current
+    ``st[S_DIR]``), 4 at a switch where the motion enters a Filippov sliding motion (it
+    reverses the previous switch at the same threshold with the opposite jump, the flow pushes
+    into the threshold from both sides and the excursion just begun lasts ``2|v|/|q''| <=
+    par[P_SL]``; state right after that switch, neither recorded nor applied to the tangent,
+    its jump and direction in ``st[S_JMP]``, ``st[S_DIR]``; the caller integrates the slide,
+    :mod:`oscillators.engines._sliding`). Tangent vectors (columns of ``y``, rows δq, δv,
+    δφ) are propagated while ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and ``st[S_MV]`` must be current
     (:func:`_table_refresh`).
     """
     zeta = par[P_ZETA]
@@ -550,6 +567,7 @@ def advance_table(
     period = par[P_T]
     h_taylor = par[P_HT]
     h_small = par[P_HS]
+    h_slide = par[P_SL]
     cap = sw.shape[0]
     q = st[S_Q]
     v = st[S_V]
@@ -612,6 +630,10 @@ def advance_table(
     b0, b1, b2 = y[1, 0], y[1, 1], y[1, 2]
     f0, f1, f2 = y[2, 0], y[2, 1], y[2, 2]
     status = 0
+    # the previous switch (threshold, jump): a switch undoing it at the same threshold is a
+    # zero-width group chattering, the candidate of a sliding motion
+    prev_q = st[S_PQ]
+    prev_jump = st[S_PJ]
     while True:
         horizon = tau_stop - tau
         if horizon <= 0.0:
@@ -804,6 +826,20 @@ def advance_table(
         down = st[S_DN]
         mv = st[S_MV]
         nsw += 1
+        if jump == -prev_jump and q == prev_q and jump != 0.0:
+            a_now = c - q - 2.0 * zeta * v + coupling * mv
+            a_before = a_now - coupling * jump
+            if (
+                direction * a_before > 0.0
+                and direction * a_now < 0.0
+                and 2.0 * abs(v) <= h_slide * abs(a_now)
+            ):
+                st[S_JMP] = jump
+                st[S_DIR] = direction
+                status = 4  # sliding: the caller integrates it in closed form
+                break
+        prev_q = q
+        prev_jump = jump
         if nsw >= nsw_max:
             # switch budget spent (the caller raises SlidingError or SwitchBudgetError); the
             # tangent and the record of this last switch are left out
@@ -837,6 +873,8 @@ def advance_table(
     st[S_COS] = c
     st[S_SIN] = s
     st[S_IM] = integral
+    st[S_PQ] = prev_q
+    st[S_PJ] = prev_jump
     ist[I_NSW] = nsw
     if tan_on:
         y[0, 0], y[0, 1], y[0, 2] = a0, a1, a2
@@ -878,7 +916,7 @@ def run_table(
 
     Row i of ``out`` (if ``out`` has rows) receives (q, v, M) at target i. Returns (status,
     next target index); status as :func:`advance_table` (0 done, 1 record buffer full, 2
-    grazing switch with the tangent flow on, 3 switch budget spent).
+    grazing switch with the tangent flow on, 3 switch budget spent, 4 sliding motion).
     """
     e = np.empty(ORDER + 1)
     period = par[P_T]

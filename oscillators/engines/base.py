@@ -62,7 +62,11 @@ does.
 
 Engines raise :class:`DivergenceError` when the state becomes non-finite or runs away, and
 :class:`GrazingError` (piecewise-constant operators) when a switch happens at a turning point
-while the tangent flow is on.
+while the tangent flow is on. Work per ``advance`` call is bounded, proportional to the
+advanced time: :class:`SwitchBudgetError` (relay engines, :data:`SWITCHES_PER_RELAY_AND_TIME`;
+a chattering towards a sliding motion that does not settle within it: :class:`SlidingError`)
+and :class:`StepBudgetError` (play kernel and continuous engine, :data:`STEPS_PER_TIME`).
+Filippov sliding on a relay threshold is integrated (:mod:`oscillators.engines._sliding`).
 """
 
 from __future__ import annotations
@@ -73,12 +77,17 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._validation import real_array
 from oscillators.results import OscillatorState
 
 __all__ = [
     "DivergenceError",
     "Engine",
     "GrazingError",
+    "SLIDE_EXCURSION",
+    "STEPS_PER_TIME",
+    "STEP_BUDGET_FLOOR",
+    "StepBudgetError",
     "SWITCH_BUDGET_FLOOR",
     "SWITCHES_PER_RELAY_AND_TIME",
     "SlidingError",
@@ -86,6 +95,7 @@ __all__ = [
     "SWITCH_DTYPE",
     "TIME_TOLERANCE",
     "split_times",
+    "step_budget",
     "wrap_phase",
 ]
 
@@ -142,20 +152,55 @@ class SwitchBudgetError(RuntimeError):
         self.budget = budget
 
 
-class SlidingError(ValueError):
-    """A Filippov sliding motion on a relay threshold, which the relay engines do not integrate.
+#: Relay engines: a chattering across a zero-width threshold that pushes in from both sides
+#: is set on the Filippov sliding set ``q = θ, v = 0`` once an excursion lasts at most
+#: ``SLIDE_EXCURSION/ρ`` (``ρ = max(1, Ω, 2ζ)``), i.e. ``|v| <= ½|q''|·SLIDE_EXCURSION/ρ``;
+#: that change of ``v`` is the error of entering the slide (:mod:`oscillators.engines._sliding`).
+SLIDE_EXCURSION = 1e-3
 
-    On both sides of the threshold the flow pushes into it (q'' with the output below the
-    threshold points up, with the output above it points down, and v ≈ 0), so the exact
-    event-driven integration chatters across it with vanishing intervals. Detected when the
-    switch budget of the call runs out there. ``time`` is the absolute time, ``threshold`` the
-    value of q the motion slides along.
+
+class SlidingError(ValueError):
+    """A chattering towards a Filippov sliding motion that did not settle within the budget.
+
+    The relay engines integrate sliding motions (:mod:`oscillators.engines._sliding`): the
+    chattering across a zero-width threshold is set on the sliding set once its excursions are
+    short (:data:`SLIDE_EXCURSION`). This error is left for a call whose switch budget runs out
+    while the flow pushes into a threshold from both sides before that happened (the
+    chattering decays too slowly, e.g. at very weak damping). ``time`` is the absolute time,
+    ``threshold`` the value of q.
     """
 
     def __init__(self, message: str, time: float | None = None, threshold: float | None = None):
         super().__init__(message)
         self.time = time
         self.threshold = threshold
+
+
+#: Work bound of the stepping engines (play kernel, continuous engine): steps and events
+#: allowed per unit of time (times ``max(1, Ω, 2ζ)``) in one ``advance`` call, plus
+#: :data:`STEP_BUDGET_FLOOR` per call; beyond it the call stops with :class:`StepBudgetError`.
+#: Ordinary motion takes a few hundred steps per unit time (the play kernel's fixed DOP853 step
+#: is 0.05/max(1, Ω); solve_ivp at rtol 1e-11 a few dozen), so the bound only ends runaway work.
+STEPS_PER_TIME = 100_000
+#: Steps and events every ``advance`` call of a stepping engine may make whatever its length.
+STEP_BUDGET_FLOOR = 100_000
+
+
+class StepBudgetError(RuntimeError):
+    """An ``advance`` call of a stepping engine exceeded its work budget
+    (:data:`STEPS_PER_TIME`). ``time`` is the absolute time at which it ran out, ``budget``
+    the number of steps and events the call was allowed."""
+
+    def __init__(self, message: str, time: float | None = None, budget: int | None = None):
+        super().__init__(message)
+        self.time = time
+        self.budget = budget
+
+
+def step_budget(omega: float, zeta: float, span: float) -> int:
+    """Steps and events one ``advance`` call of a stepping engine spanning ``span`` may make."""
+    b = STEP_BUDGET_FLOOR + STEPS_PER_TIME * max(1.0, omega, 2.0 * zeta) * max(span, 0.0)
+    return int(min(b, 2.0**62))
 
 
 def wrap_phase(phi: float) -> float:
@@ -240,7 +285,7 @@ class Engine(ABC):
 
     def _target_times(self, times: np.ndarray | float) -> np.ndarray:
         """``times`` as a checked 1-D array: finite, sorted, not before now (may be empty)."""
-        times = np.asarray(times, dtype=np.float64)
+        times = real_array(times, "times")
         if times.ndim > 1:
             raise ValueError("times must be a scalar or a 1-D array")
         times = np.atleast_1d(times)

@@ -59,7 +59,15 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar, positive_scalar
 from hysteresis.base import ContinuousHysteron
-from oscillators.engines.base import DivergenceError, Engine, split_times, wrap_phase
+from oscillators.engines.base import (
+    STEPS_PER_TIME,
+    DivergenceError,
+    Engine,
+    StepBudgetError,
+    split_times,
+    step_budget,
+    wrap_phase,
+)
 from oscillators.results import OscillatorState
 
 __all__ = ["ContinuousEngine", "EVENT_DTYPE"]
@@ -216,6 +224,10 @@ class ContinuousEngine(Engine):
         n_t, tau_t = split_times(times[-1:], self._period)
         ncol = len(self.sample_columns)
         i = 0
+        # bounded work: DOP853 steps (12 right-hand sides each) plus events per call
+        span = float((n_t[0] - self._n) * self._period + (tau_t[0] - self._tau))
+        budget = step_budget(self._omega, self._zeta, span)
+        used = 0
         while True:
             s_eval = None
             if out is not None and i < times.size:
@@ -231,6 +243,17 @@ class ContinuousEngine(Engine):
                 break
             horizon = min(duration, _MAX_CALL)
             s_done, samples, hit = self._segment(horizon, s_eval)
+            used += 1 + self._last_nfev // 12
+            if used > budget:
+                t = self.start.t + self.elapsed + s_done
+                raise StepBudgetError(
+                    f"step budget exceeded at t = {t:.6g}: more than {budget} steps and events "
+                    f"in one advance call, the cap of {STEPS_PER_TIME} per unit time (times "
+                    "max(1, Ω, 2ζ)) plus STEP_BUDGET_FLOOR per call "
+                    "(oscillators.engines.base.STEPS_PER_TIME)",
+                    time=t,
+                    budget=budget,
+                )
             if samples is not None:
                 for j in range(samples.shape[1]):
                     out[i + j, :ncol] = self._sample_row(float(samples[0, j]), float(samples[1, j]))
@@ -339,6 +362,7 @@ class ContinuousEngine(Engine):
             atol=self._atol,
             max_step=self._max_step,
         )
+        self._last_nfev = int(sol.nfev)
         if sol.status < 0:
             raise DivergenceError(
                 f"continuous engine: integration failed ({sol.message})",

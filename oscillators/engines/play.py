@@ -64,7 +64,7 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar
 from oscillators.engines import _play_kernels as _k
-from oscillators.engines.base import Engine
+from oscillators.engines.base import STEPS_PER_TIME, Engine, StepBudgetError, step_budget
 from oscillators.linear import particular_amplitudes
 from oscillators.parameters import check_closed_form
 from oscillators.results import OscillatorState
@@ -283,6 +283,15 @@ class PlayEngine(Engine):
                 self._flags,
                 self._work,
             )
+            budget = step_budget(self._omega, 0.0, span)
+            if cnt[0] > budget:  # bounded work: events per call (the wall steps are fixed)
+                raise StepBudgetError(
+                    f"step budget exceeded by t = {self.start.t + self._st[0]:.6g}: {cnt[0]} "
+                    f"events in one advance call, more than the cap of {STEPS_PER_TIME} per unit "
+                    "time (oscillators.engines.base.STEPS_PER_TIME)",
+                    time=float(self.start.t + self._st[0]),
+                    budget=budget,
+                )
             if not record or cnt[0] <= cap:
                 break
             self._st[:], self._T[:], self._diag[:] = saved

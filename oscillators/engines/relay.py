@@ -26,6 +26,12 @@ base, is what :func:`~oscillators.engines.select.select_engine` hands out:
 
 Relays of zero weight never change ``M`` and are left out of the kernels (the operator state
 returned rebuilds them from the staircase).
+
+Filippov sliding (:mod:`oscillators.engines._sliding`, closed form, exit, tangent collapse):
+a chattering across a zero-width threshold pushing in from both sides is set on ``q = θ, v = 0``
+(kernel status 4) and slides with ``M = M_eq = (θ − cos φ)/C`` to its exit phase;
+``records()["slides"]`` lists slide-in (+1) / slide-out (−1); a state taken during a slide
+restarts sliding.
 """
 
 from __future__ import annotations
@@ -35,8 +41,11 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._validation import real_array
 from oscillators.engines import _relay_kernels as kern
+from oscillators.engines import _sliding as slide
 from oscillators.engines.base import (
+    SLIDE_EXCURSION,
     SWITCH_BUDGET_FLOOR,
     SWITCH_DTYPE,
     SWITCHES_PER_RELAY_AND_TIME,
@@ -73,50 +82,6 @@ def _grazing_message(t: float | None = None) -> str:
     )
 
 
-def _budget_error(
-    par: np.ndarray,
-    t: float,
-    c: float,
-    q: float,
-    v: float,
-    m_now: float,
-    jump: float,
-    direction: int,
-    budget: int,
-) -> Exception:
-    """The error when an ``advance`` call spent its switch budget, right after a switch at
-    ``q`` (output ``m_now`` after it, ``m_now - jump`` before it, ``direction`` +1 up / -1 down;
-    ``c`` = cos φ now).
-
-    Sliding (Filippov): on the threshold the acceleration with the output of the side below
-    points up and the one with the output of the side above points down, so the motion is
-    pushed into the threshold from both sides and the exact integration chatters across it.
-    """
-    coupling = par[kern.P_C]
-    base = -2.0 * par[kern.P_ZETA] * v - q + c
-    a_now = base + coupling * m_now
-    a_before = base + coupling * (m_now - jump)
-    if direction != 0 and direction * a_before > 0.0 and direction * a_now < 0.0:
-        a_below, a_above = (a_before, a_now) if direction > 0 else (a_now, a_before)
-        return SlidingError(
-            f"sliding motion on the relay threshold q = {q!r} at t = {t!r}: the flow pushes "
-            f"into the threshold from both sides (q'' = {float(a_below)!r} with the output "
-            f"below it, {float(a_above)!r} with the output above it, v = {v!r}), so the motion "
-            "slides along the threshold (a Filippov sliding motion), which this event-driven "
-            f"engine does not integrate (it chatters: {budget} switches in this call)",
-            time=t,
-            threshold=q,
-        )
-    return SwitchBudgetError(
-        f"switch budget exceeded at t = {t!r} (q = {q!r}, v = {v!r}): more than {budget} "
-        f"switches in one advance call, the cap of {SWITCHES_PER_RELAY_AND_TIME} switches per "
-        f"relay and per unit time (times max(1, Ω)) plus {SWITCH_BUDGET_FLOOR} per call "
-        "(oscillators.engines.base.SWITCHES_PER_RELAY_AND_TIME)",
-        time=t,
-        budget=budget,
-    )
-
-
 def _switch_budget(n_relays: int, omega: float, span: float) -> int:
     """Switches one ``advance`` call spanning ``span`` time units may make (module constants
     :data:`~oscillators.engines.base.SWITCHES_PER_RELAY_AND_TIME`, ``SWITCH_BUDGET_FLOOR``)."""
@@ -126,7 +91,7 @@ def _switch_budget(n_relays: int, omega: float, span: float) -> int:
     return int(min(b, 2.0**62))
 
 
-class RelayEngine(Engine):
+class RelayEngine(slide.SlidingMixin, Engine):
     """Event-driven engine for piecewise-constant operators (see the module docstring).
 
     ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or,
@@ -177,12 +142,17 @@ class RelayEngine(Engine):
         zeta = float(system.damping_ratio)
         amp_a, amp_b = particular_amplitudes(zeta, self._omega)
         self._par = kern.make_params(
-            zeta, self._omega, float(system.coupling), self._phi0, amp_a, amp_b, t0, taylor
-        )
+            zeta, self._omega, float(system.coupling), self._phi0, amp_a, amp_b, t0, taylor,
+            SLIDE_EXCURSION,
+        )  # fmt: skip
         self._t0 = t0
         self._y = np.zeros((3, 3))
         self._chunks: list[np.ndarray] = []
         self._state_cache: OscillatorState | None = None
+        # the sliding motion in progress (None: ordinary motion) and the slide records
+        self._slide: slide._Slide | None = None
+        self._slide_events: list[tuple[float, float, float, int, float]] = []
+        self._collapsed = False  # a slide collapsed (δq, δv) since the last start/set
 
     def _now(self) -> tuple[float, float, Any]:
         """(q, v, operator state) now."""
@@ -197,11 +167,15 @@ class RelayEngine(Engine):
         return self._state_cache
 
     def records(self) -> dict[str, np.ndarray]:
+        """``{"switches": time, q, v, jump}`` and ``{"slides": time, q, v, kind, M}``
+        (:data:`~oscillators.engines._sliding.SLIDE_DTYPE`: kind +1 slide-in, -1 slide-out;
+        ``v`` the speed set to 0 at slide-in; ``M`` the equivalent output then)."""
         sw = np.concatenate(self._chunks) if self._chunks else np.empty((0, 4))
         rec = np.empty(sw.shape[0], dtype=SWITCH_DTYPE)
         for j, name in enumerate(SWITCH_DTYPE.names):
             rec[name] = sw[:, j]
-        return {"switches": rec}
+        slides = np.array(self._slide_events, dtype=slide.SLIDE_DTYPE)
+        return {"switches": rec, "slides": slides}
 
     # -- tangent flow: (δq, δv[, δφ]) columns in the 3×3 buffer the kernels update in place ----
     def _start_tangent(self, include_phase: bool) -> int:
@@ -209,6 +183,10 @@ class RelayEngine(Engine):
         self._y[:, :] = 0.0
         for j in range(k):
             self._y[j, j] = 1.0
+        self._collapsed = False
+        if self._slide is not None:  # started on the sliding set
+            self._y[:2, :] = 0.0
+            self._collapsed = True
         return k
 
     @property
@@ -220,10 +198,12 @@ class RelayEngine(Engine):
 
     def _set_deviations(self, y: np.ndarray) -> None:
         self._y[: self._ntan, : self._ntan] = y
+        self._collapsed = False
 
     def _rank_bound(self) -> int:
-        # relays have no memory directions and every saltation matrix is invertible
-        return self._ntan
+        # relays have no memory directions and every saltation matrix is invertible; a slide
+        # collapses (δq, δv) (only the phase direction, if tracked, survives it)
+        return self._ntan - 2 if self._collapsed else self._ntan
 
 
 class RelayKernelEngine(RelayEngine):
@@ -286,14 +266,77 @@ class RelayKernelEngine(RelayEngine):
         )
         self._st = st
         self._ist = ist
+        self._start_on_sliding_set(q0, v0)
+
+    def _switched_copy(self, direction: int) -> tuple[float, float, float]:
+        """(output, next up, next down threshold) after switching the relays at the current
+        threshold in ``direction``, on a copy of the table state."""
+        st, ist, bits = self._st.copy(), self._ist.copy(), self._bits.copy()
+        kern._table_switch(
+            self._par, self._kind, self._tf, self._ti, bits, self._lay, st, ist, direction
+        )
+        return float(st[kern.S_MV]), float(st[kern.S_UP]), float(st[kern.S_DN])
+
+    def _start_on_sliding_set(self, q: float, v: float) -> None:
+        """A start on a zero-width threshold pushing in from both sides starts sliding."""
+        st = self._st
+        m_now = float(st[kern.S_MV])
+        for direction, theta in ((1, float(st[kern.S_UP])), (-1, float(st[kern.S_DN]))):
+            if q != theta:
+                continue
+            m_other, up, down = self._switched_copy(direction)
+            if (down if direction > 0 else up) != theta:
+                continue  # not a zero-width group: no chattering at this threshold
+            below, above = (m_now, m_other) if direction > 0 else (m_other, m_now)
+            if slide.should_slide(
+                q, v, float(st[kern.S_COS]), float(self._par[kern.P_ZETA]),
+                float(self._par[kern.P_C]), below, above, m_now, float(self._par[kern.P_SL]),
+            ):  # fmt: skip
+                self._enter_slide(theta, v, m_now, m_other, direction, False)
+                return
 
     def _clock(self) -> tuple[int, float]:
         return int(self._ist[kern.I_N]), float(self._st[kern.S_TAU])
 
     @property
     def output(self) -> float:
-        """Operator output ``M`` now."""
+        """Operator output ``M`` now (``M_eq`` while sliding)."""
+        if self._slide is not None:
+            return self._slide_output(float(self._st[kern.S_TAU]))
         return float(self._st[kern.S_MV])
+
+    def _slide_set_clock(self, n: int, tau: float, integral: float) -> None:
+        st = self._st
+        self._ist[kern.I_N] = n
+        ph = self._phi0 + self._omega * tau
+        st[kern.S_TAU] = tau
+        st[kern.S_COS] = math.cos(ph)
+        st[kern.S_SIN] = math.sin(ph)
+        st[kern.S_Q] = self._slide.theta
+        st[kern.S_V] = 0.0
+        st[kern.S_IM] += integral
+
+    def _slide_switch(self, direction: int) -> None:
+        kern._table_switch(
+            self._par, self._kind, self._tf, self._ti, self._bits, self._lay, self._st,
+            self._ist, direction,
+        )  # fmt: skip
+
+    def _slide_targets(self, tgt_n: np.ndarray, tgt_tau: np.ndarray, i: int, buf, record) -> int:
+        """Slide through the targets from ``i`` (rows of ``buf``: θ, 0, M_eq) until the exit;
+        returns the first target not reached."""
+        theta = self._slide.theta
+        sample = buf.shape[0] > 0
+        while i < tgt_n.size:
+            tau = float(tgt_tau[i])
+            if not self._slide_to(int(tgt_n[i]), tau, record):
+                return i
+            if sample:
+                buf[i, 0] = theta
+                buf[i, 1] = 0.0
+                buf[i, 2] = self._slide_output(tau)
+            i += 1
+        return i
 
     def output_integral(self) -> float:
         """``∫ M dt`` since the start, exact: ``M`` is constant between switches, so the kernel
@@ -310,6 +353,7 @@ class RelayKernelEngine(RelayEngine):
         if type(times) is float or np.size(times) == 1:
             # one target (the Lyapunov stepper's case): no array bookkeeping on the way in
             if type(times) is not float:
+                times = real_array(times, "times")
                 if np.ndim(times) > 1:
                     raise ValueError("times must be a scalar or a 1-D array")
                 times = float(np.reshape(times, -1)[0])
@@ -358,7 +402,9 @@ class RelayKernelEngine(RelayEngine):
         sw = np.empty((cap, 4)) if record else self._nosw
         cnt = self._cnt
         i = 0
-        while True:
+        if self._slide is not None:
+            i = self._slide_targets(tgt_n, tgt_tau, 0, buf, record)
+        while i < tgt_n.size:
             cnt[0] = 0
             status, i = self._run(
                 self._par, self._tf, self._ti, self._bits, self._lay, self._st,
@@ -371,11 +417,22 @@ class RelayKernelEngine(RelayEngine):
                 raise GrazingError(_grazing_message(self._t0 + self.elapsed))
             if status == 3:
                 st = self._st
-                raise _budget_error(
+                raise slide.budget_error(
                     self._par, self._t0 + self.elapsed, float(st[kern.S_COS]), float(st[kern.S_Q]),
                     float(st[kern.S_V]), float(st[kern.S_MV]), float(st[kern.S_JMP]),
                     int(st[kern.S_DIR]), budget,
                 )  # fmt: skip
+            if status == 4:
+                st = self._st
+                st[kern.S_PJ] = 0.0  # the chattering ends here
+                m_now, jump = float(st[kern.S_MV]), float(st[kern.S_JMP])
+                direction = int(st[kern.S_DIR])
+                self._enter_slide(
+                    float(st[kern.S_Q]), float(st[kern.S_V]), m_now, m_now - jump, -direction,
+                    record,
+                )  # fmt: skip
+                i = self._slide_targets(tgt_n, tgt_tau, i, buf, record)
+                continue
             if status == 0:
                 break
             cap = min(cap * 4, 1 << 20)
@@ -429,13 +486,52 @@ class RelayReferenceEngine(RelayEngine):
         self._switches: list[tuple[float, float, float, float]] = []
         self._integral = 0.0  # ∫M dt since the start
         self._n_relays = int(self._op.relay_table().n_relays)  # for the switch budget
+        self._prev_switch = (math.nan, 0.0)  # (threshold, jump) of the previous switch
+        self._start_on_sliding_set(self._q, self._v)
+
+    def _other_side(self, theta: float, direction: int) -> tuple[Any, float, float]:
+        """(operator state, output, reverse threshold) after moving the input across ``theta``
+        in ``direction`` (+1: to θ, switching relays with α = θ up; -1: just below θ)."""
+        u = theta if direction > 0 else float(np.nextafter(theta, -np.inf))
+        _, st = self._op.apply(np.array([u]), self._opstate)
+        sw = self._op.switching(st)
+        return st, float(self._op.output(st)), float(sw.lower if direction > 0 else sw.upper)
+
+    def _start_on_sliding_set(self, q: float, v: float) -> None:
+        """As :meth:`RelayKernelEngine._start_on_sliding_set`, through ``switching()``."""
+        sw = self._op.switching(self._opstate)
+        m_now = self.output
+        for direction, theta in ((1, float(sw.upper)), (-1, float(sw.lower))):
+            if q != theta:
+                continue
+            _, m_other, back = self._other_side(theta, direction)
+            if back != theta:
+                continue
+            below, above = (m_now, m_other) if direction > 0 else (m_other, m_now)
+            c = math.cos(self._phi0)
+            par = self._par
+            if slide.should_slide(
+                q, v, c, par[kern.P_ZETA], par[kern.P_C], below, above, m_now, par[kern.P_SL]
+            ):
+                self._enter_slide(theta, v, m_now, m_other, direction, False)
+                return
+
+    def _slide_set_clock(self, n: int, tau: float, integral: float) -> None:
+        self._n, self._tau = n, tau
+        self._q, self._v = self._slide.theta, 0.0
+        self._integral += integral
+
+    def _slide_switch(self, direction: int) -> None:
+        self._opstate = self._other_side(self._slide.theta, direction)[0]
 
     def _clock(self) -> tuple[int, float]:
         return self._n, self._tau
 
     @property
     def output(self) -> float:
-        """Operator output ``M`` now."""
+        """Operator output ``M`` now (``M_eq`` while sliding)."""
+        if self._slide is not None:
+            return self._slide_output(self._tau)
         return float(self._op.output(self._opstate))
 
     def output_integral(self) -> float:
@@ -473,6 +569,8 @@ class RelayReferenceEngine(RelayEngine):
         amp_a, amp_b, phi0 = par[kern.P_A], par[kern.P_B], par[kern.P_PHI0]
         op = self._op
         while True:
+            if self._slide is not None and self._slide_to(self._n, tau_stop, record):
+                return
             horizon = tau_stop - self._tau
             if horizon <= 0.0:
                 return
@@ -515,6 +613,18 @@ class RelayReferenceEngine(RelayEngine):
             jump = self.output - m_old
             self._n_switches += 1
             t = par[kern.P_TBASE] + self._n * par[kern.P_T] + self._tau
+            prev_q, prev_jump = self._prev_switch
+            self._prev_switch = (self._q, jump)
+            if jump != 0.0 and jump == -prev_jump and self._q == prev_q:
+                c_now = math.cos(phi0 + omega * self._tau)
+                m_now = self.output
+                below, above = (m_now - jump, m_now) if direction > 0 else (m_now, m_now - jump)
+                if slide.should_slide(
+                    self._q, self._v, c_now, zeta, coupling, below, above, m_now, par[kern.P_SL]
+                ):
+                    self._prev_switch = (math.nan, 0.0)
+                    self._enter_slide(self._q, self._v, m_now, m_now - jump, -direction, record)
+                    continue
             if record:
                 self._switches.append((t, self._q, self._v, jump))
             if self._n_switches >= self._max_switches:
@@ -522,7 +632,7 @@ class RelayReferenceEngine(RelayEngine):
                     self._chunks.append(np.array(self._switches, dtype=float).reshape(-1, 4))
                     self._switches.clear()
                 c_now = math.cos(phi0 + omega * self._tau)
-                raise _budget_error(
+                raise slide.budget_error(
                     par, float(t), c_now, self._q, self._v, self.output, jump, direction,
                     self._budget,
                 )  # fmt: skip

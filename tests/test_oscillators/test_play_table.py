@@ -108,6 +108,17 @@ def test_compiled_tanh_play_matches_the_generic_engine():
     # periods: the 1e-8 (measured: 6e-10)
     for name in ("q", "v", "w", "M"):
         np.testing.assert_allclose(getattr(sec, name), getattr(ref, name), rtol=0, atol=1e-8)
+    # event records: the same wall hits (kind +1) at the same times; the kernel records the
+    # reversals on a wall (kind -1), the generic engine also those inside the play (v = 0
+    # there changes its branch), so the kernel's reversals are a subset of the generic ones
+    t_end = 10 * compiled.period
+    ev = compiled.trajectory(t_end, sample_dt=compiled.period).events
+    ev_ref = generic.trajectory(t_end, sample_dt=generic.period, engine_options=TIGHT).events
+    hits, hits_ref = ev["time"][ev["kind"] == 1], ev_ref["time"][ev_ref["kind"] == 1]
+    assert hits.size == hits_ref.size > 10
+    np.testing.assert_allclose(hits, hits_ref, rtol=0, atol=1e-8)
+    rev, rev_ref = ev["time"][ev["kind"] == -1], ev_ref["time"][ev_ref["kind"] == -1]
+    assert np.all(np.min(np.abs(rev[:, None] - rev_ref[None, :]), axis=1) < 1e-8)
 
 
 def test_zero_coupling_exponents_are_minus_zeta():

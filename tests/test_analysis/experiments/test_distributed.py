@@ -337,3 +337,59 @@ def test_lost_scheduler_fails_clearly_and_a_rerun_resumes(tmp_path):
             _stop(client_proc)
         assert rc == 0, cluster.log_tail()
     _assert_same_as_reference(tmp_path, dist_store, reference, reference_arrays)
+
+
+def _process_group(pgid: int) -> list[int]:
+    """Pids of the live (not zombie) processes in process group ``pgid`` (Linux /proc)."""
+    members = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        # fields after the command name "(...)": state, ppid, pgrp
+        state, _ppid, pgrp = stat.rsplit(")", 1)[1].split()[:3]
+        if int(pgrp) == pgid and state != "Z":
+            members.append(int(entry.name))
+    return members
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_killed_client_leaves_no_process_and_no_work_behind(tmp_path):
+    """Issue 21: SIGKILL of ``hyst ensemble --scheduler ADDR`` mid-run (the client process
+    only, not its group). The client starts no process of its own on the Dask path (no local
+    cluster, nanny or worker: ``--scheduler`` takes an address, ``'local'`` is refused), so
+    nothing is orphaned: its process group is empty once it is dead. The cluster drops the dead
+    client's work: within a bounded time the scheduler holds none of its tasks and no worker
+    computes for nobody; the cluster's own workers stay (they belong to the cluster)."""
+    args = _ensemble_args(["2.9", "4.0"], 3, 8000.0)
+    store = tmp_path / "dist.sqlite"
+    with _cluster(tmp_path, n_workers=2) as cluster:
+        with distributed.Client(cluster.address, timeout="60s") as observer:
+            observer.wait_for_workers(2, timeout=STARTUP_TIMEOUT)
+            client_proc = _start_client(tmp_path, cluster, args, store, "killed")
+            try:
+                deadline = time.monotonic() + RUN_TIMEOUT
+                while not any(observer.processing().values()):
+                    if client_proc.poll() is not None or time.monotonic() > deadline:
+                        pytest.fail("the cluster never computed\n" + cluster.log_tail())
+                    time.sleep(0.05)
+                assert _process_group(client_proc.pid) == [client_proc.pid]
+                os.kill(client_proc.pid, signal.SIGKILL)
+                client_proc.wait(timeout=30)
+                assert _process_group(client_proc.pid) == []  # nothing outlived the client
+            finally:
+                _stop(client_proc)
+            # the scheduler forgets the dead client's tasks (closed connection), bounded
+            deadline = time.monotonic() + 60
+            while True:
+                held = observer.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks))
+                if held == 0 and not any(observer.processing().values()):
+                    break
+                assert time.monotonic() < deadline, f"{held} tasks kept for a dead client"
+                time.sleep(0.2)
+            assert len(observer.scheduler_info()["workers"]) == 2  # the cluster is intact
+    assert _stored_count(store) < 6  # the kill fell inside the run

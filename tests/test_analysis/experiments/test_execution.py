@@ -319,3 +319,12 @@ def test_bad_arguments():
     with ThreadPoolExecutor(1) as ex, pytest.raises(ValueError):
         run_tasks("e", [], dict, executor=ex, scheduler="tcp://x:1")
     assert run_tasks("e", [], dict, progress=False) == []
+
+
+def test_scheduler_must_be_an_address_no_local_cluster_is_started():
+    # issue 21: nothing in the toolkit starts a Dask LocalCluster (whose nannies and workers
+    # could outlive a killed client); '--scheduler local' is refused in one line naming it
+    pytest.importorskip("distributed")
+    with pytest.raises(ValueError, match="scheduler 'local' is not a Dask scheduler address") as e:
+        run_tasks("x", [{"seed": 1}], dict, scheduler="local", progress=False)
+    assert "\n" not in str(e.value) and "--workers" in str(e.value)
