@@ -20,6 +20,7 @@ from collections.abc import Iterator, Sequence
 
 from analysis import __version__
 from analysis.cli import (
+    basins,
     bifurcation,
     dimension,
     ensemble,
@@ -44,7 +45,17 @@ from oscillators.engines import DivergenceError
 __all__ = ["COMMANDS", "main", "build_parser"]
 
 #: the subcommands, in the order of ``hyst --help``
-COMMANDS = (bifurcation, dimension, ensemble, identify, lyapunov, paper, poincare, trajectory)
+COMMANDS = (
+    basins,
+    bifurcation,
+    dimension,
+    ensemble,
+    identify,
+    lyapunov,
+    paper,
+    poincare,
+    trajectory,
+)
 
 
 def build_parser() -> HystArgumentParser:
