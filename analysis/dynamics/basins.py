@@ -320,7 +320,7 @@ def basins(
     max_periods: int | None = None,
     tolerance: float = 1e-6,
     match_tolerance: float = 1e-4,
-    max_period: int = 32,
+    max_period: int | None = None,
     lyapunov_periods: int = 2000,
     max_aperiodic: int = 8,
     cloud_bins: int = 64,
@@ -354,7 +354,7 @@ def basins(
         included); larger than ``tolerance`` because a cycle repeating within ``tolerance`` is
         within ``tolerance/(1 − |μ|)`` of its orbit.
     max_period:
-        Longest section period detected (``<= periods // 2``).
+        Longest section period detected (``<= periods // 2``; default ``min(32, periods // 2)``).
     lyapunov_periods, max_aperiodic, cloud_bins, tail:
         The aperiodic attractors: length of the Lyapunov run (10 segments), the most attractor
         candidates tried, the cells per axis of the section cloud, the tail points per start.
@@ -368,6 +368,7 @@ def basins(
     pts, grid = _as_starts(starts)
     transient = nonnegative_integer(transient, "transient")
     periods = positive_integer(periods, "periods", minimum=2)
+    max_period = min(32, periods // 2) if max_period is None else max_period
     max_period = positive_integer(max_period, "max_period")
     if max_period > periods // 2:
         raise ValueError(f"max_period must be <= periods // 2 = {periods // 2}, got {max_period}")
