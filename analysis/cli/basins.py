@@ -94,7 +94,12 @@ def register(subparsers: Any) -> None:
         help="N, starts per axis (N x N starts)",
     )
     g.add_argument(
-        "--q0-range", type=finite_float, nargs=2, default=[-3.0, 3.0], metavar=("A", "B")
+        "--q0-range",
+        type=finite_float,
+        nargs=2,
+        default=[-3.0, 3.0],
+        metavar=("A", "B"),
+        help="initial positions q0 from A to B",
     )
     g.add_argument(
         "--v0-range",
