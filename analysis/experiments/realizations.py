@@ -29,7 +29,7 @@ from analysis.dynamics.attractors import (
     section_run,
     start_state,
 )
-from analysis.experiments.ensemble import realization_seeds
+from analysis.experiments.ensemble import MAX_TASKS, realization_seeds
 from analysis.experiments.execution import run_tasks
 from analysis.experiments.models import build_operator, canonical_model_name
 from analysis.experiments.parameters import (
@@ -55,8 +55,6 @@ from oscillators import ForcedOscillator
 __all__ = ["EXPERIMENT", "realization_attractor", "realization_attractors"]
 
 EXPERIMENT = "realization-attractors"
-#: most tasks of one call (N values × couplings × realizations)
-MAX_TASKS = 1_000_000
 
 
 def realization_attractor(
