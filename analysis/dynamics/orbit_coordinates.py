@@ -1,0 +1,135 @@
+"""State coordinates of the stroboscopic map: an :class:`OscillatorState` as a vector and back.
+
+Newton on ``F(x) = P^k(x) − x`` (:mod:`analysis.dynamics.periodic_orbits`) needs the state at
+the section ``φ = φ0`` as a point of R^d whose components are exactly the rows of the engine's
+tangent space without the phase, ``("q", "v", *memory)``, so that the Jacobian the engine
+propagates (``ForcedOscillator.jacobian(k·T, state, include_phase=False)``) is the derivative
+of the map in these coordinates. Three families, told apart by the operator's contract and the
+engine's memory labels (never by class):
+
+* **piecewise constant** (relays, discrete Preisach, dimers): ``x = (q, v)``; the discrete
+  relay configuration is carried by a template state (the engine applies the new ``q`` to it,
+  which switches nothing while ``q`` stays between the thresholds);
+* **one wagon** (memory label ``"w"``: play, generalized play): ``x = (q, v, w)``, the state
+  rebuilt by ``operator.state(position=w, input=q)``;
+* **several wagons** (labels ``"w0" .. "w{K-1}"``: Prandtl–Ishlinskii): ``x = (q, v, w_0..)``,
+  rebuilt by ``operator.state(positions, input=q)``.
+
+A wagon position that a Newton step places beyond its wall (``|q − w| > p/2``) is put back on
+the wall (the state space is the closed strip). Operators whose memory cannot be set from a
+vector of fixed size (a continuous Preisach staircase, whose number of extrema changes along
+an orbit) are refused with a ``ValueError`` naming the operator.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from oscillators import OscillatorState
+
+__all__ = ["StateCoordinates"]
+
+_WAGON = re.compile(r"^w\d+$")
+
+
+class StateCoordinates:
+    """Vector coordinates ``("q", "v", *memory)`` of the states of one system at one phase.
+
+    Parameters
+    ----------
+    system:
+        A :class:`~oscillators.system.ForcedOscillator`.
+    state:
+        A state of that system; its phase is the section's phase and its operator state the
+        template of a piecewise-constant operator's relay configuration.
+    engine_options:
+        Passed to the engine that reads the tangent-space labels.
+    """
+
+    def __init__(
+        self, system: Any, state: OscillatorState, engine_options: dict | None = None
+    ) -> None:
+        if not isinstance(state, OscillatorState):
+            raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
+        self.system = system
+        self.phi = float(state.phi)
+        op = system.operator
+        eng = system.engine(state, **(engine_options or {}))
+        eng.start_tangent(False)
+        self.labels: tuple[str, ...] = tuple(eng.tangent_space)
+        memory = self.labels[2:]
+        if op.piecewise_constant:
+            self.kind = "relay"
+        elif memory == ("w",) and hasattr(op, "state"):
+            self.kind = "wagon"
+        elif memory and all(_WAGON.match(m) for m in memory) and hasattr(op, "state"):
+            self.kind = "wagons"
+        else:
+            raise ValueError(
+                f"the memory of {op!r} (tangent rows {memory}) cannot be set from a vector of "
+                "fixed size; periodic orbits are computed for relay-type operators, plays and "
+                "Prandtl–Ishlinskii operators"
+            )
+        self.half_widths = self._half_widths(op) if self.kind != "relay" else np.zeros(0)
+
+    @property
+    def dimension(self) -> int:
+        """Number of coordinates ``len(labels)``."""
+        return len(self.labels)
+
+    @staticmethod
+    def _half_widths(op: Any) -> np.ndarray:
+        if hasattr(op, "widths"):
+            return 0.5 * np.asarray(op.widths, dtype=np.float64).ravel()
+        return np.array([float(op.half_width)])
+
+    def vector(self, state: OscillatorState) -> np.ndarray:
+        """``(q, v, *memory)`` of ``state``."""
+        head = [float(state.q), float(state.v)]
+        if self.kind == "relay":
+            return np.array(head)
+        op_state = state.operator_state
+        if self.kind == "wagon":
+            return np.array([*head, float(op_state.position)])
+        return np.concatenate([head, np.asarray(op_state.positions, dtype=np.float64)])
+
+    def state(self, x: np.ndarray, template: OscillatorState) -> OscillatorState:
+        """The state with coordinates ``x`` at the section's phase (``template``: the relay
+        configuration of piecewise-constant operators, and the time ``t``)."""
+        x = np.asarray(x, dtype=np.float64)
+        if x.shape != (self.dimension,) or not np.all(np.isfinite(x)):
+            raise ValueError(
+                f"coordinates must be {self.dimension} finite numbers {self.labels}, got {x}"
+            )
+        q, v = float(x[0]), float(x[1])
+        op = self.system.operator
+        if self.kind == "relay":
+            op_state = template.operator_state
+        else:
+            w = np.clip(x[2:], q - self.half_widths, q + self.half_widths)
+            if self.kind == "wagon":
+                op_state = op.state(position=float(w[0]), input=q)
+            else:
+                op_state = op.state(w, input=q)
+        return replace(template, q=q, v=v, phi=self.phi, operator_state=op_state)
+
+    def same_memory(self, a: OscillatorState, b: OscillatorState) -> bool:
+        """Whether the discrete relay configurations of ``a`` and ``b`` agree (always true for
+        continuous memory, which is part of the coordinates)."""
+        if self.kind != "relay":
+            return True
+        op = self.system.operator
+        return bool(
+            np.array_equal(op.relay_outputs(a.operator_state), op.relay_outputs(b.operator_state))
+        )
+
+    def scale(self, x: np.ndarray) -> float:
+        """``max(1, |x|_∞)``: the size a residual is measured against."""
+        return max(1.0, float(np.max(np.abs(x))))
+
+    def __repr__(self) -> str:
+        return f"StateCoordinates({self.labels}, kind={self.kind!r}, phi={self.phi:.6g})"

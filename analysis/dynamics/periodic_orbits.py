@@ -1,0 +1,503 @@
+"""Periodic orbits of forced oscillators with hysteresis and their Floquet multipliers.
+
+A periodic orbit of period ``k`` (forcing periods) is a fixed point of the k-th iterate of the
+stroboscopic map ``P`` (section ``φ = φ0``). :func:`find_periodic_orbit`:
+
+1. integrates a transient of whole forcing periods from the start;
+2. detects a candidate period ``k <= max_period`` from ``2·max_period`` stroboscopic points
+   (:func:`~analysis.dynamics.bifurcation.orbit_period` at relative tolerances 1e-8, 1e-6,
+   1e-4, 1e-3 of the section's extent, the tightest first);
+3. refines it by Newton on ``F(x) = P^k(x) − x`` in the state coordinates
+   ``x = (q, v, *memory)`` (:class:`~analysis.dynamics.orbit_coordinates.StateCoordinates`)::
+
+       J = D P^k(x)       (the engine's tangent flow over k·T: saltations, memory rows)
+       solve (J − I) Δ = −F(x);   x := x + λ Δ   (λ = 1, halved while |F| does not decrease)
+
+   until ``|F(x)|_∞ <= tolerance · max(1, |x|_∞)`` (the explicit convergence criterion);
+4. integrates the converged orbit once more, period by period: the ``k`` orbit points, the
+   monodromy matrix ``J``, its eigenvalues (the Floquet multipliers), the events.
+
+Memory coordinates
+------------------
+For relay-type operators the memory is the discrete relay configuration: ``x = (q, v)`` and the
+configuration is carried from one iterate to the next (it is fixed along the iteration as long
+as the switching sequence does not change; at convergence the configuration at the end of the
+orbit must equal the one at its start). For plays and Prandtl–Ishlinskii operators the wagon
+positions are coordinates. A wagon that hits its wall along the orbit has its perturbation reset
+(``δw := δq``, the paper's ``V_out``), so its direction is mapped to zero: the monodromy matrix
+has the multiplier ``μ = 0`` (exponent ``−∞``). This does **not** make Newton singular — the
+Newton matrix is ``J − I``, whose eigenvalue there is ``−1`` — so the iteration runs in the full
+coordinates ``(q, v, w)``, which also covers orbits whose wagons are not all reset (a wagon
+strictly inside the play for a whole orbit keeps ``μ = 1`` and makes ``J − I`` singular: a
+continuum of orbits, refused with :class:`OrbitNotFoundError`). A reduction to ``(q, v)`` would
+be exact only when the section point itself lies on a wall (the memory is then slaved,
+``w = q ∓ p/2``); in general ``P^k`` depends on the frozen ``w`` through the force ``C f(w)``
+before the reset, so the full coordinates are the consistent choice. The structural zero
+multipliers are counted from the engine's ``rank_bound()`` (directions reset or removed along
+the orbit) and set to exactly 0 instead of a round-off remainder.
+
+Results
+-------
+:class:`PeriodicOrbit`: ``period`` k, the orbit points (states and coordinates), multipliers
+(complex, sorted by decreasing modulus) with the tangent space that labels the basis,
+exponents ``log|μ|/(k·T)`` (``−inf`` for ``μ = 0``), ``stable`` (every ``|μ| < 1``), the
+event sequence along one orbit (relay switches or wall hits / reversals, from the engine's
+records), the Newton residuals, and :meth:`PeriodicOrbit.to_dict` for JSON.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from analysis.dynamics.bifurcation import orbit_period
+from analysis.dynamics.orbit_coordinates import StateCoordinates
+from hysteresis._validation import (
+    finite_scalar,
+    nonnegative_integer,
+    positive_integer,
+)
+from oscillators import MAX_PERIODS, DivergenceError, OscillatorState
+
+__all__ = [
+    "OrbitNotFoundError",
+    "PeriodicOrbit",
+    "event_sequence",
+    "find_periodic_orbit",
+    "refine_periodic_orbit",
+]
+
+#: relative tolerances (of the section's extent) at which candidate periods are detected
+DETECTION_TOLERANCES = (1e-8, 1e-6, 1e-4, 1e-3)
+#: halvings of a Newton step whose residual does not decrease
+MAX_HALVINGS = 10
+#: largest allowed max_period (the detection integrates 2·max_period periods per candidate)
+MAX_ORBIT_PERIOD = 10_000
+
+
+class OrbitNotFoundError(RuntimeError):
+    """No periodic orbit: no period up to ``max_period`` fits the stroboscopic points, or Newton
+    did not reach the tolerance. ``residuals`` holds the last Newton residual sequence."""
+
+    def __init__(self, message: str, residuals: tuple[float, ...] = ()) -> None:
+        super().__init__(message)
+        self.residuals = residuals
+
+
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """A periodic orbit of the stroboscopic map and its Floquet multipliers.
+
+    Attributes
+    ----------
+    period:
+        k, in forcing periods.
+    forcing_period:
+        T = 2π/Ω.
+    states:
+        The k orbit points at the section (``states[0]`` the refined start).
+    points:
+        Their coordinates, shape (k, d), columns named by ``tangent_space``.
+    tangent_space:
+        ``("q", "v", *memory)``: the basis of the monodromy matrix and its eigenvectors.
+    monodromy:
+        ``D P^k`` at ``states[0]``, shape (d, d).
+    multipliers:
+        Eigenvalues of ``monodromy`` (complex), by decreasing modulus; a structurally reset
+        direction is exactly 0.
+    exponents:
+        ``log|μ| / (k·T)`` in the order of ``multipliers`` (``-inf`` for ``μ = 0``).
+    stable:
+        Every ``|μ| < 1``.
+    events:
+        The engine's records along one orbit (relay switches: time, q, v, jump; play engines:
+        time, q, v, kind, ...), times measured from ``states[0]``.
+    sequence:
+        :func:`event_sequence` of ``events``: what changes when the orbit's switching sequence
+        changes (a grazing or border collision).
+    residuals:
+        ``|P^k(x_n) − x_n|_∞`` of the Newton iterates (last: the accepted point).
+    tolerance:
+        The convergence criterion ``|F|_∞ <= tolerance · max(1, |x|_∞)``.
+    eigenvectors:
+        Columns: eigenvectors of ``monodromy`` in the order of ``multipliers``.
+    """
+
+    period: int
+    forcing_period: float
+    states: tuple[OscillatorState, ...]
+    points: np.ndarray
+    tangent_space: tuple[str, ...]
+    monodromy: np.ndarray
+    multipliers: np.ndarray
+    exponents: np.ndarray
+    stable: bool
+    events: np.ndarray
+    sequence: tuple
+    residuals: tuple[float, ...]
+    tolerance: float
+    eigenvectors: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
+
+    @property
+    def residual(self) -> float:
+        """The accepted point's residual ``|P^k(x) − x|_∞``."""
+        return self.residuals[-1]
+
+    @property
+    def max_abs_multiplier(self) -> float:
+        """``max |μ|``."""
+        return float(np.max(np.abs(self.multipliers)))
+
+    @property
+    def start(self) -> OscillatorState:
+        """The refined orbit point ``states[0]``."""
+        return self.states[0]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (``"-inf"`` for a reset direction's exponent)."""
+        return {
+            "period": self.period,
+            "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
+            "exponents": [float(e) if math.isfinite(e) else "-inf" for e in self.exponents],
+            "tangent_space": list(self.tangent_space),
+            "residual": float(self.residual),
+            "residuals": [float(r) for r in self.residuals],
+            "stable": bool(self.stable),
+            "max_abs_multiplier": self.max_abs_multiplier,
+            "points": self.points.tolist(),
+            "n_events": int(self.events.size),
+        }
+
+
+def event_sequence(events: np.ndarray) -> tuple:
+    """The order of events along an orbit, as a hashable tuple.
+
+    Relay switches: ``(sign of the jump, threshold)`` (the switch happens at ``q`` = the relay's
+    threshold, rounded to 1e-9); play engines: ``(kind, side)`` with kind +1 a wall hit, −1 a
+    reversal and side the sign of ``v`` just before (hits) or of the acceleration direction
+    (reversals: the sign of ``q − w``); the continuous engine: ``(kind,)``.
+    """
+    names = events.dtype.names or ()
+    if "jump" in names:
+        return tuple(
+            (int(np.sign(j)), round(float(q), 9))
+            for j, q in zip(events["jump"], events["q"], strict=True)
+        )
+    if "w" in names:
+        return tuple(
+            (int(k), int(np.sign(q - w)))
+            for k, q, w in zip(events["kind"], events["q"], events["w"], strict=True)
+        )
+    if "kind" in names:
+        return tuple((int(k),) for k in events["kind"])
+    return ()
+
+
+@dataclass
+class _Shot:
+    """One integration of k periods with the tangent flow from a start state."""
+
+    states: list[OscillatorState]
+    jacobian: np.ndarray
+    labels: tuple[str, ...]
+    rank: int
+    events: np.ndarray
+
+
+def shoot(
+    system: Any,
+    state: OscillatorState,
+    k: int,
+    *,
+    record: bool = False,
+    engine_options: dict | None = None,
+) -> _Shot:
+    """Integrate ``k`` forcing periods from ``state`` with the tangent flow on (no phase):
+    the states after each period, ``D P^k``, its labels, the structural rank bound, and (with
+    ``record``) the events."""
+    eng = system.engine(state, **(engine_options or {}))
+    eng.start_tangent(False)
+    labels0 = tuple(eng.tangent_space)
+    period = system.period
+    out = np.empty((1, len(eng.sample_columns)))
+    states = []
+    for i in range(1, k + 1):
+        eng.advance(np.array([i * period]), out, record)
+        eng.check_finite(out[:, :2])
+        states.append(eng.state())
+    jac = eng.deviations()
+    if tuple(eng.tangent_space) != labels0:
+        raise OrbitNotFoundError(
+            f"the tangent space changed along the orbit ({labels0} -> {eng.tangent_space})"
+        )
+    if not np.all(np.isfinite(jac)):
+        raise DivergenceError(f"the tangent flow is not finite after {k} periods of {system!r}")
+    rec = eng.records() if record else {}
+    events = rec.get("switches", rec.get("events"))
+    if events is None:
+        events = np.empty(0, dtype=[("time", "f8")])
+    return _Shot(states, jac, labels0, int(eng.rank_bound()), events)
+
+
+def _newton(
+    system: Any,
+    coords: StateCoordinates,
+    start: OscillatorState,
+    k: int,
+    tolerance: float,
+    max_iterations: int,
+    engine_options: dict | None,
+) -> tuple[OscillatorState, list[float]]:
+    """Newton on ``P^k(x) − x`` from ``start``; returns the converged state and residuals."""
+    template = start
+    x = coords.vector(start)
+    shot = shoot(system, coords.state(x, template), k, engine_options=engine_options)
+    image = shot.states[-1]
+    r = coords.vector(image) - x
+    res = float(np.max(np.abs(r)))
+    residuals = [res]
+    eye = np.eye(coords.dimension)
+    for _ in range(max_iterations):
+        if res <= tolerance * coords.scale(x) and coords.same_memory(
+            coords.state(x, template), image
+        ):
+            return coords.state(x, template), residuals
+        try:
+            step = np.linalg.solve(shot.jacobian - eye, -r)
+        except np.linalg.LinAlgError:
+            raise OrbitNotFoundError(
+                f"P^{k} − I is singular at the iterate (a multiplier is 1: a continuum of orbits "
+                "or a fold)",
+                tuple(residuals),
+            ) from None
+        template = image  # the relay configuration the orbit produced
+        lam = 1.0
+        for _halving in range(MAX_HALVINGS + 1):
+            trial = x + lam * step
+            try:
+                t_shot = shoot(
+                    system, coords.state(trial, template), k, engine_options=engine_options
+                )
+                t_image = t_shot.states[-1]
+                t_r = coords.vector(t_image) - trial
+                t_res = float(np.max(np.abs(t_r)))
+            except (ValueError, DivergenceError):
+                t_res = math.inf
+            if t_res < res or t_res <= tolerance * coords.scale(trial):
+                break
+            lam *= 0.5
+        else:
+            raise OrbitNotFoundError(
+                f"Newton on P^{k}(x) − x stalled at residual {res:.3g} (no decrease along the "
+                f"step after {MAX_HALVINGS} halvings)",
+                tuple(residuals),
+            )
+        x, shot, image, r, res = trial, t_shot, t_image, t_r, t_res
+        residuals.append(res)
+    if res <= tolerance * coords.scale(x) and coords.same_memory(coords.state(x, template), image):
+        return coords.state(x, template), residuals
+    raise OrbitNotFoundError(
+        f"Newton on P^{k}(x) − x did not reach |F| <= {tolerance:g}·max(1, |x|) in "
+        f"{max_iterations} iterations (residuals {', '.join(f'{e:.2e}' for e in residuals)})",
+        tuple(residuals),
+    )
+
+
+def refine_periodic_orbit(
+    system: Any,
+    state: OscillatorState,
+    period: int,
+    *,
+    tolerance: float = 1e-10,
+    max_iterations: int = 30,
+    engine_options: dict | None = None,
+) -> PeriodicOrbit:
+    """Newton-refine a guess ``state`` of a period-``period`` orbit (no transient, no period
+    detection) and compute its multipliers; see the module docstring."""
+    k = positive_integer(period, "period")
+    if k > MAX_ORBIT_PERIOD:
+        raise ValueError(f"period must be <= {MAX_ORBIT_PERIOD}, got {k}")
+    tolerance = finite_scalar(tolerance, "tolerance")
+    if not tolerance > 0.0:
+        raise ValueError(f"tolerance must be > 0, got {tolerance}")
+    max_iterations = nonnegative_integer(max_iterations, "max_iterations")
+    if not isinstance(state, OscillatorState):
+        raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
+    coords = StateCoordinates(system, state, engine_options)
+    start, residuals = _newton(system, coords, state, k, tolerance, max_iterations, engine_options)
+    return _orbit(system, coords, start, k, residuals, tolerance, engine_options)
+
+
+def _orbit(
+    system: Any,
+    coords: StateCoordinates,
+    start: OscillatorState,
+    k: int,
+    residuals: list[float],
+    tolerance: float,
+    engine_options: dict | None,
+) -> PeriodicOrbit:
+    shot = shoot(system, start, k, record=True, engine_options=engine_options)
+    states = (start, *shot.states[:-1])
+    points = np.array([coords.vector(s) for s in states])
+    mu, vec = np.linalg.eig(shot.jacobian)
+    order = np.argsort(-np.abs(mu), kind="stable")
+    mu, vec = mu[order].astype(complex), vec[:, order].astype(complex)
+    # directions reset or removed along the orbit: exactly zero (the smallest |μ|)
+    n_zero = max(0, coords.dimension - shot.rank)
+    if n_zero:
+        mu[mu.size - n_zero :] = 0.0
+    with np.errstate(divide="ignore"):
+        exps = np.log(np.abs(mu)) / (k * system.period)
+    return PeriodicOrbit(
+        period=k,
+        forcing_period=system.period,
+        states=tuple(states),
+        points=points,
+        tangent_space=coords.labels,
+        monodromy=shot.jacobian,
+        multipliers=mu,
+        exponents=exps,
+        stable=bool(np.all(np.abs(mu) < 1.0)),
+        events=shot.events,
+        sequence=event_sequence(shot.events),
+        residuals=tuple(residuals),
+        tolerance=tolerance,
+        eigenvectors=vec,
+    )
+
+
+def _minimal_period(points: np.ndarray, k: int, tolerance: float) -> int:
+    """The smallest divisor ``d`` of ``k`` with ``x_{i+d} = x_i`` on the refined orbit."""
+    scale = max(1.0, float(np.max(np.abs(points))))
+    for d in range(1, k):
+        if k % d == 0 and np.all(np.abs(points[d:] - points[:-d]) <= 1e3 * tolerance * scale):
+            return d
+    return k
+
+
+def find_periodic_orbit(
+    system: Any,
+    state: OscillatorState | None = None,
+    *,
+    q0: float | None = None,
+    v0: float | None = None,
+    transient: int = 100,
+    max_period: int = 64,
+    tolerance: float = 1e-10,
+    max_iterations: int = 30,
+    engine_options: dict | None = None,
+) -> PeriodicOrbit:
+    """The periodic orbit that the motion from ``state`` settles on (see the module docstring).
+
+    Parameters
+    ----------
+    system:
+        A :class:`~oscillators.system.ForcedOscillator`.
+    state:
+        Start state (default: ``system.initial_state(q0, v0)``, the paper's initial condition
+        when both are ``None``); its phase is the section's phase.
+    q0, v0:
+        Start position and velocity when ``state`` is ``None`` (the operator's memory from
+        ``initial_state(q0)``).
+    transient:
+        Forcing periods integrated before the period is detected (>= 0).
+    max_period:
+        Largest period k searched, in forcing periods (1 .. 10 000).
+    tolerance:
+        Newton stops when ``|P^k(x) − x|_∞ <= tolerance · max(1, |x|_∞)`` (> 0).
+    max_iterations:
+        Newton iterations per candidate period (>= 0).
+    engine_options:
+        Passed to the engine (e.g. ``{"method": "generic"}``).
+
+    Raises
+    ------
+    OrbitNotFoundError
+        No period up to ``max_period`` fits the stroboscopic points (chaos, quasi-periodic
+        motion, a longer period or a transient longer than ``transient``), or Newton did not
+        converge for any candidate.
+    """
+    transient = nonnegative_integer(transient, "transient")
+    max_period = positive_integer(max_period, "max_period")
+    if max_period > MAX_ORBIT_PERIOD:
+        raise ValueError(f"max_period must be <= {MAX_ORBIT_PERIOD}, got {max_period}")
+    tolerance = finite_scalar(tolerance, "tolerance")
+    if not tolerance > 0.0:
+        raise ValueError(f"tolerance must be > 0, got {tolerance}")
+    max_iterations = nonnegative_integer(max_iterations, "max_iterations")
+    if transient + 2 * max_period > MAX_PERIODS:
+        raise ValueError(
+            f"transient + 2·max_period must be <= {MAX_PERIODS:.0e}, got "
+            f"{transient + 2 * max_period}"
+        )
+    if state is None:
+        kw = {}
+        if q0 is not None:
+            kw["q0"] = q0
+        if v0 is not None:
+            kw["v0"] = v0
+        state = system.initial_state(**kw)
+    elif q0 is not None or v0 is not None:
+        raise ValueError("give either state or q0/v0, not both")
+    if not isinstance(state, OscillatorState):
+        raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
+    period = system.period
+    eng = system.engine(state, **(engine_options or {}))
+    if transient:
+        eng.advance(np.array([transient * period]))
+        eng.check_finite(np.array([[eng.state().q, eng.state().v]]))
+    start = eng.state()
+    start = OscillatorState(
+        q=start.q, v=start.v, phi=state.phi, operator_state=start.operator_state, t=start.t
+    )
+    n = 2 * max_period
+    times = (transient + np.arange(1, n + 1)) * period
+    out = np.empty((n, len(eng.sample_columns)))
+    eng.advance(times, out)
+    eng.check_finite(out[:, :2])
+    pts = np.vstack([[start.q, start.v], out[:, :2]])
+    scale = max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1])), 1.0)
+    tried: list[int] = []
+    failures: list[str] = []
+    for rel in DETECTION_TOLERANCES:
+        k = orbit_period(pts[:, 0], pts[:, 1], rel * scale, max_period=max_period)
+        if k == 0 or k in tried:
+            continue
+        tried.append(k)
+        try:
+            orbit = refine_periodic_orbit(
+                system,
+                start,
+                k,
+                tolerance=tolerance,
+                max_iterations=max_iterations,
+                engine_options=engine_options,
+            )
+        except OrbitNotFoundError as exc:
+            failures.append(f"k = {k}: {exc}")
+            continue
+        d = _minimal_period(orbit.points, k, tolerance)
+        if d < k:
+            orbit = refine_periodic_orbit(
+                system,
+                orbit.start,
+                d,
+                tolerance=tolerance,
+                max_iterations=max_iterations,
+                engine_options=engine_options,
+            )
+        return orbit
+    if not tried:
+        raise OrbitNotFoundError(
+            f"no period <= max_period = {max_period} fits {n + 1} stroboscopic points after a "
+            f"transient of {transient} forcing periods (relative tolerance up to "
+            f"{DETECTION_TOLERANCES[-1]:g}): chaos, quasi-periodic motion, a longer period or a "
+            "longer transient"
+        )
+    raise OrbitNotFoundError(
+        "Newton did not converge for any candidate period: " + "; ".join(failures)
+    )
