@@ -13,8 +13,9 @@ The pieces that :mod:`analysis.dynamics.basins` (many starts) and
   section index ``j`` from which ``|x_{i+k} − x_i| <= tolerance`` holds for every later ``i``
   (the start has come within the tolerance of its final cycle and stays there). A run that
   leaves the divergence bound is ``divergent``; one without a period is ``aperiodic``.
-* :func:`refine_periodic_orbit` — the one place where a cycle found on the section is turned into
-  a periodic orbit with its Floquet multipliers.
+* :func:`periodic_attractor` — the one place where a cycle found on the section is turned into
+  a refined periodic orbit with its Floquet multipliers
+  (:func:`~analysis.dynamics.periodic_orbits.refine_periodic_orbit`).
 * :func:`lyapunov_estimate` — ``λ_max`` with its finite-time error and ``D_KY`` on an aperiodic
   attractor.
 * :func:`same_cycle` — whether two cycles are the same orbit (cyclic shifts included).
@@ -33,6 +34,7 @@ import numpy as np
 
 from analysis.dynamics.dimensions import kaplan_yorke_dimension
 from analysis.dynamics.lyapunov import lyapunov_spectrum
+from analysis.dynamics.periodic_orbits import OrbitNotFoundError, refine_periodic_orbit
 from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
 from oscillators import MAX_PERIODS, DivergenceError, OscillatorState
 
@@ -43,7 +45,7 @@ __all__ = [
     "SectionRun",
     "cycle_period",
     "lyapunov_estimate",
-    "refine_periodic_orbit",
+    "periodic_attractor",
     "same_cycle",
     "section_run",
     "start_state",
@@ -204,43 +206,60 @@ def match_cycles(cycles: np.ndarray, orbit: np.ndarray, tolerance: float) -> np.
     return hit
 
 
-def refine_periodic_orbit(system: Any, state: OscillatorState, period: int) -> dict:
-    """The periodic orbit through (or next to) ``state`` with section period ``period``: the one
-    place where the basins refine an orbit (the Newton refinement of
-    ``find_periodic_orbit`` plugs in here).
+def periodic_attractor(system: Any, state: OscillatorState, period: int) -> dict:
+    """The periodic orbit next to ``state`` (the end of a run whose section repeats with period
+    ``period`` within the tolerance), refined once: the basins' one call of
+    :func:`analysis.dynamics.periodic_orbits.refine_periodic_orbit` (Newton on
+    ``P^k(x) − x`` with the exact Jacobian, to ``|F| <= 1e-10·max(1, |x|)``).
 
-    Now: ``state`` is the end of a run whose section repeats within the tolerance; the orbit
-    points are the next ``period`` section points, the residual ``max|P^k(x) − x|`` over (q, v)
-    and the memory, and the Floquet multipliers the eigenvalues of the exact Jacobian of
-    ``P^k`` (:meth:`~oscillators.system.ForcedOscillator.jacobian` without the phase: saltations
-    for relays, the memory directions for play-type operators; a memory direction reset along
-    the orbit has the multiplier 0, exponent −inf). Returns ``points`` (k × d, the section
-    columns), ``columns``, ``multipliers`` (complex, by decreasing modulus), ``tangent_space``,
-    ``exponents`` (``log|μ|/(k·T)``), ``stable`` (every ``|μ| < 1``), ``residual``.
+    Returns ``points`` (k × d: the section columns of the refined orbit, from one more run of
+    k periods), ``columns``, ``multipliers`` (complex, by decreasing modulus; a reset memory
+    direction exactly 0), ``tangent_space``, ``exponents`` (``log|μ|/(k·T)``), ``stable``,
+    ``residual`` and ``refined`` (True). If Newton does not converge
+    (:class:`~analysis.dynamics.periodic_orbits.OrbitNotFoundError`, e.g. a wagon inside the
+    play for the whole orbit: a continuum of orbits), the orbit is the run's own cycle, the
+    multipliers the eigenvalues of the Jacobian of ``P^k`` at ``state``, ``refined`` is False
+    and ``refinement_error`` says why.
     """
     period = positive_integer(period, "period")
-    eng = system.engine(state)
+    extra: dict[str, Any]
+    try:
+        orbit = refine_periodic_orbit(system, state, period)
+    except OrbitNotFoundError as exc:
+        jac, labels = system.jacobian(period * system.period, state, include_phase=False)
+        mult = np.linalg.eigvals(jac)
+        mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+        with np.errstate(divide="ignore"):
+            exps = np.log(np.abs(mult)) / (period * system.period)
+        start = state
+        extra = {
+            "multipliers": mult,
+            "tangent_space": tuple(labels),
+            "exponents": exps,
+            "stable": bool(np.all(np.abs(mult) < 1.0)),
+            "refined": False,
+            "refinement_error": str(exc).splitlines()[0],
+        }
+    else:
+        start = orbit.start
+        extra = {
+            "multipliers": orbit.multipliers,
+            "tangent_space": tuple(orbit.tangent_space),
+            "exponents": orbit.exponents,
+            "stable": orbit.stable,
+            "residual": float(orbit.residual),
+            "refined": True,
+        }
+    eng = system.engine(start)
     columns = tuple(eng.sample_columns)
     times = np.arange(period + 1, dtype=float) * system.period
     out = np.empty((period + 1, len(columns)))
     eng.advance(times, out)
     system.check_finite(eng, out[:, :2], times)
-    jac, labels = system.jacobian(period * system.period, state, include_phase=False)
-    mult = np.linalg.eigvals(jac)
-    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
-    with np.errstate(divide="ignore"):
-        exps = np.log(np.abs(mult)) / (period * system.period)
-    keep = [i for i, c in enumerate(columns) if c != "M"]
-    residual = float(np.max(np.abs(out[-1, keep] - out[0, keep])))
-    return {
-        "points": out[:-1].copy(),
-        "columns": columns,
-        "multipliers": mult,
-        "tangent_space": tuple(labels),
-        "exponents": exps,
-        "stable": bool(np.all(np.abs(mult) < 1.0)),
-        "residual": residual,
-    }
+    if not extra["refined"]:
+        keep = [i for i, c in enumerate(columns) if c != "M"]
+        extra["residual"] = float(np.max(np.abs(out[-1, keep] - out[0, keep])))
+    return {"points": out[:-1].copy(), "columns": columns, **extra}
 
 
 def lyapunov_estimate(

@@ -7,7 +7,7 @@ Plain reading of :func:`basins`::
         for every start: section_run (no tangent flow) -> periodic (k, cycle, transient),
                          aperiodic (tail points) or divergent
     periodic starts:   while one is unlabelled: refine the orbit of the first one once
-                       (refine_periodic_orbit), give its label to every start whose cycle is that
+                       (periodic_attractor), give its label to every start whose cycle is that
                        orbit up to a cyclic shift within match_tolerance (an orbit equal to one
                        already found joins its label)
     aperiodic starts:  while one is unlabelled (at most max_aperiodic times): continue the
@@ -45,7 +45,7 @@ from analysis.dynamics.attractors import (
     PERIODIC,
     lyapunov_estimate,
     match_cycles,
-    refine_periodic_orbit,
+    periodic_attractor,
     section_run,
     start_state,
 )
@@ -458,14 +458,22 @@ def basins(
         open_ = np.ones(sel.size, dtype=bool)
         while open_.any():
             first = int(np.flatnonzero(open_)[0])
-            orbit = refine_periodic_orbit(system, rerun(int(members[first])).final, int(k))
+            orbit = periodic_attractor(system, rerun(int(members[first])).final, int(k))
             hit = open_ & match_cycles(cyc, orbit["points"], match_tolerance)
             if not hit[first]:  # the refined orbit is not this start's cycle: no label for it
                 undecided.append(int(members[first]))
                 open_[first] = False
                 continue
-            label = len(attractors)
-            attractors.append({"label": label, "kind": "periodic", "period": int(k), **orbit})
+            same = [
+                a["label"]
+                for a in attractors
+                if a["kind"] == "periodic"
+                and a["period"] == k
+                and match_cycles(a["points"][None], orbit["points"], match_tolerance)[0]
+            ]
+            label = same[0] if same else len(attractors)
+            if not same:
+                attractors.append({"label": label, "kind": "periodic", "period": int(k), **orbit})
             labels[members[hit]] = label
             open_ &= ~hit
     # -- aperiodic: one Lyapunov run per attractor candidate --------------------------------------

@@ -5,7 +5,7 @@ p, R, J, seed)``; ``preisach``: N random relays) at one coupling C, with the rea
 of the ensembles (:func:`~analysis.experiments.ensemble.realization_seeds`, so the same
 realizations as ``hyst ensemble``). From ``(q0, v0)`` the section is classified as in the basins
 (:func:`~analysis.dynamics.attractors.section_run`): a periodic orbit is refined once
-(:func:`~analysis.dynamics.attractors.refine_periodic_orbit`: period, Floquet multipliers,
+(:func:`~analysis.dynamics.attractors.periodic_attractor`: period, Floquet multipliers,
 stability, transient length); an aperiodic one gets ``λ_max`` with its finite-time error and
 ``D_KY`` (:func:`~analysis.dynamics.attractors.lyapunov_estimate`) and is ``chaotic`` when
 ``λ_max`` exceeds twice its error, ``undecided`` otherwise; a run that leaves the divergence
@@ -25,7 +25,7 @@ from analysis.dynamics.attractors import (
     APERIODIC,
     PERIODIC,
     lyapunov_estimate,
-    refine_periodic_orbit,
+    periodic_attractor,
     section_run,
     start_state,
 )
@@ -103,7 +103,7 @@ def realization_attractor(
         keep_state=True,
     )
     if run.status == PERIODIC:
-        orbit = refine_periodic_orbit(system, run.final, run.period)
+        orbit = periodic_attractor(system, run.final, run.period)
         mult = np.asarray(orbit["multipliers"])
         return {
             "kind": "periodic",

@@ -16,7 +16,7 @@ import pytest
 import analysis.dynamics.basins as basins_module
 from analysis.dynamics.attractors import (
     PERIODIC,
-    refine_periodic_orbit,
+    periodic_attractor,
     same_cycle,
     section_run,
     start_state,
@@ -49,7 +49,7 @@ def test_bistable_map_is_covered_by_two_basins(bistable):
     assert math.isclose(sum(a["fraction"] for a in bm.attractors), 1.0)
     per = next(a for a in bm.attractors if a["kind"] == "periodic")
     chaos = next(a for a in bm.attractors if a["kind"] == "chaotic")
-    assert per["period"] == 3 and per["stable"]
+    assert per["period"] == 3 and per["stable"] and per["refined"]
     # the orbit closes: P^3(x) = x to the rounding of a few hundred periods of the kernel
     assert per["residual"] < 1e-9
     # chaos: λ_max significantly positive; D_KY between 1 and 2 for a flow section with a
@@ -127,7 +127,7 @@ def test_linear_oscillator_orbit_multipliers_closed_form():
     system = ForcedOscillator(Relay(0.5, -0.5), 0.0, zeta, 1.0)
     run = section_run(system, start_state(system, 0.3, -0.2), 800, 100, keep_state=True)
     assert run.status == PERIODIC and run.period == 1
-    orbit = refine_periodic_orbit(system, run.final, 1)
+    orbit = periodic_attractor(system, run.final, 1)
     mu = np.sort_complex(orbit["multipliers"])
     t = system.period
     expected = np.sort_complex(np.exp((-zeta + np.array([-1j, 1j]) * math.sqrt(1 - zeta**2)) * t))
