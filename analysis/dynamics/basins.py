@@ -424,7 +424,9 @@ def basins(
     status = np.concatenate([np.asarray(r["status"]) for r in results])
     period = np.concatenate([np.asarray(r["period"]) for r in results])
     trans = np.concatenate([np.asarray(r["transient"]) for r in results])
-    cycles = np.concatenate([np.asarray(r["cycles"]) for r in results])
+    # a chunk without a periodic start has an empty (0, 3) block: leave those out
+    blocks = [np.asarray(r["cycles"]) for r in results if len(r["cycles"])]
+    cycles = np.concatenate(blocks) if blocks else np.empty((0, 3))
     tails = np.concatenate([np.asarray(r["tails"]).reshape(-1, 2) for r in results])
     status[~valid] = -2
     labels = np.full(status.size, NOT_A_STATE, dtype=np.int32)

@@ -204,3 +204,15 @@ def test_list_start_outside_the_band_is_refused():
     system = ForcedOscillator(build_operator("erf-play"), 1.74)
     with pytest.raises(ValueError, match="w0"):
         basins(system, [[0.0, 0.0, 5.0]], transient=0, periods=10)
+
+
+def test_positive_feedback_runs_are_labelled_divergent():
+    """The plain play at C = 1.5 > 1 (stiffness 1 − C < 0 on the walls) runs away from every
+    start: one 'divergent' basin covering the list."""
+    from hysteresis import PlayOperator
+
+    with pytest.warns(RuntimeWarning, match="positive-feedback"):
+        system = ForcedOscillator(PlayOperator(2.0), 1.5)
+    bm = basins(system, [[0.0, 0.0], [5.0, 0.0], [-0.5, 0.2]], transient=0, periods=20)
+    assert [(a["kind"], a["count"]) for a in bm.attractors] == [("divergent", 3)]
+    assert np.all(bm.labels == 0) and np.all(bm.transients == -1)
