@@ -37,6 +37,13 @@ def main() -> None:
     ap.add_argument("--grid", type=int, default=200)
     ap.add_argument("--coupling", type=float, default=2.92)
     ap.add_argument("--periods", type=int, default=100)
+    ap.add_argument(
+        "--check",
+        type=int,
+        default=None,
+        help="periods of the first check (default --periods: every start runs --periods); "
+        "with --check 50 a start that settled by then stops there, the others run --periods",
+    )
     ap.add_argument("--chunk", type=int, default=400)
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--baseline-starts", type=int, default=400)
@@ -65,6 +72,7 @@ def main() -> None:
         "grid": args.grid,
         "starts": int(starts.shape[0]),
         "periods": args.periods,
+        "check": args.check,
         "chunk": args.chunk,
         "cpu_count": os.cpu_count(),
         "machine": platform.machine(),
@@ -73,11 +81,13 @@ def main() -> None:
     print(f"baseline poincare_section loop: {baseline:.1f} starts/s (median of {args.repeats})")
     for w in args.workers:
         t0 = time.perf_counter()
+        check = args.periods if args.check is None else args.check
         bm = basins(
             system,
             grid,
             transient=0,
-            periods=args.periods,
+            periods=check,
+            max_periods=args.periods,
             chunk=args.chunk,
             workers=w,
             lyapunov_periods=2000,
