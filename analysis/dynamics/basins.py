@@ -22,9 +22,10 @@ Plain reading of :func:`basins`::
     the rest:          "undecided"; divergent starts: "divergent"
 
 So the orbit refinement and the Lyapunov run happen once per attractor, not once per start.
-Fractions come with the 95 % Wilson score interval (:func:`~analysis.dynamics.statistics.
-wilson_interval`). A grid over (q0, w0) (play-type memory) has starts outside the play's band
-``|q0 − w0| <= p/2``: they are no states, labelled −1 and left out of the fractions.
+Fractions come with the 95 % Wilson score interval
+(:func:`~analysis.dynamics.statistics.wilson_interval`). A grid over (q0, w0) (play-type
+memory) has starts outside the play's band ``|q0 − w0| <= p/2``: they are no states, labelled
+−1 and left out of the fractions.
 """
 
 from __future__ import annotations
