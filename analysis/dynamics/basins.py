@@ -252,12 +252,13 @@ class BasinMap:
         return path
 
     def plot(self, path: str | Path, title: str | None = None) -> Path:
-        """The basin map coloured by attractor (grids), or the starts as points (lists)."""
+        """The basin map coloured by attractor (grids; a list: its starts as points) and, for a
+        grid with periodic starts, a second panel with each start's transient length."""
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
-        from matplotlib.colors import BoundaryNorm, ListedColormap
+        from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
         from matplotlib.patches import Patch
 
         n = len(self.attractors)
@@ -265,25 +266,46 @@ class BasinMap:
         colours = ["white"] + [base(i % base.N) for i in range(n)]
         cmap = ListedColormap(colours)
         norm = BoundaryNorm(np.arange(-1.5, n + 0.5), cmap.N)
-        fig, ax = plt.subplots(figsize=(6.5, 5))
+        with_transients = self.grid is not None and np.any(self.transients >= 0)
+        fig, axes = plt.subplots(
+            1, 2 if with_transients else 1, figsize=(12 if with_transients else 6.5, 5)
+        )
+        axes = np.atleast_1d(axes)
+        ax = axes[0]
         if self.grid is not None:
             g = self.grid
+            extent = (*g.q0_range, *g.y_range)
             ax.imshow(
                 self.label_grid(),
                 origin="lower",
-                extent=(*g.q0_range, *g.y_range),
+                extent=extent,
                 aspect="auto",
                 cmap=cmap,
                 norm=norm,
                 interpolation="nearest",
             )
-            ax.set_ylabel("$w_0$" if g.axis == "w0" else "$v_0$")
+            for a in axes:
+                a.set_ylabel("$w_0$" if g.axis == "w0" else "$v_0$")
+                a.set_xlabel("$q_0$")
         else:
             ax.scatter(self.starts[:, 0], self.starts[:, 1], c=self.labels, cmap=cmap, norm=norm)
             ax.set_ylabel("$v_0$")
-        ax.set_xlabel("$q_0$")
+            ax.set_xlabel("$q_0$")
         handles = [Patch(color=colours[a["label"] + 1], label=_legend(a)) for a in self.attractors]
         ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.8)
+        if with_transients:
+            t = np.ma.masked_less(self.transients.reshape(g.size, g.size).astype(float), 0)
+            im = axes[1].imshow(
+                t + 1.0,
+                origin="lower",
+                extent=extent,
+                aspect="auto",
+                cmap="viridis",
+                norm=LogNorm(vmin=1.0, vmax=max(2.0, float(t.max()) + 1.0)),
+                interpolation="nearest",
+            )
+            fig.colorbar(im, ax=axes[1], label="transient + 1 (forcing periods)")
+            axes[1].set_title("periods until the section repeats within the tolerance", fontsize=8)
         if title:
             ax.set_title(title, fontsize=8)
         fig.tight_layout()
