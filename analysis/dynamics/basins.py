@@ -11,14 +11,15 @@ Plain reading of :func:`basins`::
                        orbit up to a cyclic shift within match_tolerance (an orbit equal to one
                        already found joins its label)
     aperiodic starts:  while one is unlabelled (at most max_aperiodic times): continue the
-                       first one for lyapunov_periods (lyapunov_estimate: λ_max ± error, D_KY)
-                       and record the continuation's section cloud (q, v) on a cloud_bins²
-                       grid; if λ_max exceeds twice its error and the continuation has not
-                       settled on a cycle, it is a chaotic attractor, and every start whose
-                       tail points lie in the cloud's cells or their neighbours (90 % of them
-                       at least) gets its label; else that start is undecided (a chaotic
-                       transient, a slow approach, a quasi-periodic motion or a period above
-                       max_period: a longer max_periods may resolve it)
+                       first one for lyapunov_periods and record the continuation's section
+                       cloud (q, v) on a cloud_bins² grid; if the continuation has not settled
+                       on a cycle and the start's own tail lies in the cloud, λ_max ± error and
+                       D_KY on the same continuation (lyapunov_estimate); if λ_max exceeds twice
+                       its error it is a chaotic attractor, and every start whose tail points
+                       lie in the cloud's cells or their neighbours (90 % of them at least) gets
+                       its label; else that start is undecided (a chaotic transient, a slow
+                       approach, a quasi-periodic motion or a period above max_period: a longer
+                       max_periods may resolve it)
     the rest:          "undecided"; divergent starts: "divergent"
 
 So the orbit refinement and the Lyapunov run happen once per attractor, not once per start.
