@@ -140,7 +140,10 @@ def register(subparsers: Any) -> None:
         "(default: --transient + --periods, no extension)",
     )
     r.add_argument(
-        "--max-period", type=int_at_least(1, 10**4), default=32, help="longest section period"
+        "--max-period",
+        type=int_at_least(1, 10**4),
+        default=None,
+        help="longest section period (default: min(32, --periods // 2))",
     )
     r.add_argument(
         "--tolerance", type=positive_float, default=1e-6, help="section period tolerance"
@@ -210,6 +213,8 @@ def run(args: argparse.Namespace) -> int:
             f"argument --max-periods: must be >= --transient + --periods = "
             f"{args.transient + args.periods}, got {total}"
         )
+    if args.max_period is None:
+        args.max_period = min(32, args.periods // 2)
     if args.max_period > args.periods // 2:
         raise CliError(
             f"argument --max-period: must be <= --periods // 2 = {args.periods // 2} (a cycle "
