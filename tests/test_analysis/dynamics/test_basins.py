@@ -216,3 +216,31 @@ def test_positive_feedback_runs_are_labelled_divergent():
     bm = basins(system, [[0.0, 0.0], [5.0, 0.0], [-0.5, 0.2]], transient=0, periods=20)
     assert [(a["kind"], a["count"]) for a in bm.attractors] == [("divergent", 3)]
     assert np.all(bm.labels == 0) and np.all(bm.transients == -1)
+
+
+def test_transient_length_matches_the_linear_closed_form():
+    """C = 0 (relay thresholds never reached, M constant): the section map is affine,
+    ``x_{n+1} − x* = Φ(T)(x_n − x*)`` with ``Φ = expm(A·T)``, ``A = [[0, 1], [−1, −2ζ]]`` and
+    the fixed point from the particular solution ``Re(e^{iΩt}/(1 − Ω² + 2iζΩ))``. The transient
+    is the first n after which ``|x_{i+1} − x_i|_∞ = |Φ^i (Φ − I) d_0|_∞ <= tol`` for good."""
+    from scipy.linalg import expm
+
+    zeta, omega, tol = 0.05, 1.0, 1e-6
+    system = ForcedOscillator(Relay(100.0, -100.0), 0.0, zeta, omega)
+    d = 1.0 - omega**2 + 2j * zeta * omega
+    x_star = np.array([(1 / d).real, (1j * omega / d).real])
+    d0 = np.array([1.0, 0.0])
+    run = section_run(
+        system, start_state(system, *(x_star + d0)), 0, 100, max_periods=2000, tolerance=tol
+    )
+    phi = expm(np.array([[0.0, 1.0], [-1.0, -2 * zeta]]) * system.period)
+    diffs, y = [], (phi - np.eye(2)) @ d0
+    for _ in range(2000):
+        diffs.append(np.max(np.abs(y)))
+        y = phi @ y
+    expected = int(np.flatnonzero(np.array(diffs) > tol)[-1] + 1)
+    assert run.status == PERIODIC and run.period == 1
+    assert run.transient == expected
+    # and a start on the orbit has no transient
+    on = section_run(system, start_state(system, *x_star), 0, 10, tolerance=tol, max_period=5)
+    assert on.transient == 0
