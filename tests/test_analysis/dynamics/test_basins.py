@@ -244,3 +244,22 @@ def test_transient_length_matches_the_linear_closed_form():
     # and a start on the orbit has no transient
     on = section_run(system, start_state(system, *x_star), 0, 10, tolerance=tol, max_period=5)
     assert on.transient == 0
+
+
+def test_process_pool_and_dask_give_the_serial_labels(tmp_path):
+    """The system travels to the workers with the task function (pickled); chunks of two starts
+    on a process pool and on a Dask cluster give the serial run's labels and transients."""
+    distributed = pytest.importorskip("distributed")
+    system = ForcedOscillator(build_operator("erf-play"), 1.80)  # period 3 from every start
+    starts = [[-1.0, 0.1], [-0.5, 0.3], [0.5, -0.2], [1.5, 0.0]]
+    kw = dict(transient=0, periods=60, max_periods=300, chunk=2)
+    serial = basins(system, starts, workers=1, **kw)
+    pool = basins(system, starts, workers=2, **kw)
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
+        dask = basins(system, starts, scheduler=cluster.scheduler_address, **kw)
+    for other in (pool, dask):
+        np.testing.assert_array_equal(other.labels, serial.labels)
+        np.testing.assert_array_equal(other.transients, serial.transients)
+    assert [a["kind"] for a in serial.attractors] == ["periodic"]
