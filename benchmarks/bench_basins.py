@@ -12,8 +12,8 @@ number of starts (every start costs the same number of periods) plus the attract
 (refinements and Lyapunov runs once per attractor, independent of the grid size). The last
 line is one JSON object.
 
-(The issue names ``benchmarks/bench_orbits.py`` for this measurement; that file belongs to the
-periodic-orbit work, which had not created it when this one was written.)
+``python benchmarks/bench_orbits.py --sections basins`` runs the same measurement as a section
+of the orbits benchmark (the file the issue names).
 
     python benchmarks/bench_basins.py [--grid 200] [--periods 100] [--workers 1 2]
 """
@@ -32,63 +32,56 @@ from analysis.experiments.models import build_operator
 from oscillators import ForcedOscillator
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--grid", type=int, default=200)
-    ap.add_argument("--coupling", type=float, default=2.92)
-    ap.add_argument("--periods", type=int, default=100)
-    ap.add_argument(
-        "--check",
-        type=int,
-        default=None,
-        help="periods of the first check (default --periods: every start runs --periods); "
-        "with --check 50 a start that settled by then stops there, the others run --periods",
-    )
-    ap.add_argument("--chunk", type=int, default=400)
-    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
-    ap.add_argument("--baseline-starts", type=int, default=400)
-    ap.add_argument("--repeats", type=int, default=3, help="baseline repeats (median)")
-    args = ap.parse_args()
-
-    system = ForcedOscillator(build_operator("erf-play"), args.coupling)
-    grid = BasinGrid((-3.0, 3.0), (-3.0, 3.0), args.grid)
+def measure_basins(
+    grid_size: int,
+    coupling: float,
+    periods: int,
+    check_periods: int | None,
+    chunk: int,
+    workers: list[int],
+    baseline_starts: int,
+    repeats: int,
+) -> dict:
+    """The measurement (module docstring); prints one line per setting, returns the record
+    (``bench_orbits.py`` runs it as its ``basins`` section)."""
+    system = ForcedOscillator(build_operator("erf-play"), coupling)
+    grid = BasinGrid((-3.0, 3.0), (-3.0, 3.0), grid_size)
     starts = grid.starts()
     # warm the numba caches outside the timing
     system.poincare_section(2, 0, 0.0, 0.0)
 
     base = []
-    n_base = min(args.baseline_starts, starts.shape[0])
+    n_base = min(baseline_starts, starts.shape[0])
     step = max(1, starts.shape[0] // n_base)
-    for _ in range(args.repeats):
+    for _ in range(repeats):
         t0 = time.perf_counter()
         for q0, v0, _w in starts[::step][:n_base]:
-            system.poincare_section(args.periods, 0, q0, v0)
+            system.poincare_section(periods, 0, q0, v0)
         base.append(n_base / (time.perf_counter() - t0))
     baseline = statistics.median(base)
     out = {
         "benchmark": "basins",
         "model": "erf-play",
-        "coupling": args.coupling,
-        "grid": args.grid,
+        "coupling": coupling,
+        "grid": grid_size,
         "starts": int(starts.shape[0]),
-        "periods": args.periods,
-        "check": args.check,
-        "chunk": args.chunk,
+        "periods": periods,
+        "check": check_periods,
+        "chunk": chunk,
         "cpu_count": os.cpu_count(),
         "machine": platform.machine(),
         "baseline_starts_per_s": round(baseline, 2),
     }
-    print(f"baseline poincare_section loop: {baseline:.1f} starts/s (median of {args.repeats})")
-    for w in args.workers:
+    print(f"baseline poincare_section loop: {baseline:.1f} starts/s (median of {repeats})")
+    for w in workers:
         t0 = time.perf_counter()
-        check = args.periods if args.check is None else args.check
         bm = basins(
             system,
             grid,
             transient=0,
-            periods=check,
-            max_periods=args.periods,
-            chunk=args.chunk,
+            periods=periods if check_periods is None else check_periods,
+            max_periods=periods,
+            chunk=chunk,
             workers=w,
             lyapunov_periods=2000,
         )
@@ -118,6 +111,37 @@ def main() -> None:
             f"attractors {bm.timings['attractors_s']:.1f} s; 1000 x 1000 map: "
             f"{1e6 / srate / 3600 + bm.timings['attractors_s'] / 3600:.2f} h"
         )
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--grid", type=int, default=200)
+    ap.add_argument("--coupling", type=float, default=2.92)
+    ap.add_argument("--periods", type=int, default=100)
+    ap.add_argument(
+        "--check",
+        type=int,
+        default=None,
+        help="periods of the first check (default --periods: every start runs --periods); "
+        "with --check 50 a start that settled by then stops there, the others run --periods",
+    )
+    ap.add_argument("--chunk", type=int, default=400)
+    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--baseline-starts", type=int, default=400)
+    ap.add_argument("--repeats", type=int, default=3, help="baseline repeats (median)")
+    args = ap.parse_args()
+
+    out = measure_basins(
+        args.grid,
+        args.coupling,
+        args.periods,
+        args.check,
+        args.chunk,
+        args.workers,
+        args.baseline_starts,
+        args.repeats,
+    )
     print(json.dumps(out))
 
 

@@ -6,7 +6,8 @@ stroboscopic map ``P`` (section ``φ = φ0``). :func:`find_periodic_orbit`:
 1. integrates a transient of whole forcing periods from the start;
 2. detects a candidate period ``k <= max_period`` from ``2·max_period`` stroboscopic points
    (:func:`~analysis.dynamics.bifurcation.orbit_period` at relative tolerances 1e-8, 1e-6,
-   1e-4, 1e-3 of the section's extent, the tightest first);
+   1e-4, 1e-3 of the section's extent, the tightest first; then, for a transient still
+   decaying, the k whose points come back closest if within 5 % of the extent);
 3. refines it by Newton on ``F(x) = P^k(x) − x`` in the state coordinates
    ``x = (q, v, *memory)`` (:class:`~analysis.dynamics.orbit_coordinates.StateCoordinates`)::
 
@@ -72,6 +73,8 @@ __all__ = [
 
 #: relative tolerances (of the section's extent) at which candidate periods are detected
 DETECTION_TOLERANCES = (1e-8, 1e-6, 1e-4, 1e-3)
+#: largest relative mismatch ``|x_{i+k} − x_i| / extent`` of a fallback candidate period
+FALLBACK_MISMATCH = 0.05
 #: halvings of a Newton step whose residual does not decrease
 MAX_HALVINGS = 10
 #: largest allowed max_period (the detection integrates 2·max_period periods per candidate)
@@ -414,6 +417,13 @@ def find_periodic_orbit(
     engine_options:
         Passed to the engine (e.g. ``{"method": "generic"}``).
 
+    Notes
+    -----
+    A candidate period detected at a loose tolerance (or the closest-return fallback) may lead
+    Newton to an *unstable* orbit that the motion shadows for a while (chaotic motion near a
+    periodic saddle): the result is then a genuine periodic orbit, but not an attractor —
+    :attr:`PeriodicOrbit.stable` says which.
+
     Raises
     ------
     OrbitNotFoundError
@@ -463,8 +473,17 @@ def find_periodic_orbit(
     scale = max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1])), 1.0)
     tried: list[int] = []
     failures: list[str] = []
-    for rel in DETECTION_TOLERANCES:
-        k = orbit_period(pts[:, 0], pts[:, 1], rel * scale, max_period=max_period)
+    candidates = [
+        orbit_period(pts[:, 0], pts[:, 1], rel * scale, max_period=max_period)
+        for rel in DETECTION_TOLERANCES
+    ]
+    # a transient still decaying: the period whose points come back closest (below
+    # FALLBACK_MISMATCH of the extent) is a candidate too; Newton decides
+    mismatch = [float(np.max(np.abs(pts[m:] - pts[:-m]))) / scale for m in range(1, max_period + 1)]
+    best = int(np.argmin(mismatch))
+    if mismatch[best] <= FALLBACK_MISMATCH:
+        candidates.append(best + 1)
+    for k in candidates:
         if k == 0 or k in tried:
             continue
         tried.append(k)

@@ -26,6 +26,7 @@ from analysis.paper.context import (
     FigureSpec,
     PaperContext,
 )
+from analysis.paper.orbit_evidence import orbit_evidence, orbit_lines
 
 __all__ = [
     "FigureSpec",
@@ -155,6 +156,21 @@ def run_paper(
         "figures": figures,
         "errors": errors,
     }
+    if not only and size != "smoke":
+        # the periodic orbits behind the disputed windows (issue 19), for the Discussion
+        start = time.perf_counter()
+        try:
+            report["orbits"] = orbit_evidence()
+        except Exception as exc:  # evidence, not a figure: report it and keep the run
+            errors.append(
+                {"figure": "orbits", "error": repr(exc), "traceback": traceback.format_exc()}
+            )
+        if progress:
+            print(
+                f"[hyst paper] periodic-orbit evidence in {time.perf_counter() - start:.1f} s",
+                file=sys.stderr,
+                flush=True,
+            )
     write_report(ctx, report)
     return report
 
@@ -209,9 +225,10 @@ def discussion(claims: Sequence[dict]) -> list[str]:
 def write_report(ctx: PaperContext, report: dict) -> None:
     """Write ``report.json`` (the report dictionary, to which it adds ``summary``: the verdict
     counts and the summary line) and ``report.md``: the claims table, the summary line, a
-    "Discussion" of every claim that does not agree, failed figures, the figures and the run
-    size. Optional ``provenance`` lines (how and when the run was made) are printed under the
-    title."""
+    "Discussion" of every claim that does not agree (and, when ``report["orbits"]`` holds
+    :func:`~analysis.paper.orbit_evidence.orbit_evidence`, the periodic orbits behind the
+    disputed windows), failed figures, the figures and the run size. Optional ``provenance``
+    lines (how and when the run was made) are printed under the title."""
     count = Counter(c["verdict"] for c in report["claims"])
     report["summary"] = {
         "claims": len(report["claims"]),
@@ -236,6 +253,8 @@ def write_report(ctx: PaperContext, report: dict) -> None:
         lines.append("| " + " | ".join(str(x).replace("|", "\\|") for x in cells) + " |")
     lines += ["", summary_line(report["claims"]) + ".", ""]
     lines += discussion(report["claims"])
+    if report.get("orbits"):
+        lines += orbit_lines(report["orbits"])
     if report["errors"]:
         lines += ["## Figures that failed", ""]
         for e in report["errors"]:

@@ -1,0 +1,349 @@
+"""Branches of periodic orbits: their points, events, the problem ``F(x, λ) = P_λ^k(x) − x``
+with its predictor–corrector, and the location of events on a branch.
+
+The algorithms are described in :mod:`analysis.dynamics.continuation`, which drives them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.periodic_orbits import OrbitNotFoundError, event_sequence, shoot
+from oscillators import DivergenceError, GrazingError, OscillatorState
+
+__all__ = [
+    "BranchPoint",
+    "BranchProblem",
+    "ContinuationEvent",
+    "FAILURES",
+    "locate_grazing",
+    "natural_point",
+    "same_sequence",
+    "smooth_events",
+]
+
+#: failures the engines raise for a state where no orbit with this sequence exists
+FAILURES = (OrbitNotFoundError, GrazingError, DivergenceError, ValueError, np.linalg.LinAlgError)
+
+
+@dataclass(frozen=True)
+class BranchPoint:
+    """One point of a branch: the parameter, the orbit's period, its multipliers."""
+
+    parameter: float
+    period: int
+    multipliers: np.ndarray
+    point: np.ndarray
+    sequence: tuple = field(repr=False)
+    state: OscillatorState = field(repr=False)
+    monodromy: np.ndarray = field(repr=False)
+
+    @property
+    def max_abs_multiplier(self) -> float:
+        """``max |μ|``."""
+        return float(np.max(np.abs(self.multipliers)))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "parameter": float(self.parameter),
+            "period": int(self.period),
+            "max_abs_multiplier": self.max_abs_multiplier,
+            "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
+            "n_events": len(self.sequence),
+        }
+
+
+@dataclass(frozen=True)
+class ContinuationEvent:
+    """A bifurcation on the branch: ``kind`` in :data:`KINDS`, the located ``parameter`` and
+    the bracket it was located in; ``point`` the orbit there (smooth events) or the last orbit
+    of the old sequence (grazing); ``multipliers`` there; ``index`` the number of branch points
+    before it (``Continuation.points[index]`` is the first point after it)."""
+
+    kind: str
+    parameter: float
+    bracket: tuple[float, float]
+    period: int
+    multipliers: np.ndarray
+    point: BranchPoint | None = field(repr=False, default=None)
+    index: int = -1
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kind": self.kind,
+            "parameter": float(self.parameter),
+            "bracket": [float(b) for b in self.bracket],
+            "period": int(self.period),
+            "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
+        }
+
+
+def same_sequence(a: tuple, b: tuple) -> bool:
+    """Equal up to a cyclic shift (an event crossing the section moves from end to start)."""
+    if len(a) != len(b):
+        return False
+    if not a:
+        return True
+    return any(a[i:] + a[:i] == b for i in range(len(a)))
+
+
+class BranchProblem:
+    """``F(x, λ)`` and its derivatives for one operator, one period and one section."""
+
+    def __init__(
+        self, factory: Callable, coords: StateCoordinates, k: int, tol: float, iters: int, eo
+    ):
+        self.factory = factory
+        self.coords = coords
+        self.k = k
+        self.tol = tol
+        self.iters = iters
+        self.eo = eo
+        self._systems: dict[float, Any] = {}
+
+    def system(self, lam: float) -> Any:
+        s = self._systems.get(lam)
+        if s is None:
+            if len(self._systems) > 64:
+                self._systems.clear()
+            s = self._systems[lam] = self.factory(lam)
+        return s
+
+    def residual(self, x: np.ndarray, lam: float, template: OscillatorState):
+        shot = shoot(
+            self.system(lam), self.coords.state(x, template), self.k, engine_options=self.eo
+        )
+        return self.coords.vector(shot.states[-1]) - x, shot
+
+    def d_lambda(self, x: np.ndarray, lam: float, template: OscillatorState) -> np.ndarray:
+        h = 1e-6 * max(1.0, abs(lam))
+        plus, _ = self.residual(x, lam + h, template)
+        minus, _ = self.residual(x, lam - h, template)
+        return (plus - minus) / (2.0 * h)
+
+    def point(self, x: np.ndarray, lam: float, template: OscillatorState) -> BranchPoint:
+        system = self.system(lam)
+        state = self.coords.state(x, template)
+        shot = shoot(system, state, self.k, record=True, engine_options=self.eo)
+        mu = np.linalg.eigvals(shot.jacobian).astype(complex)
+        mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+        n_zero = max(0, self.coords.dimension - shot.rank)
+        if n_zero:
+            mu[mu.size - n_zero :] = 0.0
+        return BranchPoint(
+            parameter=float(lam),
+            period=self.k,
+            multipliers=mu,
+            point=np.array(x, dtype=float),
+            sequence=event_sequence(shot.events),
+            state=state,
+            monodromy=shot.jacobian,
+        )
+
+    def correct(
+        self,
+        z_pred: np.ndarray,
+        c: np.ndarray,
+        template: OscillatorState,
+        arclength: bool,
+    ) -> tuple[np.ndarray, OscillatorState] | None:
+        """Newton on ``[F(x, λ); c·(z − z_pred)] = 0`` from ``z_pred``; None if it fails."""
+        z = z_pred.copy()
+        d = self.coords.dimension
+        for _ in range(self.iters + 1):
+            x, lam = z[:d], float(z[d])
+            try:
+                r, shot = self.residual(x, lam, template)
+            except FAILURES:
+                return None
+            g = float(c @ (z - z_pred))
+            if float(np.max(np.abs(r))) <= self.tol * self.coords.scale(x) and abs(g) <= 1e-12 * (
+                1.0 + float(np.max(np.abs(z)))
+            ):
+                state = self.coords.state(x, template)
+                if self.coords.same_memory(state, shot.states[-1]) and not self._covers(x, shot):
+                    return z, shot.states[-1]
+                return None
+            jac = np.zeros((d + 1, d + 1))
+            jac[:d, :d] = shot.jacobian - np.eye(d)
+            if arclength:
+                try:
+                    jac[:d, d] = self.d_lambda(x, lam, template)
+                except FAILURES:
+                    return None
+            jac[d] = c
+            try:
+                dz = np.linalg.solve(jac, -np.append(r, g))
+            except np.linalg.LinAlgError:
+                return None
+            z = z + dz
+            template = shot.states[-1]
+        return None
+
+    def _covers(self, x: np.ndarray, shot: Any) -> bool:
+        """Whether the orbit closes after a proper divisor of k periods (a multiple cover of a
+        shorter orbit, which is not on this branch)."""
+        bound = 1e3 * self.tol * self.coords.scale(x)
+        for m in range(1, self.k):
+            if self.k % m == 0:
+                y = self.coords.vector(shot.states[m - 1])
+                if float(np.max(np.abs(y - x))) <= bound:
+                    return True
+        return False
+
+    def tangent(self, bp: BranchPoint, previous: np.ndarray | None, direction: float):
+        """Unit null vector of ``[J − I, ∂F/∂λ]`` at ``bp``, oriented like ``previous`` (else
+        with ``sign(dλ) = direction``)."""
+        d = self.coords.dimension
+        a = np.zeros((d, d + 1))
+        a[:, :d] = bp.monodromy - np.eye(d)
+        a[:, d] = self.d_lambda(bp.point, bp.parameter, bp.state)
+        _, _, vt = np.linalg.svd(a)
+        t = vt[-1]
+        if previous is not None and previous.shape == (d + 1,):
+            ref = previous
+        else:
+            ref = np.append(np.zeros(d), direction)
+        if float(t @ ref) < 0.0:
+            t = -t
+        return t / np.linalg.norm(t)
+
+
+def _tests(mu: np.ndarray) -> dict[str, float]:
+    """Test functions of fold, period doubling and torus from the multipliers."""
+    prod_pairs = 1.0 + 0.0j
+    for i in range(mu.size):
+        for j in range(i + 1, mu.size):
+            prod_pairs *= mu[i] * mu[j] - 1.0
+    return {
+        "fold": float(np.real(np.prod(mu - 1.0))),
+        "period-doubling": float(np.real(np.prod(mu + 1.0))),
+        "torus": float(np.real(prod_pairs)),
+    }
+
+
+def _is_torus(mu: np.ndarray) -> bool:
+    return bool(np.any((np.abs(mu.imag) > 1e-8) & (np.abs(np.abs(mu) - 1.0) < 1e-4)))
+
+
+def natural_point(prob: BranchProblem, a: BranchPoint, lam: float) -> BranchPoint | None:
+    """The orbit of ``a``'s period at parameter ``lam`` by Newton from ``a`` (None if none)."""
+    d = prob.coords.dimension
+    z_pred = np.append(a.point, lam)
+    got = prob.correct(z_pred, np.append(np.zeros(d), 1.0), a.state, False)
+    if got is None:
+        return None
+    try:
+        return prob.point(got[0][:d], lam, got[1])
+    except FAILURES:
+        return None
+
+
+def locate_grazing(
+    prob: BranchProblem, a: BranchPoint, trial: float, tol: float
+) -> tuple[ContinuationEvent | None, BranchPoint]:
+    """Bisection on the parameter between ``a`` (old sequence) and ``trial`` (not) for the end
+    of ``a``'s event sequence; ``(None, a)`` if the sequence holds at ``trial``."""
+    lo, hi = a.parameter, trial
+    last = a
+    b = natural_point(prob, a, hi)
+    if b is not None and same_sequence(a.sequence, b.sequence):
+        return None, a
+    while abs(hi - lo) > tol:
+        mid = 0.5 * (lo + hi)
+        m = natural_point(prob, last, mid)
+        if m is not None and same_sequence(a.sequence, m.sequence):
+            lo, last = mid, m
+        else:
+            hi = mid
+    event = ContinuationEvent(
+        kind="grazing",
+        parameter=0.5 * (lo + hi),
+        bracket=(min(lo, hi), max(lo, hi)),
+        period=a.period,
+        multipliers=last.multipliers,
+        point=last,
+    )
+    return event, last
+
+
+def smooth_events(
+    prob: BranchProblem,
+    a: BranchPoint,
+    b: BranchPoint,
+    tangent_a: np.ndarray | None,
+    tangent_b: np.ndarray | None,
+    direction: float,
+    tol: float,
+) -> list[ContinuationEvent]:
+    """Sign changes of the test functions between ``a`` and ``b``, located by secant/bisection
+    on the step from ``a`` (λ for natural continuation, arclength otherwise). With
+    pseudo-arclength the fold's test function is the parameter component of the tangent (it
+    changes sign where the branch turns back), which also catches a fold whose multiplier
+    touches +1 without crossing it."""
+    arclength = tangent_a is not None
+    d = prob.coords.dimension
+
+    def tests(bp: BranchPoint, tangent: np.ndarray | None) -> dict[str, float]:
+        t = _tests(bp.multipliers)
+        if arclength:
+            if tangent is None:
+                tangent = prob.tangent(bp, tangent_a, direction)
+            t["fold"] = float(tangent[d])
+        return t
+
+    ta, tb = tests(a, tangent_a), tests(b, tangent_b)
+    out = []
+    z_a = np.append(a.point, a.parameter)
+    z_b = np.append(b.point, b.parameter)
+    for kind in ("fold", "period-doubling", "torus"):
+        if not ta[kind] * tb[kind] < 0.0:
+            continue
+        if arclength:
+            c = tangent_a
+            s_hi = float(tangent_a @ (z_b - z_a))
+        else:
+            c = np.append(np.zeros(d), 1.0)
+            s_hi = b.parameter - a.parameter
+        s_lo, g_lo, lam_lo = 0.0, ta[kind], a.parameter
+        g_hi, lam_hi = tb[kind], b.parameter
+        at = b
+        for _ in range(100):
+            if abs(lam_hi - lam_lo) <= tol or abs(s_hi - s_lo) <= 1e-3 * tol:
+                break
+            s = s_lo - g_lo * (s_hi - s_lo) / (g_hi - g_lo)
+            width = abs(s_hi - s_lo)
+            if not min(abs(s - s_lo), abs(s - s_hi)) > 1e-3 * width:
+                s = 0.5 * (s_lo + s_hi)  # secant outside or at an end: bisect
+            if arclength:
+                z_pred = z_a + s * c
+            else:
+                z_pred = np.append(a.point + (b.point - a.point) * (s / s_hi), a.parameter + s)
+            got = prob.correct(z_pred, c, a.state, arclength)
+            if got is None:
+                break
+            at = prob.point(got[0][:d], float(got[0][d]), got[1])
+            g = tests(at, None)[kind]
+            if g * g_lo > 0.0:
+                s_lo, g_lo, lam_lo = s, g, at.parameter
+            else:
+                s_hi, g_hi, lam_hi = s, g, at.parameter
+        if kind == "torus" and not _is_torus(at.multipliers):
+            continue
+        bracket = (min(lam_lo, lam_hi), max(lam_lo, lam_hi))
+        out.append(
+            ContinuationEvent(
+                kind=kind,
+                parameter=at.parameter,
+                bracket=bracket,
+                period=a.period,
+                multipliers=at.multipliers,
+                point=at,
+            )
+        )
+    return out

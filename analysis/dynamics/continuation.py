@@ -1,0 +1,423 @@
+"""Continuation of periodic orbits in a parameter, with smooth and nonsmooth bifurcations.
+
+A branch is a curve ``z(s) = (x(s), λ(s))`` of solutions of ``F(x, λ) = P_λ^k(x) − x = 0``
+(``P_λ`` the stroboscopic map at parameter value λ, ``x`` the coordinates of
+:class:`~analysis.dynamics.orbit_coordinates.StateCoordinates`). From a point ``z_a`` with
+unit tangent ``τ_a`` a step of length ``ds`` is a predictor and a Newton corrector on::
+
+    F(x, λ) = 0,   c·(z − z_a − ds·τ_a) = 0
+
+* **pseudo-arclength** (default for continuous memory): ``c = τ_a``, the tangent being the
+  null vector of ``[J − I, ∂F/∂λ]`` (``∂F/∂λ`` by central differences of ``P^k`` in λ, step
+  ``1e-6·max(1, |λ|)``), oriented like the previous one: folds are passed;
+* **natural** (default for relay-type operators): ``c = e_λ`` (λ fixed at ``λ_a + ds``), the
+  predictor extrapolating the last secant.
+
+The corrector stops when ``|F|_∞ <= tolerance·max(1, |x|_∞)`` (and the constraint holds to
+round-off); a step whose corrector fails is halved down to ``min_step``.
+
+Events
+------
+Between two consecutive points with the same period and event sequence the Floquet multipliers
+``μ_i`` give test functions whose sign changes bracket a bifurcation:
+
+* ``fold``: ``Π (μ_i − 1)`` (a multiplier through +1);
+* ``period-doubling``: ``Π (μ_i + 1)`` (through −1);
+* ``torus``: ``Π_{i<j} (μ_i μ_j − 1)`` with a complex pair on the unit circle at the located
+  point (a real pair with ``μ_i μ_j = 1`` is a neutral saddle, not reported);
+
+located by the secant method (safeguarded by bisection) on the step length from the bracket's
+first point, to ``locate_tolerance`` in the parameter.
+
+Nonsmooth events end a branch in these systems: the event (switching) sequence along the orbit
+changes — a relay threshold or a play wall is grazed by a turning point, a border collision.
+When two consecutive points differ in their sequence (up to a cyclic shift: an event crossing
+the section), or the corrector fails for every step, the parameter where the old sequence stops
+holding is located by bisection in the parameter (natural corrector, from the last point of the
+old sequence) to ``locate_tolerance`` and reported as ``grazing``. The continuation then goes on
+from the first point of the new sequence, re-detecting the period with
+:func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit` when no orbit of the old period
+follows.
+
+Branch switching at a period doubling: :func:`period_doubled_orbit` starts the period-2k orbit
+from the located point plus a perturbation along the eigenvector of ``μ = −1``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from analysis.dynamics.branch import (
+    FAILURES,
+    BranchPoint,
+    BranchProblem,
+    ContinuationEvent,
+    locate_grazing,
+    same_sequence,
+    smooth_events,
+)
+from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.periodic_orbits import (
+    OrbitNotFoundError,
+    PeriodicOrbit,
+    find_periodic_orbit,
+    refine_periodic_orbit,
+)
+from hysteresis._validation import finite_scalar, positive_integer, positive_scalar
+from oscillators import ForcedOscillator
+
+__all__ = [
+    "PARAMETERS",
+    "BranchPoint",
+    "Continuation",
+    "ContinuationEvent",
+    "continue_orbit",
+    "period_doubled_orbit",
+    "system_factory",
+]
+
+#: continuation parameters and their aliases -> the ForcedOscillator argument
+PARAMETERS = {
+    "coupling": "coupling",
+    "C": "coupling",
+    "damping_ratio": "damping_ratio",
+    "zeta": "damping_ratio",
+    "frequency": "frequency",
+    "omega": "frequency",
+}
+#: continuation methods (``auto``: natural for relay-type operators, pseudo-arclength otherwise)
+METHODS = ("auto", "natural", "pseudo-arclength")
+#: event kinds
+KINDS = ("fold", "period-doubling", "torus", "grazing")
+#: most accepted branch points of one call
+MAX_POINTS = 100_000
+
+
+@dataclass(frozen=True)
+class Continuation:
+    """A continued branch (possibly several smooth pieces joined at grazing events)."""
+
+    parameter: str
+    method: str
+    points: tuple[BranchPoint, ...]
+    events: tuple[ContinuationEvent, ...]
+    stop_reason: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "parameter": self.parameter,
+            "method": self.method,
+            "branch": [p.to_dict() for p in self.points],
+            "events": [e.to_dict() for e in self.events],
+            "stop_reason": self.stop_reason,
+        }
+
+
+def system_factory(system: ForcedOscillator, parameter: str = "coupling") -> Callable:
+    """``value -> ForcedOscillator`` with ``parameter`` (``coupling``/``C``,
+    ``damping_ratio``/``zeta``, ``frequency``/``omega``) set and everything else from
+    ``system``."""
+    if parameter not in PARAMETERS:
+        raise ValueError(f"parameter must be one of {sorted(PARAMETERS)}, got {parameter!r}")
+    name = PARAMETERS[parameter]
+    base = {
+        "coupling": system.coupling,
+        "damping_ratio": system.damping_ratio,
+        "frequency": system.frequency,
+    }
+
+    def make(value: float) -> ForcedOscillator:
+        return ForcedOscillator(system.operator, **{**base, name: float(value)})
+
+    return make
+
+
+def continue_orbit(
+    system: ForcedOscillator | Callable[[float], Any],
+    orbit: PeriodicOrbit,
+    start: float,
+    stop: float,
+    *,
+    parameter: str = "coupling",
+    method: str = "auto",
+    step: float | None = None,
+    min_step: float | None = None,
+    max_points: int = 2000,
+    tolerance: float = 1e-10,
+    max_iterations: int = 12,
+    locate_tolerance: float = 1e-8,
+    transient: int = 200,
+    max_period: int = 64,
+    engine_options: dict | None = None,
+) -> Continuation:
+    """Continue ``orbit`` (a periodic orbit of the system at ``parameter = start``) to ``stop``.
+
+    Parameters
+    ----------
+    system:
+        The :class:`~oscillators.system.ForcedOscillator` at ``start`` (the parameter is varied
+        by :func:`system_factory`), or a factory ``value -> ForcedOscillator``.
+    orbit:
+        A :class:`~analysis.dynamics.periodic_orbits.PeriodicOrbit` at ``start``.
+    start, stop:
+        The parameter range, in continuation order (``stop < start`` continues downward).
+    parameter:
+        ``coupling`` (default), ``damping_ratio`` or ``frequency`` (labels and the factory).
+    method:
+        ``pseudo-arclength`` (passes folds), ``natural`` or ``auto`` (default): natural for
+        relay-type operators, whose orbits are piecewise linear between switches, so that their
+        branches end at grazings (switching-sequence changes) far more often than at folds, and
+        whose short branches of long periods (the N = 2 period-adding cascade) the arclength
+        predictor overshoots; pseudo-arclength for continuous memory (plays), where folds
+        bound the periodic windows.
+    step:
+        Largest step in arclength (pseudo-arclength) or in the parameter (natural); default
+        ``|stop − start|/50``. ``min_step`` (default ``step/2^12``) is the smallest.
+    max_points:
+        Most branch points (1 .. 100 000).
+    tolerance, max_iterations:
+        The corrector's convergence criterion ``|F|_∞ <= tolerance·max(1, |x|_∞)`` and its
+        iteration limit.
+    locate_tolerance:
+        Width in the parameter to which events are located (bisection / secant).
+    transient, max_period:
+        For re-detecting the orbit (period) after a grazing, from the last state.
+    """
+    start = finite_scalar(start, "start")
+    stop = finite_scalar(stop, "stop")
+    if start == stop:
+        raise ValueError(f"start and stop must differ, got {start}")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if not isinstance(orbit, PeriodicOrbit):
+        raise TypeError(f"orbit must be a PeriodicOrbit, got {type(orbit).__name__}")
+    if isinstance(system, ForcedOscillator):
+        factory = system_factory(system, parameter)
+    elif callable(system):
+        if parameter not in PARAMETERS:
+            raise ValueError(f"parameter must be one of {sorted(PARAMETERS)}, got {parameter!r}")
+        factory = system
+    else:
+        raise TypeError("system must be a ForcedOscillator or a callable value -> system")
+    span = abs(stop - start)
+    step = span / 50.0 if step is None else positive_scalar(step, "step")
+    min_step = step / 4096.0 if min_step is None else positive_scalar(min_step, "min_step")
+    if min_step > step:
+        raise ValueError(f"min_step must be <= step ({step}), got {min_step}")
+    max_points = positive_integer(max_points, "max_points")
+    if max_points > MAX_POINTS:
+        raise ValueError(f"max_points must be <= {MAX_POINTS}, got {max_points}")
+    tolerance = positive_scalar(tolerance, "tolerance")
+    max_iterations = positive_integer(max_iterations, "max_iterations")
+    locate_tolerance = positive_scalar(locate_tolerance, "locate_tolerance")
+    direction = math.copysign(1.0, stop - start)
+    if method == "auto":
+        method = "natural" if factory(start).operator.piecewise_constant else "pseudo-arclength"
+    arclength = method == "pseudo-arclength"
+
+    sys0 = factory(start)
+    coords = StateCoordinates(sys0, orbit.start, engine_options)
+    prob = BranchProblem(factory, coords, orbit.period, tolerance, max_iterations, engine_options)
+    first = prob.point(coords.vector(orbit.start), start, orbit.start)
+    points = [first]
+    events: list[ContinuationEvent] = []
+    tangent = prob.tangent(first, None, direction) if arclength else None
+    ds = step
+    reason = "reached stop"
+    d = coords.dimension
+    while True:
+        a = points[-1]
+        if len(points) >= max_points:
+            reason = "max_points"
+            break
+        if direction * (stop - a.parameter) <= locate_tolerance:
+            break
+        z_a = np.append(a.point, a.parameter)
+        new = None
+        while ds >= min_step:
+            if arclength:
+                # the step in the parameter is about ds (ten times ds along the branch near a
+                # fold, where the tangent is nearly orthogonal to the parameter axis)
+                z_pred = z_a + ds / max(abs(tangent[d]), 0.1) * tangent
+                c = tangent
+            else:
+                lam = a.parameter + direction * ds
+                slope = _secant(points)
+                z_pred = np.append(a.point + slope * (lam - a.parameter), lam)
+                c = np.append(np.zeros(d), 1.0)
+            if direction * (z_pred[d] - stop) > 0.0:  # land on stop exactly
+                lam = stop
+                z_pred = np.append(a.point + _secant(points) * (lam - a.parameter), lam)
+                got = prob.correct(z_pred, np.append(np.zeros(d), 1.0), a.state, False)
+            else:
+                got = prob.correct(z_pred, c, a.state, arclength)
+            # a corrected point farther than 10 steps in the parameter, or beyond stop, jumped
+            # to another branch: a failed step
+            if got is not None and (
+                abs(got[0][d] - a.parameter) <= 10.0 * ds + locate_tolerance
+                and direction * (got[0][d] - stop) <= locate_tolerance
+            ):
+                z, image = got
+                new = prob.point(z[:d], float(z[d]), image)
+                break
+            ds *= 0.5
+        if new is None or not same_sequence(a.sequence, new.sequence):
+            # the old sequence ends between a and new (or the next failing step)
+            trial = new.parameter if new is not None else a.parameter + direction * 2 * min_step
+            event, last = locate_grazing(prob, a, trial, locate_tolerance)
+            if event is None and new is None:
+                reason = "corrector failed (no grazing found)"
+                break
+            if event is not None:
+                events.append(replace(event, index=len(points)))
+                if last is not a:
+                    points.append(last)
+            resumed, redetected = new, new is None
+            if resumed is None:
+                resumed = _redetect(
+                    prob, event, direction, stop, step, transient, max_period, tolerance
+                )
+                if resumed is None:
+                    reason = "no periodic orbit after the grazing"
+                    break
+                prob = resumed[0]
+                resumed = resumed[1]
+            if any(_same_event(e, event) for e in events[:-1]):
+                reason = "the branch returned to a grazing already found (a closed loop)"
+                break
+            points.append(resumed)
+            # the new piece continues the old one's orientation (after a fold: backwards); a
+            # re-detected orbit (another problem) starts toward stop
+            if arclength:
+                tangent = prob.tangent(resumed, None if redetected else tangent, direction)
+            ds = step
+            continue
+        new_tangent = prob.tangent(new, tangent, direction) if arclength else None
+        found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
+        events.extend(replace(e, index=len(points)) for e in found)
+        points.append(new)
+        tangent = new_tangent
+        ds = min(step, ds * 1.5)
+        if direction * (new.parameter - start) < -span:
+            reason = "turned back past start"
+            break
+    return Continuation(
+        parameter=PARAMETERS[parameter],
+        method=method,
+        points=tuple(points),
+        events=tuple(events),
+        stop_reason=reason,
+    )
+
+
+def _same_event(a: ContinuationEvent, b: ContinuationEvent | None) -> bool:
+    if b is None or a.kind != b.kind or a.period != b.period:
+        return False
+    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0])
+    return abs(a.parameter - b.parameter) <= 10.0 * width
+
+
+def _secant(points: list[BranchPoint]) -> np.ndarray:
+    """dx/dλ from the last two points of the same period (zero if none)."""
+    if len(points) < 2 or points[-1].period != points[-2].period:
+        return np.zeros_like(points[-1].point)
+    a, b = points[-2], points[-1]
+    dl = b.parameter - a.parameter
+    if dl == 0.0 or not same_sequence(a.sequence, b.sequence):
+        return np.zeros_like(b.point)
+    return (b.point - a.point) / dl
+
+
+def _redetect(prob, event, direction, stop, step, transient, max_period, tolerance):
+    """After a grazing with no orbit of the old period: the orbit the motion settles on past
+    the event, from the last orbit's state, tried at ``10·bracket``, then ``step``, ``2·step``,
+    ``4·step``, ... beyond the event (not beyond ``stop``; at most 8 tries)."""
+    if event is None:
+        return None
+    edge = event.bracket[1] if direction > 0 else event.bracket[0]
+    offsets = [10.0 * (event.bracket[1] - event.bracket[0])] + [step * 2**i for i in range(7)]
+    for offset in offsets:
+        lam = edge + direction * offset
+        if direction * (lam - stop) > 0.0:
+            lam = stop
+        system = prob.system(lam)
+        try:
+            orbit = find_periodic_orbit(
+                system,
+                event.point.state,
+                transient=transient,
+                max_period=max_period,
+                tolerance=tolerance,
+                engine_options=prob.eo,
+            )
+        except FAILURES:
+            if lam == stop:
+                return None
+            continue
+        coords = StateCoordinates(system, orbit.start, prob.eo)
+        new = BranchProblem(prob.factory, coords, orbit.period, prob.tol, prob.iters, prob.eo)
+        return new, new.point(coords.vector(orbit.start), lam, orbit.start)
+    return None
+
+
+def period_doubled_orbit(
+    system: ForcedOscillator | Callable[[float], Any],
+    event: ContinuationEvent,
+    *,
+    parameter: str = "coupling",
+    offset: float | None = None,
+    amplitude: float = 1e-3,
+    tolerance: float = 1e-10,
+    max_iterations: int = 30,
+    engine_options: dict | None = None,
+) -> tuple[float, PeriodicOrbit]:
+    """Branch switching at a period doubling: the period-2k orbit near ``event``.
+
+    Starts Newton (period 2k) at ``event.parameter ± offset`` (default ``1e3·|bracket|`` and at
+    least ``1e-6·max(1, |λ|)``) from the orbit point plus ``± amplitude`` times the eigenvector of
+    the multiplier closest to −1, and returns ``(parameter, orbit)`` for the first start that
+    converges to an orbit of minimal period 2k (the two halves distinct beyond ``1e3·tolerance``).
+    """
+    if event.kind != "period-doubling" or event.point is None:
+        raise ValueError(f"event must be a located period-doubling event, got {event.kind!r}")
+    factory = system_factory(system, parameter) if isinstance(system, ForcedOscillator) else system
+    bp = event.point
+    lam0 = bp.parameter
+    if offset is None:
+        offset = max(1e3 * abs(event.bracket[1] - event.bracket[0]), 1e-6 * max(1.0, abs(lam0)))
+    offset = positive_scalar(offset, "offset")
+    amplitude = positive_scalar(amplitude, "amplitude")
+    mu, vec = np.linalg.eig(bp.monodromy)
+    e = np.real(vec[:, int(np.argmin(np.abs(mu + 1.0)))])
+    e = e / np.max(np.abs(e))
+    k2 = 2 * bp.period
+    for lam in (lam0 + offset, lam0 - offset):
+        sys_l = factory(lam)
+        coords = StateCoordinates(sys_l, bp.state, engine_options)
+        for sign in (1.0, -1.0):
+            guess = coords.state(bp.point + sign * amplitude * e, bp.state)
+            try:
+                orb = refine_periodic_orbit(
+                    sys_l,
+                    guess,
+                    k2,
+                    tolerance=tolerance,
+                    max_iterations=max_iterations,
+                    engine_options=engine_options,
+                )
+            except FAILURES:
+                continue
+            half = orb.points[: bp.period] - orb.points[bp.period :]
+            if float(np.max(np.abs(half))) > 1e3 * tolerance * max(
+                1.0, float(np.max(np.abs(orb.points)))
+            ):
+                return lam, orb
+    raise OrbitNotFoundError(
+        f"no period-{k2} orbit found next to the period doubling at {lam0:.10g} (offset "
+        f"{offset:g}, amplitude {amplitude:g})"
+    )
