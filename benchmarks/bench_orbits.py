@@ -13,8 +13,11 @@ Section ``orbits`` — for each case (N = 20 000 dimers, the erf-play limit):
   the final pass cost).
 
 Each time is the median of ``--repeats`` runs after a warm-up (numba caches). The last line is
-one JSON object. Further sections (the basin maps of ``hyst basins``) add a function to
-:data:`SECTIONS`.
+one JSON object. Further sections add a function to :data:`SECTIONS`.
+
+Section ``basins`` — the erf-play basin map of ``hyst basins`` (``--basin-grid``² starts, 100
+periods each) in starts/s on 1 and 2 workers against the plain ``poincare_section`` loop, and
+the extrapolated 1000 × 1000 map time (``benchmarks/bench_basins.py``, which also runs alone).
 
     python benchmarks/bench_orbits.py [--repeats 5] [--sections orbits]
 """
@@ -28,6 +31,8 @@ import platform
 import statistics
 import time
 from collections.abc import Callable
+
+from bench_basins import measure_basins  # the sibling script (benchmarks/ is on sys.path)
 
 from analysis.dynamics.periodic_orbits import find_periodic_orbit, refine_periodic_orbit, shoot
 from hysteresis import GeneralizedPlay, SpinDimerEnsemble
@@ -98,14 +103,30 @@ def bench_orbits(args: argparse.Namespace) -> dict:
     return {"orbits": rows}
 
 
+def bench_basin_maps(args: argparse.Namespace) -> dict:
+    """Section ``basins``: the erf-play basin map (``--basin-grid``² starts, 100 periods each,
+    C = 2.92) in starts/s on ``--basin-workers`` workers, against the plain
+    ``poincare_section`` loop (:func:`bench_basins.measure_basins`)."""
+    return {
+        "basins": measure_basins(
+            args.basin_grid, 2.92, 100, None, 400, args.basin_workers, 400, min(args.repeats, 3)
+        )
+    }
+
+
 #: section name -> function(args) -> dict merged into the JSON record
-SECTIONS: dict[str, Callable[[argparse.Namespace], dict]] = {"orbits": bench_orbits}
+SECTIONS: dict[str, Callable[[argparse.Namespace], dict]] = {
+    "orbits": bench_orbits,
+    "basins": bench_basin_maps,
+}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5, help="runs per timing (median)")
     ap.add_argument("--sections", nargs="+", default=list(SECTIONS), choices=list(SECTIONS))
+    ap.add_argument("--basin-grid", type=int, default=200, help="basins: starts per axis")
+    ap.add_argument("--basin-workers", type=int, nargs="+", default=[1, 2], help="basins: workers")
     args = ap.parse_args()
     out: dict = {
         "benchmark": "orbits",

@@ -20,6 +20,7 @@ from collections.abc import Iterator, Sequence
 
 from analysis import __version__
 from analysis.cli import (
+    basins,
     bifurcation,
     continuation,
     dimension,
@@ -47,6 +48,7 @@ __all__ = ["COMMANDS", "main", "build_parser"]
 
 #: the subcommands, in the order of ``hyst --help``
 COMMANDS = (
+    basins,
     bifurcation,
     continuation,
     dimension,

@@ -1,7 +1,9 @@
 """Dynamics of one forced oscillator with hysteresis: Lyapunov spectra
 (:mod:`~analysis.dynamics.lyapunov`), attractor dimensions (:mod:`~analysis.dynamics.dimensions`),
-bifurcation diagrams (:mod:`~analysis.dynamics.bifurcation`) and the statistics of their
-measurements (:mod:`~analysis.dynamics.statistics`).
+bifurcation diagrams (:mod:`~analysis.dynamics.bifurcation`), the statistics of their
+measurements (:mod:`~analysis.dynamics.statistics`), where one start ends
+(:mod:`~analysis.dynamics.attractors`) and basins of attraction (:mod:`~analysis.dynamics.basins`,
+:mod:`~analysis.dynamics.basin_map`).
 
 The modules are imported on use (each pulls in the compiled kernels it needs).
 """

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -16,7 +17,25 @@ __all__ = [
     "EmpiricalPDF",
     "power_law_fit",
     "PowerLawFit",
+    "Z95",
+    "wilson_interval",
 ]
+
+#: two-sided 95 % normal quantile
+Z95 = 1.96
+
+
+def wilson_interval(k: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial fraction ``k/n`` (95 % with the default ``z``;
+    ``nan`` for ``n = 0``). Unlike the normal (Wald) interval it stays inside [0, 1] and does not
+    collapse to a point for ``k = 0`` or ``k = n``."""
+    if n == 0:
+        return float("nan"), float("nan")
+    p = k / n
+    d = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / d
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return max(0.0, centre - half), min(1.0, centre + half)
 
 
 def _values(values: Sequence[float] | np.ndarray, name: str = "values") -> np.ndarray:

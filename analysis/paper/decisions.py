@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from analysis.dynamics.statistics import Z95, wilson_interval
 from analysis.paper.context import AGREE, DISAGREE, INCONCLUSIVE
 
 __all__ = [
@@ -30,9 +31,6 @@ __all__ = [
     "wilson",
     "fraction_matches",
 ]
-
-#: two-sided 95 % normal quantile
-Z95 = 1.96
 
 
 def _finite(*xs: float) -> bool:
@@ -85,14 +83,9 @@ def onset_within(onset: float, target: float, tol: float, step: float) -> str:
 
 
 def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """95 % Wilson score interval of a binomial fraction ``k/n`` (``nan`` for ``n = 0``)."""
-    if n == 0:
-        return float("nan"), float("nan")
-    p = k / n
-    d = 1 + z * z / n
-    centre = (p + z * z / (2 * n)) / d
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return centre - half, centre + half
+    """95 % Wilson score interval of a binomial fraction ``k/n`` (``nan`` for ``n = 0``):
+    :func:`analysis.dynamics.statistics.wilson_interval`."""
+    return wilson_interval(k, n, z)
 
 
 def fraction_matches(k: int, n: int, target: float) -> str:

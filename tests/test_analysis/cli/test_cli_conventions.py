@@ -25,6 +25,7 @@ from analysis.cli._parsing import (
 #: commands that build a model (the shared model options must be there)
 MODEL_COMMANDS = (
     "lyapunov", "trajectory", "poincare", "bifurcation", "dimension", "ensemble", "identify",
+    "basins",
 )  # fmt: skip
 SHARED_MODEL_OPTIONS = (
     "--model", "--spins", "--seed", "--width", "--spread", "--spin-coupling", "--width-spread",

@@ -253,6 +253,41 @@ CASES: list[tuple[list[str], str]] = [
     ),
     (["identify", "--reversible-ridge"], "--reversible-ridge"),
     (["identify", "--out", "x", "--json", "--quiet", "--bogus"], "--bogus"),
+    # -- hyst basins -----------------------------------------------------------------------
+    (["basins", "--coupling", "2"], "--grid"),
+    (["basins", "--coupling", "2", "--grid", "1"], "--grid"),
+    (["basins", "--coupling", "nan", "--grid", "3"], "--coupling"),
+    (["basins", "--coupling", "2", "--grid", "3", "--q0-range", "1", "0"], "--q0-range"),
+    (["basins", "--coupling", "2", "--grid", "3", "--q0-range", "0"], "--q0-range"),
+    (
+        ["basins", "--coupling", "2", "--grid", "3", "--model", "relay", "--w0-range", "-1", "1"],
+        "--w0-range",
+    ),
+    (
+        [
+            "basins",
+            "--coupling",
+            "2",
+            "--grid",
+            "3",
+            "--w0-range",
+            "-1",
+            "1",
+            "--v0-range",
+            "0",
+            "1",
+        ],
+        "--w0-range",
+    ),  # fmt: skip
+    (
+        ["basins", "--coupling", "2", "--grid", "3", "--periods", "10", "--max-period", "6"],
+        "--max-period",
+    ),  # fmt: skip
+    (["basins", "--coupling", "2", "--grid", "3", "--max-periods", "5"], "--max-periods"),
+    (
+        ["basins", "--coupling", "2", "--grid", "3", "--workers", "2", "--scheduler", "tcp://x:1"],
+        "--workers",
+    ),
     # -- hyst ------------------------------------------------------------------------------
     (["bogus"], "invalid choice"),
 ]
@@ -286,7 +321,7 @@ def test_corpus_size_and_coverage():
     assert len(CASES) >= 30
     assert commands >= {
         "lyapunov", "trajectory", "poincare", "bifurcation", "dimension", "ensemble", "paper",
-        "identify",
+        "identify", "basins",
     }  # fmt: skip
 
 

@@ -1,0 +1,208 @@
+"""The grid of starts and the result of a basin map (:func:`analysis.dynamics.basins.basins`):
+per-start labels and transient lengths, the attractors with their fractions, JSON, ``.npz`` and
+the figure."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from analysis.experiments.parameters import V0
+from hysteresis._validation import MAX_MAGNITUDE, bounded_work, finite_scalar, positive_integer
+
+__all__ = ["BasinGrid", "BasinMap", "MAX_STARTS"]
+
+#: most starts of one basin map
+MAX_STARTS = 10_000_000
+
+
+@dataclass(frozen=True)
+class BasinGrid:
+    """An ``size × size`` grid of starts: q0 along x, and v0 (``axis="v0"``) or the play's
+    wagon position w0 (``axis="w0"``, with the fixed velocity ``v0``) along y.
+
+    :meth:`starts` lists them row by row (y outer, q0 inner): ``labels.reshape(size, size)``
+    is the map with y along the rows.
+    """
+
+    q0_range: tuple[float, float]
+    y_range: tuple[float, float]
+    size: int
+    axis: str = "v0"
+    v0: float = V0
+
+    def __post_init__(self) -> None:
+        positive_integer(self.size, "size", minimum=2)
+        bounded_work(self.size * self.size, "size", MAX_STARTS, "starts")
+        if self.axis not in ("v0", "w0"):
+            raise ValueError(f"axis must be 'v0' or 'w0', got {self.axis!r}")
+        for name, rng in (("q0_range", self.q0_range), (f"{self.axis}_range", self.y_range)):
+            lo, hi = (finite_scalar(x, name, MAX_MAGNITUDE) for x in rng)
+            if not lo < hi:
+                raise ValueError(f"{name} must be (low, high) with low < high, got {rng}")
+        finite_scalar(self.v0, "v0", MAX_MAGNITUDE)
+
+    @property
+    def q0_values(self) -> np.ndarray:
+        return np.linspace(*self.q0_range, self.size)
+
+    @property
+    def y_values(self) -> np.ndarray:
+        return np.linspace(*self.y_range, self.size)
+
+    def starts(self) -> np.ndarray:
+        """Rows ``(q0, v0, w0)``; ``w0`` is nan (default memory) on a (q0, v0) grid."""
+        q, y = np.meshgrid(self.q0_values, self.y_values)
+        if self.axis == "v0":
+            return np.column_stack([q.ravel(), y.ravel(), np.full(q.size, np.nan)])
+        return np.column_stack([q.ravel(), np.full(q.size, float(self.v0)), y.ravel()])
+
+    def to_dict(self) -> dict:
+        return {
+            "q0_range": list(self.q0_range),
+            f"{self.axis}_range": list(self.y_range),
+            "size": self.size,
+            "axis": self.axis,
+            **({"v0": self.v0} if self.axis == "w0" else {}),
+        }
+
+
+@dataclass(frozen=True)
+class BasinMap:
+    """Per-start labels and the attractors they reach.
+
+    ``labels[i]`` is the index into :attr:`attractors` (−1: no state); ``transients[i]`` the
+    forcing periods before start i stayed within the tolerance of its cycle (−1 unless
+    periodic). Each attractor is a dict with ``label``, ``kind`` (``periodic``, ``chaotic``,
+    ``aperiodic``, ``divergent``, ``undecided``), ``count``, ``fraction``, ``interval`` (95 %
+    Wilson score interval) and what it is (period, points, multipliers; or λ_max with its
+    error and D_KY); ``transient_median``/``transient_max`` for periodic ones.
+    """
+
+    starts: np.ndarray
+    labels: np.ndarray
+    transients: np.ndarray
+    periods: np.ndarray
+    attractors: list[dict]
+    grid: BasinGrid | None = None
+    settings: dict = field(default_factory=dict)
+    #: wall times: ``sections_s`` (the tasks: every start's section run) and ``attractors_s``
+    #: (labelling: the refinements and Lyapunov runs once per attractor)
+    timings: dict = field(default_factory=dict)
+
+    def label_grid(self) -> np.ndarray:
+        """``labels`` as the ``size × size`` map (y along rows); grids only."""
+        if self.grid is None:
+            raise ValueError("label_grid needs a BasinGrid (the starts were a list)")
+        return self.labels.reshape(self.grid.size, self.grid.size)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (attractors with complex multipliers as [re, im] pairs)."""
+        out = []
+        for a in self.attractors:
+            rec = {}
+            for k, v in a.items():
+                if k == "multipliers":
+                    rec[k] = [[float(m.real), float(m.imag)] for m in np.asarray(v)]
+                elif isinstance(v, np.ndarray):
+                    rec[k] = v.tolist()
+                else:
+                    rec[k] = v
+            out.append(rec)
+        return {
+            "starts": int(self.labels.size),
+            "valid_starts": int(np.count_nonzero(self.labels >= 0)),
+            **({"grid": self.grid.to_dict()} if self.grid is not None else {}),
+            **self.settings,
+            "attractors": out,
+        }
+
+    def save(self, path: str | Path) -> Path:
+        """Per-start arrays to an ``.npz``: starts, labels, transients, periods (+ the grid)."""
+        path = Path(path)
+        extra = {}
+        if self.grid is not None:
+            extra = {"q0_values": self.grid.q0_values, "y_values": self.grid.y_values}
+            extra["label_grid"] = self.label_grid()
+        np.savez_compressed(
+            path,
+            starts=self.starts,
+            labels=self.labels,
+            transients=self.transients,
+            periods=self.periods,
+            **extra,
+        )
+        return path
+
+    def plot(self, path: str | Path, title: str | None = None) -> Path:
+        """The basin map coloured by attractor (grids; a list: its starts as points) and, for a
+        grid with periodic starts, a second panel with each start's transient length."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
+        from matplotlib.patches import Patch
+
+        n = len(self.attractors)
+        base = plt.get_cmap("tab10" if n <= 10 else "tab20")
+        colours = ["white"] + [base(i % base.N) for i in range(n)]
+        cmap = ListedColormap(colours)
+        norm = BoundaryNorm(np.arange(-1.5, n + 0.5), cmap.N)
+        with_transients = self.grid is not None and np.any(self.transients >= 0)
+        fig, axes = plt.subplots(
+            1, 2 if with_transients else 1, figsize=(12 if with_transients else 6.5, 5)
+        )
+        axes = np.atleast_1d(axes)
+        ax = axes[0]
+        if self.grid is not None:
+            g = self.grid
+            extent = (*g.q0_range, *g.y_range)
+            ax.imshow(
+                self.label_grid(),
+                origin="lower",
+                extent=extent,
+                aspect="auto",
+                cmap=cmap,
+                norm=norm,
+                interpolation="nearest",
+            )
+            for a in axes:
+                a.set_ylabel("$w_0$" if g.axis == "w0" else "$v_0$")
+                a.set_xlabel("$q_0$")
+        else:
+            ax.scatter(self.starts[:, 0], self.starts[:, 1], c=self.labels, cmap=cmap, norm=norm)
+            ax.set_ylabel("$v_0$")
+            ax.set_xlabel("$q_0$")
+        handles = [Patch(color=colours[a["label"] + 1], label=_legend(a)) for a in self.attractors]
+        ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.8)
+        if with_transients:
+            t = np.ma.masked_less(self.transients.reshape(g.size, g.size).astype(float), 0)
+            im = axes[1].imshow(
+                t + 1.0,
+                origin="lower",
+                extent=extent,
+                aspect="auto",
+                cmap="viridis",
+                norm=LogNorm(vmin=1.0, vmax=max(2.0, float(t.max()) + 1.0)),
+                interpolation="nearest",
+            )
+            fig.colorbar(im, ax=axes[1], label="transient + 1 (forcing periods)")
+            axes[1].set_title("periods until the section repeats within the tolerance", fontsize=8)
+        if title:
+            ax.set_title(title, fontsize=8)
+        fig.tight_layout()
+        fig.savefig(path, dpi=150)
+        plt.close(fig)
+        return Path(path)
+
+
+def _legend(a: dict) -> str:
+    frac = f"{100 * a['fraction']:.1f} %"
+    if a["kind"] == "periodic":
+        return f"period {a['period']} ({frac})"
+    if a["kind"] in ("chaotic", "aperiodic"):
+        return f"{a['kind']}, λ = {a['max_exponent']:.3f} ({frac})"
+    return f"{a['kind']} ({frac})"
