@@ -54,7 +54,15 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar, positive_scalar
 from oscillators.engines import _continuous_kernels as _k
-from oscillators.engines.base import DivergenceError, Engine, split_times, wrap_phase
+from oscillators.engines.base import (
+    STEPS_PER_TIME,
+    DivergenceError,
+    Engine,
+    StepBudgetError,
+    split_times,
+    step_budget,
+    wrap_phase,
+)
 from oscillators.engines.continuous import EVENT_DTYPE, ContinuousEngine
 from oscillators.results import OscillatorState
 
@@ -129,6 +137,7 @@ class CompiledContinuousEngine(Engine):
         if step > 0.2:
             raise ValueError(f"step must lie in (0, 0.2], got {step}")
         zeta = finite_scalar(system.damping_ratio, "damping_ratio")
+        self._zeta = zeta
         coupling = finite_scalar(system.coupling, "coupling")
         q = finite_scalar(state.q, "state.q")
         v = finite_scalar(state.v, "state.v")
@@ -258,6 +267,8 @@ class CompiledContinuousEngine(Engine):
         ist[5] = 0
         ist[6] = 0
         ist[7] = 1 if record else 0
+        events_before = int(ist[3])
+        span = float(times[-1]) - self.elapsed if times.size else 0.0
         if record and self._ev.shape[0] == 0:
             self._ev = np.zeros((_EVENT_BUFFER, 5))
         while True:
@@ -281,6 +292,16 @@ class CompiledContinuousEngine(Engine):
                     f"compiled continuous engine: no progress at q={self._st[1]} "
                     "(events at zero distance)"
                 )
+        events = int(ist[3]) - events_before
+        budget = step_budget(self._omega, self._zeta, span)
+        if events > budget:  # bounded work: events per call (the RK8 steps are fixed)
+            raise StepBudgetError(
+                f"step budget exceeded by t = {self.elapsed:.6g}: {events} events in one advance "
+                f"call, more than the cap of {STEPS_PER_TIME} per unit time "
+                "(oscillators.engines.base.STEPS_PER_TIME)",
+                time=self.elapsed,
+                budget=budget,
+            )
         if out is not None:
             out[:, :3] = buf
 
