@@ -29,6 +29,7 @@ from analysis.identification.smoothing import (
     grid_quadratic_density,
     local_quadratic_density,
 )
+from analysis.identification.variforc import VariforcParameters, weighted_quadratic_density
 from hysteresis._validation import check_grid_nodes
 
 __all__ = ["identify_preisach", "identify_from_curves", "auto_grid", "estimate_memory"]
@@ -130,6 +131,7 @@ def identify_from_curves(
     step: float | None = None,
     window: str = "rs",
     max_memory: float | None = None,
+    uncertainty: bool = False,
 ) -> PreisachIdentification:
     """Identify from reversal-curve data (measured or simulated, regular or irregular).
 
@@ -175,6 +177,16 @@ def identify_from_curves(
         :func:`~analysis.identification.memory.default_max_memory`); above it the identification
         is refused with :class:`~analysis.identification.memory.MemoryBoundError` before the
         lattice is allocated (:func:`estimate_memory` gives the estimate).
+    uncertainty:
+        Also compute the standard error of the smoothed density at every node
+        (:attr:`PreisachIdentification.density_se`; :mod:`analysis.identification.variforc`).
+        With a fixed factor the density is then the same estimator regressed on the half
+        moments ``M/2`` (independent noise per point) instead of the Everett differences; it
+        differs from the default by the reversal points' noise only.
+
+    ``smoothing`` may also be ``"variforc"`` or a
+    :class:`~analysis.identification.variforc.VariforcParameters`: VARIFORC smoothing (Egli
+    2013) on the lattice (protocol grid, or a regular native grid), regressed on ``M/2``.
 
     Returns
     -------
@@ -191,9 +203,15 @@ def identify_from_curves(
     if window not in WINDOWS:
         raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
     check_memory(estimate_memory(curves, smoothing=smoothing, grid=grid, step=step), max_memory)
+    smoothing = _variforc_or(smoothing)
+    lattice = isinstance(smoothing, VariforcParameters) or (uncertainty and smoothing is not None)
+    if uncertainty and smoothing is None:
+        raise ValueError("uncertainty needs smoothing (a factor or VARIFORC)")
+    if lattice and window != "rs":
+        raise ValueError("VARIFORC and uncertainty use the rs window; window must be 'rs'")
     if grid == "protocol":
         ext = False if extend is None else bool(extend)
-        return _identify_protocol(curves, smoothing, output_range, ext, step, window)
+        return _identify_protocol(curves, smoothing, output_range, ext, step, window, lattice)
     extend = True if extend is None else bool(extend)
     alpha, beta, E = _everett_table(curves)
     if alpha.size < 2 or beta.size < 2:
@@ -202,7 +220,20 @@ def identify_from_curves(
     reg_step = _is_regular(alpha, beta)
     density = None
     sm = None
-    if smoothing is not None:
+    extra: dict[str, Any] = {}
+    if lattice:
+        if reg_step is None:
+            raise ValueError(
+                "VARIFORC and uncertainty need a regular lattice: fields on one regular grid "
+                "shared by the curves, or grid='protocol'"
+            )
+        aa, bb = np.meshgrid(alpha, beta, indexing="ij")
+        valid = _native_valid(curves, alpha, beta) | ((bb > aa) if extend else False)
+        values = E + _native_offsets(curves, alpha, beta)
+        extra = _lattice_fit(values, valid, valid & (bb <= aa), reg_step, smoothing, alpha[0])
+        density = extra.pop("density")
+        sm = extra.pop("sm")
+    elif smoothing is not None:
         sm = _smoothing_factors(smoothing)
         unit = reg_step if reg_step is not None else _typical_step(curves)
         pa, pb, pe = _native_points(
@@ -231,7 +262,74 @@ def identify_from_curves(
         reversible_ridge=extend,
         n_curves=curves.n_curves,
         n_points=curves.n_points,
+        **extra,
     )
+
+
+def _variforc_or(smoothing: Any) -> Any:
+    """``"variforc"`` -> the default :class:`VariforcParameters`; anything else unchanged."""
+    if isinstance(smoothing, str):
+        if smoothing != "variforc":
+            raise ValueError(
+                f"smoothing must be a factor, a pair (SF_r, SF_s), 'variforc' or "
+                f"VariforcParameters, got {smoothing!r}"
+            )
+        return VariforcParameters()
+    return smoothing
+
+
+def _lattice_fit(
+    values: np.ndarray,
+    valid: np.ndarray,
+    evaluate: np.ndarray,
+    step: float,
+    smoothing: Any,
+    origin: float,
+) -> dict[str, Any]:
+    """The weighted lattice regression (VARIFORC or a fixed factor with standard errors) as
+    the fields of :class:`PreisachIdentification`."""
+    if isinstance(smoothing, VariforcParameters):
+        fit = weighted_quadratic_density(values, valid, evaluate, step, smoothing, origin)
+        sm, method, params = None, "variforc", smoothing.as_dict()
+    else:
+        sm = _smoothing_factors(smoothing)
+        fit = weighted_quadratic_density(values, valid, evaluate, step, sm, origin)
+        method, params = "fixed", None
+    sigma = float(np.nanmedian(fit.sigma)) if np.any(np.isfinite(fit.sigma)) else None
+    return {
+        "density": fit.rho,
+        "sm": sm,
+        "density_se": fit.se,
+        "smoothing_method": method,
+        "variforc": params,
+        "noise_sigma": sigma,
+        "smoothing_widths": (fit.sc, fit.sb),
+    }
+
+
+def _native_valid(curves: ReversalCurves, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """Nodes of the native table that are measured points (curve x its own fields)."""
+    valid = np.zeros((alpha.size, beta.size), dtype=bool)
+    for r, h in zip(curves.reversal_field, curves.fields, strict=True):
+        if curves.convention == "mayergoyz":
+            valid[np.searchsorted(alpha, r), :] = np.isin(beta, h)
+        else:
+            valid[:, np.searchsorted(beta, r)] = np.isin(alpha, h)
+    return valid
+
+
+def _native_offsets(curves: ReversalCurves, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """``M/2 − E`` on the native table: the reversal point's half moment of each curve
+    (a function of the curve alone, so the mixed derivative of ``E`` is unchanged)."""
+    if curves.convention == "mayergoyz":  # E = (m0 − m)/2, M/2 ↔ −m/2 = E − m0/2, by α row
+        off = np.zeros(alpha.size)
+        for r, m in zip(curves.reversal_field, curves.moments, strict=True):
+            off[np.searchsorted(alpha, r)] = -0.5 * m[0]
+        return off[:, None]
+    off = np.zeros(beta.size)  # Pike: E = (m − m0)/2, M/2 = E + m0/2, by β column
+    for r, m in zip(curves.reversal_field, curves.moments, strict=True):
+        off[np.searchsorted(beta, r)] = 0.5 * m[0]
+    return off[None, :]
 
 
 def estimate_memory(
@@ -246,6 +344,9 @@ def estimate_memory(
     the lattice's node count, nothing of its size is allocated)."""
     if grid == "auto":
         grid = auto_grid(curves)
+    smoothing = _variforc_or(smoothing)
+    if isinstance(smoothing, VariforcParameters):  # the lattice path: its far-field window
+        smoothing = (smoothing.sc1, smoothing.sb1)
     sm = None if smoothing is None else _smoothing_factors(smoothing)
     if grid == "protocol":
         n = protocol_lattice(curves, step).size
@@ -269,6 +370,14 @@ def _protocol_table(
     curves: ReversalCurves, step: float | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Everett table on the protocol lattice: ``(nodes, E[α, β], measured[α, β], step)``."""
+    return _protocol_tables(curves, step)[:4]
+
+
+def _protocol_tables(
+    curves: ReversalCurves, step: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+    """:func:`_protocol_table` plus ``M/2 − E`` (the curves' reversal half moments,
+    interpolated like the curves; broadcastable to the table)."""
     nodes = protocol_lattice(curves, step)
     step = float(nodes[1] - nodes[0])
     rev, fields, ev = rising_form(curves)
@@ -278,6 +387,9 @@ def _protocol_table(
     half = 0.5 * step
     g = np.empty((rev.size, n))
     meas = np.empty((rev.size, n), dtype=bool)
+    # half moment at the reversal point, rising form: Pike +m0/2, Mayergoyz (mirrored) −m0/2
+    sign = 0.5 if curves.convention == "pike" else -0.5
+    first = np.array([sign * curves.moments[c][0] for c in order])
     for row, c in enumerate(order):
         h, e = fields[c], ev[c]
         g[row] = np.interp(nodes, h, e)  # 0 below the reversal field, constant beyond the end
@@ -292,6 +404,7 @@ def _protocol_table(
         c0, c1 = k - 1, k
         t = np.clip((nodes - rev[c0]) / (rev[c1] - rev[c0]), 0.0, 1.0)
     table = (1.0 - t)[:, None] * g[c0] + t[:, None] * g[c1]
+    offset = (1.0 - t) * first[c0] + t * first[c1]
     used0 = t < 1.0 - 1e-9
     used1 = t > 1e-9
     m_tab = (meas[c0] | ~used0[:, None]) & (meas[c1] | ~used1[:, None])
@@ -305,6 +418,7 @@ def _protocol_table(
     if above.size:
         last = g[np.argmax(rev)] if rev.size else g[0]
         table[above] = last[None, :] - last[above][:, None]
+        offset[above] = last[above] + first[np.argmax(rev)]
     # table[R, h]; physical region h >= R; on and below the diagonal E = 0 exactly
     below = nodes[None, :] <= nodes[:, None]
     table[below] = 0.0
@@ -313,10 +427,12 @@ def _protocol_table(
     if curves.convention == "pike":  # alpha = h, beta = R
         E, measured = table.T.copy(), m_tab.T.copy()
         out_nodes = nodes
+        offset = offset[None, :]
     else:  # alpha = -R', beta = -h'
         E, measured = table[::-1, ::-1].copy(), m_tab[::-1, ::-1].copy()
         out_nodes = -nodes[::-1]
-    return out_nodes, E, measured, step
+        offset = offset[::-1][:, None]
+    return out_nodes, E, measured, step, offset
 
 
 def _identify_protocol(
@@ -326,12 +442,21 @@ def _identify_protocol(
     extend: bool,
     step: float | None,
     window: str = "rs",
+    lattice: bool = False,
 ) -> PreisachIdentification:
-    nodes, E, measured, step = _protocol_table(curves, step)
+    nodes, E, measured, step, offset = _protocol_tables(curves, step)
     mass = E[1:, :-1] - E[:-1, :-1] - E[1:, 1:] + E[:-1, 1:]
     density = None
     sm = None
-    if smoothing is not None:
+    extra: dict[str, Any] = {}
+    if lattice:
+        aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
+        valid = measured | ((bb > aa) if extend else False)
+        evaluate = measured & (bb <= aa)
+        extra = _lattice_fit(E + offset, valid, evaluate, step, smoothing, float(nodes[0]))
+        density = extra.pop("density")
+        sm = extra.pop("sm")
+    elif smoothing is not None:
         sm = _smoothing_factors(smoothing)
         aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
         valid = measured | ((bb > aa) if extend else False)
@@ -356,6 +481,7 @@ def _identify_protocol(
         reversible_ridge=extend,
         n_curves=curves.n_curves,
         n_points=curves.n_points,
+        **extra,
     )
 
 
