@@ -21,6 +21,7 @@ from analysis.identification import ReversalCurves, identify_from_curves
 from analysis.identification.density import _protocol_tables
 from analysis.identification.forc_io import read_forc_file
 from analysis.identification.smoothing import grid_quadratic_density
+from analysis.identification.uncertainty import summarize_uncertainty
 from analysis.identification.variforc import (
     VariforcParameters,
     variforc_factors,
@@ -200,3 +201,24 @@ def test_standard_errors_cover_the_true_density(smoothing):
     # ≥ 40·1000/50 = 800 independent checks: sd of the coverage <= 0.8 %, ±3 % is ±3.9 sd
     assert total > 30000
     assert 0.92 <= hits / total <= 0.98
+
+
+@pytest.mark.parametrize("smoothing", [(3.0, 3.0), VariforcParameters(sc1=4, sb1=4)])
+def test_peak_interval_and_mass_error_over_noise_draws(smoothing):
+    """The peak interval holds the true peak in >= 93 % of the draws (it is conservative by
+    construction); the irreversible mass's standard error matches the spread over draws."""
+    rng = np.random.default_rng(7)
+    grid = np.arange(-30.0, 31.0, 1.0)
+    bc0, bu0 = (HA - HB) / 2, (HA + HB) / 2  # the peak of true_rho in (Bc, Bu)
+    kw = {"smoothing": smoothing, "uncertainty": True, "extend": False}
+    draws, inside, masses, errors = 40, 0, [], []
+    for _ in range(draws):
+        s = summarize_uncertainty(identify_from_curves(noisy_curves(rng, 3e-2, grid), **kw))
+        (a, b), (c, d) = s.peak_bc_interval, s.peak_bu_interval
+        inside += (a <= bc0 <= b) and (c <= bu0 <= d)
+        masses.append(s.irreversible_mass)
+        errors.append(s.irreversible_mass_se)
+        assert 0.0 <= s.significant_fraction <= 1.0
+    assert inside / draws >= 0.93
+    # the sample sd of 40 draws has a relative standard error 1/sqrt(2·39) ≈ 11 %: ±35 % is ±3 sd
+    assert np.std(masses, ddof=1) == pytest.approx(np.mean(errors), rel=0.35)
