@@ -39,6 +39,7 @@ from analysis.cli._output import (
 from analysis.cli._parsing import (
     CliError,
     add_subcommand,
+    nonnegative_float,
     positive_float,
 )
 from analysis.experiments.models import build_operator
@@ -56,6 +57,8 @@ from analysis.identification.plots import (
     figure_preisach_density,
     figure_single_density,
 )
+from analysis.identification.uncertainty import summarize_uncertainty
+from analysis.identification.variforc import VariforcParameters
 from hysteresis._validation import check_grid_nodes
 
 __all__ = ["register", "run"]
@@ -101,12 +104,42 @@ def register(subparsers: Any) -> None:
     )
     g.add_argument(
         "--smoothing",
-        type=positive_float,
         nargs="+",
         default=None,
         metavar="SF",
         help="smoothing factor SF, or SF_R SF_S (window half-widths across r and along s, in "
-        "grid steps, > 0); default: none for models, 3 for --input",
+        "grid steps, > 0), or 'variforc' (--input: VARIFORC, Egli 2013, parameters --sc0 "
+        "--sc1 --sb0 --sb1 --lambda); default: none for models, 3 for --input",
+    )
+    defaults = VariforcParameters()
+    for name, what in (
+        ("sc0", "across Bc on the ridge Bc = 0"),
+        ("sc1", "across Bc far from Bc = 0"),
+        ("sb0", "along Bu on the ridge Bu = 0"),
+        ("sb1", "along Bu far from Bu = 0"),
+    ):
+        g.add_argument(
+            f"--{name}",
+            type=positive_float,
+            default=None,
+            metavar="S",
+            help=f"--smoothing variforc: half-width {what}, in field steps (>= 1; default "
+            f"{getattr(defaults, name):g}, PmagPy/FORCinel)",
+        )
+    g.add_argument(
+        "--lambda",
+        dest="lam",
+        type=nonnegative_float,
+        default=None,
+        metavar="L",
+        help=f"--smoothing variforc: rate of the linear growth of the half-widths away from the "
+        f"ridges, in [0, 1] (default {defaults.lam:g})",
+    )
+    g.add_argument(
+        "--uncertainty",
+        action="store_true",
+        help="--input: standard error of rho at every node, significance contours on the "
+        "diagram, the peak with an interval and the irreversible mass with its error",
     )
     g.add_argument(
         "--input",
@@ -158,15 +191,38 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _smoothing(args: argparse.Namespace, default: float | None) -> tuple[float, float] | None:
+VARIFORC_OPTIONS = ("sc0", "sc1", "sb0", "sb1", "lam")
+
+
+def _smoothing(
+    args: argparse.Namespace, default: float | None
+) -> tuple[float, float] | VariforcParameters | None:
+    """``--smoothing`` (and the VARIFORC options) as the library takes it."""
     sm = args.smoothing
+    given = [n for n in VARIFORC_OPTIONS if getattr(args, n, None) is not None]
+    if sm is not None and len(sm) == 1 and sm[0] == "variforc":
+        kw = {n: getattr(args, n) for n in given}
+        try:
+            return VariforcParameters(**kw)
+        except ValueError as exc:
+            name = str(exc).split()[0]
+            option = "--lambda" if name == "lambda" else f"--{name}"
+            raise CliError(f"argument {option}: {exc}") from exc
+    if given:
+        option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
+        raise CliError(f"argument {option}: only with --smoothing variforc")
     if sm is None:
         return None if default is None else (default, default)
     if len(sm) not in (1, 2):
         raise CliError(
-            f"argument --smoothing: takes one factor SF or two, SF_R SF_S; got {len(sm)} values"
+            f"argument --smoothing: takes one factor SF or two, SF_R SF_S, or 'variforc'; got "
+            f"{len(sm)} values"
         )
-    return (sm[0], sm[0]) if len(sm) == 1 else (sm[0], sm[1])
+    try:
+        values = [positive_float(x) for x in sm]
+    except (argparse.ArgumentTypeError, ValueError) as exc:
+        raise CliError(f"argument --smoothing: {exc} (or 'variforc')") from exc
+    return (values[0], values[0]) if len(values) == 1 else (values[0], values[1])
 
 
 def _max_memory(args: argparse.Namespace) -> float | None:
@@ -190,6 +246,8 @@ def run(args: argparse.Namespace) -> int:
         return _run_measured(args, out, t0, *measured)
     for option, given in (
         ("--grid-step", args.grid_step is not None),
+        ("--uncertainty", args.uncertainty),
+        ("--smoothing", args.smoothing == ["variforc"]),
         ("--reversible-ridge", args.reversible_ridge),
         ("--drift-correction", args.drift_correction != "none"),
         ("--format", args.format != "auto"),
@@ -397,10 +455,16 @@ def _run_measured(
     t0: float,
     fmt: str,
     data: Any,
-    smoothing: tuple[float, float],
+    smoothing: tuple[float, float] | VariforcParameters,
 ) -> int:
     """Measured FORC data: data-driven summaries only (no paper overlay)."""
 
+    variforc = isinstance(smoothing, VariforcParameters)
+    if (variforc or args.uncertainty) and args.window != "rs":
+        raise CliError(
+            "argument --window: VARIFORC and --uncertainty use the rs window (the VARIFORC "
+            "law is defined across Bc and along Bu)"
+        )
     try:
         ident = identify_from_curves(
             data.curves,
@@ -410,6 +474,7 @@ def _run_measured(
             step=args.grid_step,
             window=args.window,
             max_memory=_max_memory(args),
+            uncertainty=args.uncertainty,
         )
     except MemoryBoundError as exc:
         raise CliError(f"argument --input: {args.input}: {exc}") from exc
@@ -418,6 +483,8 @@ def _run_measured(
         raise CliError(f"argument {option}: {args.input}: {exc}") from exc
     bc, bu, rho = ident.density_peak()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
+    # ρ in the field's unit: moment per T² (the readers give fields in mT: 1/mT² = 10⁶/T²)
+    rho_factor, rho_unit = _rho_unit(data)
     report: dict[str, Any] = {
         "input": str(args.input),
         "format": fmt,
@@ -431,21 +498,42 @@ def _run_measured(
         "n_points": data.curves.n_points,
         "grid_step_mT": step,
         "grid_regular": ident.is_regular,
-        "smoothing_factor": list(smoothing),
+        "smoothing_method": ident.smoothing_method,
+        "smoothing_factor": None if variforc else list(smoothing),
+        "variforc": ident.variforc,
         "window": args.window,
         "reversible_ridge": args.reversible_ridge,
         "peak_bc_mT": bc,
         "peak_bu_mT": bu,
-        "peak_rho": rho,
+        "peak_rho": rho * rho_factor,
+        "rho_unit": rho_unit,
         "irreversible_mass": ident.irreversible_mass,
         "reversible_mass": ident.reversible_mass,
         "drift_correction": args.drift_correction,
     }
+    interval = ""
+    if args.uncertainty:
+        u = summarize_uncertainty(ident)
+        report.update(
+            peak_rho_se=u.peak_rho_se * rho_factor,
+            peak_bc_interval_mT=list(u.peak_bc_interval),
+            peak_bu_interval_mT=list(u.peak_bu_interval),
+            irreversible_mass_se=u.irreversible_mass_se,
+            significant_fraction=u.significant_fraction,
+            noise_sigma=u.noise_sigma,
+        )
+        interval = (
+            f" (Bc in [{u.peak_bc_interval[0]:.4g}, {u.peak_bc_interval[1]:.4g}], Bu in "
+            f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
+        )
     stem = "identify_" + Path(args.input).stem.replace(".", "_")
     # measured data: the title names the file and the identification's parameters (there is
     # no model)
-    title = f"FORC diagram: {Path(args.input).name}, SF={smoothing[0]:g}/{smoothing[1]:g}, "
-    title += f"Δ={step:.3g} mT, window={args.window}"
+    if variforc:
+        law = "VARIFORC sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} λ={lam:g}".format(**ident.variforc)
+    else:
+        law = f"SF={smoothing[0]:g}/{smoothing[1]:g}"
+    title = f"FORC diagram: {Path(args.input).name}\n{law}, Δ={step:.3g} mT, window={args.window}"
     paths = figure_forc(
         ident,
         out,
@@ -453,16 +541,28 @@ def _run_measured(
         title=title,
         field_unit="mT",
         moment_unit=data.moment_unit,
+        rho_factor=rho_factor,
+        rho_unit=rho_unit,
     )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
     report["seconds"] = time.perf_counter() - t0
     (out / "identify.json").write_text(to_json(report, indent=2) + "\n")
+    mass = f"{ident.irreversible_mass:.4g}"
+    if args.uncertainty:
+        mass += f" ± {report['irreversible_mass_se']:.2g}"
     lines = [
         f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
-        f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT; irreversible mass "
-        f"{ident.irreversible_mass:.4g}",
+        f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}; irreversible mass {mass}",
         f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}",
     ]
     emit(args, report, lines)
     return 0
+
+
+def _rho_unit(data: Any) -> tuple[float, str]:
+    """Factor from the identification's ρ (moment per mT²) to the field's unit, and its name:
+    ``A·m²/T²`` (×10⁶) when the file states its units, else the file's own units."""
+    if data.field_unit == "mT" and data.moment_unit:
+        return 1e6, f"{data.moment_unit}/T²"
+    return 1.0, "moment/field² (as written)"

@@ -77,8 +77,9 @@ class PreisachIdentification:
     variforc:
         The VARIFORC parameters (``sc0, sc1, sb0, sb1, lam, bu0``) or ``None``.
     noise_sigma:
-        Median over the nodes of the residual noise of the local regressions (moment units /
-        2), with ``density_se``; else ``None``.
+        Noise of the half moments ``M/2`` estimated from the fourth differences along the
+        curves (:func:`~analysis.identification.density.measurement_noise`), with
+        ``density_se``; else ``None``.
     smoothing_widths:
         Window half-widths ``(s_c, s_b)`` per node in steps (lattice regression), or ``None``.
     """
