@@ -378,10 +378,27 @@ def estimate_memory(
 def auto_grid(curves: ReversalCurves) -> str:
     """The grid ``identify_from_curves(grid="auto")`` uses: ``"protocol"`` when the union of
     field values has more than twice as many values as the longest curve plus the number of
-    curves (measured fields, different on every curve), else ``"native"``."""
-    n_union = np.unique(np.concatenate(curves.fields)).size
+    curves (measured fields, different on every curve) or when the fields lie on one uniform
+    grid but the native table would not be square (its nodes then are not one regular
+    lattice), else ``"native"``."""
+    union = np.unique(np.concatenate(curves.fields))
     longest = max(h.size for h in curves.fields)
-    return "protocol" if n_union > 2 * (longest + curves.n_curves) else "native"
+    if union.size > 2 * (longest + curves.n_curves):
+        return "protocol"
+    rev = np.sort(curves.reversal_field)
+    if _is_regular(union, union) and not _is_regular(*_native_axes(curves, union, rev)):
+        # an exact uniform grid whose native table is not square (e.g. Pike curves running
+        # past the last reversal field): the protocol lattice of that grid is regular and
+        # reproduces the data at its nodes
+        return "protocol"
+    return "native"
+
+
+def _native_axes(
+    curves: ReversalCurves, union: np.ndarray, rev: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(α nodes, β nodes)`` of the native table."""
+    return (rev, union) if curves.convention == "mayergoyz" else (union, rev)
 
 
 def _protocol_table(
