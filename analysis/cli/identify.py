@@ -52,6 +52,11 @@ from analysis.identification import (
 )
 from analysis.identification.forc_io import detect_format, read_forc_file
 from analysis.identification.memory import MemoryBoundError
+from analysis.identification.normalization import (
+    NORMALIZATIONS,
+    normalized_unit,
+    sample_amount,
+)
 from analysis.identification.plots import (
     figure_forc,
     figure_preisach_density,
@@ -134,6 +139,27 @@ def register(subparsers: Any) -> None:
         metavar="L",
         help=f"--smoothing variforc: rate of the linear growth of the half-widths away from the "
         f"ridges, in [0, 1] (default {defaults.lam:g})",
+    )
+    g.add_argument(
+        "--normalize",
+        choices=NORMALIZATIONS,
+        default="none",
+        help="--input: divide the moments by the sample's mass (A·m²/kg) or volume (A/m), "
+        "from the header's Mass/Volume (with its unit) or --mass/--volume",
+    )
+    g.add_argument(
+        "--mass",
+        type=positive_float,
+        default=None,
+        metavar="KG",
+        help="--normalize mass: the sample's mass in kg (> 0; default: the file header's)",
+    )
+    g.add_argument(
+        "--volume",
+        type=positive_float,
+        default=None,
+        metavar="M3",
+        help="--normalize volume: the sample's volume in m³ (> 0; default: the file header's)",
     )
     g.add_argument(
         "--uncertainty",
@@ -248,6 +274,9 @@ def run(args: argparse.Namespace) -> int:
         ("--grid-step", args.grid_step is not None),
         ("--uncertainty", args.uncertainty),
         ("--smoothing", args.smoothing == ["variforc"]),
+        ("--normalize", args.normalize != "none"),
+        ("--mass", args.mass is not None),
+        ("--volume", args.volume is not None),
         ("--reversible-ridge", args.reversible_ridge),
         ("--drift-correction", args.drift_correction != "none"),
         ("--format", args.format != "auto"),
@@ -423,7 +452,26 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
         raise CliError(f"argument --input: {_about(path, exc)}") from exc
     if args.grid_step is not None:
         _check_grid_step(args, data.curves)
+    args.amount = _amount(args, data)
     return fmt, data, smoothing  # type: ignore[return-value]
+
+
+def _amount(args: argparse.Namespace, data: Any) -> float:
+    """The divisor of ``--normalize`` (1 for none), checked before any output is written."""
+    for option, kind in (("--mass", "mass"), ("--volume", "volume")):
+        if getattr(args, kind) is not None and args.normalize != kind:
+            raise CliError(f"argument {option}: only with --normalize {kind}")
+    if args.normalize == "none":
+        return 1.0
+    if data.moment_unit is None:
+        raise CliError(
+            f"argument --normalize: {args.input}: the file states no moment unit, so the "
+            "normalised unit would be unknown"
+        )
+    try:
+        return sample_amount(data.header, args.normalize, getattr(args, args.normalize))
+    except ValueError as exc:
+        raise CliError(f"argument --normalize: {args.input}: {exc}") from exc
 
 
 def _about(path: Path, exc: Exception) -> str:
@@ -484,7 +532,9 @@ def _run_measured(
     bc, bu, rho = ident.density_peak()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
     # ρ in the field's unit: moment per T² (the readers give fields in mT: 1/mT² = 10⁶/T²)
-    rho_factor, rho_unit = _rho_unit(data)
+    rho_factor, rho_unit = _rho_unit(data, args.normalize)
+    amount = getattr(args, "amount", 1.0)
+    rho_factor /= amount
     report: dict[str, Any] = {
         "input": str(args.input),
         "format": fmt,
@@ -507,8 +557,11 @@ def _run_measured(
         "peak_bu_mT": bu,
         "peak_rho": rho * rho_factor,
         "rho_unit": rho_unit,
-        "irreversible_mass": ident.irreversible_mass,
-        "reversible_mass": ident.reversible_mass,
+        "irreversible_mass": ident.irreversible_mass / amount,
+        "reversible_mass": ident.reversible_mass / amount,
+        "mass_unit": normalized_unit(data.moment_unit, args.normalize),
+        "normalize": args.normalize,
+        "normalized_by": None if args.normalize == "none" else amount,
         "drift_correction": args.drift_correction,
     }
     interval = ""
@@ -518,7 +571,7 @@ def _run_measured(
             peak_rho_se=u.peak_rho_se * rho_factor,
             peak_bc_interval_mT=list(u.peak_bc_interval),
             peak_bu_interval_mT=list(u.peak_bu_interval),
-            irreversible_mass_se=u.irreversible_mass_se,
+            irreversible_mass_se=u.irreversible_mass_se / amount,
             significant_fraction=u.significant_fraction,
             noise_sigma=u.noise_sigma,
         )
@@ -540,7 +593,7 @@ def _run_measured(
         stem,
         title=title,
         field_unit="mT",
-        moment_unit=data.moment_unit,
+        moment_unit=normalized_unit(data.moment_unit, args.normalize),
         rho_factor=rho_factor,
         rho_unit=rho_unit,
     )
@@ -548,7 +601,7 @@ def _run_measured(
     report["figures"] = [str(p) for p in paths]
     report["seconds"] = time.perf_counter() - t0
     (out / "identify.json").write_text(to_json(report, indent=2) + "\n")
-    mass = f"{ident.irreversible_mass:.4g}"
+    mass = f"{report['irreversible_mass']:.4g}"
     if args.uncertainty:
         mass += f" ± {report['irreversible_mass_se']:.2g}"
     lines = [
@@ -560,9 +613,10 @@ def _run_measured(
     return 0
 
 
-def _rho_unit(data: Any) -> tuple[float, str]:
+def _rho_unit(data: Any, normalize: str = "none") -> tuple[float, str]:
     """Factor from the identification's ρ (moment per mT²) to the field's unit, and its name:
-    ``A·m²/T²`` (×10⁶) when the file states its units, else the file's own units."""
+    ``A·m²/T²`` (×10⁶; ``A·m²/kg/T²``, ``A/m/T²`` normalised) when the file states its units,
+    else the file's own units."""
     if data.field_unit == "mT" and data.moment_unit:
-        return 1e6, f"{data.moment_unit}/T²"
+        return 1e6, f"{normalized_unit(data.moment_unit, normalize)}/T²"
     return 1.0, "moment/field² (as written)"

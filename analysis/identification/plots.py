@@ -291,8 +291,9 @@ def plot_forc_diagram(
         sig = np.ma.masked_invalid(np.where(finite, sig, np.nan))
         if sig.count() and sig.min() < SIGNIFICANT < sig.max():
             ax.contourf(rr, ss, sig, levels=[0.0, SIGNIFICANT], colors="none", hatches=["...."])
-            ax.contour(rr, ss, sig, levels=[SIGNIFICANT], colors="0.4", linewidths=0.6,
-                       linestyles="--")
+            ax.contour(
+                rr, ss, sig, levels=[SIGNIFICANT], colors="0.4", linewidths=0.6, linestyles="--"
+            )
     ax.set_xlim(0.0, float(rr[finite].max()))
     ax.set_ylim(float(ss[finite].min()), float(ss[finite].max()))
     ax.set_aspect("equal")

@@ -133,7 +133,8 @@ def summarize_uncertainty(ident: PreisachIdentification) -> UncertaintySummary:
         peak_bu_interval=peak_interval(ident)[1],
         irreversible_mass=ident.irreversible_mass,
         irreversible_mass_se=irreversible_mass_error(ident),
-        significant_fraction=float(np.mean(np.abs(sig[evaluated]) > Z95)) if evaluated.any()
+        significant_fraction=float(np.mean(np.abs(sig[evaluated]) > Z95))
+        if evaluated.any()
         else float("nan"),
         noise_sigma=float(ident.noise_sigma),
     )

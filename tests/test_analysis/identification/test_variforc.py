@@ -106,7 +106,9 @@ def test_variforc_law_matches_the_published_formula():
         assert sc[k] == pytest.approx(egli_factor(3, 7, 0.07, abs(bc[k]) / 0.5), rel=1e-15)
         assert sb[k] == pytest.approx(egli_factor(3, 7, 0.07, abs(bu[k] - 1.0) / 0.5), rel=1e-15)
     # the ridge: the smallest window s0, growing with the distance, never crossing the ridge
-    assert sc[0] == 3.0 and np.all(np.diff(sc) >= 0) and np.all(sc[1:] <= np.maximum(3, bc[1:] / 0.5))
+    assert (
+        sc[0] == 3.0 and np.all(np.diff(sc) >= 0) and np.all(sc[1:] <= np.maximum(3, bc[1:] / 0.5))
+    )
 
 
 @pytest.mark.parametrize(

@@ -1,0 +1,163 @@
+"""``hyst identify --input``: VARIFORC, uncertainty, units and normalisation from the command line.
+
+Physics of the estimators is tested in tests/test_analysis/identification/test_variforc.py;
+here: the options reach the library, the report says what was done, the one-line errors name
+the option, and the units convert (cgs, SI, Hybrid SI -> A·m²/T², mass normalisation).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import io
+import json
+from contextlib import redirect_stdout
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support_paths import DATA
+
+from analysis.cli import main
+
+HYBRID = DATA / "forc_micromag_0016_hybrid_si.frc"
+CGS = DATA / "forc_micromag_0015_cgs.frc"
+
+
+def _maker():
+    spec = importlib.util.spec_from_file_location("make_forc_data", DATA / "make_forc_data.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def run_json(argv: list[str]) -> dict:
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        assert main(["identify", *argv, "--json", "--quiet"]) == 0
+    return json.loads(buf.getvalue())
+
+
+def test_variforc_and_uncertainty_from_the_command_line(tmp_path):
+    rep = run_json(
+        [
+            "--input",
+            str(HYBRID),
+            "--smoothing",
+            "variforc",
+            "--sc0",
+            "2",
+            "--lambda",
+            "0.1",
+            "--uncertainty",
+            "--out",
+            str(tmp_path),
+        ]
+    )
+    assert rep["smoothing_method"] == "variforc" and rep["smoothing_factor"] is None
+    assert rep["variforc"] == {
+        "sc0": 2.0,
+        "sc1": 7.0,
+        "sb0": 3.0,
+        "sb1": 7.0,
+        "lam": 0.1,
+        "bu0": 0.0,
+    }
+    lo, hi = rep["peak_bc_interval_mT"]
+    assert lo <= rep["peak_bc_mT"] <= hi
+    lo, hi = rep["peak_bu_interval_mT"]
+    assert lo <= rep["peak_bu_mT"] <= hi
+    assert rep["irreversible_mass_se"] > 0 and rep["peak_rho_se"] > 0
+    assert rep["rho_unit"] == "A·m²/T²"
+    npz = np.load(next(Path(tmp_path).glob("*.npz")))
+    assert {"rho", "rho_se", "significance"} <= set(npz.files)
+    both = np.isfinite(npz["rho"]) & np.isfinite(npz["rho_se"])
+    np.testing.assert_allclose(npz["significance"][both], (npz["rho"] / npz["rho_se"])[both])
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["--smoothing", "variforc", "--sc0", "0.5"], "--sc0"),
+        (["--smoothing", "variforc", "--lambda", "1.5"], "--lambda"),
+        (["--sc1", "4"], "--sc1"),
+        (["--smoothing", "variforc", "--window", "pike"], "--window"),
+        (["--smoothing", "abc"], "--smoothing"),
+        (["--normalize", "mass"], "--normalize"),  # the header says Mass N/A
+        (["--mass", "1e-3"], "--mass"),
+    ],
+)
+def test_bad_options_are_one_line_errors(argv, option, tmp_path, capsys):
+    assert main(["identify", "--input", str(HYBRID), *argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"argument {option}:" in err[0]
+
+
+@pytest.mark.parametrize("argv", [["--smoothing", "variforc"], ["--uncertainty"]])
+def test_model_runs_refuse_the_measured_options(argv, capsys):
+    assert main(["identify", "--model", "erf-play", *argv]) == 2
+    assert "only with --input" in capsys.readouterr().err
+
+
+def test_units_round_trip_to_Am2_per_T2(tmp_path):
+    """The same measurement written in cgs (Oe, emu), SI and Hybrid SI (T, A·m²) gives one ρ in
+    A·m²/T². The files round every value to 7 significant digits: a relative 5e-7 of a moment
+    of ~5e-6 A·m², 2000 times below the measurement noise (1e-3 of the saturation moment); the
+    estimator is linear in the moments, so the rounding moves ρ by well under 1 % of its noise
+    standard error (the bound asserted)."""
+    mk = _maker()
+    si = tmp_path / "si.frc"
+    si.write_bytes(mk.micromag_0016(mk.measure(), units="SI").encode("cp1252"))
+    reps = [
+        run_json(["--input", str(p), "--uncertainty", "--out", str(tmp_path / p.stem)])
+        for p in (CGS, si, HYBRID)
+    ]
+    ref = reps[-1]
+    for rep in reps:
+        assert rep["rho_unit"] == "A·m²/T²"
+        assert abs(rep["peak_rho"] - ref["peak_rho"]) <= 0.01 * ref["peak_rho_se"]
+        assert (rep["peak_bc_mT"], rep["peak_bu_mT"]) == pytest.approx(
+            (ref["peak_bc_mT"], ref["peak_bu_mT"]), abs=1e-3
+        )
+    # cgs: ρ in emu/Oe² is 1e5 A·m²/T² per unit; the report is already converted
+    assert reps[0]["units_of_measure"] == "cgs" and ref["units_of_measure"] == "Hybrid SI"
+
+
+def test_mass_normalisation_from_the_header(tmp_path):
+    text = (
+        HYBRID.read_bytes()
+        .decode("cp1252")
+        .replace(
+            "Mass                            N/A",
+            "Mass                            +2.500000E+01 mg",
+        )
+    )
+    path = tmp_path / "with_mass.frc"
+    path.write_bytes(text.encode("cp1252"))
+    plain = run_json(["--input", str(HYBRID), "--out", str(tmp_path / "a")])
+    per_kg = run_json(["--input", str(path), "--normalize", "mass", "--out", str(tmp_path / "b")])
+    assert per_kg["rho_unit"] == "A·m²/kg/T²" and per_kg["mass_unit"] == "A·m²/kg"
+    assert per_kg["normalized_by"] == pytest.approx(25e-6, rel=1e-15)
+    assert per_kg["peak_rho"] == pytest.approx(plain["peak_rho"] / 25e-6, rel=1e-12)
+    assert per_kg["irreversible_mass"] == pytest.approx(
+        plain["irreversible_mass"] / 25e-6, rel=1e-12
+    )
+    given = run_json(
+        [
+            "--input",
+            str(HYBRID),
+            "--normalize",
+            "volume",
+            "--volume",
+            "2e-9",
+            "--out",
+            str(tmp_path / "c"),
+        ]
+    )
+    assert given["mass_unit"] == "A/m"
+    assert given["peak_rho"] == pytest.approx(plain["peak_rho"] / 2e-9, rel=1e-12)
+
+
+def test_readme_is_not_a_forc_file(tmp_path, capsys):
+    readme = Path(__file__).resolve().parents[3] / "README.md"
+    assert main(["identify", "--input", str(readme), "--out", str(tmp_path)]) == 2
+    assert "not a FORC file" in capsys.readouterr().err
