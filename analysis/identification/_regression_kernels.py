@@ -1,9 +1,13 @@
-"""Compiled kernel of the weighted local quadratic regression on a regular lattice.
+"""Compiled kernels of the weighted local quadratic regression on a regular lattice.
 
-One pass over the nodes: for each node its own window and weights (fixed or VARIFORC), the
-6 × 6 normal equations, the mixed coefficient and its standard error. Used by
-:mod:`analysis.identification.variforc`; the plain-Python reading of the algorithm is in the
-docstring of :func:`weighted_quadratic_kernel`.
+Every node has its own window, a rectangle in the rotated lattice coordinates ``p = Δi − Δj``
+(across, ``Δr = pΔ/2``) and ``q = Δi + Δj`` (along, ``Δs = qΔ/2``), with a separable weight
+``T(p/2; s_r)·T(q/2; s_s)`` whose half-width ``s_r`` depends on the node's line ``u = i − j``
+only and ``s_s`` on ``w = i + j`` only (the VARIFORC law; a fixed factor is the constant
+case). The window sums therefore factor: sums along a line of constant ``u`` (in ``q``) first,
+for every line, centre and parity (:func:`line_sums`), then, per node, a sum over the lines
+``u + p`` of its window (:func:`node_fits`): ``O(n²·(Q + P))`` instead of ``O(n²·P·Q)``. Used by
+:mod:`analysis.identification.variforc`, where the estimator is described.
 """
 
 from __future__ import annotations
@@ -13,10 +17,14 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["weighted_quadratic_kernel", "variforc_weight_1d"]
+__all__ = ["variforc_weight_1d", "line_sums", "node_fits", "reach", "N_SUMS"]
 
-#: the monomials of the local quadratic, in the order of the coefficients
+#: per line, centre and parity: Σ T qᵉ·[valid] (e = 0..4), Σ T qᵉ·v (e = 0..2), Σ T·v²,
+#: Σ T² qᵉ·[valid] (e = 0..4)
+N_SUMS = 14
 _N = 6
+#: exponents (a, e) of p and q of the basis 1, p, q, p², q², pq
+_POWERS = ((0, 0), (1, 0), (0, 1), (2, 0), (0, 2), (1, 1))
 
 
 @njit(cache=True)
@@ -39,6 +47,93 @@ def variforc_weight_1d(u: float, s: float, box: bool) -> float:
         d = a - s
         return 2.0 * d * d
     return 0.0
+
+
+@njit(cache=True)
+def reach(s: float, box: bool) -> int:
+    """Largest integer ``q >= 0`` with ``T(q/2; s) > 0`` (the window's extent in ``p`` or
+    ``q``)."""
+    q = int(math.floor(2.0 * s + 1e-9)) + 1
+    while q > 0 and variforc_weight_1d(0.5 * q, s, box) <= 0.0:
+        q -= 1
+    return q
+
+
+@njit(cache=True)
+def line_sums(
+    values: np.ndarray,
+    valid: np.ndarray,
+    u_lo: int,
+    u_hi: int,
+    c_lo: int,
+    c_hi: int,
+    ss_of_w: np.ndarray,
+    qr_of_w: np.ndarray,
+    box: bool,
+    errors: bool,
+    out: np.ndarray,
+) -> None:
+    """Sums along the lines ``u = i − j`` in ``[u_lo, u_hi]`` around the centres ``c`` (the
+    position ``j`` along the line) in ``[c_lo, c_hi)``, for both parities ``π`` of ``q``.
+
+    Plain-Python reading::
+
+        for u, c, π:
+            w0 = u + 2c − π                  # the Bu index of the node these sums serve
+            s, Q = ss_of_w[w0], qr_of_w[w0]  # its half-width along s and its reach in q
+            for every q ≡ π (mod 2), |q| <= Q:
+                j = c + (q − π)/2;  i = j + u    # the lattice node on line u at offset q
+                if (i, j) is a valid node: t = T(q/2; s); accumulate t·qᵉ, t·qᵉ·v, t·v², t²·qᵉ
+
+    into ``out[u − u_lo, c − c_lo, π, :]`` (layout: :data:`N_SUMS`).
+    """
+    n = values.shape[0]
+    n_w = ss_of_w.size
+    for u in range(u_lo, u_hi + 1):
+        j_first = max(0, -u)
+        j_last = min(n - 1, n - 1 - u)
+        for c in range(c_lo, c_hi):
+            for pi in range(2):
+                row = out[u - u_lo, c - c_lo, pi]
+                row[:] = 0.0
+                w0 = u + 2 * c - pi
+                if w0 < 0 or w0 >= n_w or j_first > j_last:
+                    continue
+                s = ss_of_w[w0]
+                Q = qr_of_w[w0]
+                q_start = -Q if (Q - pi) % 2 == 0 else -Q + 1
+                # the line's nodes in reach: j = c + (q − π)/2
+                k_lo = max((q_start - pi) // 2, j_first - c)
+                k_hi = min((Q - pi) // 2, j_last - c)
+                for k in range(k_lo, k_hi + 1):
+                    j = c + k
+                    i = j + u
+                    if not valid[i, j]:
+                        continue
+                    q = 2 * k + pi
+                    t = variforc_weight_1d(0.5 * q, s, box)
+                    if t <= 0.0:
+                        continue
+                    v = values[i, j]
+                    qe = 1.0
+                    for e in range(5):
+                        row[e] += t * qe
+                        if e < 3:
+                            row[5 + e] += t * qe * v
+                        if errors:
+                            row[9 + e] += t * t * qe
+                        qe *= q
+                    row[8] += t * v * v
+
+
+@njit(cache=True)
+def _count(cum: np.ndarray, line: int, j_a: int, j_b: int, n: int) -> float:
+    """Valid nodes on ``line`` with ``j`` in ``[j_a, j_b]`` (clipped to the lattice)."""
+    a = max(j_a, 0)
+    b = min(j_b, n - 1)
+    if a > b:
+        return 0.0
+    return float(cum[line, b + 1] - cum[line, a])
 
 
 @njit(cache=True)
@@ -65,8 +160,7 @@ def _cholesky_solve(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:
             for k in range(j):
                 v -= lo[i, k] * lo[j, k]
             lo[i, j] = v / lo[j, j]
-    m = b.shape[1]
-    for c in range(m):
+    for c in range(b.shape[1]):
         y = np.zeros(n)
         for i in range(n):
             v = b[i, c]
@@ -82,161 +176,175 @@ def _cholesky_solve(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:
 
 
 @njit(cache=True)
-def weighted_quadratic_kernel(
-    values: np.ndarray,
-    valid: np.ndarray,
+def node_fits(
+    sums: np.ndarray,
+    u_lo: int,
+    c_lo: int,
+    cum: np.ndarray,
     targets_i: np.ndarray,
     targets_j: np.ndarray,
-    half_r: np.ndarray,
-    half_s: np.ndarray,
+    sr_t: np.ndarray,
+    pr_t: np.ndarray,
+    qr_t: np.ndarray,
     box: bool,
     side_fraction: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Weighted local quadratic regression at the target nodes of a regular lattice.
+    errors: bool,
+    rho: np.ndarray,
+    se: np.ndarray,
+    sigma: np.ndarray,
+    npts: np.ndarray,
+) -> None:
+    """The regression at every target node from the line sums (results written in place).
 
-    Plain-Python reading, for every target node ``(i, j)`` with half-widths ``sr = half_r[k]``,
-    ``ss = half_s[k]`` (in lattice steps, across ``r`` and along ``s``)::
+    Plain-Python reading, for a node ``(i, j)`` (``u = i − j``) with half-width ``s_r`` and
+    reaches ``P`` (in ``p``) and ``Q`` (in ``q``)::
 
-        for every offset (di, dj) with |di|, |dj| <= floor(sr + ss):
-            u_r, u_s = (di − dj)/2, (di + dj)/2              # offsets in r, s (steps)
-            w = T(u_r; sr) · T(u_s; ss)                       # variforc_weight_1d
-            if w == 0: skip                                   # outside the window
-            count the offset in the window totals of its half-windows
-            if the lattice node (i+di, j+dj) is valid:
-                count it in the valid totals of its half-windows
-                φ = (1, x, y, x², y², xy),  x = di/L, y = dj/L,  L = floor(sr + ss)
-                A += w φ φᵀ;  b += w φ v;  B += w² φ φᵀ
-        skip the node unless each of the 8 half-windows (Δr < 0, Δr > 0, Δs < 0, Δs > 0,
-        Δα < 0, Δα > 0, Δβ < 0, Δβ > 0) holds at least side_fraction of its offsets valid
-        c = A⁻¹ b                                             (Cholesky; skip if singular)
-        RSS = Σ w (v − φᵀc)²      (second pass over the window)
-        σ² = RSS / (Σ w − tr(A⁻¹B))                          # unbiased for homoscedastic noise
-        z = A⁻¹ e_xy;  var(c_xy) = σ² zᵀ B z                 # sandwich: A⁻¹ B A⁻¹
-        rho = −c_xy / L²,  se = sqrt(var(c_xy)) / L²          # per unit step²
-
-    Returns ``(rho, se, sigma, n_points)`` per target (NaN / 0 where skipped); ``rho`` and
-    ``se`` are per unit lattice step squared (divide by ``step²`` for field units).
+        for p in −P … P:                      # the lines u + p of the window
+            t = T(p/2; s_r);  m, π = divmod(p, 2);  c = j − m
+            moments S[a, e] += t pᵃ · (line sums of line u + p, centre c, parity π)[e]
+            count the window's nodes (all, and valid, from prefix sums along the line) in the
+            half-windows p < 0, p > 0, q < 0, q > 0, Δi < 0, Δi > 0, Δj < 0, Δj > 0
+        skip unless every half-window holds side_fraction of its nodes valid
+        A = S in the basis (1, p, q, p², q², pq) / L (L = max(P, Q)); c = A⁻¹ b (Cholesky)
+        ρ = 2 (c_p² − c_q²) / L²               # −∂²v/∂i∂j per step²: p² = (Δi−Δj)², q² = (Δi+Δj)²
+        errors: RSS = Σ w v² − cᵀb; σ² = RSS/(Σ w − tr(A⁻¹B)); var = σ² zᵀBz, z = A⁻¹ (e_p² − e_q²)
     """
-    n_a, n_b = values.shape
-    nt = targets_i.size
-    rho = np.full(nt, np.nan)
-    se = np.full(nt, np.nan)
-    sigma = np.full(nt, np.nan)
-    npts = np.zeros(nt, dtype=np.int64)
-    phi = np.zeros(_N)
-    for t in range(nt):
+    n = cum.shape[1] - 1
+    n_lines = cum.shape[0]
+    mom = np.zeros((5, 5))
+    mom2 = np.zeros((5, 5))
+    rhs = np.zeros((_N, 2))
+    A = np.zeros((_N, _N))
+    B = np.zeros((_N, _N))
+    sol = np.zeros((_N, 2))
+    inv = np.zeros((_N, _N))
+    eye = np.eye(_N)
+    tot = np.zeros(8)
+    ok = np.zeros(8)
+    for t in range(targets_i.size):
         i0 = targets_i[t]
         j0 = targets_j[t]
-        sr = half_r[t]
-        ss = half_s[t]
-        K = int(math.floor(sr + ss + 1e-9))
-        if K < 1:
+        u0 = i0 - j0
+        sr = sr_t[t]
+        P = pr_t[t]
+        Q = qr_t[t]
+        if P < 1 or Q < 1:
             continue
-        scale = float(K)
-        A = np.zeros((_N, _N))
-        B = np.zeros((_N, _N))
-        rhs = np.zeros((_N, 2))
-        tot = np.zeros(8)
-        ok = np.zeros(8)
-        sw = 0.0
-        n = 0
-        for di in range(-K, K + 1):
-            for dj in range(-K, K + 1):
-                w = variforc_weight_1d(0.5 * (di - dj), sr, box)
-                if w == 0.0:
+        mom[:, :] = 0.0
+        mom2[:, :] = 0.0
+        rhs[:, :] = 0.0
+        tot[:] = 0.0
+        ok[:] = 0.0
+        swv2 = 0.0
+        n_cnt = 0.0
+        for p in range(-P, P + 1):
+            tr = variforc_weight_1d(0.5 * p, sr, box)
+            if tr <= 0.0:
+                continue
+            m = p // 2
+            pi = p - 2 * m
+            c = j0 - m
+            u = u0 + p
+            line = u + n - 1
+            # q runs over q ≡ π (mod 2), |q| <= Q; the node at q sits at j = c + (q − π)/2
+            q_a = -Q if (Q - pi) % 2 == 0 else -Q + 1
+            q_b = Q if (Q - pi) % 2 == 0 else Q - 1
+            n_all = (q_b - q_a) // 2 + 1
+            inside = 0 <= line < n_lines
+            n_valid = 0.0
+            if inside:
+                n_valid = _count(cum, line, c + (q_a - pi) // 2, c + (q_b - pi) // 2, n)
+            n_cnt += n_valid
+            # half-windows in p: the whole column
+            if p <= -1:
+                tot[0] += n_all
+                ok[0] += n_valid
+            elif p >= 1:
+                tot[1] += n_all
+                ok[1] += n_valid
+            # in q (q <= −1, q >= 1), Δi = (p+q)/2 (q <= −2 − p, q >= 2 − p), Δj = (q−p)/2
+            # (q <= p − 2, q >= p + 2): ranges of q, counted with the parity π
+            for h in range(6):
+                if h == 0:
+                    lo, hi = q_a, -1
+                elif h == 1:
+                    lo, hi = 1, q_b
+                elif h == 2:
+                    lo, hi = q_a, -2 - p
+                elif h == 3:
+                    lo, hi = 2 - p, q_b
+                elif h == 4:
+                    lo, hi = q_a, p - 2
+                else:
+                    lo, hi = p + 2, q_b
+                lo = max(lo, q_a)
+                hi = min(hi, q_b)
+                if (lo - pi) % 2 != 0:
+                    lo += 1
+                if (hi - pi) % 2 != 0:
+                    hi -= 1
+                if lo > hi:
                     continue
-                w *= variforc_weight_1d(0.5 * (di + dj), ss, box)
-                if w == 0.0:
-                    continue
-                ii = i0 + di
-                jj = j0 + dj
-                good = 0 <= ii < n_a and 0 <= jj < n_b and valid[ii, jj]
-                # half-windows: r = di − dj, s = di + dj, α = di, β = dj
-                flags = (
-                    di - dj <= -1,
-                    di - dj >= 1,
-                    di + dj <= -1,
-                    di + dj >= 1,
-                    di <= -1,
-                    di >= 1,
-                    dj <= -1,
-                    dj >= 1,
-                )
-                for q in range(8):
-                    if flags[q]:
-                        tot[q] += 1.0
-                        if good:
-                            ok[q] += 1.0
-                if not good:
-                    continue
-                x = di / scale
-                y = dj / scale
-                phi[0] = 1.0
-                phi[1] = x
-                phi[2] = y
-                phi[3] = x * x
-                phi[4] = y * y
-                phi[5] = x * y
-                v = values[ii, jj]
-                for p in range(_N):
-                    wp = w * phi[p]
-                    rhs[p, 0] += wp * v
-                    for q in range(p, _N):
-                        A[p, q] += wp * phi[q]
-                        B[p, q] += wp * w * phi[q]
-                sw += w
-                n += 1
+                tot[2 + h] += (hi - lo) // 2 + 1
+                if inside:
+                    ok[2 + h] += _count(cum, line, c + (lo - pi) // 2, c + (hi - pi) // 2, n)
+            if not inside or n_valid == 0.0:
+                continue
+            row = sums[u - u_lo, c - c_lo, pi]
+            pa = 1.0
+            for a in range(5):
+                for e in range(5 - a):
+                    mom[a, e] += tr * pa * row[e]
+                    if errors:
+                        mom2[a, e] += tr * tr * pa * row[9 + e]
+                pa *= p
+            rhs[0, 0] += tr * row[5]
+            rhs[1, 0] += tr * p * row[5]
+            rhs[2, 0] += tr * row[6]
+            rhs[3, 0] += tr * p * p * row[5]
+            rhs[4, 0] += tr * row[7]
+            rhs[5, 0] += tr * p * row[6]
+            swv2 += tr * row[8]
         lopsided = False
-        for q in range(8):
-            if ok[q] < side_fraction * tot[q] - 1e-6:
+        for h in range(8):
+            if ok[h] < side_fraction * tot[h] - 1e-6:
                 lopsided = True
-        if lopsided or n < _N:
+        if lopsided or n_cnt < _N:
             continue
-        for p in range(_N):
-            for q in range(p):
-                A[p, q] = A[q, p]
-                B[p, q] = B[q, p]
-        rhs[5, 1] = 1.0
-        sol = np.zeros((_N, 2))
+        L = float(max(P, Q))
+        for k in range(_N):
+            for l in range(_N):
+                a = _POWERS[k][0] + _POWERS[l][0]
+                e = _POWERS[k][1] + _POWERS[l][1]
+                f = L ** (a + e)
+                A[k, l] = mom[a, e] / f
+                B[k, l] = mom2[a, e] / f
+        for k in range(_N):
+            rhs[k, 0] /= L ** (_POWERS[k][0] + _POWERS[k][1])
+        rhs[:, 1] = 0.0
+        rhs[3, 1] = 1.0
+        rhs[4, 1] = -1.0
         if not _cholesky_solve(A, rhs, sol):
             continue
-        # A⁻¹ for the trace term tr(A⁻¹B)
-        eye = np.eye(_N)
-        inv = np.zeros((_N, _N))
+        rho[t] = 2.0 * (sol[3, 0] - sol[4, 0]) / (L * L)
+        npts[t] = int(n_cnt)
+        if not errors:
+            continue
         _cholesky_solve(A, eye, inv)
         trace = 0.0
-        for p in range(_N):
-            for q in range(_N):
-                trace += inv[p, q] * B[q, p]
-        rss = 0.0
-        for di in range(-K, K + 1):
-            for dj in range(-K, K + 1):
-                ii = i0 + di
-                jj = j0 + dj
-                if not (0 <= ii < n_a and 0 <= jj < n_b and valid[ii, jj]):
-                    continue
-                w = variforc_weight_1d(0.5 * (di - dj), sr, box)
-                if w == 0.0:
-                    continue
-                w *= variforc_weight_1d(0.5 * (di + dj), ss, box)
-                if w == 0.0:
-                    continue
-                x = di / scale
-                y = dj / scale
-                fit = sol[0, 0] + sol[1, 0] * x + sol[2, 0] * y
-                fit += sol[3, 0] * x * x + sol[4, 0] * y * y + sol[5, 0] * x * y
-                r = values[ii, jj] - fit
-                rss += w * r * r
-        dof = sw - trace
-        z = sol[:, 1]
+        for k in range(_N):
+            for l in range(_N):
+                trace += inv[k, l] * B[l, k]
+        fitted = 0.0
+        for k in range(_N):
+            fitted += sol[k, 0] * rhs[k, 0]
+        rss = swv2 - fitted
+        dof = mom[0, 0] - trace
         zbz = 0.0
-        for p in range(_N):
-            for q in range(_N):
-                zbz += z[p] * B[p, q] * z[q]
-        rho[t] = -sol[5, 0] / (scale * scale)
-        npts[t] = n
+        for k in range(_N):
+            for l in range(_N):
+                zbz += sol[k, 1] * B[k, l] * sol[l, 1]
         if dof > 0.0:
-            s2 = rss / dof
+            s2 = max(rss, 0.0) / dof
             sigma[t] = math.sqrt(s2)
-            se[t] = math.sqrt(max(s2 * zbz, 0.0)) / (scale * scale)
-    return rho, se, sigma, npts
+            se[t] = 2.0 * math.sqrt(max(s2 * zbz, 0.0)) / (L * L)

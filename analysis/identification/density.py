@@ -212,7 +212,9 @@ def identify_from_curves(
         raise ValueError("VARIFORC and uncertainty use the rs window; window must be 'rs'")
     if grid == "protocol":
         ext = False if extend is None else bool(extend)
-        return _identify_protocol(curves, smoothing, output_range, ext, step, window, lattice)
+        return _identify_protocol(
+            curves, smoothing, output_range, ext, step, window, lattice, uncertainty
+        )
     extend = True if extend is None else bool(extend)
     alpha, beta, E = _everett_table(curves)
     if alpha.size < 2 or beta.size < 2:
@@ -231,8 +233,11 @@ def identify_from_curves(
         aa, bb = np.meshgrid(alpha, beta, indexing="ij")
         valid = _native_valid(curves, alpha, beta) | ((bb > aa) if extend else False)
         values = E + _native_offsets(curves, alpha, beta)
-        extra = _lattice_fit(values, valid, valid & (bb <= aa), reg_step, smoothing, alpha[0])
-        extra["noise_sigma"] = measurement_noise(curves, extra["noise_sigma"])
+        extra = _lattice_fit(
+            values, valid, valid & (bb <= aa), reg_step, smoothing, alpha[0], uncertainty
+        )
+        if uncertainty:
+            extra["noise_sigma"] = measurement_noise(curves, extra["noise_sigma"])
         density = extra.pop("density")
         sm = extra.pop("sm")
     elif smoothing is not None:
@@ -287,21 +292,22 @@ def _lattice_fit(
     step: float,
     smoothing: Any,
     origin: float,
+    errors: bool,
 ) -> dict[str, Any]:
     """The weighted lattice regression (VARIFORC or a fixed factor with standard errors) as
     the fields of :class:`PreisachIdentification`."""
     if isinstance(smoothing, VariforcParameters):
-        fit = weighted_quadratic_density(values, valid, evaluate, step, smoothing, origin)
+        fit = weighted_quadratic_density(values, valid, evaluate, step, smoothing, origin, errors)
         sm, method, params = None, "variforc", smoothing.as_dict()
     else:
         sm = _smoothing_factors(smoothing)
-        fit = weighted_quadratic_density(values, valid, evaluate, step, sm, origin)
+        fit = weighted_quadratic_density(values, valid, evaluate, step, sm, origin, errors)
         method, params = "fixed", None
     sigma = float(np.nanmedian(fit.sigma)) if np.any(np.isfinite(fit.sigma)) else None
     return {
         "density": fit.rho,
         "sm": sm,
-        "density_se": fit.se,
+        "density_se": fit.se if errors else None,
         "smoothing_method": method,
         "variforc": params,
         "noise_sigma": sigma,
@@ -478,6 +484,7 @@ def _identify_protocol(
     step: float | None,
     window: str = "rs",
     lattice: bool = False,
+    uncertainty: bool = False,
 ) -> PreisachIdentification:
     nodes, E, measured, step, offset = _protocol_tables(curves, step)
     mass = E[1:, :-1] - E[:-1, :-1] - E[1:, 1:] + E[:-1, 1:]
@@ -488,8 +495,11 @@ def _identify_protocol(
         aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
         valid = measured | ((bb > aa) if extend else False)
         evaluate = measured & (bb <= aa)
-        extra = _lattice_fit(E + offset, valid, evaluate, step, smoothing, float(nodes[0]))
-        extra["noise_sigma"] = measurement_noise(curves, extra["noise_sigma"])
+        extra = _lattice_fit(
+            E + offset, valid, evaluate, step, smoothing, float(nodes[0]), uncertainty
+        )
+        if uncertainty:
+            extra["noise_sigma"] = measurement_noise(curves, extra["noise_sigma"])
         density = extra.pop("density")
         sm = extra.pop("sm")
     elif smoothing is not None:

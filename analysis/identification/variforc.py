@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from analysis.identification._checks import finite_number, positive_number
-from analysis.identification._regression_kernels import weighted_quadratic_kernel
+from analysis.identification._regression_kernels import N_SUMS, line_sums, node_fits, reach
 
 __all__ = [
     "VariforcParameters",
@@ -133,6 +133,53 @@ class LocalRegression:
     sb: np.ndarray
 
 
+def _line_prefix_counts(valid: np.ndarray) -> np.ndarray:
+    """``cum[u + n − 1, k]``: valid nodes ``(j + u, j)`` with ``j < k`` on every line
+    ``u = i − j`` (prefix sums along the lines, exact integers)."""
+    n = valid.shape[0]
+    lines = np.zeros((2 * n - 1, n), dtype=np.int64)
+    for u in range(-(n - 1), n):
+        j = np.arange(max(0, -u), min(n, n - u))
+        lines[u + n - 1, j] = valid[j + u, j]
+    cum = np.zeros((2 * n - 1, n + 1), dtype=np.int64)
+    np.cumsum(lines, axis=1, out=cum[:, 1:])
+    return cum
+
+
+def _fit_by_blocks(values, valid, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box, errors):
+    """Line sums and node fits, the target lines in blocks (bounded memory of the sums)."""
+    n = values.shape[0]
+    nt = ti.size
+    rho = np.full(nt, np.nan)
+    se = np.full(nt, np.nan)
+    sigma = np.full(nt, np.nan)
+    npts = np.zeros(nt, dtype=np.int64)
+    if nt == 0:
+        return rho, se, sigma, npts
+    cum = _line_prefix_counts(valid)
+    u_t = ti - tj
+    order = np.argsort(u_t, kind="stable")
+    block = max(16, n // 4)  # target lines per block: the sums stay below ~100 B per node
+    lines = np.unique(u_t)
+    for start in range(0, lines.size, block):
+        ul, uh = int(lines[start]), int(lines[min(start + block, lines.size) - 1])
+        sel = order[(u_t[order] >= ul) & (u_t[order] <= uh)]
+        p_max = int(pr_t[sel].max())
+        u_lo, u_hi = max(ul - p_max, -(n - 1)), min(uh + p_max, n - 1)
+        half = p_max // 2 + 1
+        c_lo, c_hi = int(tj[sel].min()) - half, int(tj[sel].max()) + half + 1
+        sums = np.empty((u_hi - u_lo + 1, c_hi - c_lo, 2, N_SUMS))
+        line_sums(values, valid, u_lo, u_hi, c_lo, c_hi, ss_of_w, qr_of_w, box, errors, sums)
+        r, s, g, k = (np.full(sel.size, np.nan), np.full(sel.size, np.nan),
+                      np.full(sel.size, np.nan), np.zeros(sel.size, dtype=np.int64))
+        node_fits(
+            sums, u_lo, c_lo, cum, ti[sel], tj[sel], sc[sel], pr_t[sel], qr_t[sel], box,
+            SIDE_FRACTION, errors, r, s, g, k,
+        )
+        rho[sel], se[sel], sigma[sel], npts[sel] = r, s, g, k
+    return rho, se, sigma, npts
+
+
 def weighted_quadratic_density(
     values: Any,
     valid: Any,
@@ -140,6 +187,7 @@ def weighted_quadratic_density(
     step: float,
     smoothing: VariforcParameters | tuple[float, float],
     origin: float = 0.0,
+    errors: bool = True,
 ) -> LocalRegression:
     """Weighted local quadratic regression of ``values`` on a regular lattice, every node
     with its own window (VARIFORC) or one fixed window, with standard errors.
@@ -161,6 +209,8 @@ def weighted_quadratic_density(
         estimator of ``grid_quadratic_density``, now with standard errors).
     origin:
         Field value of node 0 (for the VARIFORC law, which depends on ``B_c`` and ``B_u``).
+    errors:
+        Compute ``se`` and ``sigma`` (a second pass over every window); else they are NaN.
     """
     v = np.asarray(values, dtype=float)
     ok = np.asarray(valid, dtype=bool)
@@ -172,10 +222,14 @@ def weighted_quadratic_density(
     if not np.all(np.isfinite(v[ok])):
         raise ValueError("values must be finite at the valid nodes")
     ti, tj = np.nonzero(ev)
+    n = v.shape[0]
+    w_all = np.arange(2 * n - 1)
     if isinstance(smoothing, VariforcParameters):
         a = origin + step * ti
         b = origin + step * tj
         sc, sb = variforc_factors(0.5 * (a - b), 0.5 * (a + b), step, smoothing)
+        # the half-width along s of every Bu index w = i + j (Bu = origin + w·step/2)
+        _, ss_of_w = variforc_factors(0.0 * w_all, origin + 0.5 * step * w_all, step, smoothing)
         box = False
     else:
         if len(smoothing) != 2:
@@ -184,16 +238,16 @@ def weighted_quadratic_density(
         sf_s = positive_number(smoothing[1], "smoothing[1] (SF_s)")
         sc = np.full(ti.size, sf_r)
         sb = np.full(ti.size, sf_s)
+        ss_of_w = np.full(w_all.size, sf_s)
         box = True
-    rho_t, se_t, sig_t, n_t = weighted_quadratic_kernel(
-        np.where(ok, v, 0.0),
-        ok,
-        ti.astype(np.int64),
-        tj.astype(np.int64),
-        sc.astype(float),
-        sb.astype(float),
-        box,
-        SIDE_FRACTION,
+    sc = np.asarray(sc, dtype=float)
+    sb = np.asarray(sb, dtype=float)
+    ss_of_w = np.ascontiguousarray(ss_of_w, dtype=float)
+    qr_of_w = np.array([reach(x, box) for x in ss_of_w], dtype=np.int64)
+    pr_t = np.array([reach(x, box) for x in sc], dtype=np.int64)
+    qr_t = qr_of_w[ti + tj] if ti.size else np.zeros(0, dtype=np.int64)
+    rho_t, se_t, sig_t, n_t = _fit_by_blocks(
+        np.where(ok, v, 0.0), ok, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box, errors
     )
     shape = v.shape
     out = {name: np.full(shape, np.nan) for name in ("rho", "se", "sigma", "sc", "sb")}
