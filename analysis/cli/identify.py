@@ -114,7 +114,8 @@ def register(subparsers: Any) -> None:
         metavar="SF",
         help="smoothing factor SF, or SF_R SF_S (window half-widths across r and along s, in "
         "grid steps, > 0), or 'variforc' (--input: VARIFORC, Egli 2013, parameters --sc0 "
-        "--sc1 --sb0 --sb1 --lambda); default: none for models, 3 for --input",
+        "--sc1 --sb0 --sb1 --lambda), or 'auto' (--input: VARIFORC with its half-width chosen "
+        "per file by leave-one-out cross-validation); default: none for models, 3 for --input",
     )
     defaults = VariforcParameters()
     for name, what in (
@@ -226,6 +227,11 @@ def _smoothing(
     """``--smoothing`` (and the VARIFORC options) as the library takes it."""
     sm = args.smoothing
     given = [n for n in VARIFORC_OPTIONS if getattr(args, n, None) is not None]
+    if sm == ["auto"]:
+        if given:
+            option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
+            raise CliError(f"argument {option}: only with --smoothing variforc (auto chooses)")
+        return "auto"  # type: ignore[return-value]
     if sm is not None and len(sm) == 1 and sm[0] == "variforc":
         kw = {n: getattr(args, n) for n in given}
         try:
@@ -247,7 +253,7 @@ def _smoothing(
     try:
         values = [positive_float(x) for x in sm]
     except (argparse.ArgumentTypeError, ValueError) as exc:
-        raise CliError(f"argument --smoothing: {exc} (or 'variforc')") from exc
+        raise CliError(f"argument --smoothing: {exc} (or 'variforc', 'auto')") from exc
     return (values[0], values[0]) if len(values) == 1 else (values[0], values[1])
 
 
@@ -273,7 +279,7 @@ def run(args: argparse.Namespace) -> int:
     for option, given in (
         ("--grid-step", args.grid_step is not None),
         ("--uncertainty", args.uncertainty),
-        ("--smoothing", args.smoothing == ["variforc"]),
+        ("--smoothing", args.smoothing in (["variforc"], ["auto"])),
         ("--normalize", args.normalize != "none"),
         ("--mass", args.mass is not None),
         ("--volume", args.volume is not None),
@@ -507,7 +513,7 @@ def _run_measured(
 ) -> int:
     """Measured FORC data: data-driven summaries only (no paper overlay)."""
 
-    variforc = isinstance(smoothing, VariforcParameters)
+    variforc = isinstance(smoothing, (VariforcParameters, str))
     if (variforc or args.uncertainty) and args.window != "rs":
         raise CliError(
             "argument --window: VARIFORC and --uncertainty use the rs window (the VARIFORC "
@@ -551,6 +557,7 @@ def _run_measured(
         "smoothing_method": ident.smoothing_method,
         "smoothing_factor": None if variforc else list(smoothing),
         "variforc": ident.variforc,
+        "smoothing_choice": ident.smoothing_choice,
         "window": args.window,
         "reversible_ridge": args.reversible_ridge,
         "peak_bc_mT": bc,
@@ -584,6 +591,8 @@ def _run_measured(
     # no model)
     if variforc:
         law = "VARIFORC sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} λ={lam:g}".format(**ident.variforc)
+        if ident.smoothing_choice is not None:
+            law += " (chosen by cross-validation)"
     else:
         law = f"SF={smoothing[0]:g}/{smoothing[1]:g}"
     title = f"FORC diagram: {Path(args.input).name}\n{law}, Δ={step:.3g} mT, window={args.window}"

@@ -187,7 +187,13 @@ def identify_from_curves(
 
     ``smoothing`` may also be ``"variforc"`` or a
     :class:`~analysis.identification.variforc.VariforcParameters`: VARIFORC smoothing (Egli
-    2013) on the lattice (protocol grid, or a regular native grid), regressed on ``M/2``.
+    2013) on the lattice (protocol grid, or a regular native grid), regressed on ``M/2``; or
+    ``"auto"``: VARIFORC with the far-field half-width ``s_1`` chosen per data set among
+    :data:`AUTO_CANDIDATES` by leave-one-out cross-validation of the lattice values (the
+    choice and the scores in :attr:`PreisachIdentification.smoothing_choice`). Cross-validation
+    picks the smoothing that best predicts ``M``, which for a second derivative tends to be
+    on the light side; on the protocol lattice, whose values are interpolated between
+    neighbouring measurements, lighter still.
 
     Returns
     -------
@@ -205,7 +211,9 @@ def identify_from_curves(
         raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
     check_memory(estimate_memory(curves, smoothing=smoothing, grid=grid, step=step), max_memory)
     smoothing = _variforc_or(smoothing)
-    lattice = isinstance(smoothing, VariforcParameters) or (uncertainty and smoothing is not None)
+    lattice = isinstance(smoothing, (VariforcParameters, str)) or (
+        uncertainty and smoothing is not None
+    )
     if uncertainty and smoothing is None:
         raise ValueError("uncertainty needs smoothing (a factor or VARIFORC)")
     if lattice and window != "rs":
@@ -273,16 +281,52 @@ def identify_from_curves(
     )
 
 
+#: the VARIFORC far-field half-widths s_1 = s_c1 = s_b1 that ``smoothing="auto"`` compares
+#: (ridge half-widths min(3, s_1), λ = 0.07: the defaults' shape, scaled)
+AUTO_CANDIDATES = (2.0, 3.0, 4.0, 5.0, 7.0, 9.0)
+
+
+def auto_candidates() -> list[VariforcParameters]:
+    """The VARIFORC parameter sets ``smoothing="auto"`` chooses from."""
+    return [
+        VariforcParameters(sc0=min(3.0, s), sc1=s, sb0=min(3.0, s), sb1=s)
+        for s in AUTO_CANDIDATES
+    ]
+
+
 def _variforc_or(smoothing: Any) -> Any:
-    """``"variforc"`` -> the default :class:`VariforcParameters`; anything else unchanged."""
+    """``"variforc"`` -> the default :class:`VariforcParameters`; ``"auto"`` kept; anything
+    else unchanged."""
     if isinstance(smoothing, str):
+        if smoothing == "auto":
+            return smoothing
         if smoothing != "variforc":
             raise ValueError(
-                f"smoothing must be a factor, a pair (SF_r, SF_s), 'variforc' or "
+                f"smoothing must be a factor, a pair (SF_r, SF_s), 'variforc', 'auto' or "
                 f"VariforcParameters, got {smoothing!r}"
             )
         return VariforcParameters()
     return smoothing
+
+
+def _choose(values, valid, evaluate, step, origin) -> tuple[VariforcParameters, dict]:
+    """Leave-one-out cross-validation over :func:`auto_candidates` (the mean squared
+    leave-one-out residual of the node values, on the nodes every candidate evaluates)."""
+    cands = auto_candidates()
+    fits = [weighted_quadratic_density(values, valid, evaluate, step, c, origin, False)
+            for c in cands]
+    common = np.logical_and.reduce([np.isfinite(f.loo) for f in fits])
+    if not common.any():
+        raise ValueError("automatic smoothing: no node is evaluated by every candidate")
+    scores = [float(np.mean(f.loo[common] ** 2)) for f in fits]
+    best = int(np.argmin(scores))
+    return cands[best], {
+        "criterion": "leave-one-out cross-validation of M/2 (mean squared residual)",
+        "candidates_s1": list(AUTO_CANDIDATES),
+        "scores": scores,
+        "chosen_s1": AUTO_CANDIDATES[best],
+        "nodes": int(common.sum()),
+    }
 
 
 def _lattice_fit(
@@ -296,6 +340,9 @@ def _lattice_fit(
 ) -> dict[str, Any]:
     """The weighted lattice regression (VARIFORC or a fixed factor with standard errors) as
     the fields of :class:`PreisachIdentification`."""
+    choice = None
+    if isinstance(smoothing, str):  # "auto"
+        smoothing, choice = _choose(values, valid, evaluate, step, origin)
     if isinstance(smoothing, VariforcParameters):
         fit = weighted_quadratic_density(values, valid, evaluate, step, smoothing, origin, errors)
         sm, method, params = None, "variforc", smoothing.as_dict()
@@ -312,6 +359,7 @@ def _lattice_fit(
         "variforc": params,
         "noise_sigma": sigma,
         "smoothing_widths": (fit.sc, fit.sb),
+        "smoothing_choice": choice,
     }
 
 
@@ -369,6 +417,8 @@ def estimate_memory(
     if grid == "auto":
         grid = auto_grid(curves)
     smoothing = _variforc_or(smoothing)
+    if isinstance(smoothing, str):  # "auto": the largest candidate
+        smoothing = auto_candidates()[-1]
     if isinstance(smoothing, VariforcParameters):  # the lattice path: its far-field window
         smoothing = (smoothing.sc1, smoothing.sb1)
     sm = None if smoothing is None else _smoothing_factors(smoothing)

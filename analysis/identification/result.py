@@ -82,6 +82,8 @@ class PreisachIdentification:
         ``density_se``; else ``None``.
     smoothing_widths:
         Window half-widths ``(s_c, s_b)`` per node in steps (lattice regression), or ``None``.
+    smoothing_choice:
+        With ``smoothing="auto"``: the criterion, the candidates, their scores and the choice.
     """
 
     alpha: np.ndarray
@@ -102,6 +104,7 @@ class PreisachIdentification:
     variforc: dict | None = None
     noise_sigma: float | None = None
     smoothing_widths: tuple[np.ndarray, np.ndarray] | None = None
+    smoothing_choice: dict | None = None
 
     # -- totals ----------------------------------------------------------------------------
     @property

@@ -123,7 +123,8 @@ class LocalRegression:
 
     ``rho`` is ``μ_αβ = −∂²v/∂α∂β`` and ``se`` its standard error (field units, NaN where not
     evaluated); ``sigma`` the node's residual noise estimate; ``n_points`` the valid nodes in
-    its window; ``sc``, ``sb`` the half-widths used (steps)."""
+    its window; ``sc``, ``sb`` the half-widths used (steps); ``loo`` the leave-one-out residual
+    of the node's own value (``(v − v̂)/(1 − leverage)``, for cross-validation)."""
 
     rho: np.ndarray
     se: np.ndarray
@@ -131,6 +132,7 @@ class LocalRegression:
     n_points: np.ndarray
     sc: np.ndarray
     sb: np.ndarray
+    loo: np.ndarray
 
 
 def _line_prefix_counts(valid: np.ndarray) -> np.ndarray:
@@ -153,9 +155,10 @@ def _fit_by_blocks(values, valid, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box,
     rho = np.full(nt, np.nan)
     se = np.full(nt, np.nan)
     sigma = np.full(nt, np.nan)
+    loo = np.full(nt, np.nan)
     npts = np.zeros(nt, dtype=np.int64)
     if nt == 0:
-        return rho, se, sigma, npts
+        return rho, se, sigma, npts, loo
     cum = _line_prefix_counts(valid)
     u_t = ti - tj
     order = np.argsort(u_t, kind="stable")
@@ -170,14 +173,14 @@ def _fit_by_blocks(values, valid, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box,
         c_lo, c_hi = int(tj[sel].min()) - half, int(tj[sel].max()) + half + 1
         sums = np.empty((u_hi - u_lo + 1, c_hi - c_lo, 2, N_SUMS))
         line_sums(values, valid, u_lo, u_hi, c_lo, c_hi, ss_of_w, qr_of_w, box, errors, sums)
-        r, s, g, k = (np.full(sel.size, np.nan), np.full(sel.size, np.nan),
-                      np.full(sel.size, np.nan), np.zeros(sel.size, dtype=np.int64))
+        r, s, g, o = (np.full(sel.size, np.nan) for _ in range(4))
+        k = np.zeros(sel.size, dtype=np.int64)
         node_fits(
             sums, u_lo, c_lo, cum, ti[sel], tj[sel], sc[sel], pr_t[sel], qr_t[sel], box,
-            SIDE_FRACTION, errors, r, s, g, k,
+            SIDE_FRACTION, errors, r, s, g, k, values, o,
         )
-        rho[sel], se[sel], sigma[sel], npts[sel] = r, s, g, k
-    return rho, se, sigma, npts
+        rho[sel], se[sel], sigma[sel], npts[sel], loo[sel] = r, s, g, k, o
+    return rho, se, sigma, npts, loo
 
 
 def weighted_quadratic_density(
@@ -246,11 +249,12 @@ def weighted_quadratic_density(
     qr_of_w = np.array([reach(x, box) for x in ss_of_w], dtype=np.int64)
     pr_t = np.array([reach(x, box) for x in sc], dtype=np.int64)
     qr_t = qr_of_w[ti + tj] if ti.size else np.zeros(0, dtype=np.int64)
-    rho_t, se_t, sig_t, n_t = _fit_by_blocks(
+    rho_t, se_t, sig_t, n_t, loo_t = _fit_by_blocks(
         np.where(ok, v, 0.0), ok, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box, errors
     )
     shape = v.shape
-    out = {name: np.full(shape, np.nan) for name in ("rho", "se", "sigma", "sc", "sb")}
+    out = {name: np.full(shape, np.nan) for name in ("rho", "se", "sigma", "sc", "sb", "loo")}
+    out["loo"][ti, tj] = loo_t
     out["rho"][ti, tj] = rho_t / step**2
     out["se"][ti, tj] = se_t / step**2
     out["sigma"][ti, tj] = sig_t

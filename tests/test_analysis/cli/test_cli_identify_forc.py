@@ -161,3 +161,11 @@ def test_readme_is_not_a_forc_file(tmp_path, capsys):
     readme = Path(__file__).resolve().parents[3] / "README.md"
     assert main(["identify", "--input", str(readme), "--out", str(tmp_path)]) == 2
     assert "not a FORC file" in capsys.readouterr().err
+
+
+def test_automatic_smoothing_is_reported(tmp_path):
+    rep = run_json(["--input", str(CGS), "--smoothing", "auto", "--out", str(tmp_path)])
+    choice = rep["smoothing_choice"]
+    assert choice["chosen_s1"] in choice["candidates_s1"]
+    assert rep["variforc"]["sc1"] == choice["chosen_s1"] and rep["smoothing_method"] == "variforc"
+    assert "cross-validation" in rep["figure_title"]

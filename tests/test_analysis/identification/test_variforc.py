@@ -224,3 +224,20 @@ def test_peak_interval_and_mass_error_over_noise_draws(smoothing):
     assert inside / draws >= 0.93
     # the sample sd of 40 draws has a relative standard error 1/sqrt(2·39) ≈ 11 %: ±35 % is ±3 sd
     assert np.std(masses, ddof=1) == pytest.approx(np.mean(errors), rel=0.35)
+
+
+def test_automatic_smoothing_grows_with_the_noise():
+    """Leave-one-out cross-validation: the chosen half-width is the candidate of least score,
+    and noisier data of the same sample get at least as much smoothing (strictly more between
+    1e-4 and 3e-2 of the saturation: the variance term of the score grows as noise²/window)."""
+    rng = np.random.default_rng(11)
+    grid = np.arange(-30.0, 31.0, 1.0)
+    chosen = []
+    for noise in (1e-4, 3e-2):
+        ident = identify_from_curves(noisy_curves(rng, noise, grid), smoothing="auto", extend=False)
+        choice = ident.smoothing_choice
+        assert choice["chosen_s1"] == choice["candidates_s1"][int(np.argmin(choice["scores"]))]
+        assert ident.smoothing_method == "variforc"
+        assert ident.variforc["sc1"] == choice["chosen_s1"]
+        chosen.append(choice["chosen_s1"])
+    assert chosen[1] > chosen[0]
