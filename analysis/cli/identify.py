@@ -39,6 +39,7 @@ from analysis.cli._output import (
 from analysis.cli._parsing import (
     CliError,
     add_subcommand,
+    int_at_least,
     nonnegative_float,
     positive_float,
 )
@@ -171,8 +172,18 @@ def register(subparsers: Any) -> None:
     g.add_argument(
         "--input",
         type=Path,
+        nargs="+",
         default=None,
-        help="FORC data file to identify instead of a model (default: none, use --model)",
+        metavar="PATH",
+        help="FORC data file to identify instead of a model (default: none, use --model); a "
+        "directory or several files: a batch, one diagram per file in OUT/<file stem>/ and "
+        "OUT/summary.csv, OUT/summary.json",
+    )
+    g.add_argument(
+        "--workers",
+        type=int_at_least(1, 256),
+        default=1,
+        help="batch --input: files identified in parallel by this many processes (default 1)",
     )
     g.add_argument(
         "--format",
@@ -273,10 +284,17 @@ def run(args: argparse.Namespace) -> int:
                     f"argument {option}: only for models; with --input the lattice comes from "
                     "the measurement (--grid-step)"
                 )
+        files = _input_files(args.input)
+        if len(files) > 1 or any(p.is_dir() for p in args.input):
+            return _run_batch(args, files)
+        if args.workers != 1:
+            raise CliError("argument --workers: only for a batch (a directory or several files)")
+        args.input = files[0]
         measured = _prepare_measured(args)
         out = prepare_out(args)
         return _run_measured(args, out, t0, *measured)
     for option, given in (
+        ("--workers", args.workers != 1),
         ("--grid-step", args.grid_step is not None),
         ("--uncertainty", args.uncertainty),
         ("--smoothing", args.smoothing in (["variforc"], ["auto"])),
@@ -618,7 +636,173 @@ def _run_measured(
         f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}; irreversible mass {mass}",
         f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}",
     ]
+    if getattr(args, "batch_child", False):
+        return report  # type: ignore[return-value]
     emit(args, report, lines)
+    return 0
+
+
+# -- batches ---------------------------------------------------------------------------------
+
+#: columns of summary.csv
+SUMMARY_COLUMNS = (
+    "file",
+    "status",
+    "format",
+    "n_curves",
+    "peak_bc_mT",
+    "peak_bu_mT",
+    "peak_bc_lo_mT",
+    "peak_bc_hi_mT",
+    "peak_bu_lo_mT",
+    "peak_bu_hi_mT",
+    "peak_rho",
+    "peak_rho_se",
+    "rho_unit",
+    "irreversible_mass",
+    "irreversible_mass_se",
+    "mass_unit",
+    "smoothing",
+    "warnings",
+)
+
+
+def _input_files(paths: list[Path]) -> list[Path]:
+    """The files of ``--input``: files as given, directories by their regular, non-hidden
+    files (sorted, not recursive); one-line errors naming the option."""
+    files: list[Path] = []
+    for path in paths:
+        if path.is_dir():
+            found = sorted(p for p in path.iterdir() if p.is_file() and not p.name.startswith("."))
+            if not found:
+                raise CliError(f"argument --input: {path}: a directory without files")
+            files += found
+        elif not path.exists():
+            raise CliError(f"argument --input: {path}: no such file")
+        else:
+            files.append(path)
+    return files
+
+
+def _one_file(args: argparse.Namespace, path: Path, out: Path) -> dict[str, Any]:
+    """Identify one file of a batch into ``out``; the report, or the error as one line."""
+    child = argparse.Namespace(**vars(args))
+    child.input = path
+    child.out = out
+    child.batch_child = True
+    child.json = False
+    try:
+        measured = _prepare_measured(child)
+        out.mkdir(parents=True, exist_ok=True)
+        report = _run_measured(child, out, time.perf_counter(), *measured)
+        report["status"] = "ok"
+        return report  # type: ignore[return-value]
+    except CliError as exc:
+        return {"input": str(path), "status": "failed", "error": str(exc)}
+
+
+def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
+    def pair(key: str, k: int) -> Any:
+        v = rep.get(key)
+        return v[k] if v else ""
+
+    if rep.get("smoothing_method") == "variforc":
+        smoothing = "variforc sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} lambda={lam:g}".format(
+            **rep["variforc"]
+        )
+        if rep.get("smoothing_choice"):
+            smoothing += " (cross-validation)"
+    elif rep.get("smoothing_factor"):
+        smoothing = "SF={:g}/{:g}".format(*rep["smoothing_factor"])
+    else:
+        smoothing = ""
+    warnings = list(rep.get("notes", []))
+    if rep.get("complete") is False:
+        warnings.append("incomplete measurement")
+    if rep.get("error"):
+        warnings.append(rep["error"])
+    return {
+        "file": rep["input"],
+        "status": rep["status"],
+        "format": rep.get("format", ""),
+        "n_curves": rep.get("n_curves", ""),
+        "peak_bc_mT": rep.get("peak_bc_mT", ""),
+        "peak_bu_mT": rep.get("peak_bu_mT", ""),
+        "peak_bc_lo_mT": pair("peak_bc_interval_mT", 0),
+        "peak_bc_hi_mT": pair("peak_bc_interval_mT", 1),
+        "peak_bu_lo_mT": pair("peak_bu_interval_mT", 0),
+        "peak_bu_hi_mT": pair("peak_bu_interval_mT", 1),
+        "peak_rho": rep.get("peak_rho", ""),
+        "peak_rho_se": rep.get("peak_rho_se", ""),
+        "rho_unit": rep.get("rho_unit", ""),
+        "irreversible_mass": rep.get("irreversible_mass", ""),
+        "irreversible_mass_se": rep.get("irreversible_mass_se", ""),
+        "mass_unit": rep.get("mass_unit", ""),
+        "smoothing": smoothing,
+        "warnings": "; ".join(warnings),
+    }
+
+
+def _run_batch(args: argparse.Namespace, files: list[Path]) -> int:
+    """Every file into ``OUT/<stem>/``, progress on stderr, ``summary.csv`` and
+    ``summary.json``; a file that fails is recorded and the batch goes on (exit status 2 and one
+    line at the end if any failed)."""
+    import csv
+    import sys
+    from concurrent.futures import ProcessPoolExecutor
+
+    _smoothing(args, 3.0)  # option errors before any work
+    out = prepare_out(args)
+    stems: dict[str, int] = {}
+    targets = []
+    for path in files:
+        stem = path.stem.replace(".", "_") or "file"
+        stems[stem] = stems.get(stem, 0) + 1
+        targets.append(out / (stem if stems[stem] == 1 else f"{stem}_{stems[stem]}"))
+    show = progress_enabled(args)
+    t0 = time.perf_counter()
+    reports: list[dict[str, Any]] = []
+    if args.workers == 1:
+        results = (_one_file(args, p, o) for p, o in zip(files, targets, strict=True))
+        for k, rep in enumerate(results, 1):
+            reports.append(rep)
+            if show:
+                print(f"[{k}/{len(files)}] {rep['input']}: {rep['status']}", file=sys.stderr)
+    else:
+        with ProcessPoolExecutor(max_workers=args.workers) as pool:
+            futures = [
+                pool.submit(_one_file, args, p, o) for p, o in zip(files, targets, strict=True)
+            ]
+            for k, fut in enumerate(futures, 1):
+                rep = fut.result()
+                reports.append(rep)
+                if show:
+                    print(f"[{k}/{len(files)}] {rep['input']}: {rep['status']}", file=sys.stderr)
+    rows = [_summary_row(r) for r in reports]
+    with open(out / "summary.csv", "w", newline="", encoding="utf-8") as fh:
+        writer = csv.DictWriter(fh, fieldnames=SUMMARY_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    failed = [r for r in reports if r["status"] != "ok"]
+    summary = {
+        "n_files": len(files),
+        "n_failed": len(failed),
+        "workers": args.workers,
+        "seconds": time.perf_counter() - t0,
+        "files": rows,
+        "reports": reports,
+    }
+    (out / "summary.json").write_text(to_json(summary, indent=2) + "\n")
+    lines = [
+        f"{len(files)} files, {len(files) - len(failed)} identified, {len(failed)} failed",
+        f"wrote {out / 'summary.csv'}, {out / 'summary.json'} and one folder per file",
+    ]
+    emit(args, summary, lines)
+    if failed:
+        raise CliError(
+            f"argument --input: {len(failed)} of {len(files)} files failed (first: "
+            f"{failed[0]['error']}); see {out / 'summary.json'}"
+        )
     return 0
 
 

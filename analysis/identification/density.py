@@ -289,8 +289,7 @@ AUTO_CANDIDATES = (2.0, 3.0, 4.0, 5.0, 7.0, 9.0)
 def auto_candidates() -> list[VariforcParameters]:
     """The VARIFORC parameter sets ``smoothing="auto"`` chooses from."""
     return [
-        VariforcParameters(sc0=min(3.0, s), sc1=s, sb0=min(3.0, s), sb1=s)
-        for s in AUTO_CANDIDATES
+        VariforcParameters(sc0=min(3.0, s), sc1=s, sb0=min(3.0, s), sb1=s) for s in AUTO_CANDIDATES
     ]
 
 
@@ -313,8 +312,9 @@ def _choose(values, valid, evaluate, step, origin) -> tuple[VariforcParameters, 
     """Leave-one-out cross-validation over :func:`auto_candidates` (the mean squared
     leave-one-out residual of the node values, on the nodes every candidate evaluates)."""
     cands = auto_candidates()
-    fits = [weighted_quadratic_density(values, valid, evaluate, step, c, origin, False)
-            for c in cands]
+    fits = [
+        weighted_quadratic_density(values, valid, evaluate, step, c, origin, False) for c in cands
+    ]
     common = np.logical_and.reduce([np.isfinite(f.loo) for f in fits])
     if not common.any():
         raise ValueError("automatic smoothing: no node is evaluated by every candidate")

@@ -176,8 +176,24 @@ def _fit_by_blocks(values, valid, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box,
         r, s, g, o = (np.full(sel.size, np.nan) for _ in range(4))
         k = np.zeros(sel.size, dtype=np.int64)
         node_fits(
-            sums, u_lo, c_lo, cum, ti[sel], tj[sel], sc[sel], pr_t[sel], qr_t[sel], box,
-            SIDE_FRACTION, errors, r, s, g, k, values, o,
+            sums,
+            u_lo,
+            c_lo,
+            cum,
+            ti[sel],
+            tj[sel],
+            sc[sel],
+            pr_t[sel],
+            qr_t[sel],
+            box,
+            SIDE_FRACTION,
+            errors,
+            r,
+            s,
+            g,
+            k,
+            values,
+            o,
         )
         rho[sel], se[sel], sigma[sel], npts[sel], loo[sel] = r, s, g, k, o
     return rho, se, sigma, npts, loo

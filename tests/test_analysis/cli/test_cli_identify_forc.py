@@ -169,3 +169,31 @@ def test_automatic_smoothing_is_reported(tmp_path):
     assert choice["chosen_s1"] in choice["candidates_s1"]
     assert rep["variforc"]["sc1"] == choice["chosen_s1"] and rep["smoothing_method"] == "variforc"
     assert "cross-validation" in rep["figure_title"]
+
+
+def test_batch_of_a_directory_writes_a_summary(tmp_path, capsys):
+    import csv
+    import shutil
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("forc_micromag_0015_cgs.frc", "forc_lakeshore_8600.csv", "make_forc_data.py"):
+        shutil.copy(DATA / name, folder / name)
+    out = tmp_path / "out"
+    # one file is not a FORC file: recorded, the batch goes on, exit status 2 at the end
+    assert main(["identify", "--input", str(folder), "--out", str(out), "--quiet"]) == 2
+    assert "1 of 3 files failed" in capsys.readouterr().err
+    rows = list(csv.DictReader(open(out / "summary.csv", encoding="utf-8")))
+    assert [r["status"] for r in rows] == ["ok", "ok", "failed"]
+    assert "not a FORC file" in rows[2]["warnings"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["n_files"] == 3 and summary["n_failed"] == 1
+    for row in rows[:2]:
+        stem = Path(row["file"]).stem.replace(".", "_")
+        assert (out / stem / "identify.json").exists()
+        assert (out / stem / f"identify_{stem}.png").exists()
+    # the same files on two workers: the same numbers
+    files = [str(folder / "forc_micromag_0015_cgs.frc"), str(folder / "forc_lakeshore_8600.csv")]
+    rep = run_json(["--input", *files, "--workers", "2", "--out", str(tmp_path / "out2")])
+    by_name = {Path(r["file"]).name: float(r["peak_bc_mT"]) for r in rows[:2]}
+    assert {Path(r["file"]).name: r["peak_bc_mT"] for r in rep["files"]} == by_name
