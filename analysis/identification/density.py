@@ -163,9 +163,9 @@ def identify_from_curves(
         reversal fields; each curve is interpolated linearly onto it along the field and
         neighbouring curves linearly across reversal fields. Use it for measured data, whose
         field values all differ slightly (the native grid of such data has near-zero-area
-        cells). ``"auto"`` (default): ``"protocol"`` when the union of field values has more
-        than twice as many values as the longest curve plus the number of curves (measured
-        fields), else ``"native"``.
+        cells). ``"auto"`` (default): :func:`auto_grid`; with VARIFORC or uncertainty, an
+        irregular native grid is replaced by the protocol lattice (the weighted regression
+        needs a regular lattice).
     step:
         Lattice step of the protocol grid (> 0); ignored on the native grid.
     window:
@@ -205,6 +205,7 @@ def identify_from_curves(
     """
     if grid not in GRIDS:
         raise ValueError(f"grid must be one of {GRIDS}, got {grid!r}")
+    chosen_grid = grid
     if grid == "auto":
         grid = auto_grid(curves)
     if window not in WINDOWS:
@@ -218,6 +219,10 @@ def identify_from_curves(
         raise ValueError("uncertainty needs smoothing (a factor or VARIFORC)")
     if lattice and window != "rs":
         raise ValueError("VARIFORC and uncertainty use the rs window; window must be 'rs'")
+    if lattice and chosen_grid == "auto" and grid == "native":
+        union = np.unique(np.concatenate(curves.fields))
+        if not _is_regular(*_native_axes(curves, union, np.sort(curves.reversal_field))):
+            grid = "protocol"  # the lattice regression needs a regular lattice
     if grid == "protocol":
         ext = False if extend is None else bool(extend)
         return _identify_protocol(
