@@ -24,6 +24,8 @@ from analysis.cli._build import (
     model_record,
     option_error,
 )
+from analysis.cli._identify_batch import input_files, run_batch
+from analysis.cli._identify_measured import amount_option, rho_unit, smoothing_option
 from analysis.cli._options import (
     add_model_options,
     add_output_options,
@@ -56,7 +58,6 @@ from analysis.identification.memory import MemoryBoundError
 from analysis.identification.normalization import (
     NORMALIZATIONS,
     normalized_unit,
-    sample_amount,
 )
 from analysis.identification.plots import (
     figure_forc,
@@ -229,45 +230,6 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run)
 
 
-VARIFORC_OPTIONS = ("sc0", "sc1", "sb0", "sb1", "lam")
-
-
-def _smoothing(
-    args: argparse.Namespace, default: float | None
-) -> tuple[float, float] | VariforcParameters | None:
-    """``--smoothing`` (and the VARIFORC options) as the library takes it."""
-    sm = args.smoothing
-    given = [n for n in VARIFORC_OPTIONS if getattr(args, n, None) is not None]
-    if sm == ["auto"]:
-        if given:
-            option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
-            raise CliError(f"argument {option}: only with --smoothing variforc (auto chooses)")
-        return "auto"  # type: ignore[return-value]
-    if sm is not None and len(sm) == 1 and sm[0] == "variforc":
-        kw = {n: getattr(args, n) for n in given}
-        try:
-            return VariforcParameters(**kw)
-        except ValueError as exc:
-            name = str(exc).split()[0]
-            option = "--lambda" if name == "lambda" else f"--{name}"
-            raise CliError(f"argument {option}: {exc}") from exc
-    if given:
-        option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
-        raise CliError(f"argument {option}: only with --smoothing variforc")
-    if sm is None:
-        return None if default is None else (default, default)
-    if len(sm) not in (1, 2):
-        raise CliError(
-            f"argument --smoothing: takes one factor SF or two, SF_R SF_S, or 'variforc'; got "
-            f"{len(sm)} values"
-        )
-    try:
-        values = [positive_float(x) for x in sm]
-    except (argparse.ArgumentTypeError, ValueError) as exc:
-        raise CliError(f"argument --smoothing: {exc} (or 'variforc', 'auto')") from exc
-    return (values[0], values[0]) if len(values) == 1 else (values[0], values[1])
-
-
 def _max_memory(args: argparse.Namespace) -> float | None:
     """``--max-memory`` in bytes (``None``: the library's default bound)."""
     gb = getattr(args, "max_memory", None)
@@ -284,9 +246,10 @@ def run(args: argparse.Namespace) -> int:
                     f"argument {option}: only for models; with --input the lattice comes from "
                     "the measurement (--grid-step)"
                 )
-        files = _input_files(args.input)
+        files = input_files(args.input)
         if len(files) > 1 or any(p.is_dir() for p in args.input):
-            return _run_batch(args, files)
+            smoothing_option(args, 3.0)  # option errors before any work
+            return run_batch(args, files, _one_file)
         if args.workers != 1:
             raise CliError("argument --workers: only for a batch (a directory or several files)")
         args.input = files[0]
@@ -322,7 +285,7 @@ def _prepare_model(args: argparse.Namespace) -> tuple[Any, Any, float, Any]:
     """The operator, its thresholds (dimers), the grid's half-extent and the smoothing."""
 
     check_model_options(args)
-    smoothing = _smoothing(args, None)
+    smoothing = smoothing_option(args, None)
     # preisach-uniform: the triangle is the grid (--saturation), so records and titles name it
     args.half_extent = args.saturation if args.model == "preisach-uniform" else None
     params = model_parameters(args)
@@ -454,7 +417,7 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
         raise CliError(f"argument --input: {path}: not a regular file")
     if not os.access(path, os.R_OK):
         raise CliError(f"argument --input: {path}: not readable")
-    smoothing = _smoothing(args, 3.0)
+    smoothing = smoothing_option(args, 3.0)
     try:
         fmt = detect_format(path) if args.format == "auto" else args.format
     except (ValueError, OSError) as exc:
@@ -476,26 +439,8 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
         raise CliError(f"argument --input: {_about(path, exc)}") from exc
     if args.grid_step is not None:
         _check_grid_step(args, data.curves)
-    args.amount = _amount(args, data)
+    args.amount = amount_option(args, data)
     return fmt, data, smoothing  # type: ignore[return-value]
-
-
-def _amount(args: argparse.Namespace, data: Any) -> float:
-    """The divisor of ``--normalize`` (1 for none), checked before any output is written."""
-    for option, kind in (("--mass", "mass"), ("--volume", "volume")):
-        if getattr(args, kind) is not None and args.normalize != kind:
-            raise CliError(f"argument {option}: only with --normalize {kind}")
-    if args.normalize == "none":
-        return 1.0
-    if data.moment_unit is None:
-        raise CliError(
-            f"argument --normalize: {args.input}: the file states no moment unit, so the "
-            "normalised unit would be unknown"
-        )
-    try:
-        return sample_amount(data.header, args.normalize, getattr(args, args.normalize))
-    except ValueError as exc:
-        raise CliError(f"argument --normalize: {args.input}: {exc}") from exc
 
 
 def _about(path: Path, exc: Exception) -> str:
@@ -556,7 +501,7 @@ def _run_measured(
     bc, bu, rho = ident.density_peak()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
     # ρ in the field's unit: moment per T² (the readers give fields in mT: 1/mT² = 10⁶/T²)
-    rho_factor, rho_unit = _rho_unit(data, args.normalize)
+    rho_factor, rho_name = rho_unit(data, args.normalize)
     amount = getattr(args, "amount", 1.0)
     rho_factor /= amount
     report: dict[str, Any] = {
@@ -581,7 +526,7 @@ def _run_measured(
         "peak_bc_mT": bc,
         "peak_bu_mT": bu,
         "peak_rho": rho * rho_factor,
-        "rho_unit": rho_unit,
+        "rho_unit": rho_name,
         "irreversible_mass": ident.irreversible_mass / amount,
         "reversible_mass": ident.reversible_mass / amount,
         "mass_unit": normalized_unit(data.moment_unit, args.normalize),
@@ -622,7 +567,7 @@ def _run_measured(
         field_unit="mT",
         moment_unit=normalized_unit(data.moment_unit, args.normalize),
         rho_factor=rho_factor,
-        rho_unit=rho_unit,
+        rho_unit=rho_name,
     )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
@@ -642,46 +587,7 @@ def _run_measured(
     return 0
 
 
-# -- batches ---------------------------------------------------------------------------------
-
-#: columns of summary.csv
-SUMMARY_COLUMNS = (
-    "file",
-    "status",
-    "format",
-    "n_curves",
-    "peak_bc_mT",
-    "peak_bu_mT",
-    "peak_bc_lo_mT",
-    "peak_bc_hi_mT",
-    "peak_bu_lo_mT",
-    "peak_bu_hi_mT",
-    "peak_rho",
-    "peak_rho_se",
-    "rho_unit",
-    "irreversible_mass",
-    "irreversible_mass_se",
-    "mass_unit",
-    "smoothing",
-    "warnings",
-)
-
-
-def _input_files(paths: list[Path]) -> list[Path]:
-    """The files of ``--input``: files as given, directories by their regular, non-hidden
-    files (sorted, not recursive); one-line errors naming the option."""
-    files: list[Path] = []
-    for path in paths:
-        if path.is_dir():
-            found = sorted(p for p in path.iterdir() if p.is_file() and not p.name.startswith("."))
-            if not found:
-                raise CliError(f"argument --input: {path}: a directory without files")
-            files += found
-        elif not path.exists():
-            raise CliError(f"argument --input: {path}: no such file")
-        else:
-            files.append(path)
-    return files
+# -- batches (the loop and the summary: analysis/cli/_identify_batch.py) ------------------
 
 
 def _one_file(args: argparse.Namespace, path: Path, out: Path) -> dict[str, Any]:
@@ -699,117 +605,3 @@ def _one_file(args: argparse.Namespace, path: Path, out: Path) -> dict[str, Any]
         return report  # type: ignore[return-value]
     except CliError as exc:
         return {"input": str(path), "status": "failed", "error": str(exc)}
-
-
-def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
-    def pair(key: str, k: int) -> Any:
-        v = rep.get(key)
-        return v[k] if v else ""
-
-    if rep.get("smoothing_method") == "variforc":
-        smoothing = "variforc sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} lambda={lam:g}".format(
-            **rep["variforc"]
-        )
-        if rep.get("smoothing_choice"):
-            smoothing += " (cross-validation)"
-    elif rep.get("smoothing_factor"):
-        smoothing = "SF={:g}/{:g}".format(*rep["smoothing_factor"])
-    else:
-        smoothing = ""
-    warnings = list(rep.get("notes", []))
-    if rep.get("complete") is False:
-        warnings.append("incomplete measurement")
-    if rep.get("error"):
-        warnings.append(rep["error"])
-    return {
-        "file": rep["input"],
-        "status": rep["status"],
-        "format": rep.get("format", ""),
-        "n_curves": rep.get("n_curves", ""),
-        "peak_bc_mT": rep.get("peak_bc_mT", ""),
-        "peak_bu_mT": rep.get("peak_bu_mT", ""),
-        "peak_bc_lo_mT": pair("peak_bc_interval_mT", 0),
-        "peak_bc_hi_mT": pair("peak_bc_interval_mT", 1),
-        "peak_bu_lo_mT": pair("peak_bu_interval_mT", 0),
-        "peak_bu_hi_mT": pair("peak_bu_interval_mT", 1),
-        "peak_rho": rep.get("peak_rho", ""),
-        "peak_rho_se": rep.get("peak_rho_se", ""),
-        "rho_unit": rep.get("rho_unit", ""),
-        "irreversible_mass": rep.get("irreversible_mass", ""),
-        "irreversible_mass_se": rep.get("irreversible_mass_se", ""),
-        "mass_unit": rep.get("mass_unit", ""),
-        "smoothing": smoothing,
-        "warnings": "; ".join(warnings),
-    }
-
-
-def _run_batch(args: argparse.Namespace, files: list[Path]) -> int:
-    """Every file into ``OUT/<stem>/``, progress on stderr, ``summary.csv`` and
-    ``summary.json``; a file that fails is recorded and the batch goes on (exit status 2 and one
-    line at the end if any failed)."""
-    import csv
-    import sys
-    from concurrent.futures import ProcessPoolExecutor
-
-    _smoothing(args, 3.0)  # option errors before any work
-    out = prepare_out(args)
-    stems: dict[str, int] = {}
-    targets = []
-    for path in files:
-        stem = path.stem.replace(".", "_") or "file"
-        stems[stem] = stems.get(stem, 0) + 1
-        targets.append(out / (stem if stems[stem] == 1 else f"{stem}_{stems[stem]}"))
-    show = progress_enabled(args)
-    t0 = time.perf_counter()
-    reports: list[dict[str, Any]] = []
-    if args.workers == 1:
-        results = (_one_file(args, p, o) for p, o in zip(files, targets, strict=True))
-        for k, rep in enumerate(results, 1):
-            reports.append(rep)
-            if show:
-                print(f"[{k}/{len(files)}] {rep['input']}: {rep['status']}", file=sys.stderr)
-    else:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            futures = [
-                pool.submit(_one_file, args, p, o) for p, o in zip(files, targets, strict=True)
-            ]
-            for k, fut in enumerate(futures, 1):
-                rep = fut.result()
-                reports.append(rep)
-                if show:
-                    print(f"[{k}/{len(files)}] {rep['input']}: {rep['status']}", file=sys.stderr)
-    rows = [_summary_row(r) for r in reports]
-    with open(out / "summary.csv", "w", newline="", encoding="utf-8") as fh:
-        writer = csv.DictWriter(fh, fieldnames=SUMMARY_COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
-    failed = [r for r in reports if r["status"] != "ok"]
-    summary = {
-        "n_files": len(files),
-        "n_failed": len(failed),
-        "workers": args.workers,
-        "seconds": time.perf_counter() - t0,
-        "files": rows,
-        "reports": reports,
-    }
-    (out / "summary.json").write_text(to_json(summary, indent=2) + "\n")
-    lines = [
-        f"{len(files)} files, {len(files) - len(failed)} identified, {len(failed)} failed",
-        f"wrote {out / 'summary.csv'}, {out / 'summary.json'} and one folder per file",
-    ]
-    emit(args, summary, lines)
-    if failed:
-        raise CliError(
-            f"argument --input: {len(failed)} of {len(files)} files failed (first: "
-            f"{failed[0]['error']}); see {out / 'summary.json'}"
-        )
-    return 0
-
-
-def _rho_unit(data: Any, normalize: str = "none") -> tuple[float, str]:
-    """Factor from the identification's ρ (moment per mT²) to the field's unit, and its name:
-    ``A·m²/T²`` (×10⁶; ``A·m²/kg/T²``, ``A/m/T²`` normalised) when the file states its units,
-    else the file's own units."""
-    if data.field_unit == "mT" and data.moment_unit:
-        return 1e6, f"{normalized_unit(data.moment_unit, normalize)}/T²"
-    return 1.0, "moment/field² (as written)"
