@@ -74,7 +74,7 @@ __all__ = ["register", "run"]
 IDENTIFY_MODELS = ("dimers", "erf-play", "play", "preisach-uniform")
 #: models whose density the paper states (N(s; 0, R²) δ(r − p/2)): only these get its metrics
 PAPER_MODELS = ("dimers", "erf-play")
-FORMATS = ("auto", "csv", "micromag", "lakeshore")
+FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks")
 #: the grid step of a model's identification (the paper's fig:preis_dens)
 DEFAULT_STEP = 0.1
 
@@ -193,6 +193,13 @@ def register(subparsers: Any) -> None:
         help="--input format (auto: detected from the file)",
     )
     g.add_argument(
+        "--columns",
+        choices=("field,moment", "moment,field"),
+        default=None,
+        help="--input data-only file (two columns, no header): which column is which "
+        "(default field,moment)",
+    )
+    g.add_argument(
         "--reversible-ridge",
         action="store_true",
         help="--input: include the reversible ridge at Bc = 0 in the smoothed density (constant "
@@ -262,6 +269,7 @@ def run(args: argparse.Namespace) -> int:
         ("--uncertainty", args.uncertainty),
         ("--smoothing", args.smoothing in (["variforc"], ["auto"])),
         ("--normalize", args.normalize != "none"),
+        ("--columns", args.columns is not None),
         ("--mass", args.mass is not None),
         ("--volume", args.volume is not None),
         ("--reversible-ridge", args.reversible_ridge),
@@ -423,6 +431,12 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
     except (ValueError, OSError) as exc:
         raise CliError(f"argument --input: {_about(path, exc)}") from exc
     kwargs: dict[str, Any] = {}
+    if args.columns is not None:
+        if fmt != "blocks":
+            raise CliError(
+                f"argument --columns: for data-only files (two columns, no header), not {fmt!r}"
+            )
+        kwargs["columns"] = args.columns
     if args.drift_correction != "none":
         if fmt not in ("micromag", "lakeshore"):
             raise CliError(
