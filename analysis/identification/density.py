@@ -145,6 +145,15 @@ def identify_from_curves(
         quadratic regression of ``E`` in the window ``|Δr| <= SF_r·Δ``, ``|Δs| <= SF_s·Δ``
         (see :func:`identify_preisach`). On the native grid of irregular data the unit ``Δ`` is
         the larger of the median reversal-field spacing and the median field step.
+        May also be ``"variforc"`` or a
+        :class:`~analysis.identification.variforc.VariforcParameters`: VARIFORC smoothing (Egli
+        2013) on the lattice (protocol grid, or a regular native grid), regressed on ``M/2``; or
+        ``"auto"``: VARIFORC with the far-field half-width ``s_1`` chosen per data set among
+        ``AUTO_CANDIDATES`` by leave-one-out cross-validation of the lattice values (the
+        choice and the scores in :attr:`PreisachIdentification.smoothing_choice`). Cross-validation
+        picks the smoothing that best predicts ``M``, which for a second derivative tends to be
+        on the light side; on the protocol lattice, whose values are interpolated between
+        neighbouring measurements, lighter still.
     output_range:
         Saturation outputs (for :attr:`PreisachIdentification.mass_outside_grid`); pass
         ``(-inf, inf)`` for measured data of unknown saturation.
@@ -184,16 +193,6 @@ def identify_from_curves(
         With a fixed factor the density is then the same estimator regressed on the half
         moments ``M/2`` (independent noise per point) instead of the Everett differences; it
         differs from the default by the reversal points' noise only.
-
-    ``smoothing`` may also be ``"variforc"`` or a
-    :class:`~analysis.identification.variforc.VariforcParameters`: VARIFORC smoothing (Egli
-    2013) on the lattice (protocol grid, or a regular native grid), regressed on ``M/2``; or
-    ``"auto"``: VARIFORC with the far-field half-width ``s_1`` chosen per data set among
-    :data:`AUTO_CANDIDATES` by leave-one-out cross-validation of the lattice values (the
-    choice and the scores in :attr:`PreisachIdentification.smoothing_choice`). Cross-validation
-    picks the smoothing that best predicts ``M``, which for a second derivative tends to be
-    on the light side; on the protocol lattice, whose values are interpolated between
-    neighbouring measurements, lighter still.
 
     Returns
     -------

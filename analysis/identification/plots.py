@@ -43,7 +43,7 @@ __all__ = [
 #: a negative minimum beyond this fraction of the maximum counts as meaningful (diverging map)
 NEGATIVE_FRACTION = 0.05
 CONTOUR_FRACTIONS = (0.1, 0.3, 0.5, 0.7, 0.9)
-#: |ρ|/se below this is not significant at 95 % (hatched on the FORC diagram)
+#: ``abs(ρ)/se`` below this is not significant at 95 % (hatched on the FORC diagram)
 SIGNIFICANT = 1.959963984540054
 
 

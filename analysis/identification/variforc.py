@@ -5,7 +5,7 @@ VARIFORC
 Egli, R. (2013), *VARIFORC: An optimized protocol for calculating non-regular first-order
 reversal curve (FORC) diagrams*, Global and Planetary Change 110, 302–320. The FORC density is a
 weighted local quadratic regression whose window half-widths, in units of the field step ``Δ``,
-vary over the diagram: ``s_c`` across (along ``B_c``) and ``s_b`` along ``B_u``,
+vary over the diagram: ``s_c`` across (along ``B_c``) and ``s_b`` along ``B_u``::
 
     s_c(B_c) = min( max((1 − λ) s_c1 + λ |B_c|/Δ,  s_c0),  max(s_c0, |B_c|/Δ) )
     s_b(B_u) = min( max((1 − λ) s_b1 + λ |B_u − B_u0|/Δ,  s_b0),  max(s_b0, |B_u − B_u0|/Δ) )

@@ -18,6 +18,7 @@ import pytest
 from support_paths import DATA
 
 from analysis.cli import main
+from analysis.identification.normalization import normalized_unit, sample_amount
 
 HYBRID = DATA / "forc_micromag_0016_hybrid_si.frc"
 CGS = DATA / "forc_micromag_0015_cgs.frc"
@@ -141,20 +142,12 @@ def test_mass_normalisation_from_the_header(tmp_path):
     assert per_kg["irreversible_mass"] == pytest.approx(
         plain["irreversible_mass"] / 25e-6, rel=1e-12
     )
-    given = run_json(
-        [
-            "--input",
-            str(HYBRID),
-            "--normalize",
-            "volume",
-            "--volume",
-            "2e-9",
-            "--out",
-            str(tmp_path / "c"),
-        ]
-    )
-    assert given["mass_unit"] == "A/m"
-    assert given["peak_rho"] == pytest.approx(plain["peak_rho"] / 2e-9, rel=1e-12)
+    # the volume from the header, with its unit (A·m²/m³ = A/m), and the refusals
+    assert sample_amount({"Volume": "+2.0E+00 mm³"}, "volume") == pytest.approx(2e-9, rel=1e-15)
+    assert normalized_unit("A·m²", "volume") == "A/m"
+    for header in ({"Mass": "N/A"}, {"Mass": "+1.0E+00"}, {}):
+        with pytest.raises(ValueError, match="pass it with --mass|pass --mass"):
+            sample_amount(header, "mass")
 
 
 def test_readme_is_not_a_forc_file(tmp_path, capsys):
