@@ -74,7 +74,7 @@ __all__ = ["register", "run"]
 IDENTIFY_MODELS = ("dimers", "erf-play", "play", "preisach-uniform")
 #: models whose density the paper states (N(s; 0, R²) δ(r − p/2)): only these get its metrics
 PAPER_MODELS = ("dimers", "erf-play")
-FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks")
+FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks", "segments")
 #: the grid step of a model's identification (the paper's fig:preis_dens)
 DEFAULT_STEP = 0.1
 

@@ -16,8 +16,11 @@ such), never with a ``UnicodeDecodeError``; binary, compressed or BOM-less UTF-1
 refused as ``"PATH: not a text FORC file (WHAT)"``, and with format detection a text file that
 is none of the formats as ``"PATH: not a FORC file this toolkit recognises; ..."``.
 
-Data-only files (two columns, no header, a blank line after every curve; ``columns=``
-``"field,moment"`` or ``"moment,field"``) are read by
+Irregular FORC protocols written as MicroMag "Direct moment vs. field; Multiple segments"
+exports are reconstructed from their segment script by
+:mod:`~analysis.identification.forc_files.segments` (format ``"segments"``, detected from
+line 2; remanence FORCs are refused). Data-only files (two columns, no header, a blank line
+after every curve; ``columns=`` ``"field,moment"`` or ``"moment,field"``) are read by
 :mod:`~analysis.identification.forc_files.blocks` (format ``"blocks"``).
 
 Formats (one module each in :mod:`analysis.identification.forc_files`):
@@ -47,6 +50,11 @@ from analysis.identification.forc_files.common import DATA_LINE, MicroMagData, d
 from analysis.identification.forc_files.csv_format import read_csv, write_csv
 from analysis.identification.forc_files.lakeshore import read_lakeshore_csv
 from analysis.identification.forc_files.micromag import read_micromag, write_micromag
+from analysis.identification.forc_files.segments import (
+    SEGMENTS_TITLE,
+    read_segments,
+    write_segments,
+)
 from analysis.identification.memory import check_memory, estimate_read_bytes
 
 __all__ = [
@@ -61,9 +69,11 @@ __all__ = [
     "detect_format",
     "read_blocks",
     "write_blocks",
+    "read_segments",
+    "write_segments",
 ]
 
-FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks")
+FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks", "segments")
 #: the formats :func:`detect_format` recognises, as its refusal names them
 KNOWN_FORMATS = (
     "MicroMag 2900/3900 FORC text export (line 1 starts with 'MicroMag'), "
@@ -92,6 +102,8 @@ def detect_format(path: str | Path) -> str:
     """
     lines = decode(path).splitlines()[:200]
     if lines and lines[0].lstrip().startswith("MicroMag"):
+        if len(lines) > 1 and lines[1].strip() == SEGMENTS_TITLE:
+            return "segments"
         return "micromag"
     for k, raw in enumerate(lines):
         if DATA_LINE.match(raw.strip()):
@@ -132,6 +144,8 @@ def read_forc_file(
         return read_micromag(path, **kwargs)
     if format == "blocks":
         return read_blocks(path, **kwargs)
+    if format == "segments":
+        return read_segments(path, **kwargs)
     return read_lakeshore_csv(path, **kwargs)
 
 
