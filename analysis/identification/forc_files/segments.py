@@ -73,10 +73,14 @@ def read_segments(path: str | Path) -> MicroMagData:
         elif DATA_LINE.match(line) and line.count(",") == 1:
             h, m = line.split(",")
             data.append((parse_float(h, lineno, "field"), parse_float(m, lineno, "moment"), lineno))
+    if not script:
+        raise ValueError(
+            f"line 2: a '{SEGMENTS_TITLE}' export without its SCRIPT table of segments (number, "
+            "averaging time, initial field, increment, final field, pause, final index): the "
+            "curves cannot be reconstructed"
+        )
     if units not in _UNITS:
         raise ValueError(f"{path}: 'Units of measure' must be cgs, SI or Hybrid SI, got {units!r}")
-    if not script:
-        raise ValueError(f"{path}: no SCRIPT table of segments (number, ..., final index)")
     if script[-1][3] != len(data):
         raise ValueError(
             f"line {script[-1][4]}: the script ends at data index {script[-1][3]}, the file "
