@@ -17,8 +17,9 @@ measured fields:
 * a rising segment (final > initial) measures its points at ``initial + k·increment`` and
   continues the current curve; consecutive segments share their end points, so points measured
   twice at one commanded field are averaged (field and moment);
-* a falling segment (the sweep from saturation to the next reversal field) measures nothing
-  that belongs to a curve and is skipped.
+* a falling segment (the sweep from saturation to the next reversal field), a rising one at
+  the calibration field or before the first reversal point measure nothing that belongs to a
+  curve and are skipped (counted in the notes).
 
 Remanence FORCs (points measured back at zero field) are not reconstructed: a point whose
 measured field is farther than 10 % of the calibration field from its commanded field is
@@ -98,6 +99,7 @@ def read_segments(path: str | Path) -> MicroMagData:
     curves: list[dict[float, list[tuple[float, float, int]]]] = []
     cal_h, cal_m = [], []
     start = 0
+    skipped = 0
     for initial, step, final, index, lineno in script:
         points = data[start:index]
         if index < start:
@@ -112,10 +114,9 @@ def read_segments(path: str | Path) -> MicroMagData:
             else:
                 curves.append({initial: [points[0]]})
         elif final > initial:
-            if not points:
+            if not points or not curves or abs(initial - h_cal) <= tol:
+                skipped += len(points)  # at saturation, or before the first reversal point
                 continue
-            if not curves:
-                raise ValueError(f"line {lineno}: a rising segment before any reversal point")
             n = len(points)
             commanded = initial + step * np.arange(n) if n > 1 else np.array([initial])
             if n > 1 and abs(commanded[-1] - final) > tol:
@@ -130,7 +131,7 @@ def read_segments(path: str | Path) -> MicroMagData:
                     )
                 curves[-1].setdefault(_key(float(c), curves[-1], tol), []).append(p)
         elif points:
-            continue  # a falling sweep that measured points: not part of a FORC
+            skipped += len(points)  # a falling sweep that measured points: not part of a FORC
     rev, fields, moments = [], [], []
     for curve in curves:
         keys = sorted(curve)
@@ -143,7 +144,8 @@ def read_segments(path: str | Path) -> MicroMagData:
     if not rev:
         raise ValueError(f"{path}: no FORC in the script")
     notes = (
-        f"irregular FORC protocol: {len(rev)} curves reconstructed from {len(script)} segments",
+        f"irregular FORC protocol: {len(rev)} curves reconstructed from {len(script)} segments"
+        + (f"; {skipped} points at saturation or outside the curves skipped" if skipped else ""),
     )
     return MicroMagData(
         ReversalCurves(np.array(rev), tuple(fields), tuple(moments), "pike"),
