@@ -38,6 +38,7 @@ def test_docs_build_with_warnings_as_errors(tmp_path):
         "drive_operators",
         "couple_oscillator",
         "identify_density",
+        "forc_uncertainty",
         "fit_and_compensate",
         "bifurcation_sweep",
     ):

@@ -24,6 +24,8 @@ from analysis.cli._build import (
     model_record,
     option_error,
 )
+from analysis.cli._identify_batch import input_files, run_batch
+from analysis.cli._identify_measured import amount_option, rho_unit, smoothing_option
 from analysis.cli._options import (
     add_model_options,
     add_output_options,
@@ -39,6 +41,8 @@ from analysis.cli._output import (
 from analysis.cli._parsing import (
     CliError,
     add_subcommand,
+    int_at_least,
+    nonnegative_float,
     positive_float,
 )
 from analysis.experiments.models import build_operator
@@ -51,11 +55,17 @@ from analysis.identification import (
 )
 from analysis.identification.forc_io import detect_format, read_forc_file
 from analysis.identification.memory import MemoryBoundError
+from analysis.identification.normalization import (
+    NORMALIZATIONS,
+    normalized_unit,
+)
 from analysis.identification.plots import (
     figure_forc,
     figure_preisach_density,
     figure_single_density,
 )
+from analysis.identification.uncertainty import summarize_uncertainty
+from analysis.identification.variforc import VariforcParameters
 from hysteresis._validation import check_grid_nodes
 
 __all__ = ["register", "run"]
@@ -64,7 +74,7 @@ __all__ = ["register", "run"]
 IDENTIFY_MODELS = ("dimers", "erf-play", "play", "preisach-uniform")
 #: models whose density the paper states (N(s; 0, R²) δ(r − p/2)): only these get its metrics
 PAPER_MODELS = ("dimers", "erf-play")
-FORMATS = ("auto", "csv", "micromag", "lakeshore")
+FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks", "segments")
 #: the grid step of a model's identification (the paper's fig:preis_dens)
 DEFAULT_STEP = 0.1
 
@@ -101,24 +111,93 @@ def register(subparsers: Any) -> None:
     )
     g.add_argument(
         "--smoothing",
-        type=positive_float,
         nargs="+",
         default=None,
         metavar="SF",
         help="smoothing factor SF, or SF_R SF_S (window half-widths across r and along s, in "
-        "grid steps, > 0); default: none for models, 3 for --input",
+        "grid steps, > 0), or 'variforc' (--input: VARIFORC, Egli 2013, parameters --sc0 "
+        "--sc1 --sb0 --sb1 --lambda), or 'auto' (--input: VARIFORC with its half-width chosen "
+        "per file by leave-one-out cross-validation); default: none for models, 3 for --input",
+    )
+    defaults = VariforcParameters()
+    for name, what in (
+        ("sc0", "across Bc on the ridge Bc = 0"),
+        ("sc1", "across Bc far from Bc = 0"),
+        ("sb0", "along Bu on the ridge Bu = 0"),
+        ("sb1", "along Bu far from Bu = 0"),
+    ):
+        g.add_argument(
+            f"--{name}",
+            type=positive_float,
+            default=None,
+            metavar="S",
+            help=f"--smoothing variforc: half-width {what}, in field steps (>= 1; default "
+            f"{getattr(defaults, name):g}, PmagPy/FORCinel)",
+        )
+    g.add_argument(
+        "--lambda",
+        dest="lam",
+        type=nonnegative_float,
+        default=None,
+        metavar="L",
+        help=f"--smoothing variforc: rate of the linear growth of the half-widths away from the "
+        f"ridges, in [0, 1] (default {defaults.lam:g})",
+    )
+    g.add_argument(
+        "--normalize",
+        choices=NORMALIZATIONS,
+        default="none",
+        help="--input: divide the moments by the sample's mass (A·m²/kg) or volume (A/m), "
+        "from the header's Mass/Volume (with its unit) or --mass/--volume",
+    )
+    g.add_argument(
+        "--mass",
+        type=positive_float,
+        default=None,
+        metavar="KG",
+        help="--normalize mass: the sample's mass in kg (> 0; default: the file header's)",
+    )
+    g.add_argument(
+        "--volume",
+        type=positive_float,
+        default=None,
+        metavar="M3",
+        help="--normalize volume: the sample's volume in m³ (> 0; default: the file header's)",
+    )
+    g.add_argument(
+        "--uncertainty",
+        action="store_true",
+        help="--input: standard error of rho at every node, significance contours on the "
+        "diagram, the peak with an interval and the irreversible mass with its error",
     )
     g.add_argument(
         "--input",
         type=Path,
+        nargs="+",
         default=None,
-        help="FORC data file to identify instead of a model (default: none, use --model)",
+        metavar="PATH",
+        help="FORC data file to identify instead of a model (default: none, use --model); a "
+        "directory or several files: a batch, one diagram per file in OUT/<file stem>/ and "
+        "OUT/summary.csv, OUT/summary.json",
+    )
+    g.add_argument(
+        "--workers",
+        type=int_at_least(1, 256),
+        default=1,
+        help="batch --input: files identified in parallel by this many processes (default 1)",
     )
     g.add_argument(
         "--format",
         choices=FORMATS,
         default="auto",
         help="--input format (auto: detected from the file)",
+    )
+    g.add_argument(
+        "--columns",
+        choices=("field,moment", "moment,field"),
+        default=None,
+        help="--input data-only file (two columns, no header): which column is which "
+        "(default field,moment)",
     )
     g.add_argument(
         "--reversible-ridge",
@@ -158,17 +237,6 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _smoothing(args: argparse.Namespace, default: float | None) -> tuple[float, float] | None:
-    sm = args.smoothing
-    if sm is None:
-        return None if default is None else (default, default)
-    if len(sm) not in (1, 2):
-        raise CliError(
-            f"argument --smoothing: takes one factor SF or two, SF_R SF_S; got {len(sm)} values"
-        )
-    return (sm[0], sm[0]) if len(sm) == 1 else (sm[0], sm[1])
-
-
 def _max_memory(args: argparse.Namespace) -> float | None:
     """``--max-memory`` in bytes (``None``: the library's default bound)."""
     gb = getattr(args, "max_memory", None)
@@ -185,11 +253,25 @@ def run(args: argparse.Namespace) -> int:
                     f"argument {option}: only for models; with --input the lattice comes from "
                     "the measurement (--grid-step)"
                 )
+        files = input_files(args.input)
+        if len(files) > 1 or any(p.is_dir() for p in args.input):
+            smoothing_option(args, 3.0)  # option errors before any work
+            return run_batch(args, files, _one_file)
+        if args.workers != 1:
+            raise CliError("argument --workers: only for a batch (a directory or several files)")
+        args.input = files[0]
         measured = _prepare_measured(args)
         out = prepare_out(args)
         return _run_measured(args, out, t0, *measured)
     for option, given in (
+        ("--workers", args.workers != 1),
         ("--grid-step", args.grid_step is not None),
+        ("--uncertainty", args.uncertainty),
+        ("--smoothing", args.smoothing in (["variforc"], ["auto"])),
+        ("--normalize", args.normalize != "none"),
+        ("--columns", args.columns is not None),
+        ("--mass", args.mass is not None),
+        ("--volume", args.volume is not None),
         ("--reversible-ridge", args.reversible_ridge),
         ("--drift-correction", args.drift_correction != "none"),
         ("--format", args.format != "auto"),
@@ -211,7 +293,7 @@ def _prepare_model(args: argparse.Namespace) -> tuple[Any, Any, float, Any]:
     """The operator, its thresholds (dimers), the grid's half-extent and the smoothing."""
 
     check_model_options(args)
-    smoothing = _smoothing(args, None)
+    smoothing = smoothing_option(args, None)
     # preisach-uniform: the triangle is the grid (--saturation), so records and titles name it
     args.half_extent = args.saturation if args.model == "preisach-uniform" else None
     params = model_parameters(args)
@@ -343,12 +425,18 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
         raise CliError(f"argument --input: {path}: not a regular file")
     if not os.access(path, os.R_OK):
         raise CliError(f"argument --input: {path}: not readable")
-    smoothing = _smoothing(args, 3.0)
+    smoothing = smoothing_option(args, 3.0)
     try:
         fmt = detect_format(path) if args.format == "auto" else args.format
     except (ValueError, OSError) as exc:
         raise CliError(f"argument --input: {_about(path, exc)}") from exc
     kwargs: dict[str, Any] = {}
+    if args.columns is not None:
+        if fmt != "blocks":
+            raise CliError(
+                f"argument --columns: for data-only files (two columns, no header), not {fmt!r}"
+            )
+        kwargs["columns"] = args.columns
     if args.drift_correction != "none":
         if fmt not in ("micromag", "lakeshore"):
             raise CliError(
@@ -365,6 +453,7 @@ def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, 
         raise CliError(f"argument --input: {_about(path, exc)}") from exc
     if args.grid_step is not None:
         _check_grid_step(args, data.curves)
+    args.amount = amount_option(args, data)
     return fmt, data, smoothing  # type: ignore[return-value]
 
 
@@ -397,10 +486,16 @@ def _run_measured(
     t0: float,
     fmt: str,
     data: Any,
-    smoothing: tuple[float, float],
+    smoothing: tuple[float, float] | VariforcParameters,
 ) -> int:
     """Measured FORC data: data-driven summaries only (no paper overlay)."""
 
+    variforc = isinstance(smoothing, (VariforcParameters, str))
+    if (variforc or args.uncertainty) and args.window != "rs":
+        raise CliError(
+            "argument --window: VARIFORC and --uncertainty use the rs window (the VARIFORC "
+            "law is defined across Bc and along Bu)"
+        )
     try:
         ident = identify_from_curves(
             data.curves,
@@ -410,6 +505,7 @@ def _run_measured(
             step=args.grid_step,
             window=args.window,
             max_memory=_max_memory(args),
+            uncertainty=args.uncertainty,
         )
     except MemoryBoundError as exc:
         raise CliError(f"argument --input: {args.input}: {exc}") from exc
@@ -418,6 +514,10 @@ def _run_measured(
         raise CliError(f"argument {option}: {args.input}: {exc}") from exc
     bc, bu, rho = ident.density_peak()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
+    # ρ in the field's unit: moment per T² (the readers give fields in mT: 1/mT² = 10⁶/T²)
+    rho_factor, rho_name = rho_unit(data, args.normalize)
+    amount = getattr(args, "amount", 1.0)
+    rho_factor /= amount
     report: dict[str, Any] = {
         "input": str(args.input),
         "format": fmt,
@@ -431,38 +531,91 @@ def _run_measured(
         "n_points": data.curves.n_points,
         "grid_step_mT": step,
         "grid_regular": ident.is_regular,
-        "smoothing_factor": list(smoothing),
+        "smoothing_method": ident.smoothing_method,
+        "smoothing_factor": None if variforc else list(smoothing),
+        "variforc": ident.variforc,
+        "smoothing_choice": ident.smoothing_choice,
         "window": args.window,
         "reversible_ridge": args.reversible_ridge,
         "peak_bc_mT": bc,
         "peak_bu_mT": bu,
-        "peak_rho": rho,
-        "irreversible_mass": ident.irreversible_mass,
-        "reversible_mass": ident.reversible_mass,
+        "peak_rho": rho * rho_factor,
+        "rho_unit": rho_name,
+        "irreversible_mass": ident.irreversible_mass / amount,
+        "reversible_mass": ident.reversible_mass / amount,
+        "mass_unit": normalized_unit(data.moment_unit, args.normalize),
+        "normalize": args.normalize,
+        "normalized_by": None if args.normalize == "none" else amount,
         "drift_correction": args.drift_correction,
     }
+    interval = ""
+    if args.uncertainty:
+        u = summarize_uncertainty(ident)
+        report.update(
+            peak_rho_se=u.peak_rho_se * rho_factor,
+            peak_bc_interval_mT=list(u.peak_bc_interval),
+            peak_bu_interval_mT=list(u.peak_bu_interval),
+            irreversible_mass_se=u.irreversible_mass_se / amount,
+            significant_fraction=u.significant_fraction,
+            noise_sigma=u.noise_sigma,
+        )
+        interval = (
+            f" (Bc in [{u.peak_bc_interval[0]:.4g}, {u.peak_bc_interval[1]:.4g}], Bu in "
+            f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
+        )
     stem = "identify_" + Path(args.input).stem.replace(".", "_")
     # measured data: the title names the file and the identification's parameters (there is
     # no model)
-    title = f"FORC diagram: {Path(args.input).name}, SF={smoothing[0]:g}/{smoothing[1]:g}, "
-    title += f"Δ={step:.3g} mT, window={args.window}"
+    if variforc:
+        law = "VARIFORC sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} λ={lam:g}".format(**ident.variforc)
+        if ident.smoothing_choice is not None:
+            law += " (chosen by cross-validation)"
+    else:
+        law = f"SF={smoothing[0]:g}/{smoothing[1]:g}"
+    title = f"FORC diagram: {Path(args.input).name}\n{law}, Δ={step:.3g} mT, window={args.window}"
     paths = figure_forc(
         ident,
         out,
         stem,
         title=title,
         field_unit="mT",
-        moment_unit=data.moment_unit,
+        moment_unit=normalized_unit(data.moment_unit, args.normalize),
+        rho_factor=rho_factor,
+        rho_unit=rho_name,
     )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
     report["seconds"] = time.perf_counter() - t0
     (out / "identify.json").write_text(to_json(report, indent=2) + "\n")
+    mass = f"{report['irreversible_mass']:.4g}"
+    if args.uncertainty:
+        mass += f" ± {report['irreversible_mass_se']:.2g}"
     lines = [
         f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
-        f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT; irreversible mass "
-        f"{ident.irreversible_mass:.4g}",
+        f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}; irreversible mass {mass}",
         f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}",
     ]
+    if getattr(args, "batch_child", False):
+        return report  # type: ignore[return-value]
     emit(args, report, lines)
     return 0
+
+
+# -- batches (the loop and the summary: analysis/cli/_identify_batch.py) ------------------
+
+
+def _one_file(args: argparse.Namespace, path: Path, out: Path) -> dict[str, Any]:
+    """Identify one file of a batch into ``out``; the report, or the error as one line."""
+    child = argparse.Namespace(**vars(args))
+    child.input = path
+    child.out = out
+    child.batch_child = True
+    child.json = False
+    try:
+        measured = _prepare_measured(child)
+        out.mkdir(parents=True, exist_ok=True)
+        report = _run_measured(child, out, time.perf_counter(), *measured)
+        report["status"] = "ok"
+        return report  # type: ignore[return-value]
+    except CliError as exc:
+        return {"input": str(path), "status": "failed", "error": str(exc)}

@@ -10,6 +10,7 @@ cells and masses: :mod:`analysis.identification.result`.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -29,6 +30,7 @@ from analysis.identification.smoothing import (
     grid_quadratic_density,
     local_quadratic_density,
 )
+from analysis.identification.variforc import VariforcParameters, weighted_quadratic_density
 from hysteresis._validation import check_grid_nodes
 
 __all__ = ["identify_preisach", "identify_from_curves", "auto_grid", "estimate_memory"]
@@ -130,6 +132,7 @@ def identify_from_curves(
     step: float | None = None,
     window: str = "rs",
     max_memory: float | None = None,
+    uncertainty: bool = False,
 ) -> PreisachIdentification:
     """Identify from reversal-curve data (measured or simulated, regular or irregular).
 
@@ -142,6 +145,15 @@ def identify_from_curves(
         quadratic regression of ``E`` in the window ``|Δr| <= SF_r·Δ``, ``|Δs| <= SF_s·Δ``
         (see :func:`identify_preisach`). On the native grid of irregular data the unit ``Δ`` is
         the larger of the median reversal-field spacing and the median field step.
+        May also be ``"variforc"`` or a
+        :class:`~analysis.identification.variforc.VariforcParameters`: VARIFORC smoothing (Egli
+        2013) on the lattice (protocol grid, or a regular native grid), regressed on ``M/2``; or
+        ``"auto"``: VARIFORC with the far-field half-width ``s_1`` chosen per data set among
+        ``AUTO_CANDIDATES`` by leave-one-out cross-validation of the lattice values (the
+        choice and the scores in :attr:`PreisachIdentification.smoothing_choice`). Cross-validation
+        picks the smoothing that best predicts ``M``, which for a second derivative tends to be
+        on the light side; on the protocol lattice, whose values are interpolated between
+        neighbouring measurements, lighter still.
     output_range:
         Saturation outputs (for :attr:`PreisachIdentification.mass_outside_grid`); pass
         ``(-inf, inf)`` for measured data of unknown saturation.
@@ -160,9 +172,9 @@ def identify_from_curves(
         reversal fields; each curve is interpolated linearly onto it along the field and
         neighbouring curves linearly across reversal fields. Use it for measured data, whose
         field values all differ slightly (the native grid of such data has near-zero-area
-        cells). ``"auto"`` (default): ``"protocol"`` when the union of field values has more
-        than twice as many values as the longest curve plus the number of curves (measured
-        fields), else ``"native"``.
+        cells). ``"auto"`` (default): :func:`auto_grid`; with VARIFORC or uncertainty, an
+        irregular native grid is replaced by the protocol lattice (the weighted regression
+        needs a regular lattice).
     step:
         Lattice step of the protocol grid (> 0); ignored on the native grid.
     window:
@@ -175,6 +187,12 @@ def identify_from_curves(
         :func:`~analysis.identification.memory.default_max_memory`); above it the identification
         is refused with :class:`~analysis.identification.memory.MemoryBoundError` before the
         lattice is allocated (:func:`estimate_memory` gives the estimate).
+    uncertainty:
+        Also compute the standard error of the smoothed density at every node
+        (:attr:`PreisachIdentification.density_se`; :mod:`analysis.identification.variforc`).
+        With a fixed factor the density is then the same estimator regressed on the half
+        moments ``M/2`` (independent noise per point) instead of the Everett differences; it
+        differs from the default by the reversal points' noise only.
 
     Returns
     -------
@@ -186,14 +204,29 @@ def identify_from_curves(
     """
     if grid not in GRIDS:
         raise ValueError(f"grid must be one of {GRIDS}, got {grid!r}")
+    chosen_grid = grid
     if grid == "auto":
         grid = auto_grid(curves)
     if window not in WINDOWS:
         raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
     check_memory(estimate_memory(curves, smoothing=smoothing, grid=grid, step=step), max_memory)
+    smoothing = _variforc_or(smoothing)
+    lattice = isinstance(smoothing, (VariforcParameters, str)) or (
+        uncertainty and smoothing is not None
+    )
+    if uncertainty and smoothing is None:
+        raise ValueError("uncertainty needs smoothing (a factor or VARIFORC)")
+    if lattice and window != "rs":
+        raise ValueError("VARIFORC and uncertainty use the rs window; window must be 'rs'")
+    if lattice and chosen_grid == "auto" and grid == "native":
+        union = np.unique(np.concatenate(curves.fields))
+        if not _is_regular(*_native_axes(curves, union, np.sort(curves.reversal_field))):
+            grid = "protocol"  # the lattice regression needs a regular lattice
     if grid == "protocol":
         ext = False if extend is None else bool(extend)
-        return _identify_protocol(curves, smoothing, output_range, ext, step, window)
+        return _identify_protocol(
+            curves, smoothing, output_range, ext, step, window, lattice, uncertainty
+        )
     extend = True if extend is None else bool(extend)
     alpha, beta, E = _everett_table(curves)
     if alpha.size < 2 or beta.size < 2:
@@ -202,7 +235,24 @@ def identify_from_curves(
     reg_step = _is_regular(alpha, beta)
     density = None
     sm = None
-    if smoothing is not None:
+    extra: dict[str, Any] = {}
+    if lattice:
+        if reg_step is None:
+            raise ValueError(
+                "VARIFORC and uncertainty need a regular lattice: fields on one regular grid "
+                "shared by the curves, or grid='protocol'"
+            )
+        aa, bb = np.meshgrid(alpha, beta, indexing="ij")
+        valid = _native_valid(curves, alpha, beta) | ((bb > aa) if extend else False)
+        values = E + _native_offsets(curves, alpha, beta)
+        extra = _lattice_fit(
+            values, valid, valid & (bb <= aa), reg_step, smoothing, alpha[0], uncertainty
+        )
+        if uncertainty:
+            extra["noise_sigma"] = measurement_noise(curves, extra["noise_sigma"])
+        density = extra.pop("density")
+        sm = extra.pop("sm")
+    elif smoothing is not None:
         sm = _smoothing_factors(smoothing)
         unit = reg_step if reg_step is not None else _typical_step(curves)
         pa, pb, pe = _native_points(
@@ -231,7 +281,131 @@ def identify_from_curves(
         reversible_ridge=extend,
         n_curves=curves.n_curves,
         n_points=curves.n_points,
+        **extra,
     )
+
+
+#: the VARIFORC far-field half-widths s_1 = s_c1 = s_b1 that ``smoothing="auto"`` compares
+#: (ridge half-widths min(3, s_1), λ = 0.07: the defaults' shape, scaled)
+AUTO_CANDIDATES = (2.0, 3.0, 4.0, 5.0, 7.0, 9.0)
+
+
+def auto_candidates() -> list[VariforcParameters]:
+    """The VARIFORC parameter sets ``smoothing="auto"`` chooses from."""
+    return [
+        VariforcParameters(sc0=min(3.0, s), sc1=s, sb0=min(3.0, s), sb1=s) for s in AUTO_CANDIDATES
+    ]
+
+
+def _variforc_or(smoothing: Any) -> Any:
+    """``"variforc"`` -> the default :class:`VariforcParameters`; ``"auto"`` kept; anything
+    else unchanged."""
+    if isinstance(smoothing, str):
+        if smoothing == "auto":
+            return smoothing
+        if smoothing != "variforc":
+            raise ValueError(
+                f"smoothing must be a factor, a pair (SF_r, SF_s), 'variforc', 'auto' or "
+                f"VariforcParameters, got {smoothing!r}"
+            )
+        return VariforcParameters()
+    return smoothing
+
+
+def _choose(values, valid, evaluate, step, origin) -> tuple[VariforcParameters, dict]:
+    """Leave-one-out cross-validation over :func:`auto_candidates` (the mean squared
+    leave-one-out residual of the node values, on the nodes every candidate evaluates)."""
+    cands = auto_candidates()
+    fits = [
+        weighted_quadratic_density(values, valid, evaluate, step, c, origin, False) for c in cands
+    ]
+    common = np.logical_and.reduce([np.isfinite(f.loo) for f in fits])
+    if not common.any():
+        raise ValueError("automatic smoothing: no node is evaluated by every candidate")
+    scores = [float(np.mean(f.loo[common] ** 2)) for f in fits]
+    best = int(np.argmin(scores))
+    return cands[best], {
+        "criterion": "leave-one-out cross-validation of M/2 (mean squared residual)",
+        "candidates_s1": list(AUTO_CANDIDATES),
+        "scores": scores,
+        "chosen_s1": AUTO_CANDIDATES[best],
+        "nodes": int(common.sum()),
+    }
+
+
+def _lattice_fit(
+    values: np.ndarray,
+    valid: np.ndarray,
+    evaluate: np.ndarray,
+    step: float,
+    smoothing: Any,
+    origin: float,
+    errors: bool,
+) -> dict[str, Any]:
+    """The weighted lattice regression (VARIFORC or a fixed factor with standard errors) as
+    the fields of :class:`PreisachIdentification`."""
+    choice = None
+    if isinstance(smoothing, str):  # "auto"
+        smoothing, choice = _choose(values, valid, evaluate, step, origin)
+    if isinstance(smoothing, VariforcParameters):
+        fit = weighted_quadratic_density(values, valid, evaluate, step, smoothing, origin, errors)
+        sm, method, params = None, "variforc", smoothing.as_dict()
+    else:
+        sm = _smoothing_factors(smoothing)
+        fit = weighted_quadratic_density(values, valid, evaluate, step, sm, origin, errors)
+        method, params = "fixed", None
+    sigma = float(np.nanmedian(fit.sigma)) if np.any(np.isfinite(fit.sigma)) else None
+    return {
+        "density": fit.rho,
+        "sm": sm,
+        "density_se": fit.se if errors else None,
+        "smoothing_method": method,
+        "variforc": params,
+        "noise_sigma": sigma,
+        "smoothing_widths": (fit.sc, fit.sb),
+        "smoothing_choice": choice,
+    }
+
+
+def measurement_noise(curves: ReversalCurves, fallback: float | None = None) -> float | None:
+    """Noise of the half moments ``M/2``, from the fourth differences along the curves.
+
+    For white noise of standard deviation ``σ`` the fourth difference has the variance
+    ``70 σ²``; a smooth curve adds only ``h⁴`` times its fourth derivative. The median absolute
+    fourth difference over all curves (``/0.6745``: a robust standard deviation, insensitive to
+    the few steps where a curve switches sharply) gives ``σ``, halved for ``M/2``; independent
+    of the smoothing. ``fallback`` when no curve has five points.
+    """
+    diffs = [np.diff(m, 4) for m in curves.moments if m.size >= 5]
+    if not diffs:
+        return fallback
+    d = np.concatenate(diffs)
+    return float(0.5 * np.median(np.abs(d)) / 0.6744897501960817 / math.sqrt(70.0))
+
+
+def _native_valid(curves: ReversalCurves, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """Nodes of the native table that are measured points (curve x its own fields)."""
+    valid = np.zeros((alpha.size, beta.size), dtype=bool)
+    for r, h in zip(curves.reversal_field, curves.fields, strict=True):
+        if curves.convention == "mayergoyz":
+            valid[np.searchsorted(alpha, r), :] = np.isin(beta, h)
+        else:
+            valid[:, np.searchsorted(beta, r)] = np.isin(alpha, h)
+    return valid
+
+
+def _native_offsets(curves: ReversalCurves, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """``M/2 − E`` on the native table: the reversal point's half moment of each curve
+    (a function of the curve alone, so the mixed derivative of ``E`` is unchanged)."""
+    if curves.convention == "mayergoyz":  # E = (m0 − m)/2, M/2 ↔ −m/2 = E − m0/2, by α row
+        off = np.zeros(alpha.size)
+        for r, m in zip(curves.reversal_field, curves.moments, strict=True):
+            off[np.searchsorted(alpha, r)] = -0.5 * m[0]
+        return off[:, None]
+    off = np.zeros(beta.size)  # Pike: E = (m − m0)/2, M/2 = E + m0/2, by β column
+    for r, m in zip(curves.reversal_field, curves.moments, strict=True):
+        off[np.searchsorted(beta, r)] = 0.5 * m[0]
+    return off[None, :]
 
 
 def estimate_memory(
@@ -246,6 +420,11 @@ def estimate_memory(
     the lattice's node count, nothing of its size is allocated)."""
     if grid == "auto":
         grid = auto_grid(curves)
+    smoothing = _variforc_or(smoothing)
+    if isinstance(smoothing, str):  # "auto": the largest candidate
+        smoothing = auto_candidates()[-1]
+    if isinstance(smoothing, VariforcParameters):  # the lattice path: its far-field window
+        smoothing = (smoothing.sc1, smoothing.sb1)
     sm = None if smoothing is None else _smoothing_factors(smoothing)
     if grid == "protocol":
         n = protocol_lattice(curves, step).size
@@ -259,16 +438,41 @@ def estimate_memory(
 def auto_grid(curves: ReversalCurves) -> str:
     """The grid ``identify_from_curves(grid="auto")`` uses: ``"protocol"`` when the union of
     field values has more than twice as many values as the longest curve plus the number of
-    curves (measured fields, different on every curve), else ``"native"``."""
-    n_union = np.unique(np.concatenate(curves.fields)).size
+    curves (measured fields, different on every curve) or when the fields lie on one uniform
+    grid but the native table would not be square (its nodes then are not one regular
+    lattice), else ``"native"``."""
+    union = np.unique(np.concatenate(curves.fields))
     longest = max(h.size for h in curves.fields)
-    return "protocol" if n_union > 2 * (longest + curves.n_curves) else "native"
+    if union.size > 2 * (longest + curves.n_curves):
+        return "protocol"
+    rev = np.sort(curves.reversal_field)
+    if _is_regular(union, union) and not _is_regular(*_native_axes(curves, union, rev)):
+        # an exact uniform grid whose native table is not square (e.g. Pike curves running
+        # past the last reversal field): the protocol lattice of that grid is regular and
+        # reproduces the data at its nodes
+        return "protocol"
+    return "native"
+
+
+def _native_axes(
+    curves: ReversalCurves, union: np.ndarray, rev: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(α nodes, β nodes)`` of the native table."""
+    return (rev, union) if curves.convention == "mayergoyz" else (union, rev)
 
 
 def _protocol_table(
     curves: ReversalCurves, step: float | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Everett table on the protocol lattice: ``(nodes, E[α, β], measured[α, β], step)``."""
+    return _protocol_tables(curves, step)[:4]
+
+
+def _protocol_tables(
+    curves: ReversalCurves, step: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+    """:func:`_protocol_table` plus ``M/2 − E`` (the curves' reversal half moments,
+    interpolated like the curves; broadcastable to the table)."""
     nodes = protocol_lattice(curves, step)
     step = float(nodes[1] - nodes[0])
     rev, fields, ev = rising_form(curves)
@@ -278,6 +482,9 @@ def _protocol_table(
     half = 0.5 * step
     g = np.empty((rev.size, n))
     meas = np.empty((rev.size, n), dtype=bool)
+    # half moment at the reversal point, rising form: Pike +m0/2, Mayergoyz (mirrored) −m0/2
+    sign = 0.5 if curves.convention == "pike" else -0.5
+    first = np.array([sign * curves.moments[c][0] for c in order])
     for row, c in enumerate(order):
         h, e = fields[c], ev[c]
         g[row] = np.interp(nodes, h, e)  # 0 below the reversal field, constant beyond the end
@@ -292,6 +499,7 @@ def _protocol_table(
         c0, c1 = k - 1, k
         t = np.clip((nodes - rev[c0]) / (rev[c1] - rev[c0]), 0.0, 1.0)
     table = (1.0 - t)[:, None] * g[c0] + t[:, None] * g[c1]
+    offset = (1.0 - t) * first[c0] + t * first[c1]
     used0 = t < 1.0 - 1e-9
     used1 = t > 1e-9
     m_tab = (meas[c0] | ~used0[:, None]) & (meas[c1] | ~used1[:, None])
@@ -305,6 +513,7 @@ def _protocol_table(
     if above.size:
         last = g[np.argmax(rev)] if rev.size else g[0]
         table[above] = last[None, :] - last[above][:, None]
+        offset[above] = last[above] + first[np.argmax(rev)]
     # table[R, h]; physical region h >= R; on and below the diagonal E = 0 exactly
     below = nodes[None, :] <= nodes[:, None]
     table[below] = 0.0
@@ -313,10 +522,12 @@ def _protocol_table(
     if curves.convention == "pike":  # alpha = h, beta = R
         E, measured = table.T.copy(), m_tab.T.copy()
         out_nodes = nodes
+        offset = offset[None, :]
     else:  # alpha = -R', beta = -h'
         E, measured = table[::-1, ::-1].copy(), m_tab[::-1, ::-1].copy()
         out_nodes = -nodes[::-1]
-    return out_nodes, E, measured, step
+        offset = offset[::-1][:, None]
+    return out_nodes, E, measured, step, offset
 
 
 def _identify_protocol(
@@ -326,12 +537,26 @@ def _identify_protocol(
     extend: bool,
     step: float | None,
     window: str = "rs",
+    lattice: bool = False,
+    uncertainty: bool = False,
 ) -> PreisachIdentification:
-    nodes, E, measured, step = _protocol_table(curves, step)
+    nodes, E, measured, step, offset = _protocol_tables(curves, step)
     mass = E[1:, :-1] - E[:-1, :-1] - E[1:, 1:] + E[:-1, 1:]
     density = None
     sm = None
-    if smoothing is not None:
+    extra: dict[str, Any] = {}
+    if lattice:
+        aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
+        valid = measured | ((bb > aa) if extend else False)
+        evaluate = measured & (bb <= aa)
+        extra = _lattice_fit(
+            E + offset, valid, evaluate, step, smoothing, float(nodes[0]), uncertainty
+        )
+        if uncertainty:
+            extra["noise_sigma"] = measurement_noise(curves, extra["noise_sigma"])
+        density = extra.pop("density")
+        sm = extra.pop("sm")
+    elif smoothing is not None:
         sm = _smoothing_factors(smoothing)
         aa, bb = np.meshgrid(nodes, nodes, indexing="ij")
         valid = measured | ((bb > aa) if extend else False)
@@ -356,6 +581,7 @@ def _identify_protocol(
         reversible_ridge=extend,
         n_curves=curves.n_curves,
         n_points=curves.n_points,
+        **extra,
     )
 
 

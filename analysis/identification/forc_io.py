@@ -16,6 +16,13 @@ such), never with a ``UnicodeDecodeError``; binary, compressed or BOM-less UTF-1
 refused as ``"PATH: not a text FORC file (WHAT)"``, and with format detection a text file that
 is none of the formats as ``"PATH: not a FORC file this toolkit recognises; ..."``.
 
+Irregular FORC protocols written as MicroMag "Direct moment vs. field; Multiple segments"
+exports are reconstructed from their segment script by
+:mod:`~analysis.identification.forc_files.segments` (format ``"segments"``, detected from
+line 2; remanence FORCs are refused). Data-only files (two columns, no header, a blank line
+after every curve; ``columns=`` ``"field,moment"`` or ``"moment,field"``) are read by
+:mod:`~analysis.identification.forc_files.blocks` (format ``"blocks"``).
+
 Formats (one module each in :mod:`analysis.identification.forc_files`):
 :mod:`~analysis.identification.forc_files.csv_format` (three columns
 ``reversal_field, field, moment``), :mod:`~analysis.identification.forc_files.micromag` (the
@@ -38,10 +45,16 @@ from pathlib import Path
 from typing import Any
 
 from analysis.identification.curves import ReversalCurves
+from analysis.identification.forc_files.blocks import is_blocks_row, read_blocks, write_blocks
 from analysis.identification.forc_files.common import DATA_LINE, MicroMagData, decode
 from analysis.identification.forc_files.csv_format import read_csv, write_csv
 from analysis.identification.forc_files.lakeshore import read_lakeshore_csv
 from analysis.identification.forc_files.micromag import read_micromag, write_micromag
+from analysis.identification.forc_files.segments import (
+    SEGMENTS_TITLE,
+    read_segments,
+    write_segments,
+)
 from analysis.identification.memory import check_memory, estimate_read_bytes
 
 __all__ = [
@@ -54,14 +67,19 @@ __all__ = [
     "read_forc",
     "read_forc_file",
     "detect_format",
+    "read_blocks",
+    "write_blocks",
+    "read_segments",
+    "write_segments",
 ]
 
-FORMATS = ("auto", "csv", "micromag", "lakeshore")
+FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks", "segments")
 #: the formats :func:`detect_format` recognises, as its refusal names them
 KNOWN_FORMATS = (
     "MicroMag 2900/3900 FORC text export (line 1 starts with 'MicroMag'), "
     "Lake Shore 8600 FORC CSV (a column-title row naming a field and a moment column with "
-    "units, then data rows) or three-column CSV 'reversal_field,field,moment'"
+    "units, then data rows), three-column CSV 'reversal_field,field,moment' or a data-only "
+    "file (two columns field,moment, a blank line after every curve)"
 )
 
 _UNIT_CELL = re.compile(r"[\[(][^\])]*[\])]")
@@ -84,6 +102,8 @@ def detect_format(path: str | Path) -> str:
     """
     lines = decode(path).splitlines()[:200]
     if lines and lines[0].lstrip().startswith("MicroMag"):
+        if len(lines) > 1 and lines[1].strip() == SEGMENTS_TITLE:
+            return "segments"
         return "micromag"
     for k, raw in enumerate(lines):
         if DATA_LINE.match(raw.strip()):
@@ -97,6 +117,8 @@ def detect_format(path: str | Path) -> str:
         if any(i != j for i in fields for j in moments) and after and DATA_LINE.match(after[0]):
             return "lakeshore"
     content = _content(lines)
+    if content and all(is_blocks_row(line) for line in content[:50]):
+        return "blocks"  # two numbers per row, no header: a data-only file
     if not content or any(DATA_LINE.match(line) for line in content[:2]):
         return "csv"
     raise ValueError(f"{path}: not a FORC file this toolkit recognises; it reads {KNOWN_FORMATS}")
@@ -120,6 +142,10 @@ def read_forc_file(
         return MicroMagData(read_csv(path, **kwargs))
     if format == "micromag":
         return read_micromag(path, **kwargs)
+    if format == "blocks":
+        return read_blocks(path, **kwargs)
+    if format == "segments":
+        return read_segments(path, **kwargs)
     return read_lakeshore_csv(path, **kwargs)
 
 

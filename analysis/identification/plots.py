@@ -37,11 +37,14 @@ __all__ = [
     "figure_single_density",
     "plot_forc_diagram",
     "figure_forc",
+    "forc_profiles",
 ]
 
 #: a negative minimum beyond this fraction of the maximum counts as meaningful (diverging map)
 NEGATIVE_FRACTION = 0.05
 CONTOUR_FRACTIONS = (0.1, 0.3, 0.5, 0.7, 0.9)
+#: ``abs(ρ)/se`` below this is not significant at 95 % (hatched on the FORC diagram)
+SIGNIFICANT = 1.959963984540054
 
 
 def plot_density_rs(
@@ -238,8 +241,14 @@ def plot_forc_diagram(
     moment_unit: str | None = "A·m²",
     cmap: str = "auto",
     contours: Sequence[float] = CONTOUR_FRACTIONS,
+    scale: float = 1.0,
+    significance: bool = True,
 ) -> Any:
     """FORC diagram of the smoothed density: ``ρ`` over ``(B_c, B_u)``; returns the mappable.
+
+    The colours show ``scale · ρ``. With ``significance`` and an identification made with
+    ``uncertainty=True``, the nodes where ``|ρ| <= 1.96 se`` (not significant at 95 %) are
+    hatched and bounded by a dashed grey line.
 
     ``cmap="auto"``: ``"RdBu_r"`` centred at 0 when at least 1 % of the nodes lie below
     −5 % of the peak (a negative region, e.g. of interacting single-domain particles), else
@@ -252,7 +261,7 @@ def plot_forc_diagram(
         raise ValueError("a FORC diagram needs an identification made with smoothing")
     aa, bb = np.meshgrid(ident.alpha, ident.beta, indexing="ij")
     rr, ss = 0.5 * (aa - bb), 0.5 * (aa + bb)
-    rho = np.where(bb <= aa, ident.density_alpha_beta, np.nan)
+    rho = scale * np.where(bb <= aa, ident.density_alpha_beta, np.nan)
     finite = np.isfinite(rho)
     if not finite.any():
         raise ValueError("the smoothed density is NaN everywhere (too few data points)")
@@ -276,6 +285,15 @@ def plot_forc_diagram(
     levels = sorted(f * top for f in contours if 0 < f < 1)
     if levels:
         ax.contour(rr, ss, masked, levels=levels, colors="k", linewidths=0.5)
+    if significance and ident.density_se is not None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sig = np.abs(ident.density_alpha_beta) / ident.density_se
+        sig = np.ma.masked_invalid(np.where(finite, sig, np.nan))
+        if sig.count() and sig.min() < SIGNIFICANT < sig.max():
+            ax.contourf(rr, ss, sig, levels=[0.0, SIGNIFICANT], colors="none", hatches=["...."])
+            ax.contour(
+                rr, ss, sig, levels=[SIGNIFICANT], colors="0.4", linewidths=0.6, linestyles="--"
+            )
     ax.set_xlim(0.0, float(rr[finite].max()))
     ax.set_ylim(float(ss[finite].min()), float(ss[finite].max()))
     ax.set_aspect("equal")
@@ -283,6 +301,23 @@ def plot_forc_diagram(
     ax.set_xlabel(f"B_c = (B − B_r)/2{unit}")
     ax.set_ylabel(f"B_u = (B + B_r)/2{unit}")
     return mappable
+
+
+def forc_profiles(ident: PreisachIdentification) -> tuple[np.ndarray, ...]:
+    """Marginal profiles of the smoothed ``ρ``: ``(B_c, ∫ρ dB_u, B_u, ∫ρ dB_c)`` on the
+    lattice (regular grids: the nodes with ``i − j = d`` lie at ``B_c = dΔ/2``, ``Δ`` apart
+    in ``B_u``; NaN nodes count as 0)."""
+    step = ident._require_regular()
+    rho = np.nan_to_num(ident.density_alpha_beta, nan=0.0)
+    i, j = np.indices(rho.shape)
+    d = (i - j).ravel()
+    keep = d >= 0
+    bc_prof = np.bincount(d[keep], weights=rho.ravel()[keep]) * step
+    k = (i + j).ravel()
+    bu_prof = np.bincount(k[keep], weights=rho.ravel()[keep]) * 0.5 * step
+    bc = np.arange(bc_prof.size) * 0.5 * step
+    bu = ident.alpha[0] + np.arange(bu_prof.size) * 0.5 * step
+    return bc, bc_prof, bu, bu_prof
 
 
 def figure_forc(
@@ -293,24 +328,65 @@ def figure_forc(
     field_unit: str | None = "mT",
     moment_unit: str | None = "A·m²",
     cmap: str = "auto",
+    rho_factor: float = 1.0,
+    rho_unit: str | None = None,
 ) -> list[Path]:
     """FORC diagram of measured data: ``stem.png`` (150 dpi), ``stem.pdf`` (vector axes,
-    raster mesh) and ``stem.npz`` (nodes, Everett table, cell masses, smoothed ρ)."""
+    raster mesh) and ``stem.npz`` (nodes, Everett table, cell masses, smoothed ρ, its standard
+    error and significance when computed).
+
+    ``ρ`` is drawn times ``rho_factor`` in ``rho_unit`` (default: moment per field unit²),
+    with the power of ten in the colour-bar label (no offset text to collide with the title);
+    on a regular lattice the ``B_c`` and ``B_u`` marginal profiles are drawn beside it."""
     import matplotlib.pyplot as plt
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    mappable = plot_forc_diagram(ax, ident, field_unit, moment_unit, cmap)
     fu = field_unit or "field unit"
     mu = moment_unit or "moment unit"
-    fig.colorbar(mappable, ax=ax, label=f"ρ = −½ ∂²M/∂B_r∂B ({mu}/{fu}²);  μ_rs = 2ρ")
+    unit = rho_unit or f"{mu}/{fu}²"
+    top = float(np.nanmax(np.abs(ident.density_alpha_beta))) * abs(rho_factor)
+    power = int(np.floor(np.log10(top))) if top > 0 and np.isfinite(top) else 0
+    scale = rho_factor / 10.0**power
+    profiles = ident.is_regular
+    if profiles:
+        fig = plt.figure(figsize=(9.6, 5.2))
+        grid = fig.add_gridspec(2, 2, width_ratios=(3, 1.3), height_ratios=(1, 1))
+        ax = fig.add_subplot(grid[:, 0])
+        ax_c, ax_u = fig.add_subplot(grid[0, 1]), fig.add_subplot(grid[1, 1])
+    else:
+        fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    mappable = plot_forc_diagram(ax, ident, field_unit, moment_unit, cmap, scale=scale)
+    exp = f"$10^{{{power}}}$ " if power else ""
+    fig.colorbar(mappable, ax=ax, label=f"ρ = −½ ∂²M/∂B_r∂B ({exp}{unit});  μ_rs = 2ρ")
+    if profiles:
+        # rho_factor converts field unit⁻²; a profile has one field power less
+        bc, pc, bu, pu = forc_profiles(ident)
+        pfac = np.sqrt(abs(rho_factor))
+        punit = f"{mu}/T" if rho_unit and rho_unit.endswith("/T²") else f"{mu}/{fu}"
+        ax_c.plot(bc, pc * pfac, "k-", lw=1)
+        ax_c.set_xlabel(f"B_c ({fu})")
+        ax_c.set_title(f"∫ρ dB_u ({punit})", fontsize=8)
+        ax_u.plot(bu, pu * pfac, "k-", lw=1)
+        ax_u.set_xlabel(f"B_u ({fu})")
+        ax_u.set_title(f"∫ρ dB_c ({punit})", fontsize=8)
+        for a in (ax_c, ax_u):
+            a.tick_params(labelsize=7)
+            a.yaxis.get_offset_text().set_fontsize(7)
     if title:
-        ax.set_title(title, fontsize=9)
+        fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
     paths = [out_dir / f"{stem}.png", out_dir / f"{stem}.pdf", out_dir / f"{stem}.npz"]
     fig.savefig(paths[0], dpi=150, bbox_inches="tight")
     fig.savefig(paths[1], dpi=150, bbox_inches="tight")
     plt.close(fig)
+    extra = {}
+    if ident.density_se is not None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            extra = {
+                "rho_se": ident.density_se,
+                "significance": ident.density_alpha_beta / ident.density_se,
+            }
     np.savez_compressed(
         paths[2],
         alpha=ident.alpha,
@@ -318,5 +394,7 @@ def figure_forc(
         everett=ident.everett,
         cell_mass=ident.cell_mass,
         rho=ident.density_alpha_beta,
+        rho_factor=rho_factor,
+        **extra,
     )
     return paths

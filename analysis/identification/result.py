@@ -68,6 +68,22 @@ class PreisachIdentification:
         ``E = 0`` for ``β >= α`` used in the regression) or excludes it (measured points only).
     n_curves, n_points:
         Size of the data set the identification was made from (``None`` if not from curves).
+    density_se:
+        Standard error of :attr:`density_alpha_beta` at every node (``uncertainty=True``), or
+        ``None``.
+    smoothing_method:
+        ``"fixed"`` (the factors in :attr:`smoothing`) or ``"variforc"`` (parameters in
+        :attr:`variforc`; :attr:`smoothing` is then ``None``).
+    variforc:
+        The VARIFORC parameters (``sc0, sc1, sb0, sb1, lam, bu0``) or ``None``.
+    noise_sigma:
+        Noise of the half moments ``M/2`` estimated from the fourth differences along the
+        curves (:func:`~analysis.identification.density.measurement_noise`), with
+        ``density_se``; else ``None``.
+    smoothing_widths:
+        Window half-widths ``(s_c, s_b)`` per node in steps (lattice regression), or ``None``.
+    smoothing_choice:
+        With ``smoothing="auto"``: the criterion, the candidates, their scores and the choice.
     """
 
     alpha: np.ndarray
@@ -83,6 +99,12 @@ class PreisachIdentification:
     reversible_ridge: bool = True
     n_curves: int | None = None
     n_points: int | None = None
+    density_se: np.ndarray | None = None
+    smoothing_method: str = "fixed"
+    variforc: dict | None = None
+    noise_sigma: float | None = None
+    smoothing_widths: tuple[np.ndarray, np.ndarray] | None = None
+    smoothing_choice: dict | None = None
 
     # -- totals ----------------------------------------------------------------------------
     @property

@@ -25,6 +25,11 @@ follow the MicroMag and Lake Shore file descriptions (see :mod:`analysis.identif
   of a curve (fewer curves and points than announced, no end marker).
 * ``forc_micromag_irregular.frc``: a "Direct moment vs. field; Multiple segments" export
   (refused by the reader).
+* ``forc_micromag_segments.frc`` and ``forc_micromag_segments_regular.frc``: one irregular
+  FORC protocol (reversal fields and fields on the irregular lattice of
+  :func:`irregular_nodes`, 30 curves) of a known discrete Preisach model (:func:`segments_model`:
+  3000 relays, seeded), written as a "Direct moment vs. field; Multiple segments" export (the
+  segment script, every inner field measured twice) and as a regular MicroMag FORC file.
 * ``forc_lakeshore_8600.csv``: Lake Shore 8600-style CSV (time, field in T, moment in A·m²),
   one row per point, calibration points in the stream.
 """
@@ -36,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from analysis.identification import measure_reversal_curves, regular_grid
-from analysis.identification.forc_io import write_csv, write_micromag
+from analysis.identification.forc_io import write_csv, write_micromag, write_segments
 from hysteresis.play import GeneralizedPlay
 from hysteresis.preisach import PreisachModel
 
@@ -58,6 +63,10 @@ SAMPLE_FILES = {
     "aborted": HERE / "forc_micromag_0016_si_aborted.frc",
     "irregular": HERE / "forc_micromag_irregular.frc",
     "lakeshore": HERE / "forc_lakeshore_8600.csv",
+}
+SEGMENTS_FILES = {
+    "segments": HERE / "forc_micromag_segments.frc",
+    "regular": HERE / "forc_micromag_segments_regular.frc",
 }
 
 
@@ -249,7 +258,34 @@ def lakeshore(seq) -> str:
     return "\n".join(lines) + "\n"
 
 
+def segments_model() -> PreisachModel:
+    """A discrete Preisach model: 3000 relays, centres N(1.5, 0.5²), widths |N(2.5, 0.6²)|."""
+    rng = np.random.default_rng(0)
+    a = rng.normal(1.5, 0.5, 3000)
+    b = a - np.abs(rng.normal(2.5, 0.6, 3000))
+    return PreisachModel.from_relays(a, b)
+
+
+def curves_segments():
+    """Pike curves of :func:`segments_model` on the irregular lattice (reversal fields below
+    saturation: every curve has two points or more)."""
+    nodes = irregular_nodes()
+    return measure_reversal_curves(
+        segments_model(), nodes[:-1], fields=nodes, convention="pike", saturation=SATURATION
+    )
+
+
+def write_segments_files() -> None:
+    curves = curves_segments()
+    cal = np.ones(curves.n_curves)
+    write_segments(SEGMENTS_FILES["segments"], curves, SATURATION, cal)
+    write_micromag(
+        SEGMENTS_FILES["regular"], curves, calibration_field=SATURATION, calibration_moments=cal
+    )
+
+
 def main() -> None:
+    write_segments_files()
     write_csv(CSV_FILE, curves_csv())
     mm = curves_micromag()
     write_micromag(

@@ -8,7 +8,9 @@ reads (FORCinel, VARIFORC, FORCsensei):
   printable range: ``Am²``, ``µ``, ``°`` in unit lines); LF or CRLF line ends.
 * **Title.** Line 1 starts with ``MicroMag``; line 2 names the measurement. Only
   ``First-order reversal curves`` is read; ``Direct moment vs. field; Multiple segments``
-  (irregular or remanence FORC protocols), remanence curves and hysteresis loops are refused
+  (irregular or remanence FORC protocols: read by
+  :mod:`~analysis.identification.forc_files.segments`), remanence curves and hysteresis loops
+  are refused
   with a one-line ``ValueError`` naming the variant. A line after the title that starts with
   digits but is not a ``field,moment`` pair (the date/time line of Series 0016) is header.
 * **Header.** ``Key value`` (two or more spaces or a tab), ``Key = value`` or ``Key: value``

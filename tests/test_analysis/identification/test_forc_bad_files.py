@@ -27,8 +27,9 @@ CSV = DATA / "forc_erf_play_mayergoyz.csv"
 KNOWN = (
     "not a FORC file this toolkit recognises; it reads MicroMag 2900/3900 FORC text export "
     "(line 1 starts with 'MicroMag'), Lake Shore 8600 FORC CSV (a column-title row naming a "
-    "field and a moment column with units, then data rows) or three-column CSV "
-    "'reversal_field,field,moment'"
+    "field and a moment column with units, then data rows), three-column CSV "
+    "'reversal_field,field,moment' or a data-only file (two columns field,moment, a blank line "
+    "after every curve)"
 )
 
 

@@ -1,0 +1,162 @@
+"""``hyst identify --input DIR`` (or several files): the batch loop, its progress and its
+summary (``summary.csv``, ``summary.json``). One file is identified by
+:func:`analysis.cli.identify._one_file` (passed in, a module-level function so that worker
+processes can run it); a file that fails is recorded and the batch goes on.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+from analysis.cli._output import emit, prepare_out, progress_enabled, to_json
+from analysis.cli._parsing import CliError
+
+__all__ = ["SUMMARY_COLUMNS", "input_files", "run_batch"]
+
+#: columns of summary.csv
+SUMMARY_COLUMNS = (
+    "file",
+    "status",
+    "format",
+    "n_curves",
+    "peak_bc_mT",
+    "peak_bu_mT",
+    "peak_bc_lo_mT",
+    "peak_bc_hi_mT",
+    "peak_bu_lo_mT",
+    "peak_bu_hi_mT",
+    "peak_rho",
+    "peak_rho_se",
+    "rho_unit",
+    "irreversible_mass",
+    "irreversible_mass_se",
+    "mass_unit",
+    "smoothing",
+    "warnings",
+)
+
+
+def input_files(paths: list[Path]) -> list[Path]:
+    """The files of ``--input``: files as given, directories by their regular, non-hidden
+    files (sorted, not recursive); one-line errors naming the option."""
+    files: list[Path] = []
+    for path in paths:
+        if path.is_dir():
+            found = sorted(p for p in path.iterdir() if p.is_file() and not p.name.startswith("."))
+            if not found:
+                raise CliError(f"argument --input: {path}: a directory without files")
+            files += found
+        elif not path.exists():
+            raise CliError(f"argument --input: {path}: no such file")
+        else:
+            files.append(path)
+    return files
+
+
+def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
+    def pair(key: str, k: int) -> Any:
+        v = rep.get(key)
+        return v[k] if v else ""
+
+    if rep.get("smoothing_method") == "variforc":
+        smoothing = "variforc sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} lambda={lam:g}".format(
+            **rep["variforc"]
+        )
+        if rep.get("smoothing_choice"):
+            smoothing += " (cross-validation)"
+    elif rep.get("smoothing_factor"):
+        smoothing = "SF={:g}/{:g}".format(*rep["smoothing_factor"])
+    else:
+        smoothing = ""
+    warnings = list(rep.get("notes", []))
+    if rep.get("complete") is False:
+        warnings.append("incomplete measurement")
+    if rep.get("error"):
+        warnings.append(rep["error"])
+    return {
+        "file": rep["input"],
+        "status": rep["status"],
+        "format": rep.get("format", ""),
+        "n_curves": rep.get("n_curves", ""),
+        "peak_bc_mT": rep.get("peak_bc_mT", ""),
+        "peak_bu_mT": rep.get("peak_bu_mT", ""),
+        "peak_bc_lo_mT": pair("peak_bc_interval_mT", 0),
+        "peak_bc_hi_mT": pair("peak_bc_interval_mT", 1),
+        "peak_bu_lo_mT": pair("peak_bu_interval_mT", 0),
+        "peak_bu_hi_mT": pair("peak_bu_interval_mT", 1),
+        "peak_rho": rep.get("peak_rho", ""),
+        "peak_rho_se": rep.get("peak_rho_se", ""),
+        "rho_unit": rep.get("rho_unit", ""),
+        "irreversible_mass": rep.get("irreversible_mass", ""),
+        "irreversible_mass_se": rep.get("irreversible_mass_se", ""),
+        "mass_unit": rep.get("mass_unit", ""),
+        "smoothing": smoothing,
+        "warnings": "; ".join(warnings),
+    }
+
+
+def run_batch(
+    args: argparse.Namespace, files: list[Path], one_file: Callable[..., dict[str, Any]]
+) -> int:
+    """Every file into ``OUT/<stem>/``, progress on stderr, ``summary.csv`` and
+    ``summary.json``; a file that fails is recorded and the batch goes on (exit status 2 and one
+    line at the end if any failed)."""
+    out = prepare_out(args)
+    stems: dict[str, int] = {}
+    targets = []
+    for path in files:
+        stem = path.stem.replace(".", "_") or "file"
+        stems[stem] = stems.get(stem, 0) + 1
+        targets.append(out / (stem if stems[stem] == 1 else f"{stem}_{stems[stem]}"))
+    show = progress_enabled(args)
+    t0 = time.perf_counter()
+    reports: list[dict[str, Any]] = []
+    if args.workers == 1:
+        results = (one_file(args, p, o) for p, o in zip(files, targets, strict=True))
+        for k, rep in enumerate(results, 1):
+            reports.append(rep)
+            if show:
+                print(f"[{k}/{len(files)}] {rep['input']}: {rep['status']}", file=sys.stderr)
+    else:
+        with ProcessPoolExecutor(max_workers=args.workers) as pool:
+            futures = [
+                pool.submit(one_file, args, p, o) for p, o in zip(files, targets, strict=True)
+            ]
+            for k, fut in enumerate(futures, 1):
+                rep = fut.result()
+                reports.append(rep)
+                if show:
+                    print(f"[{k}/{len(files)}] {rep['input']}: {rep['status']}", file=sys.stderr)
+    rows = [_summary_row(r) for r in reports]
+    with open(out / "summary.csv", "w", newline="", encoding="utf-8") as fh:
+        writer = csv.DictWriter(fh, fieldnames=SUMMARY_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    failed = [r for r in reports if r["status"] != "ok"]
+    summary = {
+        "n_files": len(files),
+        "n_failed": len(failed),
+        "workers": args.workers,
+        "seconds": time.perf_counter() - t0,
+        "files": rows,
+        "reports": reports,
+    }
+    (out / "summary.json").write_text(to_json(summary, indent=2) + "\n")
+    lines = [
+        f"{len(files)} files, {len(files) - len(failed)} identified, {len(failed)} failed",
+        f"wrote {out / 'summary.csv'}, {out / 'summary.json'} and one folder per file",
+    ]
+    emit(args, summary, lines)
+    if failed:
+        raise CliError(
+            f"argument --input: {len(failed)} of {len(files)} files failed (first: "
+            f"{failed[0]['error']}); see {out / 'summary.json'}"
+        )
+    return 0

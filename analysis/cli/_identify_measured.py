@@ -1,0 +1,80 @@
+"""What ``hyst identify --input`` makes of its smoothing and unit options: the smoothing law
+(a factor, VARIFORC with its parameters, or ``auto``), the normalisation's divisor and the unit
+of ρ. Errors are one line naming the option (:class:`~analysis.cli._parsing.CliError`).
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from analysis.cli._parsing import CliError, positive_float
+from analysis.identification.normalization import normalized_unit, sample_amount
+from analysis.identification.variforc import VariforcParameters
+
+__all__ = ["VARIFORC_OPTIONS", "smoothing_option", "amount_option", "rho_unit"]
+
+VARIFORC_OPTIONS = ("sc0", "sc1", "sb0", "sb1", "lam")
+
+
+def smoothing_option(
+    args: argparse.Namespace, default: float | None
+) -> tuple[float, float] | VariforcParameters | None:
+    """``--smoothing`` (and the VARIFORC options) as the library takes it."""
+    sm = args.smoothing
+    given = [n for n in VARIFORC_OPTIONS if getattr(args, n, None) is not None]
+    if sm == ["auto"]:
+        if given:
+            option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
+            raise CliError(f"argument {option}: only with --smoothing variforc (auto chooses)")
+        return "auto"  # type: ignore[return-value]
+    if sm is not None and len(sm) == 1 and sm[0] == "variforc":
+        kw = {n: getattr(args, n) for n in given}
+        try:
+            return VariforcParameters(**kw)
+        except ValueError as exc:
+            name = str(exc).split()[0]
+            option = "--lambda" if name == "lambda" else f"--{name}"
+            raise CliError(f"argument {option}: {exc}") from exc
+    if given:
+        option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
+        raise CliError(f"argument {option}: only with --smoothing variforc")
+    if sm is None:
+        return None if default is None else (default, default)
+    if len(sm) not in (1, 2):
+        raise CliError(
+            f"argument --smoothing: takes one factor SF or two, SF_R SF_S, or 'variforc'; got "
+            f"{len(sm)} values"
+        )
+    try:
+        values = [positive_float(x) for x in sm]
+    except (argparse.ArgumentTypeError, ValueError) as exc:
+        raise CliError(f"argument --smoothing: {exc} (or 'variforc', 'auto')") from exc
+    return (values[0], values[0]) if len(values) == 1 else (values[0], values[1])
+
+
+def amount_option(args: argparse.Namespace, data: Any) -> float:
+    """The divisor of ``--normalize`` (1 for none), checked before any output is written."""
+    for option, kind in (("--mass", "mass"), ("--volume", "volume")):
+        if getattr(args, kind) is not None and args.normalize != kind:
+            raise CliError(f"argument {option}: only with --normalize {kind}")
+    if args.normalize == "none":
+        return 1.0
+    if data.moment_unit is None:
+        raise CliError(
+            f"argument --normalize: {args.input}: the file states no moment unit, so the "
+            "normalised unit would be unknown"
+        )
+    try:
+        return sample_amount(data.header, args.normalize, getattr(args, args.normalize))
+    except ValueError as exc:
+        raise CliError(f"argument --normalize: {args.input}: {exc}") from exc
+
+
+def rho_unit(data: Any, normalize: str = "none") -> tuple[float, str]:
+    """Factor from the identification's ρ (moment per mT²) to the field's unit, and its name:
+    ``A·m²/T²`` (×10⁶; ``A·m²/kg/T²``, ``A/m/T²`` normalised) when the file states its units,
+    else the file's own units."""
+    if data.field_unit == "mT" and data.moment_unit:
+        return 1e6, f"{normalized_unit(data.moment_unit, normalize)}/T²"
+    return 1.0, "moment/field² (as written)"
