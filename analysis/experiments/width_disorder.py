@@ -242,17 +242,18 @@ def continuum_task(
 
 
 def continuum_tasks(size: StudySize, seed: int = 0) -> list[dict]:
-    """Task dicts of the continuum: σ_r = 0 (the erf play) and every σ_r, per C and initial
-    condition (``t_end`` and the transient rounded to whole forcing periods)."""
+    """Task dicts of the continuum: σ_r = 0 (the erf play) and every σ_r, per initial
+    condition and C (``t_end`` and the transient rounded to whole forcing periods)."""
     period = 2 * math.pi / FREQUENCY
     transient = size.transient_periods * period
     t_end = math.floor(size.t_end / period + 1e-9) * period
     if not t_end > transient:
         raise ValueError(f"t_end={size.t_end} must exceed the transient ({transient:g})")
     tasks = []
-    for c in size.couplings:
-        for s in (0.0, *size.width_spreads):
-            for q0, v0 in initial_conditions(size.initial_conditions, seed):
+    # initial condition outermost: a run stopped early has every (C, σ_r) from fewer of them
+    for q0, v0 in initial_conditions(size.initial_conditions, seed):
+        for c in size.couplings:
+            for s in (0.0, *size.width_spreads):
                 tasks.append(
                     dict(
                         coupling=float(c),
