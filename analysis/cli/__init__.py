@@ -28,6 +28,7 @@ from analysis.cli import (
     paper,
     poincare,
     trajectory,
+    width_disorder,
 )
 from analysis.cli._build import last_system
 from analysis.cli._parsing import (
@@ -44,7 +45,17 @@ from oscillators.engines import DivergenceError
 __all__ = ["COMMANDS", "main", "build_parser"]
 
 #: the subcommands, in the order of ``hyst --help``
-COMMANDS = (bifurcation, dimension, ensemble, identify, lyapunov, paper, poincare, trajectory)
+COMMANDS = (
+    bifurcation,
+    dimension,
+    ensemble,
+    identify,
+    lyapunov,
+    paper,
+    poincare,
+    trajectory,
+    width_disorder,
+)
 
 
 def build_parser() -> HystArgumentParser:

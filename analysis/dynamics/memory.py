@@ -128,14 +128,17 @@ def memory_frozen_exponents(
         every P forcing periods:  step;  Y = deviations[:, :2]
             rows of memory variables that existed at the last projection with the same
             label and value (an extremum frozen through the whole interval) := 0
-            Q R = Y;  Σ += log|diag R|;  deviations := [Q, 0]
+            Q R = Y[q, v rows];  Σ += log|diag R|;  deviations := [Y R⁻¹, 0]
         λ = Σ / (t_end − transient)
 
     Memory born inside an interval (the extrema of the current oscillation, a play's ``w`` set
     at a wall) keeps its deviation; only memory older than ``P`` periods is dropped, so the
     result is the spectrum of the motion in ``(q, v)`` with memory younger than 1–2·P periods.
     A plateau of the exponents over ``P`` separates the short-lived memory (part of the
-    chaotic motion) from the long-lived, neutral extrema. For a continuous operator with a
+    chaotic motion) from the long-lived, neutral extrema. The growth is measured in the
+    ``(q, v)`` rows (the young memory is a bounded function of the recent ``δq``, so it does not
+    change the exponential rates, while counting it in the norm would bias every interval by
+    the memory it is about to drop). For a continuous operator with a
     ``branch_flow`` (the labels and values come from it).
     """
     t_end, transient = time_window(t_end, transient)
@@ -176,12 +179,13 @@ def memory_frozen_exponents(
             if lab in old and old[lab] == val:
                 y[2 + i] = 0.0
                 zeroed += 1
-        q, r = np.linalg.qr(y)
+        _, r = np.linalg.qr(y[:2])
         diag = np.abs(np.diag(r))
         if not np.all(np.isfinite(diag)) or np.any(diag == 0.0):
             raise RuntimeError("the two deviation vectors became degenerate or non-finite")
         lsum += np.log(diag)
-        set_columns(q)
+        # Y R⁻¹: the (q, v) block becomes orthonormal, the young memory rows follow it
+        set_columns(np.linalg.solve(r.T, y.T).T)
         labels, values = new_labels, new_values
     exps = -np.sort(-lsum / (n_steps * dt))
     return MemoryFrozenResult(exps, projection_periods, zeroed / n_steps, t_end, transient)

@@ -403,9 +403,7 @@ def summarize(
                 [x["frozen_kaplan_yorke"][i] for x in runs]
             )
         points.append(point)
-    finite_rows = [
-        {k: v for k, v in row.items() if not k.endswith("_values")} for row in finite
-    ]
+    finite_rows = [{k: v for k, v in row.items() if not k.endswith("_values")} for row in finite]
     return {"size": asdict(size), "continuum": points, "finite": finite_rows}
 
 
@@ -416,11 +414,13 @@ def run_study(
     progress: bool = False,
     allow_version_mismatch: bool = False,
     parts: Sequence[str] = ("continuum", "finite"),
+    finite_store: ResultStore | str | os.PathLike | None = None,
     **overrides: Any,
 ) -> dict:
     """Run (or resume) the study at ``size`` (a :data:`SIZES` name or a :class:`StudySize`,
     with ``overrides`` of its fields) and return :func:`summarize`'s record with the wall time
-    of each part (``seconds``)."""
+    of each part (``wall_seconds``). ``finite_store`` keeps the finite-N ensembles (default:
+    ``store``)."""
     if isinstance(size, str):
         if size not in SIZES:
             raise ValueError(f"size must be one of {sorted(SIZES)}, got {size!r}")
@@ -438,7 +438,13 @@ def run_study(
         timing["continuum"] = time.perf_counter() - start
     if "finite" in parts:
         start = time.perf_counter()
-        finite = run_finite(size, store, workers, progress, allow_version_mismatch)
+        finite = run_finite(
+            size,
+            store if finite_store is None else finite_store,
+            workers,
+            progress,
+            allow_version_mismatch,
+        )
         timing["finite"] = time.perf_counter() - start
     record = summarize(continuum, finite, size)
     record["wall_seconds"] = timing
