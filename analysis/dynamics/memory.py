@@ -167,8 +167,9 @@ def memory_frozen_exponents(
     set_columns(np.eye(rows, 2))
     lsum = np.zeros(2)
     zeroed = 0
-    for _ in range(n_steps):
-        stepper.step(dt)
+    for i in range(n_steps):
+        # absolute targets, as lyapunov_spectrum's loop: the same orbit to the last bit
+        stepper.step(transient + (i + 1) * dt - stepper.elapsed)
         y = stepper.deviations()[:, :2].copy()
         names = stepper.tangent_space
         new_labels, new_values = _memory(system, stepper)
