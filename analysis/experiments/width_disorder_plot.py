@@ -134,7 +134,8 @@ def plot_study(record: dict, path: str | os.PathLike) -> None:
         ax.set_xticklabels(["play"] + [f"{s:g}" for s in positive])
         ax.set_xlabel(r"width spread $\sigma_r$ (play: $\sigma_r = 0$)")
         ax.set_title(title, fontsize=10)
-        ax.legend(fontsize=6.5)
+        if ax.get_legend_handles_labels()[0]:  # a part not run leaves its panels empty
+            ax.legend(fontsize=6.5)
     size = record["size"]
     fig.suptitle(
         rf"Preisach $N(s;0,1)\,N(r;1,\sigma_r^2)$, $\zeta$ = 0.05, $\Omega$ = 1: continuum "
