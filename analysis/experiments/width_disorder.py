@@ -41,7 +41,8 @@ from analysis.dynamics.memory import (
     memory_frozen_exponents,
     neutral_count,
 )
-from analysis.experiments.ensemble import run_ensemble
+from analysis.experiments.ensemble import EXPERIMENT as ENSEMBLE_EXPERIMENT
+from analysis.experiments.ensemble import ensemble_tasks, run_ensemble
 from analysis.experiments.execution import run_tasks
 from analysis.experiments.models import build_operator
 from analysis.experiments.parameters import (
@@ -53,6 +54,7 @@ from analysis.experiments.parameters import (
     WIDTH,
 )
 from analysis.experiments.store import ResultStore
+from analysis.experiments.store_format import task_key
 from hysteresis._validation import as_generator, nonnegative_integer, positive_integer
 from oscillators import ForcedOscillator
 
@@ -307,17 +309,9 @@ def run_finite(
     transient = size.finite_transient_periods * 2 * math.pi / FREQUENCY
     rows = []
     for s in (0.0, *size.width_spreads):
-        points = run_ensemble(
-            list(size.spins),
-            list(size.couplings),
-            size.realizations,
-            seed,
-            size.finite_t_end,
-            transient,
-            store=store,
-            workers=workers,
-            progress=progress,
-            allow_version_mismatch=allow_version_mismatch,
+        args = (list(size.spins), list(size.couplings), size.realizations, seed)
+        args += (size.finite_t_end, transient)
+        kw = dict(
             damping_ratio=DAMPING_RATIO,
             frequency=FREQUENCY,
             box_max_fill=BOX_MAX_FILL,
@@ -327,13 +321,43 @@ def run_finite(
             model="preisach",
             width_spread=float(s),
         )
+        points = run_ensemble(
+            *args,
+            store=store,
+            workers=workers,
+            progress=progress,
+            allow_version_mismatch=allow_version_mismatch,
+            **kw,
+        )
+        seconds = _task_seconds(store, ensemble_tasks(*args, **kw))
         for pt in points:
             row = {"width_spread": float(s), **pt.to_json()}
+            row["task_seconds"] = seconds.get((pt.spins, pt.coupling))
             row["fraction_regular"] = pt.regular_count / pt.realizations
             row["kaplan_yorke_values"] = pt.kaplan_yorke
             row["box_counting_values"] = pt.box_counting
             rows.append(row)
     return rows
+
+
+def _task_seconds(
+    store: ResultStore | str | os.PathLike | None, tasks: list[dict]
+) -> dict[tuple[int, float], float]:
+    """Summed wall time of the stored ensemble tasks per (N, C) (as measured in the worker)."""
+    if store is None:
+        return {}
+    own = not isinstance(store, ResultStore)
+    st = ResultStore(store) if own else store
+    try:
+        out: dict[tuple[int, float], float] = {}
+        for t in tasks:
+            wall = st.get(task_key(ENSEMBLE_EXPERIMENT, t)).wall_time
+            key = (int(t["spins"]), float(t["coupling"]))
+            out[key] = out.get(key, 0.0) + float(wall or 0.0)
+        return out
+    finally:
+        if own:
+            st.close()
 
 
 def _mean_sem(x: Sequence[float]) -> tuple[float, float]:
