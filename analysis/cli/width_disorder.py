@@ -95,8 +95,9 @@ def register(subparsers: Any) -> None:
     g.add_argument(
         "--realizations",
         type=int_at_least(1, 10**6),
+        nargs="+",
         default=None,
-        help="finite N: realizations per (N, sigma_r, C)",
+        help="finite N: realizations per (N, sigma_r, C): one count, or one per --spins value",
     )
     e = p.add_argument_group("execution")
     add_store_options(e)
@@ -139,6 +140,15 @@ def run(args: argparse.Namespace) -> int:
         if odd:
             raise CliError(f"argument --spins: must be even, got {odd[0]}")
     size = replace(SIZES[args.size], **overrides)
+    if "realizations" in overrides:
+        counts = overrides["realizations"]
+        if len(counts) == 1:
+            size = replace(size, realizations=counts[0])
+        elif len(counts) != len(size.spins):
+            raise CliError(
+                f"argument --realizations: give one count or one per N ({len(size.spins)}), "
+                f"got {len(counts)}"
+            )
     try:
         continuum_tasks(size)
     except ValueError as exc:

@@ -25,6 +25,7 @@ both parts and :func:`summarize` reduces them to the JSON of ``docs/width_disord
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import time
@@ -89,7 +90,7 @@ class StudySize:
     blocks: int
     projection_periods: tuple[int, ...]
     spins: tuple[int, ...]
-    realizations: int
+    realizations: int | tuple[int, ...]
     finite_t_end: float
     finite_transient_periods: int
 
@@ -302,15 +303,25 @@ def run_finite(
     allow_version_mismatch: bool = False,
     seed: int = 0,
 ) -> list[dict]:
-    """The finite-N ensembles (registry model ``preisach``), one :func:`run_ensemble` per σ_r
-    (σ_r = 0 included: equal widths) into the same store; returns one summary row per
-    (σ_r, N, C). The task options are those of ``hyst ensemble --model preisach`` with its
-    defaults, so that an ensemble started by that command is resumed here."""
+    """The finite-N ensembles (registry model ``preisach``), one :func:`run_ensemble` per
+    (σ_r, N) (σ_r = 0 included: equal widths) into the same store, with ``size.realizations``
+    realizations (one count, or one per N); returns one summary row per (σ_r, N, C). The task
+    options are those of ``hyst ensemble --model preisach`` with its defaults, so that an
+    ensemble started by that command is resumed here."""
     transient = size.finite_transient_periods * 2 * math.pi / FREQUENCY
+    per_n = size.realizations
+    if isinstance(per_n, int):
+        per_n = (per_n,) * len(size.spins)
+    if len(per_n) != len(size.spins):
+        raise ValueError(
+            f"realizations must be one count or one per N ({len(size.spins)}), got {per_n}"
+        )
     rows = []
-    for s in (0.0, *size.width_spreads):
-        args = (list(size.spins), list(size.couplings), size.realizations, seed)
-        args += (size.finite_t_end, transient)
+    # one ensemble per (σ_r, N): the disorder seeds depend on (seed, N) only, so this is the
+    # same set of tasks as one call over every N
+    sizes = list(zip(size.spins, per_n, strict=True))
+    for s, (n, count) in itertools.product((0.0, *size.width_spreads), sizes):
+        args = ([n], list(size.couplings), count, seed, size.finite_t_end, transient)
         kw = dict(
             damping_ratio=DAMPING_RATIO,
             frequency=FREQUENCY,

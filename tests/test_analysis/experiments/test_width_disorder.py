@@ -151,6 +151,7 @@ def test_cli_finite_part_writes_json_and_figure(tmp_path, capsys):
         (["--width-spreads", "-0.1"], "argument --width-spreads"),
         (["--part", "all"], "argument --part"),
         (["--initial-conditions", "0"], "argument --initial-conditions"),
+        (["--spins", "40", "60", "--realizations", "1", "2", "3"], "argument --realizations"),
     ],
 )
 def test_cli_errors_are_one_line(argv, needle, tmp_path, monkeypatch, capsys):
