@@ -114,7 +114,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="local worker processes (default: one per core)",
     )
-    add_output_options(p, writes="width_disorder.json, width_disorder.png, results.sqlite")
+    add_output_options(p, writes="width_disorder.json and .png, results.sqlite")
     p.set_defaults(func=run)
 
 
