@@ -91,6 +91,8 @@ def plot_study(record: dict, path: str | os.PathLike) -> None:
         live = np.array([p["live_memory_mean"] for p in pts])
         ax_n.plot(x, neutral, "o-", color=col, label=f"neutral exponents, C = {c:g}")
         ax_n.plot(x, live, "s--", color=col, label=f"live memory directions, C = {c:g}")
+        low = np.array([np.mean([r["live_memory_min"] for r in p["runs"]]) for p in pts])
+        ax_n.plot(x, low, "v:", color=col, label=f"fewest live memory directions, C = {c:g}")
     fin = record["finite"]
     markers = dict(zip(sorted({r["spins"] for r in fin}), "o^sDv<>", strict=False))
     for c in sorted({r["coupling"] for r in fin}):
@@ -123,7 +125,7 @@ def plot_study(record: dict, path: str | os.PathLike) -> None:
     titles = (
         "continuum: Lyapunov exponents",
         "continuum: dimensions",
-        "continuum: memory (means over initial conditions)",
+        "continuum: memory directions (means over initial conditions)",
         "finite N (registry model 'preisach'): ensemble means",
     )
     for ax, title in zip(axes.flat, titles, strict=True):
