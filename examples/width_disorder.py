@@ -1,160 +1,72 @@
-"""Width disorder: λ_max and D_KY of the forced oscillator with a Gaussian-ridge Preisach model.
+"""Width disorder: continuum Preisach models with a spread of loop widths against finite N.
 
-    python examples/width_disorder.py [--out out/examples] [--smoke] [--t-end 3000]
-        [--transient 300] [--spreads 0.4 0.2 0.1 0.05 0.025]
+    python examples/width_disorder.py [--out out/examples] [--smoke] [--workers K]
+        [--t-end T] [--realizations R]
 
-The paper's thermodynamic limit has all elementary loops of one width p (a ridge δ(r − p/2) in
-the Preisach plane; the generalized play ``GeneralizedPlay.erf(p, R)``). Real materials have a
-width distribution: here the density is ``N(s; 0, R²)·N(r; p/2, σ_r²)``
-(:meth:`ContinuousPreisachModel.gaussian`, p = 2, R = 1) and the oscillator (ζ = 0.05, Ω = 1,
-q0 = −1, v0 = 0.1, rising from negative saturation) runs through the generic continuous engine
-with its tangent flow (memory directions: the remembered extrema of the staircase). For
-C = 2.9 and 4.0 and each σ_r the script computes the Lyapunov spectrum, λ_max and D_KY; σ_r = 0
-is the erf play itself (compiled play kernel). Nothing is tuned: one initial condition, one run
-length for all.
-
-Output (resumable: finished runs are read back, not recomputed): ``width_disorder.json`` (one
-entry per (C, σ_r, t_end, transient)) and ``width_disorder.png``.
-
-Note on λ_2 and D_KY: the tangent space of a Preisach model holds every remembered extremum.
-A perturbation copied into an extremum at a reversal (δm := δq) stays frozen until that extremum
-is wiped out, and an outer extremum that is rarely or never wiped out is a neutral direction
-(exponent 0: each value of it carries its own invariant set). In the full tangent space the
-second exponent is therefore pulled towards 0 by the long-lived extrema, and D_KY reflects the
-memory turnover rather than the chaotic (q, v) dynamics; this holds however small σ_r is, since
-the extrema stay in the state even where their influence on the output vanishes. The play
-forgets its memory perturbation at every wall hit (λ = −∞). λ_max is not affected.
+The same study as ``hyst width-disorder`` (see its help and README "What the reproduction
+finds"), through the library: :func:`analysis.experiments.width_disorder.run_study` at the
+issue's sizes (σ_r ∈ {0.0125 … 0.4}, C ∈ {2.9, 4}, three initial conditions, t = 2·10⁴,
+transient 160 periods; finite N ∈ {10³, 5·10³, 2·10⁴} with 100 realizations each), resumable
+through ``OUT/results.sqlite``, then :func:`~analysis.experiments.width_disorder_plot.plot_study`.
+For every (C, σ_r) it gives the spectrum with memory directions and its neutral exponents, the
+exponents without long-lived memory, D_KY of both and D_BC of the section; σ_r = 0 is the erf
+play. ``--smoke`` runs a tiny configuration (seconds).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import time
+import math
 from pathlib import Path
 
-import matplotlib
+from analysis._json import to_json
+from analysis.experiments.width_disorder import run_study
+from analysis.experiments.width_disorder_plot import plot_study
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from analysis.dynamics.dimensions import kaplan_yorke_dimension  # noqa: E402
-from analysis.dynamics.lyapunov import lyapunov_spectrum  # noqa: E402
-from hysteresis import ContinuousPreisachModel, GeneralizedPlay  # noqa: E402
-from oscillators import ForcedOscillator  # noqa: E402
-
-WIDTH, SPREAD, ZETA, OMEGA = 2.0, 1.0, 0.05, 1.0
-COUPLINGS = (2.9, 4.0)
-
-
-def run_one(coupling: float, width_spread: float, t_end: float, transient: float) -> dict:
-    """Spectrum of one (C, σ_r); σ_r = 0 is the erf play."""
-    if width_spread == 0.0:
-        operator = GeneralizedPlay.erf(WIDTH, SPREAD)
-    else:
-        operator = ContinuousPreisachModel.gaussian(WIDTH, SPREAD, width_spread)
-    system = ForcedOscillator(operator, coupling, ZETA, OMEGA)
-    start = time.perf_counter()
-    res = lyapunov_spectrum(system, t_end, transient, q0=-1.0, v0=0.1, progress=False)
-    exps = np.asarray(res.exponents, dtype=float)
-    # running estimate at the middle of the averaging window: |λ(T) − λ(T/2)| is a rough
-    # finite-time error bar
-    half = 0.5 * (transient + t_end)
-    i_half = int(np.argmin(np.abs(np.asarray(res.history_t) - half)))
-    lam_half = float(np.asarray(res.history)[i_half, 0])
-    return {
-        "coupling": coupling,
-        "width_spread": width_spread,
-        "t_end": t_end,
-        "transient": transient,
-        "exponents": [float(x) if np.isfinite(x) else str(x) for x in exps],
-        "lambda_max": float(exps[0]),
-        "lambda_max_half": lam_half,
-        "lambda_2": float(exps[1]),
-        "kaplan_yorke": float(kaplan_yorke_dimension(exps)),
-        "tangent_space": list(res.tangent_space),
-        "seconds": time.perf_counter() - start,
-    }
+SMOKE = dict(
+    t_end=10 * 2 * math.pi,
+    transient_periods=2,
+    section_t_end=12 * 2 * math.pi,
+    initial_conditions=1,
+    blocks=4,
+    spins=(40,),
+    realizations=2,
+    finite_t_end=10 * 2 * math.pi,
+    finite_transient_periods=2,
+)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="out/examples", help="output directory")
     parser.add_argument("--smoke", action="store_true", help="tiny sizes (for tests)")
-    parser.add_argument("--t-end", type=float, default=3000.0, help="Lyapunov run length")
-    parser.add_argument("--transient", type=float, default=300.0)
-    parser.add_argument(
-        "--spreads", type=float, nargs="+", default=[0.4, 0.2, 0.1, 0.05, 0.025], help="σ_r"
-    )
+    parser.add_argument("--workers", type=int, default=1, help="worker processes")
+    parser.add_argument("--t-end", type=float, default=None, help="continuum run length")
+    parser.add_argument("--realizations", type=int, default=None, help="finite-N realizations")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    if args.smoke:
-        args.t_end, args.transient, args.spreads = 30.0, 5.0, [0.2]
-    for s in args.spreads:
-        if not s > 0.0:
-            raise SystemExit(
-                f"--spreads must be > 0 (σ_r = 0 is the erf play, always run), got {s}"
-            )
-    store = out / ("width_disorder_smoke.json" if args.smoke else "width_disorder.json")
-    results: dict[str, dict] = json.loads(store.read_text()) if store.exists() else {}
-    spreads = [0.0] + sorted(args.spreads, reverse=True)
-    for c in COUPLINGS:
-        for s in spreads:
-            key = f"C={c:g} sigma_r={s:g} t_end={args.t_end:g} transient={args.transient:g}"
-            if key not in results:
-                results[key] = run_one(c, s, args.t_end, args.transient)
-                store.write_text(json.dumps(results, indent=1))  # resumable after each run
-            r = results[key]
-            print(
-                f"C = {c:g}, sigma_r = {s:<6g}: lambda_max = {r['lambda_max']:+.4f}, "
-                f"D_KY = {r['kaplan_yorke']:.3f}, exponents = {r['exponents'][:4]} "
-                f"({r['seconds']:.0f} s)",
-                flush=True,
-            )
-
-    fig, axes = plt.subplots(1, 3, figsize=(14, 3.8))
-    for c, color in zip(COUPLINGS, ("tab:blue", "tab:red"), strict=True):
-        rows = [
-            results[f"C={c:g} sigma_r={s:g} t_end={args.t_end:g} transient={args.transient:g}"]
-            for s in spreads
-        ]
-        sig = np.array([r["width_spread"] for r in rows[1:]])
-        lam = np.array([r["lambda_max"] for r in rows[1:]])
-        err = np.array(
-            [abs(r["lambda_max"] - r.get("lambda_max_half", r["lambda_max"])) for r in rows[1:]]
+    overrides = dict(SMOKE) if args.smoke else {}
+    if args.t_end is not None:
+        overrides["t_end"] = args.t_end
+    if args.realizations is not None:
+        overrides["realizations"] = args.realizations
+    record = run_study(
+        "quick" if args.smoke else "full",
+        store=out / "results.sqlite",
+        workers=args.workers,
+        **overrides,
+    )
+    (out / "width_disorder.json").write_text(to_json(record, indent=1) + "\n")
+    plot_study(json.loads(to_json(record)), out / "width_disorder.png")
+    for p in record["continuum"]:
+        print(
+            f"C = {p['coupling']:g}, sigma_r = {p['width_spread']:<6g}: "
+            f"lambda_1 = {p['lambda_max'][0]:+.4f}, D_KY = {p['kaplan_yorke'][0]:.3f}, "
+            f"neutral = {p['neutral']}, D_BC = {p['box_counting'][0]:.3f}"
         )
-        lam2 = np.array([r.get("lambda_2", np.nan) for r in rows[1:]])
-        dky = np.array([r["kaplan_yorke"] for r in rows[1:]])
-        axes[0].errorbar(sig, lam, yerr=err, fmt="o-", color=color, capsize=3, label=f"C = {c:g}")
-        axes[0].axhline(rows[0]["lambda_max"], color=color, ls="--", lw=1)
-        axes[1].plot(sig, lam2, "o-", color=color, label=f"C = {c:g}")
-        axes[1].axhline(rows[0].get("lambda_2", np.nan), color=color, ls="--", lw=1)
-        axes[2].plot(sig, dky, "o-", color=color, label=f"C = {c:g}")
-        axes[2].axhline(rows[0]["kaplan_yorke"], color=color, ls="--", lw=1)
-    names = (
-        r"$\lambda_\max$ (bars: $|\lambda(T) - \lambda(T/2)|$)",
-        r"$\lambda_2$",
-        r"$D_\mathrm{KY}$",
-    )
-    for ax, name in zip(axes, names, strict=True):
-        ax.set_xscale("log")
-        ax.minorticks_off()
-        ax.set_xticks(sorted(args.spreads))
-        ax.set_xticklabels([f"{x:g}" for x in sorted(args.spreads)])
-        ax.set_xlabel(r"width spread $\sigma_r$")
-        ax.set_ylabel(name)
-        ax.legend(title="dashed: erf play ($\\sigma_r = 0$)", fontsize=8, title_fontsize=8)
-    fig.suptitle(
-        f"Preisach N(s;0,1)·N(r;1,σ_r²): p = {WIDTH:g}, R = {SPREAD:g}, "
-        f"t = {args.t_end:g} (transient {args.transient:g})",
-        fontsize=10,
-    )
-    fig.tight_layout()
-    png = out / ("width_disorder_smoke.png" if args.smoke else "width_disorder.png")
-    fig.savefig(png, dpi=120)
-    print(f"wrote {png} and {store}")
+    print(f"wrote {out / 'width_disorder.png'} and {out / 'width_disorder.json'}")
     return 0
 
 

@@ -31,6 +31,7 @@ from analysis.cli import (
     paper,
     poincare,
     trajectory,
+    width_disorder,
 )
 from analysis.cli._build import last_system
 from analysis.cli._parsing import (
@@ -59,6 +60,7 @@ COMMANDS = (
     paper,
     poincare,
     trajectory,
+    width_disorder,
 )
 
 

@@ -1,0 +1,192 @@
+"""Memory directions of a Lyapunov spectrum: finite-time errors, neutral exponents, and the
+exponents of the motion without long-lived memory.
+
+A continuous Preisach staircase keeps every remembered extremum in the tangent space
+(:mod:`oscillators.engines.continuous`): a reversal pushes an extremum with ``δm := δq``, which
+then stays **frozen** until the extremum is wiped out. While it lives, such a direction carries
+its perturbation unchanged: a Lyapunov exponent 0 (a *neutral* direction), whatever the norm. The
+outermost extrema are wiped out only when the input breaks its record, so they live for times of
+the order of the run, and the spectrum in ``(q, v, extrema)`` holds exponents ``≈ 0`` that say
+nothing about the extent of the attractor.
+
+Two tools separate them:
+
+* :func:`exponent_block_errors` — the finite-time error of each exponent from block averages of
+  the running estimate (batch means), so that "neutral" means ``|λ| <= 2·error``
+  (:func:`neutral_count`);
+* :func:`memory_frozen_exponents` — an independent Benettin loop over two deviation vectors in
+  which every memory direction that survived a whole projection interval (same label, same value)
+  is set to zero at the interval's end: the two exponents of the motion in ``(q, v)`` together
+  with its short-lived memory (the extrema of the current oscillation, a play's ``w`` between
+  wall hits), without the long-lived, neutral extrema.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from analysis.dynamics.lyapunov import LyapunovResult, TangentStepper
+from hysteresis._validation import positive_integer, time_window
+from oscillators import DEFAULT_Q0, DEFAULT_V0, MAX_PERIODS
+
+__all__ = [
+    "exponent_block_errors",
+    "neutral_count",
+    "memory_frozen_exponents",
+    "MemoryFrozenResult",
+]
+
+
+def exponent_block_errors(result: LyapunovResult, blocks: int = 10) -> np.ndarray:
+    """Finite-time error of each exponent from ``blocks`` batch means of its running estimate.
+
+    Plain reading: with ``S_j(t) = λ_j(t)·(t − transient)`` the running log sum (from
+    ``result.history``, which must hold at least ``blocks`` rows; run
+    :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` with ``history_points`` >= the number
+    of QR steps for exact block edges), the block rates are
+    ``r_jb = (S_j(t_b) − S_j(t_{b−1})) / (t_b − t_{b−1})`` over ``blocks`` equal blocks of the
+    window, and the error of ``λ_j`` (the mean of the ``r_jb``) is
+    ``std_b(r_jb) / sqrt(blocks)``. Assumes blocks longer than the correlation time of the local
+    growth rates (a forcing period or a few here). A ``-inf`` exponent has error nan.
+    """
+    blocks = positive_integer(blocks, "blocks", minimum=2)
+    t = np.asarray(result.history_t, dtype=float)
+    hist = np.asarray(result.history, dtype=float)
+    if t.size < blocks:
+        raise ValueError(
+            f"blocks={blocks} needs at least {blocks} running estimates, the result holds "
+            f"{t.size} (use more history_points)"
+        )
+    elapsed = t - result.transient
+    with np.errstate(invalid="ignore"):
+        sums = hist * elapsed[:, None]
+    edges = np.unique(np.round(np.linspace(-1, t.size - 1, blocks + 1)).astype(int))
+    s = np.vstack([np.zeros((1, hist.shape[1])), sums[edges[1:]]])
+    times = np.concatenate([[0.0], elapsed[edges[1:]]])
+    with np.errstate(invalid="ignore"):
+        rates = np.diff(s, axis=0) / np.diff(times)[:, None]
+    err = np.std(rates, axis=0, ddof=1) / math.sqrt(rates.shape[0])
+    err[~np.isfinite(np.asarray(result.exponents, dtype=float))] = np.nan
+    return err
+
+
+def neutral_count(exponents: np.ndarray, errors: np.ndarray, sigmas: float = 2.0) -> int:
+    """Number of finite exponents with ``|λ_j| <= sigmas·error_j`` (zero within their error)."""
+    lam = np.asarray(exponents, dtype=float)
+    err = np.asarray(errors, dtype=float)
+    ok = np.isfinite(lam) & np.isfinite(err)
+    return int(np.count_nonzero(np.abs(lam[ok]) <= sigmas * err[ok]))
+
+
+class MemoryFrozenResult:
+    """Outcome of :func:`memory_frozen_exponents`.
+
+    Attributes: ``exponents`` (2, descending), ``projection_periods``, ``zeroed_mean`` (memory
+    directions set to zero per projection, on average), ``t_end``, ``transient``.
+    """
+
+    def __init__(
+        self,
+        exponents: np.ndarray,
+        projection_periods: int,
+        zeroed_mean: float,
+        t_end: float,
+        transient: float,
+    ) -> None:
+        self.exponents = exponents
+        self.projection_periods = projection_periods
+        self.zeroed_mean = zeroed_mean
+        self.t_end = t_end
+        self.transient = transient
+
+
+def _memory(system: Any, stepper: TangentStepper) -> tuple[tuple[str, ...], np.ndarray]:
+    """Labels and values of the memory variables of the branch the engine is on now."""
+    state = stepper.state()
+    direction = 1 if state.v >= 0.0 else -1
+    flow = system.operator.branch_flow(state.operator_state, direction)
+    return tuple(flow.labels), np.asarray(flow.memory, dtype=float)
+
+
+def memory_frozen_exponents(
+    system: Any,
+    t_end: float,
+    transient: float = 0.0,
+    q0: float = DEFAULT_Q0,
+    v0: float = DEFAULT_V0,
+    operator_state: Any = None,
+    projection_periods: int = 1,
+) -> MemoryFrozenResult:
+    """The two exponents of the motion without its long-lived memory directions.
+
+    Plain reading (two deviation vectors, the other tracked columns kept at zero)::
+
+        reinit at the initial state, transient without tangent flow; Y := [e_q, e_v]
+        every P forcing periods:  step;  Y = deviations[:, :2]
+            rows of memory variables that existed at the last projection with the same
+            label and value (an extremum frozen through the whole interval) := 0
+            Q R = Y[q, v rows];  Σ += log|diag R|;  deviations := [Y R⁻¹, 0]
+        λ = Σ / (t_end − transient)
+
+    Memory born inside an interval (the extrema of the current oscillation, a play's ``w`` set
+    at a wall) keeps its deviation; only memory older than ``P`` periods is dropped, so the
+    result is the spectrum of the motion in ``(q, v)`` with memory younger than 1–2·P periods.
+    A plateau of the exponents over ``P`` separates the short-lived memory (part of the
+    chaotic motion) from the long-lived, neutral extrema. The growth is measured in the
+    ``(q, v)`` rows (the young memory is a bounded function of the recent ``δq``, so it does not
+    change the exponential rates, while counting it in the norm would bias every interval by
+    the memory it is about to drop). For a continuous operator with a
+    ``branch_flow`` (the labels and values come from it).
+    """
+    t_end, transient = time_window(t_end, transient)
+    projection_periods = positive_integer(projection_periods, "projection_periods")
+    period = float(system.period)
+    dt = projection_periods * period
+    span = t_end - transient
+    n_steps = int(math.floor(span / dt + 1e-9))
+    if n_steps < 1:
+        raise ValueError(
+            f"t_end - transient = {span:g} is shorter than one projection interval ({dt:g})"
+        )
+    if t_end / period > MAX_PERIODS:
+        raise ValueError(f"t_end spans more than {MAX_PERIODS:.0e} forcing periods")
+    stepper = TangentStepper(system)
+    stepper.reinit(system.initial_state(q0, v0, operator_state), transient)
+    k = stepper.deviations().shape[1]
+    labels, values = _memory(system, stepper)
+
+    def set_columns(q2: np.ndarray) -> None:
+        y = np.zeros((len(stepper.tangent_space), k))
+        y[: q2.shape[0], :2] = q2
+        stepper.set_deviations(y)
+
+    rows = len(stepper.tangent_space)
+    set_columns(np.eye(rows, 2))
+    lsum = np.zeros(2)
+    zeroed = 0
+    for i in range(n_steps):
+        # absolute targets, as lyapunov_spectrum's loop: the same orbit to the last bit
+        stepper.step(transient + (i + 1) * dt - stepper.elapsed)
+        y = stepper.deviations()[:, :2].copy()
+        names = stepper.tangent_space
+        new_labels, new_values = _memory(system, stepper)
+        if tuple(names[2:]) != new_labels:  # the engine's rows are the branch's memory
+            raise RuntimeError(f"tangent rows {names} do not match the memory {new_labels}")
+        old = dict(zip(labels, values, strict=True))
+        for i, (lab, val) in enumerate(zip(new_labels, new_values, strict=True)):
+            if lab in old and old[lab] == val:
+                y[2 + i] = 0.0
+                zeroed += 1
+        _, r = np.linalg.qr(y[:2])
+        diag = np.abs(np.diag(r))
+        if not np.all(np.isfinite(diag)) or np.any(diag == 0.0):
+            raise RuntimeError("the two deviation vectors became degenerate or non-finite")
+        lsum += np.log(diag)
+        # Y R⁻¹: the (q, v) block becomes orthonormal, the young memory rows follow it
+        set_columns(np.linalg.solve(r.T, y.T).T)
+        labels, values = new_labels, new_values
+    exps = -np.sort(-lsum / (n_steps * dt))
+    return MemoryFrozenResult(exps, projection_periods, zeroed / n_steps, t_end, transient)
