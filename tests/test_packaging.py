@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+TESTS = ROOT / "tests"
 
 
 class _FakeDist:
@@ -115,3 +116,13 @@ def test_pyproject_uses_an_spdx_license_expression():
     assert any(r.startswith("setuptools>=77") for r in meta["build-system"]["requires"])
     # napoleon (numpydoc-style docstrings) ships with Sphinx: one dependency builds the docs
     assert "sphinx>=7" in meta["project"]["optional-dependencies"]["test"]
+
+
+def test_test_module_basenames_are_unique():
+    # the test folders have no __init__.py (rootdir-relative imports): two test modules with one
+    # basename make pytest's collection fail with "import file mismatch" on a fresh checkout
+    names: dict[str, list[str]] = {}
+    for path in sorted(TESTS.rglob("test_*.py")):
+        names.setdefault(path.name, []).append(str(path.relative_to(TESTS)))
+    duplicates = {name: paths for name, paths in names.items() if len(paths) > 1}
+    assert not duplicates, f"test modules share a basename: {duplicates}"
