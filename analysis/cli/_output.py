@@ -67,6 +67,13 @@ def to_json(record: Any, indent: int | None = None) -> str:
     return encode(record, indent=indent)
 
 
+def write_record(out: Path, name: str, record: dict[str, Any]) -> None:
+    """Write ``record`` as ``out/name`` (indented JSON) and note the file in ``record["json"]``."""
+    path = out / name
+    path.write_text(to_json(record, indent=2) + "\n")
+    record["json"] = str(path)
+
+
 def emit(args: argparse.Namespace, record: dict[str, Any], lines: Sequence[str]) -> None:
     """Print the record as one JSON object (``--json``) or the human-readable lines."""
     if args.json:

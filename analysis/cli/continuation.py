@@ -30,7 +30,7 @@ from analysis.cli._options import (
     add_oscillator_options,
     add_output_options,
 )
-from analysis.cli._output import announce_compilation, emit, prepare_out, to_json
+from analysis.cli._output import announce_compilation, emit, prepare_out, write_record
 from analysis.cli._parsing import (
     CliError,
     add_subcommand,
@@ -139,16 +139,15 @@ def run(args: argparse.Namespace) -> int:
         transient_periods=args.transient,
         **branch.to_dict(),
     )
-    path = out / "continuation.json"
-    path.write_text(to_json(record, indent=2) + "\n")
-    record["json"] = str(path)
+    write_record(out, "continuation.json", record)
     events = ", ".join(f"{e.kind} at {e.parameter:.10g}" for e in branch.events) or "none"
     emit(
         args,
         record,
         [
             f"{len(branch.points)} points of {args.parameter} from {args.start} toward "
-            f"{args.stop} ({branch.method}; {branch.stop_reason}); events: {events}; wrote {path}"
+            f"{args.stop} ({branch.method}; {branch.stop_reason}); events: {events}; "
+            f"wrote {record['json']}"
         ],
     )
     return 0

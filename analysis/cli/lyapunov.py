@@ -31,7 +31,7 @@ from analysis.cli._output import (
     emit,
     prepare_out,
     progress_enabled,
-    to_json,
+    write_record,
 )
 from analysis.cli._parsing import (
     add_subcommand,
@@ -93,16 +93,14 @@ def run(args: argparse.Namespace) -> int:
         transient_periods=args.transient,
         include_phase=bool(args.include_phase),
     )
-    path = out / "lyapunov.json"
-    path.write_text(to_json(record, indent=2) + "\n")
-    record["json"] = str(path)
+    write_record(out, "lyapunov.json", record)
     lines = [
         f"model {args.model}, C = {args.coupling}, averaged over "
         f"[{res.transient:g}, {res.t_end:g}], {res.n_switches} switches",
         f"  tangent space ({', '.join(res.tangent_space)})",
         *(f"  lambda_{i} = {lam: .6f}" for i, lam in enumerate(res.exponents, start=1)),
         f"  D_KY = {res.kaplan_yorke:.4f}",
-        f"wrote {path}",
+        f"wrote {record['json']}",
     ]
     emit(args, record, lines)
     return 0

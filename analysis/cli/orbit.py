@@ -32,7 +32,7 @@ from analysis.cli._options import (
     add_output_options,
     add_transient_option,
 )
-from analysis.cli._output import announce_compilation, emit, prepare_out, to_json
+from analysis.cli._output import announce_compilation, emit, prepare_out, write_record
 from analysis.cli._parsing import add_subcommand, int_at_least, positive_float
 from analysis.dynamics.periodic_orbits import MAX_ORBIT_PERIOD, find_periodic_orbit
 
@@ -101,9 +101,7 @@ def run(args: argparse.Namespace) -> int:
         transient_periods=args.transient,
         **orbit.to_dict(),
     )
-    path = out / "orbit.json"
-    path.write_text(to_json(record, indent=2) + "\n")
-    record["json"] = str(path)
+    write_record(out, "orbit.json", record)
     mults = ", ".join(f"{abs(m):.6g}" for m in orbit.multipliers)
     emit(
         args,
@@ -111,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
         [
             f"model {args.model}, C = {args.coupling}: period {orbit.period}, "
             f"{'stable' if orbit.stable else 'unstable'}, |multipliers| = ({mults}) on "
-            f"({', '.join(orbit.tangent_space)}), residual {orbit.residual:.2e}; wrote {path}"
+            f"({', '.join(orbit.tangent_space)}), residual {orbit.residual:.2e}; "
+            f"wrote {record['json']}"
         ],
     )
     return 0

@@ -230,6 +230,35 @@ def one_pass_measurements(
     return ly, rows[:n, 1].copy(), rows[:n, 2].copy(), m_t, window
 
 
+def disorder_system(
+    model: str,
+    spins: int,
+    seed: int,
+    coupling: float,
+    width: float,
+    spread: float,
+    spin_coupling: float,
+    width_spread: float,
+    damping_ratio: float,
+    frequency: float,
+) -> ForcedOscillator:
+    """The forced oscillator with one realization of a disorder model of the registry
+    (``dimers``: N spins with spin coupling J; ``preisach``: N relays with half-width spread
+    σ_r), ``seed`` its disorder seed; the one place ensembles build their systems."""
+    model = canonical_model_name(model)
+    params: dict[str, Any] = dict(spins=spins, seed=seed, width=width, spread=spread)
+    if model == "dimers":
+        params["spin_coupling"] = spin_coupling
+    elif model == "preisach":
+        params["width_spread"] = width_spread
+    else:
+        raise ValueError(
+            f"model must be 'dimers' or 'preisach' (models with disorder), got {model!r}"
+        )
+    operator = build_operator(model, **params)
+    return ForcedOscillator(operator, coupling, damping_ratio=damping_ratio, frequency=frequency)
+
+
 def ensemble_task(
     spins: int,
     coupling: float,
@@ -265,18 +294,10 @@ def ensemble_task(
     ``width_spread``);
     ``spins`` is then its number of spins/relays.
     """
-    model = canonical_model_name(model)
-    params = dict(spins=spins, seed=seed, width=width, spread=spread)
-    if model == "dimers":
-        params["spin_coupling"] = spin_coupling
-    elif model == "preisach":
-        params["width_spread"] = width_spread
-    else:
-        raise ValueError(
-            f"model must be 'dimers' or 'preisach' (models with disorder), got {model!r}"
-        )
-    operator = build_operator(model, **params)
-    system = ForcedOscillator(operator, coupling, damping_ratio=damping_ratio, frequency=frequency)
+    system = disorder_system(
+        model, spins, seed, coupling, width, spread, spin_coupling, width_spread,
+        damping_ratio, frequency,
+    )  # fmt: skip
     ly, q, v, m_t, window = one_pass_measurements(system, t_end, transient, q0, v0)
     exponents = np.asarray(ly.exponents, dtype=float)
     d_bc, d_bc_err, period = section_dimension(q, v, box_max_fill, box_min_boxes)

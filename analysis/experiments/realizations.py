@@ -29,9 +29,8 @@ from analysis.dynamics.attractors import (
     section_run,
     start_state,
 )
-from analysis.experiments.ensemble import MAX_TASKS, realization_seeds
+from analysis.experiments.ensemble import MAX_TASKS, disorder_system, realization_seeds
 from analysis.experiments.execution import run_tasks
-from analysis.experiments.models import build_operator, canonical_model_name
 from analysis.experiments.parameters import (
     DAMPING_RATIO,
     DEFAULT_Q0,
@@ -50,7 +49,6 @@ from hysteresis._validation import (
     nonnegative_integer,
     positive_integer,
 )
-from oscillators import ForcedOscillator
 
 __all__ = ["EXPERIMENT", "realization_attractor", "realization_attractors"]
 
@@ -81,17 +79,10 @@ def realization_attractor(
     that it runs in process pools. Returns ``kind`` and, when periodic, ``period``,
     ``multipliers`` (n × 2: re, im), ``tangent_space``, ``stable``, ``residual``,
     ``transient``; when aperiodic, ``max_exponent``, ``max_exponent_error``, ``kaplan_yorke``."""
-    model = canonical_model_name(model)
-    params: dict[str, Any] = dict(spins=spins, seed=seed, width=width, spread=spread)
-    if model == "dimers":
-        params["spin_coupling"] = spin_coupling
-    elif model == "preisach":
-        params["width_spread"] = width_spread
-    else:
-        raise ValueError(
-            f"model must be 'dimers' or 'preisach' (models with disorder), got {model!r}"
-        )
-    system = ForcedOscillator(build_operator(model, **params), coupling, damping_ratio, frequency)
+    system = disorder_system(
+        model, spins, seed, coupling, width, spread, spin_coupling, width_spread,
+        damping_ratio, frequency,
+    )  # fmt: skip
     run = section_run(
         system,
         start_state(system, q0, v0),
