@@ -351,7 +351,17 @@ def main() -> None:
     SAMPLE_FILES["irregular"].write_bytes(micromag_irregular().encode("cp1252"))
     SAMPLE_FILES["lakeshore"].write_text(lakeshore(seq), encoding="utf-8")
     print(
-        "wrote", ", ".join(str(p.name) for p in [CSV_FILE, MICROMAG_FILE, *SAMPLE_FILES.values()])
+        "wrote",
+        ", ".join(
+            str(p.name)
+            for p in [
+                CSV_FILE,
+                MICROMAG_FILE,
+                *SAMPLE_FILES.values(),
+                *SEGMENTS_FILES.values(),
+                REMANENCE_FILE,
+            ]
+        ),
     )
 
 

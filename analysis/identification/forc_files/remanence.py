@@ -20,6 +20,11 @@ segment script that :mod:`~analysis.identification.forc_files.segments` parses:
   point comes next):
   the curve gets the point ``(B measured in the field, moment measured at zero field)``; the
   in-field moment at ``B`` is kept as the companion in-field curve;
+* for ``B_a <= 0`` both kinds of points are first-order: the excursion to zero field and back
+  is a minor loop closed by the next, higher field (return-point memory). For ``B_a > 0`` the
+  excursion to zero field goes below ``B_a`` and erases the reversal, so the in-field
+  companions there are not FORC points (the zero-field moments are: nothing at zero field
+  depends on ``B_a > 0``, the remanent density vanishes there either way);
 * segments without points (the ramps between the fields and zero, the sweep from saturation)
   are skipped; a segment measuring several points cannot interleave zero-field points and is
   refused, as is a field point followed by another field point. A field point left without
