@@ -34,11 +34,11 @@ experiment on the mirror-image operator ``u → −u, y → −y``).
 ``μ(s) δ(r − p/2)`` is a density in ``r``-``s``). FORC software usually plots ``ρ(H_c, H_u)`` with
 the value of ``ρ(H_r, H)``, i.e. *without* that factor 2.
 
-**Remanence FORCs** (``kind="remanence"``; Zhao et al. 2017, G³ 18, 4765). Every point of a
-Pike curve is measured back at zero field after the field ``H`` was reached: ``M_rem(H_r, H)``
-is the moment at zero field after positive saturation → ``H_r`` → ``H`` → 0. For a Preisach
-operator a relay ``(α, β)`` is up at zero field iff ``β <= 0`` and (``β <= H_r`` or
-``α <= max(H, 0)``), so that
+**Remanence FORCs** (``kind="remanence"``; Zhao et al. 2017, "Magnetic domain state diagnosis
+using hysteresis reversal curves"). Every point of a Pike curve is measured back at zero field
+after the field ``H`` was reached: ``M_rem(H_r, H)`` is the moment at zero field after positive
+saturation → ``H_r`` → ``H`` → 0. For a Preisach operator a relay ``(α, β)`` is up at zero
+field iff ``β <= 0`` and (``β <= H_r`` or ``α <= max(H, 0)``), so that
 
     ρ_rem(H_r, H) = −½ ∂²M_rem/∂H_r∂H = μ(α = H, β = H_r) · [H_r <= 0 <= H],
 

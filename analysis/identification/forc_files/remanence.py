@@ -1,5 +1,6 @@
 """Remanence FORCs in MicroMag "Multiple segments" exports: every field point of a FORC is
-followed by a point measured back at zero field (Zhao et al. 2017, G³ 18, 4765: remFORC).
+followed by a point measured back at zero field (remFORC: Zhao et al. 2017, "Magnetic domain
+state diagnosis using hysteresis reversal curves").
 
 The physics of the curves (which relays the zero-field moment remembers, the remanent FORC
 density) is in :mod:`analysis.identification.curves`. This module reconstructs them from the
