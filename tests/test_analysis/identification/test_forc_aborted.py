@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import json
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from support_paths import DATA
 
 from analysis.cli import main
+from analysis.cli._identify_measured import data_warnings
 from analysis.identification import identify_from_curves, measure_reversal_curves
 from analysis.identification.curves import ReversalCurves
 from analysis.identification.forc_io import read_forc_file
@@ -113,3 +115,13 @@ def test_shipped_aborted_file_has_a_positive_irreversible_mass_and_a_warning(tmp
     (warning,) = report["warnings"]
     assert warning.startswith("aborted measurement (header announces 46 curves")
     assert "its last curve (B_r = -38.06 mT) stops at -26.07 mT" in warning
+
+
+def test_warnings_name_their_cause():
+    complete = read_forc_file(COMPLETE)
+    assert data_warnings(complete, SimpleNamespace(irreversible_mass=4e-6)) == []
+    (negative,) = data_warnings(complete, SimpleNamespace(irreversible_mass=-2e-9))
+    assert negative.startswith("the irreversible mass is negative (-2e-09): the measured curves")
+    aborted = read_forc_file(ABORTED)
+    (warning,) = data_warnings(aborted, SimpleNamespace(irreversible_mass=3e-6))
+    assert "cover reversal fields >= -38.06 mT only" in warning
