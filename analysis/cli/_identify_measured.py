@@ -1,6 +1,8 @@
 """What ``hyst identify --input`` makes of its smoothing and unit options: the smoothing law
 (a factor, VARIFORC with its parameters, or ``auto``), the normalisation's divisor and the unit
-of ρ. Errors are one line naming the option (:class:`~analysis.cli._parsing.CliError`).
+of ρ; and what it says about the data: the kind of curves (in-field or remanence FORC) and the
+warnings about them. Errors are one line naming the option
+(:class:`~analysis.cli._parsing.CliError`).
 """
 
 from __future__ import annotations
@@ -8,11 +10,22 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import numpy as np
+
 from analysis.cli._parsing import CliError, positive_float
+from analysis.identification.curves import KIND_NAMES
 from analysis.identification.normalization import normalized_unit, sample_amount
 from analysis.identification.variforc import VariforcParameters
 
-__all__ = ["VARIFORC_OPTIONS", "smoothing_option", "amount_option", "rho_unit"]
+__all__ = [
+    "VARIFORC_OPTIONS",
+    "smoothing_option",
+    "amount_option",
+    "rho_unit",
+    "curve_kind",
+    "diagram_name",
+    "data_warnings",
+]
 
 VARIFORC_OPTIONS = ("sc0", "sc1", "sb0", "sb1", "lam")
 
@@ -78,3 +91,40 @@ def rho_unit(data: Any, normalize: str = "none") -> tuple[float, str]:
     if data.field_unit == "mT" and data.moment_unit:
         return 1e6, f"{normalized_unit(data.moment_unit, normalize)}/T²"
     return 1.0, "moment/field² (as written)"
+
+
+def curve_kind(data: Any) -> str:
+    """``"FORC"`` or ``"remanence FORC"``: what the file's curves are (reports)."""
+    return KIND_NAMES[data.curves.kind]
+
+
+def diagram_name(data: Any) -> str:
+    """``"FORC diagram"`` or ``"Remanence FORC diagram"`` (titles)."""
+    name = curve_kind(data)
+    return f"{name[:1].upper()}{name[1:]} diagram"
+
+
+def data_warnings(data: Any, ident: Any) -> list[str]:
+    """What the result cannot say because of the data, one sentence each: an aborted run (the
+    region its masses and diagram cover) and a negative irreversible mass."""
+    out = []
+    curves = data.curves
+    if not data.complete and curves.convention == "pike":
+        last = int(np.argmin(curves.reversal_field))
+        others = [h[-1] for c, h in enumerate(curves.fields) if c != last]
+        end = float(curves.fields[last][-1])
+        stop = ""
+        if others and end < float(np.median(others)):
+            rev = curves.reversal_field[last]
+            stop = f"; its last curve (B_r = {rev:.4g} mT) stops at {end:.4g} mT"
+        out.append(
+            f"aborted measurement ({'; '.join(data.notes)}){stop}: the diagram and the masses "
+            f"cover reversal fields >= {curves.reversal_field[last]:.4g} mT only, the "
+            "irreversible mass misses the relays switching below"
+        )
+    if ident.irreversible_mass < 0:
+        out.append(
+            f"the irreversible mass is negative ({ident.irreversible_mass:.4g}): the measured "
+            "curves cross (noise, drift or an incomplete protocol), check them"
+        )
+    return out

@@ -25,7 +25,14 @@ from analysis.cli._build import (
     option_error,
 )
 from analysis.cli._identify_batch import input_files, run_batch
-from analysis.cli._identify_measured import amount_option, rho_unit, smoothing_option
+from analysis.cli._identify_measured import (
+    amount_option,
+    curve_kind,
+    data_warnings,
+    diagram_name,
+    rho_unit,
+    smoothing_option,
+)
 from analysis.cli._options import (
     add_model_options,
     add_output_options,
@@ -521,6 +528,8 @@ def _run_measured(
     report: dict[str, Any] = {
         "input": str(args.input),
         "format": fmt,
+        "curve_kind": curve_kind(data),
+        "warnings": data_warnings(data, ident),
         "convention": data.curves.convention,
         "units_of_measure": data.units_of_measure,
         "field_unit": data.field_unit or "as written (taken as mT)",
@@ -572,7 +581,8 @@ def _run_measured(
             law += " (chosen by cross-validation)"
     else:
         law = f"SF={smoothing[0]:g}/{smoothing[1]:g}"
-    title = f"FORC diagram: {Path(args.input).name}\n{law}, Δ={step:.3g} mT, window={args.window}"
+    title = f"{diagram_name(data)}: {Path(args.input).name}\n"
+    title += f"{law}, Δ={step:.3g} mT, window={args.window}"
     paths = figure_forc(
         ident,
         out,

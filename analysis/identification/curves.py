@@ -33,6 +33,19 @@ experiment on the mirror-image operator ``u → −u, y → −y``).
 ``dα dβ = 2 dr ds``, so a density per unit ``r``-``s`` area is ``μ_rs = 2 μ_αβ`` (the paper's
 ``μ(s) δ(r − p/2)`` is a density in ``r``-``s``). FORC software usually plots ``ρ(H_c, H_u)`` with
 the value of ``ρ(H_r, H)``, i.e. *without* that factor 2.
+
+**Remanence FORCs** (``kind="remanence"``; Zhao et al. 2017, "Magnetic domain state diagnosis
+using hysteresis reversal curves"). Every point of a Pike curve is measured back at zero field
+after the field ``H`` was reached: ``M_rem(H_r, H)`` is the moment at zero field after positive
+saturation → ``H_r`` → ``H`` → 0. For a Preisach operator a relay ``(α, β)`` is up at zero
+field iff ``β <= 0`` and (``β <= H_r`` or ``α <= max(H, 0)``), so that
+
+    ρ_rem(H_r, H) = −½ ∂²M_rem/∂H_r∂H = μ(α = H, β = H_r) · [H_r <= 0 <= H],
+
+the in-field density restricted to the relays that are bistable at zero field
+(``|H_u| <= H_c``, the remanence carriers; Egli's remanent FORC diagram); it vanishes where
+``H_r > 0`` or ``H < 0`` and carries no reversible ridge. The curves are processed exactly like
+in-field curves; :attr:`ReversalCurves.kind` says which they are.
 """
 
 from __future__ import annotations
@@ -58,6 +71,11 @@ __all__ = [
 ]
 
 CONVENTIONS = ("mayergoyz", "pike")
+#: what the moments of a set of curves are: measured in the field (the usual FORC) or back at
+#: zero field after every field point (remanence FORC, module docstring)
+KINDS = ("in-field", "remanence")
+#: how results and diagrams name the curves of each kind
+KIND_NAMES = {"in-field": "FORC", "remanence": "remanence FORC"}
 #: largest number of nodes along one side of the protocol lattice of measured data
 #: (:func:`protocol_lattice`; the lattice is square: memory and time grow with the square of the
 #: node count). A bound of its own: ``hysteresis._validation.MAX_GRID_NODES`` (2001) limits the
@@ -101,16 +119,22 @@ class ReversalCurves:
     convention:
         ``"mayergoyz"`` (from negative saturation up to α, down to β) or ``"pike"`` (from
         positive saturation down to H_r, up to H).
+    kind:
+        ``"in-field"`` (moments measured at the fields) or ``"remanence"`` (each moment
+        measured back at zero field after its field; module docstring).
     """
 
     reversal_field: np.ndarray
     fields: tuple[np.ndarray, ...]
     moments: tuple[np.ndarray, ...]
     convention: str = "mayergoyz"
+    kind: str = "in-field"
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
             raise ValueError(f"convention must be one of {CONVENTIONS}, got {self.convention!r}")
+        if self.kind not in KINDS:
+            raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
         rev = np.array(self.reversal_field, dtype=float).reshape(-1)
         if len(self.fields) != rev.size or len(self.moments) != rev.size:
             raise ValueError("reversal_field, fields and moments must have one entry per curve")
@@ -170,6 +194,7 @@ class ReversalCurves:
             tuple(-h for h in self.fields),
             tuple(-m for m in self.moments),
             other,
+            self.kind,
         )
 
     def as_rows(self) -> np.ndarray:

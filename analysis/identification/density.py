@@ -281,6 +281,7 @@ def identify_from_curves(
         reversible_ridge=extend,
         n_curves=curves.n_curves,
         n_points=curves.n_points,
+        curve_kind=curves.kind,
         **extra,
     )
 
@@ -490,6 +491,13 @@ def _protocol_tables(
         g[row] = np.interp(nodes, h, e)  # 0 below the reversal field, constant beyond the end
         g[row, nodes < h[0]] = 0.0
         meas[row] = (nodes >= h[0] - half) & (nodes <= h[-1] + half)
+    # beyond its last point a curve continues parallel to the curve above it (zero density in
+    # the cells it did not measure); held constant, it would put minus the rise of the curve
+    # above into those cells (an aborted run's partial last curve: a negative mass)
+    for row in range(rev.size - 2, -1, -1):
+        end = fields[order[row]][-1]
+        beyond = nodes > end
+        g[row, beyond] += g[row + 1, beyond] - np.interp(end, nodes, g[row + 1])
     # across reversal fields: linear interpolation between the bracketing curves
     k = np.clip(np.searchsorted(rev, nodes), 1, max(rev.size - 1, 1))
     if rev.size == 1:
@@ -581,6 +589,7 @@ def _identify_protocol(
         reversible_ridge=extend,
         n_curves=curves.n_curves,
         n_points=curves.n_points,
+        curve_kind=curves.kind,
         **extra,
     )
 

@@ -19,8 +19,14 @@ is none of the formats as ``"PATH: not a FORC file this toolkit recognises; ..."
 Irregular FORC protocols written as MicroMag "Direct moment vs. field; Multiple segments"
 exports are reconstructed from their segment script by
 :mod:`~analysis.identification.forc_files.segments` (format ``"segments"``, detected from
-line 2; remanence FORCs are refused). Data-only files (two columns, no header, a blank line
-after every curve; ``columns=`` ``"field,moment"`` or ``"moment,field"``) are read by
+line 2); remanence FORC scripts (every point measured again at zero field) by
+:mod:`~analysis.identification.forc_files.remanence`, as curves of
+``kind="remanence"`` with the in-field moments in :attr:`MicroMagData.in_field_curves`. Files
+that are no FORC measurement are refused in one line saying what they are not: MicroMag
+hysteresis-loop and remanence-curve exports (line 2), Lake Shore exports whose field rises on
+fewer than two stretches (a loop, a remanence curve), binary content and empty files.
+Data-only files (two columns, no header, a blank line after every curve; ``columns=``
+``"field,moment"`` or ``"moment,field"``) are read by
 :mod:`~analysis.identification.forc_files.blocks` (format ``"blocks"``).
 
 Formats (one module each in :mod:`analysis.identification.forc_files`):
@@ -93,14 +99,21 @@ def detect_format(path: str | Path) -> str:
     """``"micromag"`` (first line starts with ``MicroMag``), ``"lakeshore"`` (before any data,
     a column-title row with one cell naming a field and another naming a moment, each with a
     unit in brackets or parentheses, followed by a data row), ``"csv"`` (the first line that is
-    not blank or a ``#`` comment, or the one after it, is a ``number, ...`` data row) or an
-    empty file (``"csv"``, whose reader says it is empty).
+    not blank or a ``#`` comment, or the one after it, is a ``number, ...`` data row),
+    ``"blocks"`` (two numbers per row, no header) or ``"segments"`` (a MicroMag "Multiple
+    segments" export: irregular or remanence FORC protocols).
+
+    An empty (or blank) file is refused as ``"PATH: an empty file (no text), not a FORC
+    file"``.
 
     Raises a one-line ``ValueError`` for a file that is none of these (``"PATH: not a FORC
     file ..."`` naming the known formats) or not text at all (``"PATH: not a text FORC file
     (WHAT)"``, from the decoding).
     """
-    lines = decode(path).splitlines()[:200]
+    text = decode(path)
+    if not text.strip():
+        raise ValueError(f"{path}: an empty file (no text), not a FORC file")
+    lines = text.splitlines()[:200]
     if lines and lines[0].lstrip().startswith("MicroMag"):
         if len(lines) > 1 and lines[1].strip() == SEGMENTS_TITLE:
             return "segments"

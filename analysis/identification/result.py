@@ -84,6 +84,10 @@ class PreisachIdentification:
         Window half-widths ``(s_c, s_b)`` per node in steps (lattice regression), or ``None``.
     smoothing_choice:
         With ``smoothing="auto"``: the criterion, the candidates, their scores and the choice.
+    curve_kind:
+        :attr:`~analysis.identification.ReversalCurves.kind` of the curves identified:
+        ``"in-field"`` or ``"remanence"`` (a remanence FORC diagram: the remanence-carrying
+        relays only, :mod:`analysis.identification.curves`).
     """
 
     alpha: np.ndarray
@@ -105,6 +109,7 @@ class PreisachIdentification:
     noise_sigma: float | None = None
     smoothing_widths: tuple[np.ndarray, np.ndarray] | None = None
     smoothing_choice: dict | None = None
+    curve_kind: str = "in-field"
 
     # -- totals ----------------------------------------------------------------------------
     @property

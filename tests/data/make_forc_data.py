@@ -30,6 +30,11 @@ follow the MicroMag and Lake Shore file descriptions (see :mod:`analysis.identif
   :func:`irregular_nodes`, 30 curves) of a known discrete Preisach model (:func:`segments_model`:
   3000 relays, seeded), written as a "Direct moment vs. field; Multiple segments" export (the
   segment script, every inner field measured twice) and as a regular MicroMag FORC file.
+* ``forc_micromag_remanence.frc``: a remanence FORC protocol (every field point followed by a
+  point measured back at zero field) of a known discrete Preisach model
+  (:func:`remanence_model`: 400 relays, seeded) on the regular lattice ``0.75·k``,
+  ``k = −8 … 8`` (16 curves), written as a "Multiple segments" export
+  (:func:`remanence_protocol` drives the model through the script's field sequence).
 * ``forc_lakeshore_8600.csv``: Lake Shore 8600-style CSV (time, field in T, moment in A·m²),
   one row per point, calibration points in the stream.
 """
@@ -40,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis.identification import measure_reversal_curves, regular_grid
+from analysis.identification import ReversalCurves, measure_reversal_curves, regular_grid
 from analysis.identification.forc_io import write_csv, write_micromag, write_segments
 from hysteresis.play import GeneralizedPlay
 from hysteresis.preisach import PreisachModel
@@ -68,6 +73,8 @@ SEGMENTS_FILES = {
     "segments": HERE / "forc_micromag_segments.frc",
     "regular": HERE / "forc_micromag_segments_regular.frc",
 }
+REMANENCE_FILE = HERE / "forc_micromag_remanence.frc"
+REMANENCE_STEP = 0.75  # the lattice 0.75·k, k = −8 … 8, holds 0
 
 
 def operator() -> GeneralizedPlay:
@@ -284,8 +291,45 @@ def write_segments_files() -> None:
     )
 
 
+def remanence_model() -> PreisachModel:
+    """A discrete Preisach model inside (−6, 6): 400 relays, centres N(0.3, 1²), half-widths
+    |N(1.5, 0.6²)|, clipped to ±5.9 (every relay inside the lattice)."""
+    rng = np.random.default_rng(3)
+    s = rng.normal(0.3, 1.0, 400)
+    r = np.abs(rng.normal(1.5, 0.6, 400))
+    return PreisachModel.from_relays(np.clip(s + r, -5.9, 5.9), np.clip(s - r, -5.9, 5.9))
+
+
+def remanence_protocol(model) -> tuple[ReversalCurves, ReversalCurves]:
+    """In-field and zero-field (remanence) Pike curves of ``model`` on the lattice
+    ``REMANENCE_STEP·k``: per curve, from positive saturation down to ``B_a``, then for every
+    field ``B_b >= B_a`` in turn: to ``B_b`` (in-field moment), back to 0 (remanent moment)."""
+    nodes = REMANENCE_STEP * np.arange(-8, 9)
+    rev, fields, in_field, remanent = [], [], [], []
+    for b_a in nodes[:-1]:
+        h = nodes[nodes >= b_a]
+        inputs = np.ravel(np.column_stack([h, np.zeros_like(h)]))  # B_a, 0, B_1, 0, ...
+        y, _ = model.apply(inputs, model.initial_state(SATURATION))
+        rev.append(b_a)
+        fields.append(h)
+        in_field.append(np.asarray(y[0::2], dtype=float))
+        remanent.append(np.asarray(y[1::2], dtype=float))
+    rev = np.array(rev)
+    return (
+        ReversalCurves(rev, tuple(fields), tuple(in_field), "pike"),
+        ReversalCurves(rev, tuple(fields), tuple(remanent), "pike", "remanence"),
+    )
+
+
+def write_remanence_file() -> None:
+    in_field, remanent = remanence_protocol(remanence_model())
+    cal = np.ones(in_field.n_curves)
+    write_segments(REMANENCE_FILE, in_field, SATURATION, cal, remanence=remanent)
+
+
 def main() -> None:
     write_segments_files()
+    write_remanence_file()
     write_csv(CSV_FILE, curves_csv())
     mm = curves_micromag()
     write_micromag(
@@ -307,7 +351,17 @@ def main() -> None:
     SAMPLE_FILES["irregular"].write_bytes(micromag_irregular().encode("cp1252"))
     SAMPLE_FILES["lakeshore"].write_text(lakeshore(seq), encoding="utf-8")
     print(
-        "wrote", ", ".join(str(p.name) for p in [CSV_FILE, MICROMAG_FILE, *SAMPLE_FILES.values()])
+        "wrote",
+        ", ".join(
+            str(p.name)
+            for p in [
+                CSV_FILE,
+                MICROMAG_FILE,
+                *SAMPLE_FILES.values(),
+                *SEGMENTS_FILES.values(),
+                REMANENCE_FILE,
+            ]
+        ),
     )
 
 

@@ -94,6 +94,9 @@ class MicroMagData:
         Human-readable remarks (what was missing, which correction was applied).
     calibration_fields:
         Measured field of every calibration point (converted), or ``None``.
+    in_field_curves:
+        For remanence FORCs (``curves.kind == "remanence"``): the moments measured in the
+        field at the same points, as in-field curves; else ``None``.
     """
 
     curves: ReversalCurves
@@ -106,6 +109,7 @@ class MicroMagData:
     complete: bool = True
     notes: tuple[str, ...] = ()
     calibration_fields: np.ndarray | None = None
+    in_field_curves: ReversalCurves | None = None
 
 
 #: leading bytes of the binary and compressed formats a FORC file gets mistaken for

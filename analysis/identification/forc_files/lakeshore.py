@@ -9,6 +9,9 @@ converted to mT and A·m². Curves are split where the field falls; a single poi
 the calibration field (header ``Calibration field``, else the first point when it is followed
 by a fall) is a calibration point, usable for the same drift correction.
 
+A file whose field rises over two or more points on fewer than two stretches (a hysteresis
+loop, a remanence curve, a single sweep: no FORC measurement) is refused in one line.
+
 Rows must be in measurement order; rows out of order are refused (not sorted) in one line
 naming the first one: a numeric time stamp earlier than the row before, or (with or without
 time stamps) a curve whose reversal field steps against the way the reversal fields step from
@@ -176,6 +179,14 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     _check_curve_order([b for b in blocks if not b[0][3]])
     blocks = [[q[:3] for q in b] for b in blocks]
     curves, cal_m, cal_h = build_curves(blocks, h_cal, drift, None, CAL_ABS_TOL_MT)
+    rising = sum(f.size >= 2 for f in curves.fields)
+    if rising < 2:
+        # a loop splits into one-point "curves" on its falling branch and one rising branch
+        raise ValueError(
+            f"{path}: not a FORC measurement: the field rises over two or more points on "
+            f"{rising} stretch{'es' if rising != 1 else ''} only (a hysteresis loop, a "
+            "remanence curve or a single sweep; FORCs rise once from every reversal field)"
+        )
     notes = []
     if drift is not None and cal_m is not None:
         notes.append(f"{drift} drift correction from {cal_m.size} calibration points")

@@ -21,9 +21,14 @@ measured fields:
   the calibration field or before the first reversal point measure nothing that belongs to a
   curve and are skipped (counted in the notes).
 
-Remanence FORCs (points measured back at zero field) are not reconstructed: a point whose
-measured field is farther than 10 % of the calibration field from its commanded field is
-refused. Errors name the line.
+Remanence FORCs (every field point followed by a point measured back at zero field, written
+as single-point segments commanded at 0) are recognised from the script (two or more such
+segments) and reconstructed by :mod:`~analysis.identification.forc_files.remanence`: the
+curves are the zero-field moments at the fields of their field points
+(``curves.kind == "remanence"``), the in-field moments are kept as
+:attr:`MicroMagData.in_field_curves`. In an in-field script a point whose measured field is
+farther than 10 % of the calibration field from its commanded field (a zero-field point inside
+a rising segment) is refused. Errors name the line.
 """
 
 from __future__ import annotations
@@ -41,6 +46,11 @@ from analysis.identification.forc_files.common import (
     check_magnitudes,
     decode,
     parse_float,
+)
+from analysis.identification.forc_files.remanence import (
+    is_remanence_script,
+    reconstruct_remanence,
+    remanence_curves,
 )
 
 __all__ = ["read_segments", "write_segments", "SEGMENTS_TITLE"]
@@ -96,6 +106,8 @@ def read_segments(path: str | Path) -> MicroMagData:
         raise ValueError(f"{path}: no single-point segment (calibration or reversal point)")
     h_cal = max(single, key=abs)
     tol = 1e-3 * abs(h_cal)
+    if is_remanence_script(script):
+        return _read_remanence(path, script, data, units, h_cal, tol)
     curves: list[dict[float, list[tuple[float, float, int]]]] = []
     cal_h, cal_m = [], []
     start = 0
@@ -127,7 +139,8 @@ def read_segments(path: str | Path) -> MicroMagData:
                 if abs(p[0] - c) > 0.1 * abs(h_cal):
                     raise ValueError(
                         f"line {p[2]}: measured field {p[0]} is far from the script's {c} (a "
-                        "remanence FORC, measured back at zero field, is not supported)"
+                        "remanence FORC writes its zero-field points as single-point segments "
+                        "at 0, not inside a rising segment)"
                     )
                 curves[-1].setdefault(_key(float(c), curves[-1], tol), []).append(p)
         elif points:
@@ -159,6 +172,36 @@ def read_segments(path: str | Path) -> MicroMagData:
     )
 
 
+def _read_remanence(
+    path: str | Path, script: list, data: list, units: str, h_cal: float, tol: float
+) -> MicroMagData:
+    """A remanence FORC script (:mod:`~analysis.identification.forc_files.remanence`)."""
+    f_fac, m_fac = _UNITS[units]
+    curves, cal_h, cal_m, _, notes, skipped, complete = reconstruct_remanence(
+        script, data, h_cal, tol
+    )
+    if not curves:
+        raise ValueError(f"{path}: no remanence FORC in the script")
+    rem, in_field = remanence_curves(curves, f_fac, m_fac)
+    summary = (
+        f"remanence FORC protocol: {rem.n_curves} curves of zero-field moments reconstructed "
+        f"from {len(script)} segments"
+        + (f"; {skipped} points outside the curves skipped" if skipped else "")
+    )
+    return MicroMagData(
+        rem,
+        calibration_field=h_cal * f_fac,
+        calibration_moments=np.array(cal_m) * m_fac if cal_m else None,
+        calibration_fields=np.array(cal_h) * f_fac if cal_h else None,
+        field_unit="mT",
+        moment_unit="A·m²",
+        units_of_measure={"cgs": "cgs", "si": "SI", "hybrid si": "Hybrid SI"}[units],
+        complete=complete,
+        notes=(summary, *notes),
+        in_field_curves=in_field,
+    )
+
+
 def _key(field: float, curve: dict, tol: float) -> float:
     """The commanded field ``field`` as a key of ``curve`` (equal within ``tol``: the end of
     one segment is the start of the next)."""
@@ -173,13 +216,26 @@ def write_segments(
     curves: ReversalCurves,
     calibration_field: float,
     calibration_moments: np.ndarray,
+    remanence: ReversalCurves | None = None,
 ) -> Path:
     """Write Pike curves (Hybrid SI: fields in T, moments in A·m²) as a "Multiple segments"
     irregular-FORC export: per curve a calibration point, the sweep down to the reversal field,
     the reversal point, then one rising segment between consecutive fields of the curve (two
-    points each: both ends, so every inner field is measured twice, as the instrument does)."""
+    points each: both ends, so every inner field is measured twice, as the instrument does).
+
+    With ``remanence`` (the zero-field moments at the same points, ``kind="remanence"``) the
+    export is a remanence FORC script instead: per curve a calibration point, the sweep down to
+    the reversal field, then for every field of the curve a ramp to it, a single-point segment
+    there (the in-field moment of ``curves``), a ramp to zero and a single-point segment at 0
+    (the zero-field moment of ``remanence``)."""
     if curves.convention != "pike":
         raise ValueError("a Multiple-segments FORC export holds Pike curves")
+    if remanence is not None:
+        same = remanence.n_curves == curves.n_curves and all(
+            np.array_equal(a, b) for a, b in zip(remanence.fields, curves.fields, strict=True)
+        )
+        if not same or remanence.kind != "remanence":
+            raise ValueError("remanence must be remanence curves at the fields of curves")
     rows, data = [], []
 
     def segment(initial: float, step: float, final: float, points: list) -> None:
@@ -191,6 +247,15 @@ def write_segments(
             calibration_field, 0.0, calibration_field, [(calibration_field, calibration_moments[c])]
         )
         segment(calibration_field, calibration_field - h[0], h[0], [])
+        if remanence is not None:
+            for k in range(h.size):
+                if k and h[k] != 0.0:
+                    segment(0.0, abs(h[k]), h[k], [])
+                segment(h[k], 0.0, h[k], [(h[k], m[k])])
+                if h[k] != 0.0:
+                    segment(h[k], abs(h[k]), 0.0, [])
+                segment(0.0, 0.0, 0.0, [(0.0, remanence.moments[c][k])])
+            continue
         segment(h[0], 0.0, h[0], [(h[0], m[0])])
         for k in range(h.size - 1):
             segment(h[k], h[k + 1] - h[k], h[k + 1], [(h[k], m[k]), (h[k + 1], m[k + 1])])
