@@ -75,8 +75,12 @@ def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
         smoothing = "SF={:g}/{:g}".format(*rep["smoothing_factor"])
     else:
         smoothing = ""
-    warnings = list(rep.get("notes", []))
-    if rep.get("complete") is False:
+    # the report's own warnings (identify.json "warnings": an aborted run's coverage, a
+    # negative mass) first; then the reader's notes they do not already quote
+    warnings = list(rep.get("warnings", []))
+    quoted = " ".join(warnings)
+    warnings += [n for n in rep.get("notes", []) if n not in quoted]
+    if rep.get("complete") is False and not warnings:
         warnings.append("incomplete measurement")
     if rep.get("error"):
         warnings.append(rep["error"])

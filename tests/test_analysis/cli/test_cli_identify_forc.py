@@ -190,3 +190,20 @@ def test_batch_of_a_directory_writes_a_summary(tmp_path, capsys):
     rep = run_json(["--input", *files, "--workers", "2", "--out", str(tmp_path / "out2")])
     by_name = {Path(r["file"]).name: float(r["peak_bc_mT"]) for r in rows[:2]}
     assert {Path(r["file"]).name: r["peak_bc_mT"] for r in rep["files"]} == by_name
+
+
+def test_batch_summary_carries_the_data_warnings(tmp_path):
+    """An aborted measurement in a batch: its summary row names the cause (the reversal-field
+    range the masses cover), as the file's own identify.json does."""
+    import csv
+    import shutil
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    shutil.copy(DATA / "forc_micromag_0016_si_aborted.frc", folder / "aborted.frc")
+    out = tmp_path / "out"
+    assert main(["identify", "--input", str(folder), "--out", str(out), "--quiet"]) == 0
+    (row,) = list(csv.DictReader(open(out / "summary.csv", encoding="utf-8")))
+    single = json.loads((out / "aborted" / "identify.json").read_text())
+    assert single["warnings"] and all(w in row["warnings"] for w in single["warnings"])
+    assert "aborted measurement" in row["warnings"]
