@@ -24,24 +24,41 @@ For relay-type operators the memory is the discrete relay configuration: ``x = (
 configuration is carried from one iterate to the next (it is fixed along the iteration as long
 as the switching sequence does not change; at convergence the configuration at the end of the
 orbit must equal the one at its start). For plays and Prandtl–Ishlinskii operators the wagon
-positions are coordinates. A wagon that hits its wall along the orbit has its perturbation reset
+positions are coordinates, for continuous Preisach models the remembered extrema of the
+staircase at the section (its length fixed: the orbit's own structure). A wagon that hits its
+wall along the orbit, or an extremum wiped out and pushed again, has its perturbation reset
 (``δw := δq``, the paper's ``V_out``), so its direction is mapped to zero: the monodromy matrix
 has the multiplier ``μ = 0`` (exponent ``−∞``). This does **not** make Newton singular — the
-Newton matrix is ``J − I``, whose eigenvalue there is ``−1`` — so the iteration runs in the full
-coordinates ``(q, v, w)``, which also covers orbits whose wagons are not all reset (a wagon
-strictly inside the play for a whole orbit keeps ``μ = 1`` and makes ``J − I`` singular: a
-continuum of orbits, refused with :class:`OrbitNotFoundError`). A reduction to ``(q, v)`` would
+Newton matrix is ``J − I``, whose eigenvalue there is ``−1``. A reduction to ``(q, v)`` would
 be exact only when the section point itself lies on a wall (the memory is then slaved,
-``w = q ∓ p/2``); in general ``P^k`` depends on the frozen ``w`` through the force ``C f(w)``
-before the reset, so the full coordinates are the consistent choice. The structural zero
-multipliers are counted from the engine's ``rank_bound()`` (directions reset or removed along
-the orbit) and set to exactly 0 instead of a round-off remainder.
+``w = q ∓ p/2``); in general ``P^k`` depends on the reset memory through the force ``C·M``
+before the reset, so such memory stays a coordinate. The structural zero multipliers are
+counted from the engine's ``rank_bound()`` (directions reset or removed along the orbit) and
+set to exactly 0 instead of a round-off remainder.
+
+Frozen memory
+-------------
+A memory coordinate that the orbit never moves — a wagon strictly inside its play for the whole
+orbit, an older extremum of a Preisach staircase that the orbit does not wipe out — has the
+row of the identity in ``J = D P^k`` (its value after k periods is its value before, whatever
+the other coordinates: the engine carries such a row unchanged, so the test is exact). It is a
+**parameter of a family of periodic orbits**, not an unknown: with ``f`` the frozen and ``r``
+the remaining coordinates ``J = [[J_rr, J_rf], [0, I]]`` (``J − I`` is singular: a continuum
+of orbits), so Newton runs on ``r`` only, ``(J_rr − I) Δ_r = −F_r``, with the frozen values held
+where the start put them. The multipliers reported are the eigenvalues of ``J_rr`` plus exactly
+``1`` for every frozen direction, labelled ``"frozen: <label>"`` in
+:attr:`PeriodicOrbit.multiplier_labels` and listed in :attr:`PeriodicOrbit.frozen`; their
+eigenvectors ``(−(J_rr − I)^{-1} J_rf e_f, e_f)`` are the tangents of the family. ``stable``
+(and ``max_abs_multiplier``) are judged on the other multipliers: neutral memory does not make
+an orbit unstable — a perturbation of frozen memory moves the motion onto a neighbouring orbit
+of the family (the same neutral direction a Lyapunov spectrum shows as a zero exponent).
 
 Results
 -------
 :class:`PeriodicOrbit`: ``period`` k, the orbit points (states and coordinates), multipliers
 (complex, sorted by decreasing modulus) with the tangent space that labels the basis,
-exponents ``log|μ|/(k·T)`` (``−inf`` for ``μ = 0``), ``stable`` (every ``|μ| < 1``), the
+exponents ``log|μ|/(k·T)`` (``−inf`` for ``μ = 0``), ``stable`` (every non-frozen
+``|μ| < 1``), the frozen memory (labels), the
 event sequence along one orbit (relay switches or wall hits / reversals, from the engine's
 records), the Newton residuals, and :meth:`PeriodicOrbit.to_dict` for JSON.
 """
@@ -68,6 +85,9 @@ __all__ = [
     "PeriodicOrbit",
     "event_sequence",
     "find_periodic_orbit",
+    "floquet_multipliers",
+    "frozen_coordinates",
+    "max_abs_multiplier",
     "refine_periodic_orbit",
 ]
 
@@ -110,11 +130,11 @@ class PeriodicOrbit:
         ``D P^k`` at ``states[0]``, shape (d, d).
     multipliers:
         Eigenvalues of ``monodromy`` (complex), by decreasing modulus; a structurally reset
-        direction is exactly 0.
+        direction is exactly 0, a frozen memory direction exactly 1 (module docstring).
     exponents:
         ``log|μ| / (k·T)`` in the order of ``multipliers`` (``-inf`` for ``μ = 0``).
     stable:
-        Every ``|μ| < 1``.
+        Every ``|μ| < 1`` but the frozen directions' (exactly 1).
     events:
         The engine's records along one orbit (relay switches: time, q, v, jump; play engines:
         time, q, v, kind, ...), times measured from ``states[0]``.
@@ -127,6 +147,12 @@ class PeriodicOrbit:
         The convergence criterion ``|F|_∞ <= tolerance · max(1, |x|_∞)``.
     eigenvectors:
         Columns: eigenvectors of ``monodromy`` in the order of ``multipliers``.
+    frozen:
+        Labels of the frozen memory coordinates (parameters of the family of orbits; module
+        docstring), in the order of ``tangent_space``.
+    multiplier_labels:
+        One per multiplier: ``"frozen: <label>"`` for a frozen direction, ``"reset"`` for a
+        structural zero, ``""`` otherwise.
     """
 
     period: int
@@ -143,6 +169,8 @@ class PeriodicOrbit:
     residuals: tuple[float, ...]
     tolerance: float
     eigenvectors: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
+    frozen: tuple[str, ...] = ()
+    multiplier_labels: tuple[str, ...] = ()
 
     @property
     def residual(self) -> float:
@@ -151,8 +179,8 @@ class PeriodicOrbit:
 
     @property
     def max_abs_multiplier(self) -> float:
-        """``max |μ|``."""
-        return float(np.max(np.abs(self.multipliers)))
+        """``max |μ|`` over the non-frozen multipliers (1 if every direction is frozen)."""
+        return max_abs_multiplier(self.multipliers, self.multiplier_labels)
 
     @property
     def start(self) -> OscillatorState:
@@ -172,6 +200,8 @@ class PeriodicOrbit:
             "max_abs_multiplier": self.max_abs_multiplier,
             "points": self.points.tolist(),
             "n_events": int(self.events.size),
+            "frozen": list(self.frozen),
+            "multiplier_labels": list(self.multiplier_labels),
         }
 
 
@@ -197,6 +227,61 @@ def event_sequence(events: np.ndarray) -> tuple:
     if "kind" in names:
         return tuple((int(k),) for k in events["kind"])
     return ()
+
+
+def frozen_coordinates(jacobian: np.ndarray, head: int = 2) -> np.ndarray:
+    """Mask of the frozen memory coordinates of ``jacobian = D P^k``: the coordinates after the
+    first ``head`` (``q, v``) whose row is exactly the identity's (module docstring)."""
+    jac = np.asarray(jacobian, dtype=np.float64)
+    d = jac.shape[0]
+    eye = np.eye(d)
+    mask = np.zeros(d, dtype=bool)
+    for j in range(head, d):
+        mask[j] = bool(np.array_equal(jac[j], eye[j]))
+    return mask
+
+
+def floquet_multipliers(
+    jacobian: np.ndarray, frozen: np.ndarray, n_zero: int, labels: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Multipliers, eigenvectors and multiplier labels of ``jacobian`` with the ``frozen`` mask.
+
+    The eigenvalues of the reduced block ``J_rr`` (its ``n_zero`` smallest set to exactly 0,
+    the structurally reset directions) and exactly 1 per frozen coordinate, by decreasing
+    modulus; eigenvectors: ``(w_r, 0)`` for ``J_rr w_r = μ w_r`` and the family's tangent
+    ``(−(J_rr − I)^{-1} J_rf e_f, e_f)`` for a frozen ``f`` (least squares if ``J_rr − I`` is
+    singular)."""
+    jac = np.asarray(jacobian, dtype=np.float64)
+    d = jac.shape[0]
+    free = np.nonzero(~frozen)[0]
+    fixed = np.nonzero(frozen)[0]
+    mu_r, vec_r = np.linalg.eig(jac[np.ix_(free, free)])
+    order = np.argsort(-np.abs(mu_r), kind="stable")
+    mu_r, vec_r = mu_r[order].astype(complex), vec_r[:, order].astype(complex)
+    tags = [""] * mu_r.size
+    n_zero = min(max(0, int(n_zero)), mu_r.size)
+    for i in range(mu_r.size - n_zero, mu_r.size):
+        mu_r[i] = 0.0
+        tags[i] = "reset"
+    vec = np.zeros((d, d), dtype=complex)
+    vec[free, : free.size] = vec_r
+    mu = np.concatenate([mu_r, np.ones(fixed.size, dtype=complex)])
+    if fixed.size:
+        a = jac[np.ix_(free, free)] - np.eye(free.size)
+        b = -jac[np.ix_(free, fixed)]
+        family = np.linalg.lstsq(a, b, rcond=None)[0]
+        vec[np.ix_(free, free.size + np.arange(fixed.size))] = family
+        vec[fixed, free.size + np.arange(fixed.size)] = 1.0
+        tags += [f"frozen: {labels[j]}" for j in fixed]
+    order = np.argsort(-np.abs(mu), kind="stable")
+    return mu[order], vec[:, order], tuple(tags[i] for i in order)
+
+
+def max_abs_multiplier(multipliers: np.ndarray, labels: tuple[str, ...] = ()) -> float:
+    """``max |μ|`` over the multipliers not labelled frozen (1 if all are)."""
+    mu = np.asarray(multipliers)
+    keep = np.array([not t.startswith("frozen") for t in labels] or [True] * mu.size, dtype=bool)
+    return float(np.max(np.abs(mu[keep]))) if np.any(keep) else 1.0
 
 
 @dataclass
@@ -259,21 +344,28 @@ def _newton(
     x = coords.vector(start)
     shot = shoot(system, coords.state(x, template), k, engine_options=engine_options)
     image = shot.states[-1]
-    r = coords.vector(image) - x
+    try:
+        r = coords.vector(image) - x
+    except ValueError as exc:  # the memory's structure is not that of the start
+        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
     res = float(np.max(np.abs(r)))
     residuals = [res]
-    eye = np.eye(coords.dimension)
     for _ in range(max_iterations):
         if res <= tolerance * coords.scale(x) and coords.same_memory(
             coords.state(x, template), image
         ):
             return coords.state(x, template), residuals
+        # frozen memory (identity rows) is a parameter of the family: held, not solved for
+        free = np.nonzero(~frozen_coordinates(shot.jacobian))[0]
+        step = np.zeros(coords.dimension)
         try:
-            step = np.linalg.solve(shot.jacobian - eye, -r)
+            step[free] = np.linalg.solve(
+                shot.jacobian[np.ix_(free, free)] - np.eye(free.size), -r[free]
+            )
         except np.linalg.LinAlgError:
             raise OrbitNotFoundError(
-                f"P^{k} − I is singular at the iterate (a multiplier is 1: a continuum of orbits "
-                "or a fold)",
+                f"P^{k} − I is singular at the iterate (a multiplier is 1 in the coordinates "
+                "the orbit moves: a fold)",
                 tuple(residuals),
             ) from None
         template = image  # the relay configuration the orbit produced
@@ -346,15 +438,13 @@ def _orbit(
     shot = shoot(system, start, k, record=True, engine_options=engine_options)
     states = (start, *shot.states[:-1])
     points = np.array([coords.vector(s) for s in states])
-    mu, vec = np.linalg.eig(shot.jacobian)
-    order = np.argsort(-np.abs(mu), kind="stable")
-    mu, vec = mu[order].astype(complex), vec[:, order].astype(complex)
-    # directions reset or removed along the orbit: exactly zero (the smallest |μ|)
-    n_zero = max(0, coords.dimension - shot.rank)
-    if n_zero:
-        mu[mu.size - n_zero :] = 0.0
+    frozen = frozen_coordinates(shot.jacobian)
+    mu, vec, tags = floquet_multipliers(
+        shot.jacobian, frozen, coords.dimension - shot.rank, coords.labels
+    )
     with np.errstate(divide="ignore"):
         exps = np.log(np.abs(mu)) / (k * system.period)
+    stable = all(abs(m) < 1.0 for m, t in zip(mu, tags, strict=True) if not t.startswith("frozen"))
     return PeriodicOrbit(
         period=k,
         forcing_period=system.period,
@@ -364,12 +454,14 @@ def _orbit(
         monodromy=shot.jacobian,
         multipliers=mu,
         exponents=exps,
-        stable=bool(np.all(np.abs(mu) < 1.0)),
+        stable=stable,
         events=shot.events,
         sequence=event_sequence(shot.events),
         residuals=tuple(residuals),
         tolerance=tolerance,
         eigenvectors=vec,
+        frozen=tuple(lab for lab, f in zip(coords.labels, frozen, strict=True) if f),
+        multiplier_labels=tags,
     )
 
 
