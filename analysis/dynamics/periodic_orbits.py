@@ -73,6 +73,7 @@ import numpy as np
 
 from analysis.dynamics.bifurcation import orbit_period
 from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.staircase_orbits import closed_loop_shot, settle_staircase
 from hysteresis._validation import (
     finite_scalar,
     nonnegative_integer,
@@ -330,6 +331,22 @@ def shoot(
     return _Shot(states, jac, labels0, int(eng.rank_bound()), events)
 
 
+def _shooter(system: Any, coords: StateCoordinates, k: int, engine_options: dict | None):
+    """``state, record -> _Shot`` in ``coords``: :func:`shoot`, or for a continuous Preisach
+    staircase the closed-loop map of :mod:`analysis.dynamics.staircase_orbits` (no structural
+    rank bound: its reset directions are round-off small, not set to 0)."""
+    if coords.kind != "staircase":
+        return lambda state, record=False: shoot(
+            system, state, k, record=record, engine_options=engine_options
+        )
+
+    def run(state: OscillatorState, record: bool = False) -> _Shot:
+        got = closed_loop_shot(system, state, k, coords.prefix, engine_options)
+        return _Shot(got.states, got.jacobian, coords.labels, coords.dimension, got.events)
+
+    return run
+
+
 def _newton(
     system: Any,
     coords: StateCoordinates,
@@ -342,7 +359,11 @@ def _newton(
     """Newton on ``P^k(x) − x`` from ``start``; returns the converged state and residuals."""
     template = start
     x = coords.vector(start)
-    shot = shoot(system, coords.state(x, template), k, engine_options=engine_options)
+    run = _shooter(system, coords, k, engine_options)
+    try:
+        shot = run(coords.state(x, template))
+    except ValueError as exc:  # the memory's structure is not that of the start
+        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
     image = shot.states[-1]
     try:
         r = coords.vector(image) - x
@@ -373,9 +394,7 @@ def _newton(
         for _halving in range(MAX_HALVINGS + 1):
             trial = x + lam * step
             try:
-                t_shot = shoot(
-                    system, coords.state(trial, template), k, engine_options=engine_options
-                )
+                t_shot = run(coords.state(trial, template))
                 t_image = t_shot.states[-1]
                 t_r = coords.vector(t_image) - trial
                 t_res = float(np.max(np.abs(t_r)))
@@ -421,9 +440,36 @@ def refine_periodic_orbit(
     max_iterations = nonnegative_integer(max_iterations, "max_iterations")
     if not isinstance(state, OscillatorState):
         raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
-    coords = StateCoordinates(system, state, engine_options)
+    coords, state = _coordinates(system, state, k, engine_options)
     start, residuals = _newton(system, coords, state, k, tolerance, max_iterations, engine_options)
     return _orbit(system, coords, start, k, residuals, tolerance, engine_options)
+
+
+def _point(coords: StateCoordinates, state: OscillatorState) -> np.ndarray:
+    """``coords.vector(state)``; for a staircase whose length differs at this orbit point (the
+    own extrema of a period-k orbit vary along it) ``(q, v)`` followed by NaN."""
+    try:
+        return coords.vector(state)
+    except ValueError:
+        if coords.kind != "staircase":
+            raise
+        x = np.full(coords.dimension, np.nan)
+        x[:2] = state.q, state.v
+        return x
+
+
+def _coordinates(
+    system: Any, state: OscillatorState, k: int, engine_options: dict | None
+) -> tuple[StateCoordinates, OscillatorState]:
+    """The coordinates of ``state`` and the Newton start: ``state`` itself, or for a continuous
+    Preisach staircase the state settled k periods on
+    (:func:`~analysis.dynamics.staircase_orbits.settle_staircase`) and its frozen prefix."""
+    coords = StateCoordinates(system, state, engine_options)
+    if coords.kind == "staircase":
+        state, prefix = settle_staircase(system, state, k, engine_options)
+        coords = StateCoordinates(system, state, engine_options)
+        coords.prefix = prefix
+    return coords, state
 
 
 def _orbit(
@@ -435,9 +481,9 @@ def _orbit(
     tolerance: float,
     engine_options: dict | None,
 ) -> PeriodicOrbit:
-    shot = shoot(system, start, k, record=True, engine_options=engine_options)
+    shot = _shooter(system, coords, k, engine_options)(start, True)
     states = (start, *shot.states[:-1])
-    points = np.array([coords.vector(s) for s in states])
+    points = np.array([_point(coords, s) for s in states])
     frozen = frozen_coordinates(shot.jacobian)
     mu, vec, tags = floquet_multipliers(
         shot.jacobian, frozen, coords.dimension - shot.rank, coords.labels
