@@ -39,6 +39,11 @@ from the first point of the new sequence, re-detecting the period with
 :func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit` when no orbit of the old period
 follows.
 
+Frozen memory (a wagon strictly inside its play along the whole orbit; see
+:mod:`analysis.dynamics.periodic_orbits`) is held at its value along the branch: the corrector
+and the tangent solve for the other coordinates and λ, and the bifurcation tests use the
+multipliers that are not frozen. Continuous Preisach orbits are not continued.
+
 Branch switching at a period doubling: :func:`period_doubled_orbit` starts the period-2k orbit
 from the located point plus a perturbation along the eigenvector of ``μ = −1``.
 """
@@ -222,6 +227,12 @@ def continue_orbit(
 
     sys0 = factory(start)
     coords = StateCoordinates(sys0, orbit.start, engine_options)
+    if coords.kind == "staircase":
+        raise ValueError(
+            "continuation of continuous Preisach orbits is not supported (the closed-loop map "
+            "of analysis.dynamics.staircase_orbits is used by find/refine_periodic_orbit only); "
+            "refine orbits at fixed parameter values instead"
+        )
     prob = BranchProblem(factory, coords, orbit.period, tolerance, max_iterations, engine_options)
     first = prob.point(coords.vector(orbit.start), start, orbit.start)
     points = [first]
@@ -376,12 +387,17 @@ def period_doubled_orbit(
     max_iterations: int = 30,
     engine_options: dict | None = None,
 ) -> tuple[float, PeriodicOrbit]:
-    """Branch switching at a period doubling: the period-2k orbit near ``event``.
+    """Frozen memory (a wagon strictly inside its play along the whole orbit; see
+    :mod:`analysis.dynamics.periodic_orbits`) is held at its value along the branch: the corrector
+    and the tangent solve for the other coordinates and λ, and the bifurcation tests use the
+    multipliers that are not frozen. Continuous Preisach orbits are not continued.
 
-    Starts Newton (period 2k) at ``event.parameter ± offset`` (default ``1e3·|bracket|`` and at
-    least ``1e-6·max(1, |λ|)``) from the orbit point plus ``± amplitude`` times the eigenvector of
-    the multiplier closest to −1, and returns ``(parameter, orbit)`` for the first start that
-    converges to an orbit of minimal period 2k (the two halves distinct beyond ``1e3·tolerance``).
+    Branch switching at a period doubling: the period-2k orbit near ``event``.
+
+        Starts Newton (period 2k) at ``event.parameter ± offset`` (default ``1e3·|bracket|`` and at
+        least ``1e-6·max(1, |λ|)``) from the orbit point plus ``± amplitude`` times the eigenvector of
+        the multiplier closest to −1, and returns ``(parameter, orbit)`` for the first start that
+        converges to an orbit of minimal period 2k (the two halves distinct beyond ``1e3·tolerance``).
     """
     if event.kind != "period-doubling" or event.point is None:
         raise ValueError(f"event must be a located period-doubling event, got {event.kind!r}")

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from analysis.dynamics.continuation import continue_orbit
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import (
@@ -146,3 +147,20 @@ def test_pi_family_moving_the_frozen_wagon():
         assert np.allclose(other.points[0], predicted, atol=1e-8)
         delta = 0.8 * 0.1 * dw / (1.0 - 0.8 * 0.9)
         assert np.allclose(other.points[0] - y, [delta, 0.0, delta, delta, delta, 0.0], atol=1e-8)
+
+
+def test_continuation_holds_the_frozen_wagon():
+    # the interior-wagon family continued in C: the wagon is held (a parameter of the family),
+    # the orbit is the C = 0 orbit shifted by C·w, so q at the section is linear in C with slope
+    # w, and the multipliers stay the linear oscillator's (|μ| = exp(−ζT)) — no event
+    zeta, omega = 0.1, 0.5
+    system = ForcedOscillator(PlayOperator(4.0), 0.5, zeta, omega)
+    orbit = find_periodic_orbit(system, transient=200, max_period=4)
+    branch = continue_orbit(system, orbit, 0.5, 0.7, step=0.05)
+    assert branch.stop_reason == "reached stop" and not branch.events
+    w = orbit.points[0, 2]
+    for p in branch.points:
+        assert p.point[2] == w
+        assert abs(p.point[0] - (orbit.points[0, 0] + (p.parameter - 0.5) * w)) < 1e-9
+        assert abs(p.max_abs_multiplier - math.exp(-zeta * system.period)) < 1e-10
+        assert p.to_dict()["frozen"] == ["w"]
