@@ -387,17 +387,12 @@ def period_doubled_orbit(
     max_iterations: int = 30,
     engine_options: dict | None = None,
 ) -> tuple[float, PeriodicOrbit]:
-    """Frozen memory (a wagon strictly inside its play along the whole orbit; see
-    :mod:`analysis.dynamics.periodic_orbits`) is held at its value along the branch: the corrector
-    and the tangent solve for the other coordinates and λ, and the bifurcation tests use the
-    multipliers that are not frozen. Continuous Preisach orbits are not continued.
+    """Branch switching at a period doubling: the period-2k orbit near ``event``.
 
-    Branch switching at a period doubling: the period-2k orbit near ``event``.
-
-        Starts Newton (period 2k) at ``event.parameter ± offset`` (default ``1e3·|bracket|`` and at
-        least ``1e-6·max(1, |λ|)``) from the orbit point plus ``± amplitude`` times the eigenvector of
-        the multiplier closest to −1, and returns ``(parameter, orbit)`` for the first start that
-        converges to an orbit of minimal period 2k (the two halves distinct beyond ``1e3·tolerance``).
+    Starts Newton (period 2k) at ``event.parameter ± offset`` (default ``1e3·|bracket|`` and at
+    least ``1e-6·max(1, |λ|)``) from the orbit point plus ``± amplitude`` times the eigenvector of
+    the multiplier closest to −1, and returns ``(parameter, orbit)`` for the first start that
+    converges to an orbit of minimal period 2k (the two halves distinct beyond ``1e3·tolerance``).
     """
     if event.kind != "period-doubling" or event.point is None:
         raise ValueError(f"event must be a located period-doubling event, got {event.kind!r}")

@@ -25,7 +25,10 @@ configuration is carried from one iterate to the next (it is fixed along the ite
 as the switching sequence does not change; at convergence the configuration at the end of the
 orbit must equal the one at its start). For plays and Prandtl–Ishlinskii operators the wagon
 positions are coordinates, for continuous Preisach models the remembered extrema of the
-staircase at the section (its length fixed: the orbit's own structure). A wagon that hits its
+staircase at the section (its length fixed: the orbit's own structure; Newton runs on the
+closed-loop map of :mod:`analysis.dynamics.staircase_orbits`, since every such orbit sits on a
+wipe-out border where the map of the full staircase is not smooth, and its structural zero
+multipliers are round-off small rather than set to 0). A wagon that hits its
 wall along the orbit, or an extremum wiped out and pushed again, has its perturbation reset
 (``δw := δq``, the paper's ``V_out``), so its direction is mapped to zero: the monodromy matrix
 has the multiplier ``μ = 0`` (exponent ``−∞``). This does **not** make Newton singular — the

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from analysis.cli import main
 from analysis.dynamics.continuation import continue_orbit
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from analysis.dynamics.orbit_coordinates import StateCoordinates
@@ -164,3 +165,18 @@ def test_continuation_holds_the_frozen_wagon():
         assert abs(p.point[0] - (orbit.points[0, 0] + (p.parameter - 0.5) * w)) < 1e-9
         assert abs(p.max_abs_multiplier - math.exp(-zeta * system.period)) < 1e-10
         assert p.to_dict()["frozen"] == ["w"]
+
+
+def test_cli_orbit_json_lists_frozen_memory(tmp_path, monkeypatch, capsys):
+    # hyst orbit on the interior-wagon play: the JSON carries the frozen labels next to the
+    # existing keys, and stable is judged without the frozen multiplier
+    monkeypatch.chdir(tmp_path)
+    argv = ["orbit", "--model", "play", "--width", "4", "--frequency", "0.5"]
+    assert main([*argv, "--damping-ratio", "0.1", "--coupling", "0.5", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    for key in ("period", "multipliers", "exponents", "tangent_space", "residual", "stable"):
+        assert key in d
+    assert d["period"] == 1 and d["stable"] is True and d["frozen"] == ["w"]
+    assert d["multiplier_labels"] == ["frozen: w", "", ""]
+    assert d["multipliers"][0] == [1.0, 0.0] and d["exponents"][0] == 0.0
+    assert d["max_abs_multiplier"] < 1.0
