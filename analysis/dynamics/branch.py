@@ -19,7 +19,7 @@ from analysis.dynamics.periodic_orbits import (
     floquet_multipliers,
     frozen_coordinates,
     max_abs_multiplier,
-    shoot,
+    orbit_shooter,
 )
 from oscillators import DivergenceError, GrazingError, OscillatorState
 
@@ -134,9 +134,8 @@ class BranchProblem:
         return s
 
     def residual(self, x: np.ndarray, lam: float, template: OscillatorState):
-        shot = shoot(
-            self.system(lam), self.coords.state(x, template), self.k, engine_options=self.eo
-        )
+        run = orbit_shooter(self.system(lam), self.coords, self.k, self.eo)
+        shot = run(self.coords.state(x, template))
         return self.coords.vector(shot.states[-1]) - x, shot
 
     def d_lambda(self, x: np.ndarray, lam: float, template: OscillatorState) -> np.ndarray:
@@ -148,7 +147,7 @@ class BranchProblem:
     def point(self, x: np.ndarray, lam: float, template: OscillatorState) -> BranchPoint:
         system = self.system(lam)
         state = self.coords.state(x, template)
-        shot = shoot(system, state, self.k, record=True, engine_options=self.eo)
+        shot = orbit_shooter(system, self.coords, self.k, self.eo)(state, True)
         mu, _, tags = floquet_multipliers(
             shot.jacobian,
             frozen_coordinates(shot.jacobian),

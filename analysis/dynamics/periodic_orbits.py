@@ -93,6 +93,7 @@ __all__ = [
     "floquet_multipliers",
     "frozen_coordinates",
     "max_abs_multiplier",
+    "orbit_shooter",
     "refine_periodic_orbit",
 ]
 
@@ -280,7 +281,7 @@ def shoot(
     return _Shot(states, jac, labels0, int(eng.rank_bound()), events)
 
 
-def _shooter(system: Any, coords: StateCoordinates, k: int, engine_options: dict | None):
+def orbit_shooter(system: Any, coords: StateCoordinates, k: int, engine_options: dict | None):
     """``state, record -> _Shot`` in ``coords``: :func:`shoot`, or for a continuous Preisach
     staircase the closed-loop map of :mod:`analysis.dynamics.staircase_orbits` (no structural
     rank bound: its reset directions are round-off small, not set to 0)."""
@@ -308,7 +309,7 @@ def _newton(
     """Newton on ``P^k(x) − x`` from ``start``; returns the converged state and residuals."""
     template = start
     x = coords.vector(start)
-    run = _shooter(system, coords, k, engine_options)
+    run = orbit_shooter(system, coords, k, engine_options)
     try:
         shot = run(coords.state(x, template))
     except ValueError as exc:  # the memory's structure is not that of the start
@@ -430,7 +431,7 @@ def _orbit(
     tolerance: float,
     engine_options: dict | None,
 ) -> PeriodicOrbit:
-    shot = _shooter(system, coords, k, engine_options)(start, True)
+    shot = orbit_shooter(system, coords, k, engine_options)(start, True)
     states = (start, *shot.states[:-1])
     points = np.array([_point(coords, s) for s in states])
     frozen = frozen_coordinates(shot.jacobian)

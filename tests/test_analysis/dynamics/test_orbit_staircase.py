@@ -10,8 +10,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from analysis.dynamics.continuation import continue_orbit
 from analysis.dynamics.orbit_coordinates import StateCoordinates
-from analysis.dynamics.periodic_orbits import find_periodic_orbit, refine_periodic_orbit
+from analysis.dynamics.periodic_orbits import find_periodic_orbit, refine_periodic_orbit, shoot
 from analysis.dynamics.staircase_orbits import closed_loop_shot
 from hysteresis import ContinuousPreisachModel
 from oscillators import ForcedOscillator
@@ -153,3 +154,23 @@ def test_gaussian_multipliers_against_the_direct_convergence_rate(gaussian_orbit
         assert abs(slope - math.log(abs(mu[top]))) <= bound
         extrema = eng.state().operator_state.extrema
         assert len(extrema) >= len(orbit.start.operator_state.extrema)
+
+
+def test_gaussian_continuation_upward_matches_newton_at_fixed_coupling(gaussian_orbit):
+    # as C grows the orbit shrinks inside its loop: no frozen extremum is reached, one smooth
+    # branch. Every point is a periodic orbit of the true motion (the engine over one period
+    # returns to its (q, v) to the tolerance) and is what Newton at that fixed C finds from the
+    # branch state (settled anew: the same frozen extrema, the same point and multipliers)
+    system, orbit = gaussian_orbit
+    branch = continue_orbit(system, orbit, 1.0, 1.06, step=0.02)
+    assert branch.stop_reason == "reached stop" and not branch.events
+    assert branch.points[-1].parameter == 1.06
+    for p in branch.points[1:]:
+        fixed = ForcedOscillator(system.operator, p.parameter)
+        end = shoot(fixed, p.state, 1).states[-1]
+        assert max(abs(end.q - p.point[0]), abs(end.v - p.point[1])) < 1e-9
+        direct = refine_periodic_orbit(fixed, p.state, 1)
+        assert direct.frozen == orbit.frozen
+        assert np.max(np.abs(direct.points[0, :2] - p.point[:2])) < 1e-8
+        assert abs(direct.max_abs_multiplier - p.max_abs_multiplier) < 1e-8
+        assert p.to_dict()["frozen"] == list(orbit.frozen)
