@@ -110,7 +110,6 @@ def _bump_mass(n: int = 1200) -> float:
 _BUMP_MASS = _bump_mass()
 
 
-@pytest.mark.slow
 def test_from_density_orbit_found_and_refined_generic():
     model = ContinuousPreisachModel.from_density(_bump, -3.0, 3.0, resolution=64)
     system = ForcedOscillator(model, 1.0)
