@@ -26,6 +26,12 @@ the end; the frozen rows the identity; the row of an own extremum ``R_i`` the ta
 its reversal time (``dR_i = δq(t_i) + v(t_i)·dt_i`` with ``v(t_i) = 0``), from a second pass of
 the tangent flow stopped at the reversal times.
 
+Lyapunov exponents: ``lyapunov_spectrum`` in the full staircase keeps every extremum that a
+perturbation turning back inside the loop leaves behind (new neutral directions), and finds
+exponents near 0 next to such an orbit; the counterpart of ``P̃``'s Floquet exponents is
+:func:`analysis.dynamics.memory.memory_frozen_exponents` with a projection interval of one orbit
+period (which drops the long-lived extrema).
+
 :func:`settle_staircase` makes the start state canonical: the transient leaves, next to the
 orbit's own extrema, older extrema that converge onto them (an amplitude approaching the
 orbit's from outside pushes extrema that the orbit never quite wipes out); entries within

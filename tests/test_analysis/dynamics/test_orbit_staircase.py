@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from analysis.dynamics.continuation import continue_orbit
+from analysis.dynamics.memory import memory_frozen_exponents
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import find_periodic_orbit, refine_periodic_orbit, shoot
 from analysis.dynamics.staircase_orbits import closed_loop_shot
@@ -173,3 +174,32 @@ def test_gaussian_continuation_upward_matches_newton_at_fixed_coupling(gaussian_
         assert np.max(np.abs(direct.points[0, :2] - p.point[:2])) < 1e-8
         assert abs(direct.max_abs_multiplier - p.max_abs_multiplier) < 1e-8
         assert p.to_dict()["frozen"] == list(orbit.frozen)
+
+
+@pytest.mark.slow
+def test_gaussian_floquet_equals_memory_frozen_lyapunov_exponents():
+    # the Lyapunov counterpart of the closed-loop map: memory_frozen_exponents follows (q, v)
+    # and the memory younger than the projection interval, dropping the long-lived (frozen)
+    # extrema — lyapunov_spectrum in the full staircase instead keeps every extremum a
+    # perturbation leaves behind (new neutral directions: exponents near 0). Period-3 orbit at
+    # C = 2, projection every k = 3 periods (the own extrema live about one orbit period).
+    # The QR average converges as B/t with B = O(1) (measured: 1.1e-4 at t = 500·k·T, so
+    # B ≈ 1); over 2000 orbit periods (t ≈ 3.8e4) that is ~3e-5 < 1e-4
+    system = ForcedOscillator(ContinuousPreisachModel.gaussian(2.0, 1.0, 0.1), 2.0)
+    orbit = find_periodic_orbit(system, transient=200, max_period=8)
+    k = orbit.period
+    assert k == 3 and orbit.stable
+    start = orbit.start
+    ly = memory_frozen_exponents(
+        system,
+        2000 * k * system.period,
+        0.0,
+        start.q,
+        start.v,
+        start.operator_state,
+        projection_periods=k,
+    )
+    active = np.array([not t for t in orbit.multiplier_labels])
+    floquet = np.sort(orbit.exponents[active])[::-1][:2]
+    print("Floquet", floquet, "memory-frozen Lyapunov", ly.exponents)
+    assert np.max(np.abs(floquet - np.sort(ly.exponents)[::-1])) < 1e-4
