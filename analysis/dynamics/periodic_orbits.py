@@ -380,7 +380,10 @@ def refine_periodic_orbit(
     engine_options: dict | None = None,
 ) -> PeriodicOrbit:
     """Newton-refine a guess ``state`` of a period-``period`` orbit (no transient, no period
-    detection) and compute its multipliers; see the module docstring."""
+    detection) and compute its multipliers; see the module docstring. For a continuous Preisach
+    model Newton starts from the state settled ``period`` periods on
+    (:func:`~analysis.dynamics.staircase_orbits.settle_staircase`), so the orbit's ``start`` is
+    that much later than ``state``."""
     k = positive_integer(period, "period")
     if k > MAX_ORBIT_PERIOD:
         raise ValueError(f"period must be <= {MAX_ORBIT_PERIOD}, got {k}")
