@@ -13,7 +13,14 @@ from typing import Any
 import numpy as np
 
 from analysis.dynamics.orbit_coordinates import StateCoordinates
-from analysis.dynamics.periodic_orbits import OrbitNotFoundError, event_sequence, shoot
+from analysis.dynamics.periodic_orbits import (
+    OrbitNotFoundError,
+    event_sequence,
+    floquet_multipliers,
+    frozen_coordinates,
+    max_abs_multiplier,
+    orbit_shooter,
+)
 from oscillators import DivergenceError, GrazingError, OscillatorState
 
 __all__ = [
@@ -33,7 +40,9 @@ FAILURES = (OrbitNotFoundError, GrazingError, DivergenceError, ValueError, np.li
 
 @dataclass(frozen=True)
 class BranchPoint:
-    """One point of a branch: the parameter, the orbit's period, its multipliers."""
+    """One point of a branch: the parameter, the orbit's period, its multipliers (with labels:
+    ``"frozen: <label>"`` for frozen memory, exactly 1 and left out of the bifurcation tests and
+    of ``max_abs_multiplier``; see :mod:`analysis.dynamics.periodic_orbits`)."""
 
     parameter: float
     period: int
@@ -42,11 +51,20 @@ class BranchPoint:
     sequence: tuple = field(repr=False)
     state: OscillatorState = field(repr=False)
     monodromy: np.ndarray = field(repr=False)
+    multiplier_labels: tuple[str, ...] = field(repr=False, default=())
 
     @property
     def max_abs_multiplier(self) -> float:
-        """``max |μ|``."""
-        return float(np.max(np.abs(self.multipliers)))
+        """``max |μ|`` over the non-frozen multipliers."""
+        return max_abs_multiplier(self.multipliers, self.multiplier_labels)
+
+    @property
+    def active_multipliers(self) -> np.ndarray:
+        """The multipliers not labelled frozen (those the bifurcation tests use)."""
+        if not self.multiplier_labels:
+            return self.multipliers
+        keep = np.array([not t.startswith("frozen") for t in self.multiplier_labels])
+        return self.multipliers[keep]
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -55,6 +73,7 @@ class BranchPoint:
             "max_abs_multiplier": self.max_abs_multiplier,
             "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
             "n_events": len(self.sequence),
+            "frozen": [t[8:] for t in self.multiplier_labels if t.startswith("frozen: ")],
         }
 
 
@@ -115,9 +134,8 @@ class BranchProblem:
         return s
 
     def residual(self, x: np.ndarray, lam: float, template: OscillatorState):
-        shot = shoot(
-            self.system(lam), self.coords.state(x, template), self.k, engine_options=self.eo
-        )
+        run = orbit_shooter(self.system(lam), self.coords, self.k, self.eo)
+        shot = run(self.coords.state(x, template))
         return self.coords.vector(shot.states[-1]) - x, shot
 
     def d_lambda(self, x: np.ndarray, lam: float, template: OscillatorState) -> np.ndarray:
@@ -129,12 +147,13 @@ class BranchProblem:
     def point(self, x: np.ndarray, lam: float, template: OscillatorState) -> BranchPoint:
         system = self.system(lam)
         state = self.coords.state(x, template)
-        shot = shoot(system, state, self.k, record=True, engine_options=self.eo)
-        mu = np.linalg.eigvals(shot.jacobian).astype(complex)
-        mu = mu[np.argsort(-np.abs(mu), kind="stable")]
-        n_zero = max(0, self.coords.dimension - shot.rank)
-        if n_zero:
-            mu[mu.size - n_zero :] = 0.0
+        shot = orbit_shooter(system, self.coords, self.k, self.eo)(state, True)
+        mu, _, tags = floquet_multipliers(
+            shot.jacobian,
+            frozen_coordinates(shot.jacobian),
+            self.coords.dimension - shot.rank,
+            self.coords.labels,
+        )
         return BranchPoint(
             parameter=float(lam),
             period=self.k,
@@ -143,6 +162,7 @@ class BranchProblem:
             sequence=event_sequence(shot.events),
             state=state,
             monodromy=shot.jacobian,
+            multiplier_labels=tags,
         )
 
     def correct(
@@ -152,7 +172,9 @@ class BranchProblem:
         template: OscillatorState,
         arclength: bool,
     ) -> tuple[np.ndarray, OscillatorState] | None:
-        """Newton on ``[F(x, λ); c·(z − z_pred)] = 0`` from ``z_pred``; None if it fails."""
+        """Newton on ``[F(x, λ); c·(z − z_pred)] = 0`` from ``z_pred``; None if it fails.
+        Frozen memory (identity rows of ``D P^k``) is held: the step solves for the other
+        coordinates and λ."""
         z = z_pred.copy()
         d = self.coords.dimension
         for _ in range(self.iters + 1):
@@ -177,8 +199,10 @@ class BranchProblem:
                 except FAILURES:
                     return None
             jac[d] = c
+            keep = np.append(np.nonzero(~frozen_coordinates(shot.jacobian))[0], d)
+            dz = np.zeros(d + 1)
             try:
-                dz = np.linalg.solve(jac, -np.append(r, g))
+                dz[keep] = np.linalg.solve(jac[np.ix_(keep, keep)], -np.append(r, g)[keep])
             except np.linalg.LinAlgError:
                 return None
             z = z + dz
@@ -203,8 +227,12 @@ class BranchProblem:
         a = np.zeros((d, d + 1))
         a[:, :d] = bp.monodromy - np.eye(d)
         a[:, d] = self.d_lambda(bp.point, bp.parameter, bp.state)
-        _, _, vt = np.linalg.svd(a)
-        t = vt[-1]
+        # frozen memory is held: the null vector of the other rows and columns
+        keep = np.nonzero(~frozen_coordinates(bp.monodromy))[0]
+        cols = np.append(keep, d)
+        _, _, vt = np.linalg.svd(a[np.ix_(keep, cols)])
+        t = np.zeros(d + 1)
+        t[cols] = vt[-1]
         if previous is not None and previous.shape == (d + 1,):
             ref = previous
         else:
@@ -290,7 +318,7 @@ def smooth_events(
     d = prob.coords.dimension
 
     def tests(bp: BranchPoint, tangent: np.ndarray | None) -> dict[str, float]:
-        t = _tests(bp.multipliers)
+        t = _tests(bp.active_multipliers)
         if arclength:
             if tangent is None:
                 tangent = prob.tangent(bp, tangent_a, direction)
@@ -333,7 +361,7 @@ def smooth_events(
                 s_lo, g_lo, lam_lo = s, g, at.parameter
             else:
                 s_hi, g_hi, lam_hi = s, g, at.parameter
-        if kind == "torus" and not _is_torus(at.multipliers):
+        if kind == "torus" and not _is_torus(at.active_multipliers):
             continue
         bracket = (min(lam_lo, lam_hi), max(lam_lo, lam_hi))
         out.append(

@@ -39,6 +39,13 @@ from the first point of the new sequence, re-detecting the period with
 :func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit` when no orbit of the old period
 follows.
 
+Frozen memory (a wagon strictly inside its play along the whole orbit; see
+:mod:`analysis.dynamics.periodic_orbits`) is held at its value along the branch: the corrector
+and the tangent solve for the other coordinates and λ, and the bifurcation tests use the
+multipliers that are not frozen. Continuous Preisach orbits are continued with the closed-loop
+map of :mod:`analysis.dynamics.staircase_orbits` (its frozen extrema held); an orbit that grows
+onto a frozen extremum changes its staircase, which ends the branch like a grazing.
+
 Branch switching at a period doubling: :func:`period_doubled_orbit` starts the period-2k orbit
 from the located point plus a perturbation along the eigenvector of ``μ = −1``.
 """
@@ -221,7 +228,7 @@ def continue_orbit(
     arclength = method == "pseudo-arclength"
 
     sys0 = factory(start)
-    coords = StateCoordinates(sys0, orbit.start, engine_options)
+    coords = _orbit_coordinates(sys0, orbit, engine_options)
     prob = BranchProblem(factory, coords, orbit.period, tolerance, max_iterations, engine_options)
     first = prob.point(coords.vector(orbit.start), start, orbit.start)
     points = [first]
@@ -287,6 +294,7 @@ def continue_orbit(
                     break
                 prob = resumed[0]
                 resumed = resumed[1]
+                d = prob.coords.dimension  # a re-detected staircase may have another length
             if any(_same_event(e, event) for e in events[:-1]):
                 reason = "the branch returned to a grazing already found (a closed loop)"
                 break
@@ -313,6 +321,15 @@ def continue_orbit(
         events=tuple(events),
         stop_reason=reason,
     )
+
+
+def _orbit_coordinates(system: Any, orbit: PeriodicOrbit, engine_options: dict | None):
+    """The coordinates of ``orbit.start``; a staircase's frozen prefix is the orbit's frozen
+    extrema (the leading entries: the orbit's own extrema follow them)."""
+    coords = StateCoordinates(system, orbit.start, engine_options)
+    if coords.kind == "staircase":
+        coords.prefix = len(orbit.frozen)
+    return coords
 
 
 def _same_event(a: ContinuationEvent, b: ContinuationEvent | None) -> bool:
@@ -359,7 +376,7 @@ def _redetect(prob, event, direction, stop, step, transient, max_period, toleran
             if lam == stop:
                 return None
             continue
-        coords = StateCoordinates(system, orbit.start, prob.eo)
+        coords = _orbit_coordinates(system, orbit, prob.eo)
         new = BranchProblem(prob.factory, coords, orbit.period, prob.tol, prob.iters, prob.eo)
         return new, new.point(coords.vector(orbit.start), lam, orbit.start)
     return None

@@ -13,12 +13,18 @@ engine's memory labels (never by class):
 * **one wagon** (memory label ``"w"``: play, generalized play): ``x = (q, v, w)``, the state
   rebuilt by ``operator.state(position=w, input=q)``;
 * **several wagons** (labels ``"w0" .. "w{K-1}"``: Prandtl–Ishlinskii): ``x = (q, v, w_0..)``,
-  rebuilt by ``operator.state(positions, input=q)``.
+  rebuilt by ``operator.state(positions, input=q)``;
+* **a staircase** (labels ``"M1", "m1", "M2", ...``: a continuous Preisach model, any density):
+  ``x = (q, v, e_1 .. e_n)`` with ``e_1 .. e_n`` the remembered extrema of the staircase at the
+  section (all but its last entry, which is the running input ``q``), rebuilt by the model's
+  public ``state_from_extrema((e_1, .., e_n, q))``. The staircase's length is the orbit's own
+  structure: it is fixed by the state the coordinates are made from, and a vector whose
+  staircase would wipe out entries (not alternating, not nested, or ``q`` beyond the last
+  extremum of its kind) raises ``ValueError``, as does a state with another number of extrema.
 
 A wagon position that a Newton step places beyond its wall (``|q − w| > p/2``) is put back on
-the wall (the state space is the closed strip). Operators whose memory cannot be set from a
-vector of fixed size (a continuous Preisach staircase, whose number of extrema changes along
-an orbit) are refused with a ``ValueError`` naming the operator.
+the wall (the state space is the closed strip). Operators whose memory has none of these forms
+are refused with a ``ValueError`` naming the operator.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from oscillators import OscillatorState
 __all__ = ["StateCoordinates"]
 
 _WAGON = re.compile(r"^w\d+$")
+_EXTREMUM = re.compile(r"^[Mm]\d+$")
 
 
 class StateCoordinates:
@@ -57,6 +64,9 @@ class StateCoordinates:
             raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
         self.system = system
         self.phi = float(state.phi)
+        #: staircase: the number of leading extrema the orbit never reaches (frozen), set by
+        #: the orbit finder (:mod:`analysis.dynamics.staircase_orbits`)
+        self.prefix = 0
         op = system.operator
         eng = system.engine(state, **(engine_options or {}))
         eng.start_tangent(False)
@@ -68,13 +78,22 @@ class StateCoordinates:
             self.kind = "wagon"
         elif memory and all(_WAGON.match(m) for m in memory) and hasattr(op, "state"):
             self.kind = "wagons"
+        elif all(_EXTREMUM.match(m) for m in memory) and hasattr(op, "state_from_extrema"):
+            self.kind = "staircase"
+            n = np.asarray(state.operator_state.extrema).size
+            if n != len(memory) + 1:
+                raise ValueError(
+                    f"the staircase of the state has {n} extrema, the engine's memory rows "
+                    f"{memory} {len(memory) + 1} (the state is at a reversal: v = 0)"
+                )
         else:
             raise ValueError(
                 f"the memory of {op!r} (tangent rows {memory}) cannot be set from a vector of "
-                "fixed size; periodic orbits are computed for relay-type operators, plays and "
-                "Prandtl–Ishlinskii operators"
+                "fixed size; periodic orbits are computed for relay-type operators, plays, "
+                "Prandtl–Ishlinskii operators and continuous Preisach models"
             )
-        self.half_widths = self._half_widths(op) if self.kind != "relay" else np.zeros(0)
+        wagons = self.kind in ("wagon", "wagons")
+        self.half_widths = self._half_widths(op) if wagons else np.zeros(0)
 
     @property
     def dimension(self) -> int:
@@ -95,6 +114,15 @@ class StateCoordinates:
         op_state = state.operator_state
         if self.kind == "wagon":
             return np.array([*head, float(op_state.position)])
+        if self.kind == "staircase":
+            extrema = np.asarray(op_state.extrema, dtype=np.float64)
+            if extrema.size != self.dimension - 1:
+                raise ValueError(
+                    f"the staircase has {extrema.size} extrema, the coordinates "
+                    f"{self.dimension - 1} (an extremum was wiped out or added: the orbit's "
+                    "structure changed)"
+                )
+            return np.concatenate([head, extrema[:-1]])
         return np.concatenate([head, np.asarray(op_state.positions, dtype=np.float64)])
 
     def state(self, x: np.ndarray, template: OscillatorState) -> OscillatorState:
@@ -109,6 +137,8 @@ class StateCoordinates:
         op = self.system.operator
         if self.kind == "relay":
             op_state = template.operator_state
+        elif self.kind == "staircase":
+            op_state = self._staircase(x)
         else:
             w = np.clip(x[2:], q - self.half_widths, q + self.half_widths)
             if self.kind == "wagon":
@@ -116,6 +146,19 @@ class StateCoordinates:
             else:
                 op_state = op.state(w, input=q)
         return replace(template, q=q, v=v, phi=self.phi, operator_state=op_state)
+
+    def _staircase(self, x: np.ndarray) -> Any:
+        """The continuous Preisach state with extrema ``(x[2:], q)`` (no entry wiped out)."""
+        extrema = np.append(x[2:], x[0])
+        op_state = self.system.operator.state_from_extrema(extrema)
+        got = np.asarray(op_state.extrema, dtype=np.float64)
+        if got.shape != extrema.shape or not np.array_equal(got, extrema):
+            raise ValueError(
+                f"coordinates {self.labels[2:]} = {x[2:]} with q = {x[0]} are not a staircase "
+                "of the model (alternating nested extrema, q between the last two): "
+                f"{extrema.size - got.size} entries would be wiped out"
+            )
+        return op_state
 
     def same_memory(self, a: OscillatorState, b: OscillatorState) -> bool:
         """Whether the discrete relay configurations of ``a`` and ``b`` agree (always true for

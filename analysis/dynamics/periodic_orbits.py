@@ -24,24 +24,44 @@ For relay-type operators the memory is the discrete relay configuration: ``x = (
 configuration is carried from one iterate to the next (it is fixed along the iteration as long
 as the switching sequence does not change; at convergence the configuration at the end of the
 orbit must equal the one at its start). For plays and Prandtl–Ishlinskii operators the wagon
-positions are coordinates. A wagon that hits its wall along the orbit has its perturbation reset
+positions are coordinates, for continuous Preisach models the remembered extrema of the
+staircase at the section (its length fixed: the orbit's own structure; Newton runs on the
+closed-loop map of :mod:`analysis.dynamics.staircase_orbits`, since every such orbit sits on a
+wipe-out border where the map of the full staircase is not smooth, and its structural zero
+multipliers are round-off small rather than set to 0). A wagon that hits its
+wall along the orbit, or an extremum wiped out and pushed again, has its perturbation reset
 (``δw := δq``, the paper's ``V_out``), so its direction is mapped to zero: the monodromy matrix
 has the multiplier ``μ = 0`` (exponent ``−∞``). This does **not** make Newton singular — the
-Newton matrix is ``J − I``, whose eigenvalue there is ``−1`` — so the iteration runs in the full
-coordinates ``(q, v, w)``, which also covers orbits whose wagons are not all reset (a wagon
-strictly inside the play for a whole orbit keeps ``μ = 1`` and makes ``J − I`` singular: a
-continuum of orbits, refused with :class:`OrbitNotFoundError`). A reduction to ``(q, v)`` would
+Newton matrix is ``J − I``, whose eigenvalue there is ``−1``. A reduction to ``(q, v)`` would
 be exact only when the section point itself lies on a wall (the memory is then slaved,
-``w = q ∓ p/2``); in general ``P^k`` depends on the frozen ``w`` through the force ``C f(w)``
-before the reset, so the full coordinates are the consistent choice. The structural zero
-multipliers are counted from the engine's ``rank_bound()`` (directions reset or removed along
-the orbit) and set to exactly 0 instead of a round-off remainder.
+``w = q ∓ p/2``); in general ``P^k`` depends on the reset memory through the force ``C·M``
+before the reset, so such memory stays a coordinate. The structural zero multipliers are
+counted from the engine's ``rank_bound()`` (directions reset or removed along the orbit) and
+set to exactly 0 instead of a round-off remainder.
+
+Frozen memory
+-------------
+A memory coordinate that the orbit never moves — a wagon strictly inside its play for the whole
+orbit, an older extremum of a Preisach staircase that the orbit does not wipe out — has the
+row of the identity in ``J = D P^k`` (its value after k periods is its value before, whatever
+the other coordinates: the engine carries such a row unchanged, so the test is exact). It is a
+**parameter of a family of periodic orbits**, not an unknown: with ``f`` the frozen and ``r``
+the remaining coordinates ``J = [[J_rr, J_rf], [0, I]]`` (``J − I`` is singular: a continuum
+of orbits), so Newton runs on ``r`` only, ``(J_rr − I) Δ_r = −F_r``, with the frozen values held
+where the start put them. The multipliers reported are the eigenvalues of ``J_rr`` plus exactly
+``1`` for every frozen direction, labelled ``"frozen: <label>"`` in
+:attr:`PeriodicOrbit.multiplier_labels` and listed in :attr:`PeriodicOrbit.frozen`; their
+eigenvectors ``(−(J_rr − I)^{-1} J_rf e_f, e_f)`` are the tangents of the family. ``stable``
+(and ``max_abs_multiplier``) are judged on the other multipliers: neutral memory does not make
+an orbit unstable — a perturbation of frozen memory moves the motion onto a neighbouring orbit
+of the family (the same neutral direction a Lyapunov spectrum shows as a zero exponent).
 
 Results
 -------
 :class:`PeriodicOrbit`: ``period`` k, the orbit points (states and coordinates), multipliers
 (complex, sorted by decreasing modulus) with the tangent space that labels the basis,
-exponents ``log|μ|/(k·T)`` (``−inf`` for ``μ = 0``), ``stable`` (every ``|μ| < 1``), the
+exponents ``log|μ|/(k·T)`` (``−inf`` for ``μ = 0``), ``stable`` (every non-frozen
+``|μ| < 1``), the frozen memory (labels), the
 event sequence along one orbit (relay switches or wall hits / reversals, from the engine's
 records), the Newton residuals, and :meth:`PeriodicOrbit.to_dict` for JSON.
 """
@@ -55,7 +75,9 @@ from typing import Any
 import numpy as np
 
 from analysis.dynamics.bifurcation import orbit_period
+from analysis.dynamics.floquet import floquet_multipliers, frozen_coordinates, max_abs_multiplier
 from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.staircase_orbits import closed_loop_shot, settle_staircase
 from hysteresis._validation import (
     finite_scalar,
     nonnegative_integer,
@@ -68,6 +90,10 @@ __all__ = [
     "PeriodicOrbit",
     "event_sequence",
     "find_periodic_orbit",
+    "floquet_multipliers",
+    "frozen_coordinates",
+    "max_abs_multiplier",
+    "orbit_shooter",
     "refine_periodic_orbit",
 ]
 
@@ -110,11 +136,11 @@ class PeriodicOrbit:
         ``D P^k`` at ``states[0]``, shape (d, d).
     multipliers:
         Eigenvalues of ``monodromy`` (complex), by decreasing modulus; a structurally reset
-        direction is exactly 0.
+        direction is exactly 0, a frozen memory direction exactly 1 (module docstring).
     exponents:
         ``log|μ| / (k·T)`` in the order of ``multipliers`` (``-inf`` for ``μ = 0``).
     stable:
-        Every ``|μ| < 1``.
+        Every ``|μ| < 1`` but the frozen directions' (exactly 1).
     events:
         The engine's records along one orbit (relay switches: time, q, v, jump; play engines:
         time, q, v, kind, ...), times measured from ``states[0]``.
@@ -127,6 +153,12 @@ class PeriodicOrbit:
         The convergence criterion ``|F|_∞ <= tolerance · max(1, |x|_∞)``.
     eigenvectors:
         Columns: eigenvectors of ``monodromy`` in the order of ``multipliers``.
+    frozen:
+        Labels of the frozen memory coordinates (parameters of the family of orbits; module
+        docstring), in the order of ``tangent_space``.
+    multiplier_labels:
+        One per multiplier: ``"frozen: <label>"`` for a frozen direction, ``"reset"`` for a
+        structural zero, ``""`` otherwise.
     """
 
     period: int
@@ -143,6 +175,8 @@ class PeriodicOrbit:
     residuals: tuple[float, ...]
     tolerance: float
     eigenvectors: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
+    frozen: tuple[str, ...] = ()
+    multiplier_labels: tuple[str, ...] = ()
 
     @property
     def residual(self) -> float:
@@ -151,8 +185,8 @@ class PeriodicOrbit:
 
     @property
     def max_abs_multiplier(self) -> float:
-        """``max |μ|``."""
-        return float(np.max(np.abs(self.multipliers)))
+        """``max |μ|`` over the non-frozen multipliers (1 if every direction is frozen)."""
+        return max_abs_multiplier(self.multipliers, self.multiplier_labels)
 
     @property
     def start(self) -> OscillatorState:
@@ -172,6 +206,8 @@ class PeriodicOrbit:
             "max_abs_multiplier": self.max_abs_multiplier,
             "points": self.points.tolist(),
             "n_events": int(self.events.size),
+            "frozen": list(self.frozen),
+            "multiplier_labels": list(self.multiplier_labels),
         }
 
 
@@ -245,6 +281,22 @@ def shoot(
     return _Shot(states, jac, labels0, int(eng.rank_bound()), events)
 
 
+def orbit_shooter(system: Any, coords: StateCoordinates, k: int, engine_options: dict | None):
+    """``state, record -> _Shot`` in ``coords``: :func:`shoot`, or for a continuous Preisach
+    staircase the closed-loop map of :mod:`analysis.dynamics.staircase_orbits` (no structural
+    rank bound: its reset directions are round-off small, not set to 0)."""
+    if coords.kind != "staircase":
+        return lambda state, record=False: shoot(
+            system, state, k, record=record, engine_options=engine_options
+        )
+
+    def run(state: OscillatorState, record: bool = False) -> _Shot:
+        got = closed_loop_shot(system, state, k, coords.prefix, engine_options)
+        return _Shot(got.states, got.jacobian, coords.labels, coords.dimension, got.events)
+
+    return run
+
+
 def _newton(
     system: Any,
     coords: StateCoordinates,
@@ -257,23 +309,34 @@ def _newton(
     """Newton on ``P^k(x) − x`` from ``start``; returns the converged state and residuals."""
     template = start
     x = coords.vector(start)
-    shot = shoot(system, coords.state(x, template), k, engine_options=engine_options)
+    run = orbit_shooter(system, coords, k, engine_options)
+    try:
+        shot = run(coords.state(x, template))
+    except ValueError as exc:  # the memory's structure is not that of the start
+        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
     image = shot.states[-1]
-    r = coords.vector(image) - x
+    try:
+        r = coords.vector(image) - x
+    except ValueError as exc:  # the memory's structure is not that of the start
+        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
     res = float(np.max(np.abs(r)))
     residuals = [res]
-    eye = np.eye(coords.dimension)
     for _ in range(max_iterations):
         if res <= tolerance * coords.scale(x) and coords.same_memory(
             coords.state(x, template), image
         ):
             return coords.state(x, template), residuals
+        # frozen memory (identity rows) is a parameter of the family: held, not solved for
+        free = np.nonzero(~frozen_coordinates(shot.jacobian))[0]
+        step = np.zeros(coords.dimension)
         try:
-            step = np.linalg.solve(shot.jacobian - eye, -r)
+            step[free] = np.linalg.solve(
+                shot.jacobian[np.ix_(free, free)] - np.eye(free.size), -r[free]
+            )
         except np.linalg.LinAlgError:
             raise OrbitNotFoundError(
-                f"P^{k} − I is singular at the iterate (a multiplier is 1: a continuum of orbits "
-                "or a fold)",
+                f"P^{k} − I is singular at the iterate (a multiplier is 1 in the coordinates "
+                "the orbit moves: a fold)",
                 tuple(residuals),
             ) from None
         template = image  # the relay configuration the orbit produced
@@ -281,9 +344,7 @@ def _newton(
         for _halving in range(MAX_HALVINGS + 1):
             trial = x + lam * step
             try:
-                t_shot = shoot(
-                    system, coords.state(trial, template), k, engine_options=engine_options
-                )
+                t_shot = run(coords.state(trial, template))
                 t_image = t_shot.states[-1]
                 t_r = coords.vector(t_image) - trial
                 t_res = float(np.max(np.abs(t_r)))
@@ -319,7 +380,10 @@ def refine_periodic_orbit(
     engine_options: dict | None = None,
 ) -> PeriodicOrbit:
     """Newton-refine a guess ``state`` of a period-``period`` orbit (no transient, no period
-    detection) and compute its multipliers; see the module docstring."""
+    detection) and compute its multipliers; see the module docstring. For a continuous Preisach
+    model Newton starts from the state settled ``period`` periods on
+    (:func:`~analysis.dynamics.staircase_orbits.settle_staircase`), so the orbit's ``start`` is
+    that much later than ``state``."""
     k = positive_integer(period, "period")
     if k > MAX_ORBIT_PERIOD:
         raise ValueError(f"period must be <= {MAX_ORBIT_PERIOD}, got {k}")
@@ -329,9 +393,36 @@ def refine_periodic_orbit(
     max_iterations = nonnegative_integer(max_iterations, "max_iterations")
     if not isinstance(state, OscillatorState):
         raise TypeError(f"state must be an OscillatorState, got {type(state).__name__}")
-    coords = StateCoordinates(system, state, engine_options)
+    coords, state = _coordinates(system, state, k, engine_options)
     start, residuals = _newton(system, coords, state, k, tolerance, max_iterations, engine_options)
     return _orbit(system, coords, start, k, residuals, tolerance, engine_options)
+
+
+def _point(coords: StateCoordinates, state: OscillatorState) -> np.ndarray:
+    """``coords.vector(state)``; for a staircase whose length differs at this orbit point (the
+    own extrema of a period-k orbit vary along it) ``(q, v)`` followed by NaN."""
+    try:
+        return coords.vector(state)
+    except ValueError:
+        if coords.kind != "staircase":
+            raise
+        x = np.full(coords.dimension, np.nan)
+        x[:2] = state.q, state.v
+        return x
+
+
+def _coordinates(
+    system: Any, state: OscillatorState, k: int, engine_options: dict | None
+) -> tuple[StateCoordinates, OscillatorState]:
+    """The coordinates of ``state`` and the Newton start: ``state`` itself, or for a continuous
+    Preisach staircase the state settled k periods on
+    (:func:`~analysis.dynamics.staircase_orbits.settle_staircase`) and its frozen prefix."""
+    coords = StateCoordinates(system, state, engine_options)
+    if coords.kind == "staircase":
+        state, prefix = settle_staircase(system, state, k, engine_options)
+        coords = StateCoordinates(system, state, engine_options)
+        coords.prefix = prefix
+    return coords, state
 
 
 def _orbit(
@@ -343,18 +434,16 @@ def _orbit(
     tolerance: float,
     engine_options: dict | None,
 ) -> PeriodicOrbit:
-    shot = shoot(system, start, k, record=True, engine_options=engine_options)
+    shot = orbit_shooter(system, coords, k, engine_options)(start, True)
     states = (start, *shot.states[:-1])
-    points = np.array([coords.vector(s) for s in states])
-    mu, vec = np.linalg.eig(shot.jacobian)
-    order = np.argsort(-np.abs(mu), kind="stable")
-    mu, vec = mu[order].astype(complex), vec[:, order].astype(complex)
-    # directions reset or removed along the orbit: exactly zero (the smallest |μ|)
-    n_zero = max(0, coords.dimension - shot.rank)
-    if n_zero:
-        mu[mu.size - n_zero :] = 0.0
+    points = np.array([_point(coords, s) for s in states])
+    frozen = frozen_coordinates(shot.jacobian)
+    mu, vec, tags = floquet_multipliers(
+        shot.jacobian, frozen, coords.dimension - shot.rank, coords.labels
+    )
     with np.errstate(divide="ignore"):
         exps = np.log(np.abs(mu)) / (k * system.period)
+    stable = all(abs(m) < 1.0 for m, t in zip(mu, tags, strict=True) if not t.startswith("frozen"))
     return PeriodicOrbit(
         period=k,
         forcing_period=system.period,
@@ -364,12 +453,14 @@ def _orbit(
         monodromy=shot.jacobian,
         multipliers=mu,
         exponents=exps,
-        stable=bool(np.all(np.abs(mu) < 1.0)),
+        stable=stable,
         events=shot.events,
         sequence=event_sequence(shot.events),
         residuals=tuple(residuals),
         tolerance=tolerance,
         eigenvectors=vec,
+        frozen=tuple(lab for lab, f in zip(coords.labels, frozen, strict=True) if f),
+        multiplier_labels=tags,
     )
 
 

@@ -1,0 +1,65 @@
+"""Floquet multipliers of a monodromy matrix with frozen memory (the rule is described in
+:mod:`analysis.dynamics.periodic_orbits`): which coordinates are frozen, the multipliers of the
+reduced block plus exactly 1 per frozen direction with their labels, and ``max |μ|`` over the
+non-frozen ones."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["floquet_multipliers", "frozen_coordinates", "max_abs_multiplier"]
+
+
+def frozen_coordinates(jacobian: np.ndarray, head: int = 2) -> np.ndarray:
+    """Mask of the frozen memory coordinates of ``jacobian = D P^k``: the coordinates after the
+    first ``head`` (``q, v``) whose row is exactly the identity's (module docstring)."""
+    jac = np.asarray(jacobian, dtype=np.float64)
+    d = jac.shape[0]
+    eye = np.eye(d)
+    mask = np.zeros(d, dtype=bool)
+    for j in range(head, d):
+        mask[j] = bool(np.array_equal(jac[j], eye[j]))
+    return mask
+
+
+def floquet_multipliers(
+    jacobian: np.ndarray, frozen: np.ndarray, n_zero: int, labels: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Multipliers, eigenvectors and multiplier labels of ``jacobian`` with the ``frozen`` mask.
+
+    The eigenvalues of the reduced block ``J_rr`` (its ``n_zero`` smallest set to exactly 0,
+    the structurally reset directions) and exactly 1 per frozen coordinate, by decreasing
+    modulus; eigenvectors: ``(w_r, 0)`` for ``J_rr w_r = μ w_r`` and the family's tangent
+    ``(−(J_rr − I)^{-1} J_rf e_f, e_f)`` for a frozen ``f`` (least squares if ``J_rr − I`` is
+    singular)."""
+    jac = np.asarray(jacobian, dtype=np.float64)
+    d = jac.shape[0]
+    free = np.nonzero(~frozen)[0]
+    fixed = np.nonzero(frozen)[0]
+    mu_r, vec_r = np.linalg.eig(jac[np.ix_(free, free)])
+    order = np.argsort(-np.abs(mu_r), kind="stable")
+    mu_r, vec_r = mu_r[order].astype(complex), vec_r[:, order].astype(complex)
+    tags = [""] * mu_r.size
+    n_zero = min(max(0, int(n_zero)), mu_r.size)
+    for i in range(mu_r.size - n_zero, mu_r.size):
+        mu_r[i] = 0.0
+        tags[i] = "reset"
+    vec = np.zeros((d, d), dtype=complex)
+    vec[free, : free.size] = vec_r
+    mu = np.concatenate([mu_r, np.ones(fixed.size, dtype=complex)])
+    if fixed.size:
+        a = jac[np.ix_(free, free)] - np.eye(free.size)
+        b = -jac[np.ix_(free, fixed)]
+        family = np.linalg.lstsq(a, b, rcond=None)[0]
+        vec[np.ix_(free, free.size + np.arange(fixed.size))] = family
+        vec[fixed, free.size + np.arange(fixed.size)] = 1.0
+        tags += [f"frozen: {labels[j]}" for j in fixed]
+    order = np.argsort(-np.abs(mu), kind="stable")
+    return mu[order], vec[:, order], tuple(tags[i] for i in order)
+
+
+def max_abs_multiplier(multipliers: np.ndarray, labels: tuple[str, ...] = ()) -> float:
+    """``max |μ|`` over the multipliers not labelled frozen (1 if all are)."""
+    mu = np.asarray(multipliers)
+    keep = np.array([not t.startswith("frozen") for t in labels] or [True] * mu.size, dtype=bool)
+    return float(np.max(np.abs(mu[keep]))) if np.any(keep) else 1.0

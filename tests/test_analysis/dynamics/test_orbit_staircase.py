@@ -1,0 +1,205 @@
+"""Periodic orbits of continuous Preisach systems (staircase coordinates, closed-loop map, frozen
+older extrema): residual, frozen multipliers exactly 1, the Jacobian of the closed-loop map
+against central finite differences, the compiled engine against the generic one."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from analysis.dynamics.continuation import continue_orbit
+from analysis.dynamics.memory import memory_frozen_exponents
+from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.periodic_orbits import find_periodic_orbit, refine_periodic_orbit, shoot
+from analysis.dynamics.staircase_orbits import closed_loop_shot
+from hysteresis import ContinuousPreisachModel
+from oscillators import ForcedOscillator
+
+
+@pytest.fixture(scope="module")
+def gaussian_orbit():
+    # width-disorder model p = 2, R = 1, σ_r = 0.1 at C = 1: the motion settles on a stable
+    # period-1 orbit inside the density's support (a minor loop of the staircase)
+    system = ForcedOscillator(ContinuousPreisachModel.gaussian(2.0, 1.0, 0.1), 1.0)
+    return system, find_periodic_orbit(system, transient=200, max_period=4)
+
+
+def test_gaussian_orbit_structure_and_frozen_extrema(gaussian_orbit):
+    system, orbit = gaussian_orbit
+    assert orbit.period == 1 and orbit.stable
+    assert orbit.residual <= orbit.tolerance * max(1.0, float(np.max(np.abs(orbit.points))))
+    labels = orbit.tangent_space
+    assert labels[:2] == ("q", "v") and all(lab[0] in "Mm" for lab in labels[2:])
+    # the older extrema are frozen (a leading part of the staircase), the last one is the
+    # orbit's own minimum, wiped out and pushed again every period
+    n = len(orbit.frozen)
+    assert n >= 1 and orbit.frozen == labels[2 : 2 + n] and len(labels) == 2 + n + 1
+    tags = np.array(orbit.multiplier_labels)
+    is_frozen = np.char.startswith(tags, "frozen: ")
+    assert is_frozen.sum() == n
+    assert np.all(orbit.multipliers[is_frozen] == 1.0) and np.all(orbit.exponents[is_frozen] == 0)
+    others = orbit.multipliers[~is_frozen]
+    assert orbit.max_abs_multiplier == float(np.max(np.abs(others))) < 1.0
+    # the frozen extrema are the start's: Newton held them
+    extrema = np.asarray(orbit.start.operator_state.extrema)
+    assert np.array_equal(orbit.points[0, 2 : 2 + n], extrema[:n])
+    # the orbit points are one orbit: the staircase of the start comes back (own minimum
+    # pushed again at the same value to the tolerance)
+    d = orbit.to_dict()
+    assert d["frozen"] == list(orbit.frozen) and len(d["multiplier_labels"]) == len(labels)
+
+
+def test_gaussian_closed_loop_jacobian_against_central_differences(gaussian_orbit):
+    system, orbit = gaussian_orbit
+    coords = StateCoordinates(system, orbit.start)
+    x = coords.vector(orbit.start)
+    n = len(orbit.frozen)
+    free = [0, 1, *range(2 + n, x.size)]
+    # h well inside the distance from the orbit's extrema to the nearest frozen extremum (a
+    # wipe-out border of the map): a fiftieth of it
+    extrema = np.asarray(orbit.start.operator_state.extrema)
+    own = extrema[n:-1]
+    gap = float(np.min(np.abs(extrema[:n, None] - own[None, :])))
+    h = gap / 50.0
+    cols = []
+    for j in free:
+        e = np.zeros(x.size)
+        e[j] = h
+        plus = closed_loop_shot(system, coords.state(x + e, orbit.start), 1, n).states[-1]
+        minus = closed_loop_shot(system, coords.state(x - e, orbit.start), 1, n).states[-1]
+        cols.append(((coords.vector(plus) - coords.vector(minus)) / (2 * h))[free])
+    fd = np.column_stack(cols)
+    jac = orbit.monodromy[np.ix_(free, free)]
+    print("h", h, "|FD − J|", np.max(np.abs(fd - jac)))
+    # truncation h²/6·|D³P| (h ~ 1e-7: negligible) plus the map's own noise (the compiled
+    # engine's event location to ~1e-13) divided by h: ~1e-6 at most
+    scale = max(1.0, float(np.max(np.abs(jac))))
+    assert np.max(np.abs(fd - jac)) < 1e-5 * scale
+    mu_fd = np.sort(np.abs(np.linalg.eigvals(fd)))
+    mu = np.sort(np.abs(orbit.multipliers[[not t for t in orbit.multiplier_labels]]))
+    assert np.max(np.abs(mu_fd[-mu.size :] - mu)) < 1e-5 * scale
+
+
+def test_gaussian_orbit_generic_engine_agrees(gaussian_orbit):
+    system, orbit = gaussian_orbit
+    generic = refine_periodic_orbit(
+        system, orbit.start, orbit.period, engine_options={"method": "generic"}
+    )
+    assert generic.frozen == orbit.frozen
+    # the two engines integrate to ~1e-11 (DOP853 rtol 1e-11 vs RK8 with exact events); over
+    # one period with |J| ~ 1 the orbits differ by that order
+    assert np.max(np.abs(generic.points - orbit.points)) < 1e-8
+    assert np.max(np.abs(generic.multipliers - orbit.multipliers)) < 1e-6
+
+
+def _bump(alpha, beta):
+    """A smooth density on the triangle −3 <= β <= α <= 3, normalised by its mass (a fine
+    midpoint rule below: from_density wants mass 1 to 1e-3)."""
+    return np.exp(-((alpha - beta - 2.0) ** 2) - 0.5 * (alpha + beta) ** 2) / _BUMP_MASS
+
+
+def _bump_mass(n: int = 1200) -> float:
+    x = -3.0 + 6.0 * (np.arange(n) + 0.5) / n
+    a, b = np.meshgrid(x, x, indexing="ij")
+    f = np.exp(-((a - b - 2.0) ** 2) - 0.5 * (a + b) ** 2) * (b <= a)
+    return float(f.sum() * (6.0 / n) ** 2)
+
+
+_BUMP_MASS = _bump_mass()
+
+
+def test_from_density_orbit_found_and_refined_generic():
+    model = ContinuousPreisachModel.from_density(_bump, -3.0, 3.0, resolution=64)
+    system = ForcedOscillator(model, 1.0)
+    orbit = find_periodic_orbit(system, transient=200, max_period=4)
+    assert orbit.stable
+    assert orbit.residual <= orbit.tolerance * max(1.0, float(np.max(np.abs(orbit.points))))
+    generic = refine_periodic_orbit(
+        system, orbit.start, orbit.period, engine_options={"method": "generic"}
+    )
+    assert generic.frozen == orbit.frozen
+    assert np.max(np.abs(generic.points - orbit.points)) < 1e-8
+
+
+def test_gaussian_multipliers_against_the_direct_convergence_rate(gaussian_orbit):
+    # independent truth: the true motion (the engine, full staircase, no closed loop) from a
+    # start off the orbit. It converges geometrically onto a neighbouring orbit of the family
+    # (turning back inside the orbit's loop it leaves new remembered extrema: the staircase
+    # grows), at the rate of the non-frozen multipliers. Successive section differences
+    # d_n = |x_{n+1} − x_n| behave as |μ|^n times a factor between σ_min and σ_max of the real
+    # basis (Re e, Im e) of the complex pair's eigenvector: the least-squares slope of log d_n
+    # over n = 1 .. 16 is log|μ| within log(σ_max/σ_min)/15 (16 periods bring d_n from 1e-4
+    # to ~1e-10, above the integration noise)
+    system, orbit = gaussian_orbit
+    free = [i for i, lab in enumerate(orbit.tangent_space) if lab not in orbit.frozen]
+    jac = orbit.monodromy[np.ix_(free, free)]
+    mu, vec = np.linalg.eig(jac)
+    top = int(np.argmax(np.abs(mu)))
+    assert abs(mu[top].imag) > 0.1  # a complex pair
+    basis = np.column_stack([vec[:, top].real, vec[:, top].imag])
+    sv = np.linalg.svd(basis, compute_uv=False)
+    bound = math.log(sv[0] / sv[1]) / 15.0
+    n = 18
+    for dv in (1e-4, -1e-4):
+        start = replace(orbit.start, v=orbit.start.v + dv)
+        eng = system.engine(start)
+        out = np.empty((n, len(eng.sample_columns)))
+        eng.advance(np.arange(1, n + 1) * system.period, out)
+        d = np.hypot(*np.diff(out[:, :2], axis=0).T)[:16]
+        slope = np.polyfit(np.arange(16), np.log(d), 1)[0]
+        print("direct rate", math.exp(slope), "|μ|", abs(mu[top]), "bound", bound)
+        assert abs(slope - math.log(abs(mu[top]))) <= bound
+        extrema = eng.state().operator_state.extrema
+        assert len(extrema) >= len(orbit.start.operator_state.extrema)
+
+
+def test_gaussian_continuation_upward_matches_newton_at_fixed_coupling(gaussian_orbit):
+    # as C grows the orbit shrinks inside its loop: no frozen extremum is reached, one smooth
+    # branch. Every point is a periodic orbit of the true motion (the engine over one period
+    # returns to its (q, v) to the tolerance) and is what Newton at that fixed C finds from the
+    # branch state (settled anew: the same frozen extrema, the same point and multipliers)
+    system, orbit = gaussian_orbit
+    branch = continue_orbit(system, orbit, 1.0, 1.06, step=0.02)
+    assert branch.stop_reason == "reached stop" and not branch.events
+    assert branch.points[-1].parameter == 1.06
+    for p in branch.points[1:]:
+        fixed = ForcedOscillator(system.operator, p.parameter)
+        end = shoot(fixed, p.state, 1).states[-1]
+        assert max(abs(end.q - p.point[0]), abs(end.v - p.point[1])) < 1e-9
+        direct = refine_periodic_orbit(fixed, p.state, 1)
+        assert direct.frozen == orbit.frozen
+        assert np.max(np.abs(direct.points[0, :2] - p.point[:2])) < 1e-8
+        assert abs(direct.max_abs_multiplier - p.max_abs_multiplier) < 1e-8
+        assert p.to_dict()["frozen"] == list(orbit.frozen)
+
+
+@pytest.mark.slow
+def test_gaussian_floquet_equals_memory_frozen_lyapunov_exponents():
+    # the Lyapunov counterpart of the closed-loop map: memory_frozen_exponents follows (q, v)
+    # and the memory younger than the projection interval, dropping the long-lived (frozen)
+    # extrema — lyapunov_spectrum in the full staircase instead keeps every extremum a
+    # perturbation leaves behind (new neutral directions: exponents near 0). Period-3 orbit at
+    # C = 2, projection every k = 3 periods (the own extrema live about one orbit period).
+    # The QR average converges as B/t with B = O(1) (measured: 1.1e-4 at t = 500·k·T, so
+    # B ≈ 1); over 2000 orbit periods (t ≈ 3.8e4) that is ~3e-5 < 1e-4
+    system = ForcedOscillator(ContinuousPreisachModel.gaussian(2.0, 1.0, 0.1), 2.0)
+    orbit = find_periodic_orbit(system, transient=200, max_period=8)
+    k = orbit.period
+    assert k == 3 and orbit.stable
+    start = orbit.start
+    ly = memory_frozen_exponents(
+        system,
+        2000 * k * system.period,
+        0.0,
+        start.q,
+        start.v,
+        start.operator_state,
+        projection_periods=k,
+    )
+    active = np.array([not t for t in orbit.multiplier_labels])
+    floquet = np.sort(orbit.exponents[active])[::-1][:2]
+    print("Floquet", floquet, "memory-frozen Lyapunov", ly.exponents)
+    assert np.max(np.abs(floquet - np.sort(ly.exponents)[::-1])) < 1e-4
