@@ -50,8 +50,9 @@ _MAX_RESOLUTION = 4096
 #: grid cells per side of the table :meth:`ContinuousPreisachModel.compiled_everett` builds for
 #: a :meth:`PreisachModel.from_everett` model
 COMPILED_RESOLUTION = 512
-#: inputs per chunk of :meth:`ContinuousPreisachModel.apply`: its working memory (the Everett
-#: quadrature holds chunk × nodes floats) is bounded by this, not by the length of the input
+#: inputs per chunk of :meth:`ContinuousPreisachModel.apply`: its working memory (a user's
+#: vectorised Everett function may hold chunk × nodes floats) is bounded by this, not by the
+#: length of the input
 _APPLY_CHUNK = 8192
 
 
