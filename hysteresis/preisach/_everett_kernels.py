@@ -310,6 +310,27 @@ def _quintic_cell(table: np.ndarray, x: float, x0: float, hx: float, j: int, u):
 
 
 @njit(cache=True)
+def _quintic_edge(table: np.ndarray, x: float, x0: float, hx: float):
+    """``(F, ∂F/∂x)`` of the interpolant at ``x`` on the edge ``t = r_hi`` (the t-basis there
+    is ``Q_{0,1} = 1``, all others 0: a 1-D quintic in x, the same numbers as
+    :func:`_quintic_cell` at ``u = 1``)."""
+    nx = table.shape[0] - 1
+    j = table.shape[1] - 1
+    fx = (x - x0) / hx
+    i = min(max(int(math.floor(fx)), 0), nx - 1)
+    v0, v1, v2, v3, v4, v5, w0, w1, w2, w3, w4, w5 = _quintic(fx - i)
+    g00 = table[i, j, 0]
+    g01 = table[i, j, 3]
+    g02 = table[i, j, 6]
+    g10 = table[i + 1, j, 0]
+    g11 = table[i + 1, j, 3]
+    g12 = table[i + 1, j, 6]
+    value = v0 * g00 + v2 * g01 + v4 * g02 + v1 * g10 + v3 * g11 + v5 * g12
+    gx = w0 * g00 + w2 * g01 + w4 * g02 + w1 * g10 + w3 * g11 + w5 * g12
+    return value, gx / hx
+
+
+@njit(cache=True)
 def _separable(params: np.ndarray, table: np.ndarray, a: float, b: float):
     """Kind 2 at clipped ``a > b`` (see the module docstring)."""
     x0 = params[0]
@@ -323,8 +344,14 @@ def _separable(params: np.ndarray, table: np.ndarray, a: float, b: float):
     t_raw = 0.5 * (a - b)
     if t_raw <= r_lo:
         return 0.0, 0.0, 0.0
-    band = t_raw < r_hi
-    t = t_raw if band else r_hi
+    if t_raw >= r_hi:
+        # beyond the band (t clipped): E(a, b) = G(a) + G(−b) − W(r_hi), two 1-D quintics
+        fa, fa_x = _quintic_edge(table, a, x0, hx)
+        fb, fb_x = _quintic_edge(table, -b, x0, hx)
+        e = fa + fb - (_ndtr((r_hi - half) / width_spread) - params[9]) / total
+        return e, fa_x, -fb_x
+    # in the band r_lo < t < r_hi
+    t = t_raw
     nt = table.shape[1] - 1
     ft = (t - r_lo) / ht
     j = min(int(math.floor(ft)), nt - 1)
@@ -334,10 +361,8 @@ def _separable(params: np.ndarray, table: np.ndarray, a: float, b: float):
     z = (t - half) / width_spread
     w_total = (_ndtr(z) - params[9]) / total
     e = fa + fb - w_total
-    c = 0.0
-    if band:
-        w = math.exp(-0.5 * z * z) * (_SQRT1_2 / _SQRT_PI) / (width_spread * total)
-        c = 0.5 * ((fa_t + fb_t) / ht - w)
+    w = math.exp(-0.5 * z * z) * (_SQRT1_2 / _SQRT_PI) / (width_spread * total)
+    c = 0.5 * ((fa_t + fb_t) / ht - w)
     return e, fa_x + c, -fb_x - c
 
 

@@ -68,7 +68,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtr
 
-from hysteresis._validation import positive_integer, positive_scalar, readonly_array
+from hysteresis._validation import (
+    bounded_work,
+    positive_integer,
+    positive_scalar,
+    readonly_array,
+)
 from hysteresis.preisach._everett_kernels import KIND_GAUSSIAN, KIND_SEPARABLE
 from hysteresis.preisach.base import _gauss
 from hysteresis.preisach.everett_table import EMPTY_TABLE, CompiledEverett
@@ -101,8 +106,11 @@ PHI_DERIVATIVE_MAX = (
 )
 #: ``max_s Σ_p |Q_{α,p}(s)|`` of the quintic Hermite basis, α = 0, 1, 2
 _BASIS_SUMS = (1.0, 5.0 / 16.0, 1.0 / 32.0)
-#: tables kept by :func:`gaussian_table` (a few MB each)
+#: tables kept by :func:`gaussian_table` (~13 MB each)
 _TABLE_CACHE = 8
+#: largest number of table nodes ``(n_x + 1)(n_t + 1)`` (72 bytes each: 144 MB); reached only
+#: for width laws far wider than ``spread`` (the t-grid then resolves ``R``, not ``σ_r``)
+_MAX_TABLE_NODES = 2_000_000
 
 
 def gaussian_support(
@@ -279,6 +287,7 @@ def _build_table(width: float, spread: float, width_spread: float, nodes: int) -
     # a lower bound of the mass (W(r_hi) less the tails Φ(−9) beyond ±L) for the grid
     mass = (float(ndtr((r_hi - half) / width_spread)) - phi_lo) * (1.0 - 2.0 * float(ndtr(-9.0)))
     n_x, n_t = _grid((2.0 * bound, r_hi - r_lo), width_spread, spread, mass, EVERETT_TOLERANCE)
+    bounded_work((n_x + 1) * (n_t + 1), "width_spread/spread", _MAX_TABLE_NODES, "table nodes")
     hx = 2.0 * bound / n_x
     ht = (r_hi - r_lo) / n_t
     x = -bound + hx * np.arange(n_x + 1)

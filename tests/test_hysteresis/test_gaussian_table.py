@@ -173,3 +173,5 @@ def test_table_memory_cache_and_pickle():
     np.testing.assert_array_equal(back.apply(u)[0], model.apply(u)[0])
     with pytest.raises(ValueError, match="width_spread"):
         gaussian_table(2.0, 1.0, -0.1)
+    with pytest.raises(ValueError, match="width_spread/spread asks for"):
+        gaussian_table(2.0, 0.01, 5.0)  # a width law 500 R wide: refused up front
