@@ -78,7 +78,10 @@ is the exact derivative of this ``E`` (one function)::
     ∂E/∂a = F_x(a, t) + c,   ∂E/∂b = −F_x(−b, t) − c
 
 (``c`` vanishes for the exact ``F`` at ``t = (a − b)/2``; for the interpolant it is of the
-order of its error). ``(a − b)/2 <= r_lo``: ``E = 0`` (no mass below ``r_lo``).
+order of its error, so the gradient jumps by that much across ``t = r_hi``).
+``(a − b)/2 <= r_lo``: ``E = 0`` (no mass below ``r_lo``); ``(a − b)/2 >= r_hi``: the t-basis
+at ``u = 1`` is ``Q_{0,1} = 1`` and all others 0, so ``F`` is read as a 1-D quintic along the
+edge ``t = r_hi`` (:func:`_quintic_edge`).
 """
 
 from __future__ import annotations

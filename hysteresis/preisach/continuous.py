@@ -496,7 +496,8 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         ``F(a, t) + F(−b, t) − W(t)``, ``t = (a − b)/2``, with ``F`` a bi-quintic Hermite table
         (:mod:`hysteresis.preisach.gaussian`): ``|E − E_exact| <= 1e-12`` and a gradient
         within ~1e-9 (1.2e-8 at σ_r = 0.0125; the bounds derived there,
-        :attr:`gaussian_table`), E and its gradient one C¹ function; the model
+        :attr:`gaussian_table`), the gradient the exact derivative of that E (continuous
+        but for a jump within the gradient bound across ``(a − b)/2 = r_hi``); the model
         (:meth:`everett`, :meth:`everett_gradient`, :meth:`apply`, the generic engine) and the
         compiled engine evaluate the same kernel.
         ``nodes`` (>= 4): Gauss–Legendre nodes per cell of the quadratures that build the
