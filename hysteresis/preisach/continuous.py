@@ -501,7 +501,7 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuou
         (:meth:`everett`, :meth:`everett_gradient`, :meth:`apply`, the generic engine) and the
         compiled engine evaluate the same kernel.
         ``nodes`` (>= 4): Gauss–Legendre nodes per cell of the quadratures that build the
-        table (cached per parameter set, 0.2–0.4 s, ~13 MB). As σ_r → 0 the model tends to the
+        table (cached per parameter set, 0.13–0.22 s, ~13 MB). As σ_r → 0 the model tends to the
         generalized play ``GeneralizedPlay.erf(p, R)`` (paper: the thermodynamic limit).
         Support ``[−L, L]`` with ``L = p/2 + 8σ_r + 9R``.
         """

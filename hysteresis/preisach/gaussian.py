@@ -53,7 +53,7 @@ Leibniz rule, ``‖w⁽ᵏ⁾‖ <= m_k/σ_r^{k+1}``, ``‖Φ⁽ⁿ⁾‖ <= m_{
 Size: ``n_x ≈ 2L/(0.041 R)``, ``n_t ≈ (r_hi − r_lo)/(0.04 σ_r)`` cells (σ_r <~ R), e.g.
 562 × 326 at p = 2, R = 1, σ_r = 0.2 (490 × 388 at σ_r = 0.0125): memory
 ``72 (n_x + 1)(n_t + 1)`` bytes (13 MB; 12.7–14.3 MB for σ_r in 0.0125 ... 0.4); built in
-0.2–0.4 s and cached per parameter set (:func:`gaussian_table`, an LRU cache of
+0.13–0.22 s and cached per parameter set (:func:`gaussian_table`, an LRU cache of
 :data:`_TABLE_CACHE` tables) — the width-disorder study builds thousands of models through
 workers, with a handful of distinct parameter sets.
 """
