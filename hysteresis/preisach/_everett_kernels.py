@@ -91,6 +91,10 @@ import math
 import numpy as np
 from numba import njit
 
+# numba's on-disk cache of a caller (oscillators/engines/_continuous_kernels.py) is keyed on the
+# caller's own source file only: after editing a kernel here, touch that file (or clear its
+# __pycache__) so that the engine does not keep a stale copy of everett_eval.
+
 __all__ = [
     "KIND_GAUSSIAN",
     "KIND_TABLE",
