@@ -25,8 +25,13 @@ the heap kernel on the dimers next to the nested O(1) kernel.
 
 Continuous operators (:func:`continuous_engine_figures`, also alone with ``--continuous-only``):
 seconds per 1000 time units with the tangent flow of the erf play, PI with 10 plays, continuous
-Preisach (grid 256 and Gaussian), the tanh play and the generic engine on the grid-256 model,
-measured interleaved in one run, with ratios to the erf-play kernel.
+Preisach (grid 256 and Gaussian, the latter also with its Everett function by the 48-node
+quadrature, the path before the bi-quintic table), the tanh play and the generic engine on the
+grid-256 model, measured interleaved in one run, with ratios to the erf-play kernel.
+
+``--gaussian-lyapunov T``: only ``lyapunov_spectrum`` of the Gaussian width-disorder model
+(p = 2, R = 1, σ_r = 0.2, C = 4) to t = T, with the table and with the quadrature, seconds each
+(:func:`gaussian_lyapunov_figures`).
 """
 
 from __future__ import annotations
@@ -222,12 +227,22 @@ def main() -> None:
     ap.add_argument("--general-relays", type=int, default=10000)
     ap.add_argument("--general-baseline-time", type=float, default=15.0)
     ap.add_argument(
+        "--gaussian-lyapunov",
+        type=float,
+        default=None,
+        metavar="T",
+        help="only lyapunov_spectrum of the Gaussian model to t = T, table vs quadrature",
+    )
+    ap.add_argument(
         "--continuous-only",
         action="store_true",
         help="only the continuous operators (continuous_engine_figures), as one JSON line",
     )
     args = ap.parse_args()
     c, t_run = args.coupling, args.time
+    if args.gaussian_lyapunov is not None:
+        print(json.dumps(gaussian_lyapunov_figures(c, args.gaussian_lyapunov)))
+        return
     if args.continuous_only:
         print(json.dumps({"coupling": c, **continuous_engine_figures(c)}))
         return
@@ -322,12 +337,16 @@ def continuous_engine_figures(c: float, erf_play_tangent_s: float | None = None)
     * ``continuous_preisach``: a continuous Preisach model tabulated on a 256 grid by
       ``from_density`` (density N(s; 0, R²)·N(r; p/2, 0.2²)), coupling ``c``, and
       ``continuous_preisach_gaussian``: ``ContinuousPreisachModel.gaussian(p, R, 0.2)``;
+    * ``continuous_preisach_gaussian_quadrature``: the same Gaussian model with its compiled
+      Everett function replaced by the 48-node Gauss–Legendre quadrature (kind 0, what the
+      engine evaluated before the bi-quintic table; :func:`_quadrature_gaussian`);
     * ``tanh_play``: ``GeneralizedPlay`` with the user shape tanh, coupling 2;
     * ``continuous_preisach_generic``: the grid-256 model on the generic engine
       (``engine_options={"method": "generic"}``), the baseline.
 
     Run lengths differ (the generic engine is slow); each figure is normalised per 1000 tu.
-    ``erf_play_tangent_s`` (the main run's figure) is only printed for comparison.
+    ``erf_play_tangent_s`` (the main run's figure) is only printed for comparison. The Gaussian
+    model's figure is also given as ``gaussian_preisach_s_per_1000tu_tangent`` (issue 18's key).
     """
     from hysteresis import ContinuousPreisachModel, PrandtlIshlinskii, PreisachModel
 
@@ -344,6 +363,7 @@ def continuous_engine_figures(c: float, erf_play_tangent_s: float | None = None)
         "pi10": (PrandtlIshlinskii(np.linspace(0.4, 4.0, 10), np.full(10, 0.1)), 0.8, 1000.0, {}),
         "continuous_preisach": (grid, c, 200.0, {}),
         "continuous_preisach_gaussian": (ContinuousPreisachModel.gaussian(P, R, 0.2), c, 200.0, {}),
+        "continuous_preisach_gaussian_quadrature": (_quadrature_gaussian(0.2), c, 200.0, {}),
         "tanh_play": (tanh, 2.0, 100.0, {}),
         "continuous_preisach_generic": (grid, c, 10.0, generic),
     }
@@ -376,8 +396,57 @@ def continuous_engine_figures(c: float, erf_play_tangent_s: float | None = None)
             f"{cases[name][2]:g} tu each) = {sec / base:.1f} x the erf-play kernel; "
             f"lambda = {np.round(res.exponents[:3], 4)}"
         )
+    figures["gaussian_preisach_s_per_1000tu_tangent"] = figures[
+        "continuous_preisach_gaussian_s_per_1000tu_tangent"
+    ]
+    figures["gaussian_preisach_vs_erf_play"] = figures["continuous_preisach_gaussian_vs_erf_play"]
+    figures["gaussian_table_speedup_vs_quadrature"] = (
+        figures["continuous_preisach_gaussian_quadrature_s_per_1000tu_tangent"]
+        / figures["continuous_preisach_gaussian_s_per_1000tu_tangent"]
+    )
     if erf_play_tangent_s is not None:
         print(f"  (erf-play kernel in the main run: {erf_play_tangent_s:.4f} s per 1000 tu)")
+    return figures
+
+
+def _quadrature_gaussian(width_spread: float):
+    """``ContinuousPreisachModel.gaussian(p, R, width_spread)`` whose compiled Everett function
+    (what the compiled engine integrates) is the 48-node quadrature, kind 0 — the engine's
+    path before the bi-quintic table (its vectorised methods read the same attribute, its
+    scalar fast paths keep the table: the two differ by <= 1e-12, immaterial for a timing)."""
+    from hysteresis import ContinuousPreisachModel
+    from hysteresis.preisach.gaussian import gaussian_everett
+
+    model = ContinuousPreisachModel.gaussian(P, R, width_spread)
+    model._compiled_everett = gaussian_everett(P, R, width_spread, 48).compiled()
+    return model
+
+
+def gaussian_lyapunov_figures(c: float, t_end: float, rounds: int = 3) -> dict:
+    """Seconds of ``lyapunov_spectrum`` (default options) to ``t_end`` of the Gaussian
+    width-disorder model (p, R, σ_r = 0.2) at coupling ``c``: the bi-quintic table and the
+    48-node quadrature (:func:`_quadrature_gaussian`), interleaved, median of ``rounds``."""
+    from hysteresis import ContinuousPreisachModel
+
+    runs = {}
+    for name, model in (
+        ("table", ContinuousPreisachModel.gaussian(P, R, 0.2)),
+        ("quadrature", _quadrature_gaussian(0.2)),
+    ):
+        system = ForcedOscillator(model, c, ZETA, OMEGA)
+        lyapunov_spectrum(system, 10.0, progress=False)  # compile outside the timing
+
+        def run(system=system):
+            return lyapunov_spectrum(system, t_end, progress=False)
+
+        runs[name] = run
+    timed = _interleaved(runs, rounds=rounds)
+    figures = {"coupling": c, "t_end": t_end}
+    for name, (seconds, res) in timed.items():
+        figures[f"gaussian_lyapunov_{name}_s"] = seconds
+        figures[f"gaussian_lyapunov_{name}_exponents"] = [float(x) for x in res.exponents[:3]]
+        print(f"lyapunov_spectrum to t = {t_end:g}, Gaussian model ({name}): {seconds:.2f} s")
+    figures["speedup"] = timed["quadrature"][0] / timed["table"][0]
     return figures
 
 

@@ -50,7 +50,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from hysteresis._validation import readonly_array
-from hysteresis.preisach._everett_kernels import KIND_GAUSSIAN, KIND_TABLE, everett_eval
+from hysteresis.preisach._everett_kernels import (
+    KIND_GAUSSIAN,
+    KIND_SEPARABLE,
+    KIND_TABLE,
+    everett_eval,
+)
 
 __all__ = ["CompiledEverett", "EMPTY_TABLE"]
 
@@ -64,7 +69,9 @@ class CompiledEverett:
 
     ``kind``: 0 = the Gaussian width-disorder quadrature (``table`` empty, shape
     ``(0, 0, 0)``), 1 = a bicubic Hermite table of nodal ``(E, ∂E/∂a, ∂E/∂b, ∂²E/∂a∂b)``,
-    shape ``(n + 1, n + 1, 4)`` on the grid ``lower + k·(upper − lower)/n``. ``params``: 1-D
+    shape ``(n + 1, n + 1, 4)`` on the grid ``lower + k·(upper − lower)/n``, 2 = the
+    separable Gaussian width-disorder form, a bi-quintic table of ``F(x, t)``, shape
+    ``(n_x + 1, n_t + 1, 9)`` (:mod:`hysteresis.preisach.gaussian`). ``params``: 1-D
     float64, ``params[0:2] = (lower, upper)`` (the support) followed by the kind's own
     parameters. Both arrays are read-only float64; the object pickles as its fields.
     """
@@ -74,8 +81,10 @@ class CompiledEverett:
     table: np.ndarray
 
     def __post_init__(self) -> None:
-        if self.kind not in (KIND_GAUSSIAN, KIND_TABLE):
-            raise ValueError(f"kind must be {KIND_GAUSSIAN} or {KIND_TABLE}, got {self.kind!r}")
+        if self.kind not in (KIND_GAUSSIAN, KIND_TABLE, KIND_SEPARABLE):
+            raise ValueError(
+                f"kind must be {KIND_GAUSSIAN}, {KIND_TABLE} or {KIND_SEPARABLE}, got {self.kind!r}"
+            )
         params = readonly_array(self.params)
         table = readonly_array(self.table)
         if params.ndim != 1 or params.size < 2 or not params[1] > params[0]:
@@ -86,6 +95,13 @@ class CompiledEverett:
             table.shape[0] < 2 or table.shape[1] != table.shape[0] or table.shape[2] != 4
         ):
             raise ValueError(f"a kind-1 table must have shape (n+1, n+1, 4), got {table.shape}")
+        if self.kind == KIND_SEPARABLE and (
+            min(table.shape[:2], default=0) < 2 or table.shape[2] != 9 or params.size != 10
+        ):
+            raise ValueError(
+                f"a kind-2 table must have shape (n_x+1, n_t+1, 9) and 10 params, got "
+                f"{table.shape} and {params.size}"
+            )
         object.__setattr__(self, "kind", int(self.kind))
         object.__setattr__(self, "params", params)
         object.__setattr__(self, "table", table)

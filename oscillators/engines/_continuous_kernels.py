@@ -47,7 +47,11 @@ even::
     reversal at u*: push  stack[p + 1] = u*,  p += 1,  one Everett evaluation for its term
 
 with ``E`` = :func:`hysteresis.preisach._everett_kernels.everett_eval` (one call per
-right-hand side; it returns the gradient as well).
+right-hand side; it returns the gradient as well). Only a tabulated C¹ Everett function
+(``KIND_TABLE``) needs its grid lines landed on (below); the separable Gaussian table (kind 2,
+bi-quintic) is C² across its lines, so a step across one errs by ``O(h⁴ J₃)`` with ``J₃`` the
+jump of the interpolant's third derivative (``~h_cell³‖F⁽⁶⁾‖``, i.e. ~1e-4 of it), and it is
+integrated as the analytic quadrature (kind 0) is.
 
 Tangent flow: ``Y`` (3 + capacity, k): rows δq, δv, δφ (zero without the phase), then one row
 per memory variable (wagon ``i``: row ``3 + i``; stack index ``i``: row ``i + 1``). On a branch

@@ -80,12 +80,13 @@ _MIN_CAPACITY = 64
 
 def _slope_bound(spec: Any) -> float:
     """A bound of the branch slopes ``|dy/du|`` from the compiled description: ``Σ|a_i|`` of
-    a Prandtl–Ishlinskii operator, twice the largest nodal gradient of a tabulated Everett
-    function; 0 (not used) for the Gaussian quadrature, whose slopes are O(1/R)."""
+    a Prandtl–Ishlinskii operator, twice the largest nodal gradient of a tabulated (kind 1)
+    Everett function; 0 (not used) for the Gaussian width-disorder model (quadrature or
+    separable table), whose slopes are O(1/R)."""
     if spec.kind == "prandtl_ishlinskii":
         return float(np.sum(np.abs(spec.weights)))
     table = np.asarray(spec.everett.table)
-    if table.ndim == 3 and table.shape[-1] >= 3 and table.size:
+    if spec.everett.kind == _k.KIND_TABLE and table.size:
         return 2.0 * float(np.max(np.abs(table[..., 1:3])))
     return 0.0
 

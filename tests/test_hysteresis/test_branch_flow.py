@@ -158,7 +158,7 @@ def test_preisach_flow_against_apply(which):
         op = _gauss_everett_model()
     elif which == "density":
         op = _gauss_density_model()
-    else:  # smooth quadrature Everett with scalar fast paths
+    else:  # the separable bi-quintic Everett table with scalar fast paths
         op = ContinuousPreisachModel.gaussian(2.0, 1.0, 0.3)
     extrema = [2.0, -1.5, 1.0, -0.5, 0.3]
     state = op.state_from_extrema(extrema)

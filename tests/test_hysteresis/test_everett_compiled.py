@@ -8,6 +8,7 @@ import pytest
 from hysteresis.preisach import ContinuousPreisachModel
 from hysteresis.preisach._everett_kernels import everett_eval
 from hysteresis.preisach.everett_table import CompiledEverett
+from hysteresis.preisach.gaussian import gaussian_everett
 
 
 def _points(model, rng, count=400):
@@ -42,14 +43,33 @@ def _compare(model, compiled, a, b, tol):
     assert np.all(got[a <= b] == 0.0)
 
 
-@pytest.mark.parametrize("args", [(2.0, 1.0, 0.2, 48), (2.0, 0.5, 0.0125, 48), (1.0, 1.0, 0.5, 32)])
-def test_gaussian_kernel_matches_vectorised(args):
+@pytest.mark.parametrize("args", [(2.0, 1.0, 0.2, 8), (2.0, 0.5, 0.0125, 8), (1.0, 1.0, 0.5, 6)])
+def test_gaussian_model_is_its_compiled_kernel(args):
     model = ContinuousPreisachModel.gaussian(*args)
     compiled = model.compiled_everett()
-    assert compiled.kind == 0 and compiled.table.shape == (0, 0, 0)
+    assert compiled.kind == 2 and compiled.table.shape[2] == 9
     a, b = _points(model, np.random.default_rng(1))
+    # one function: the model's vectorised methods call the same kernel (bit for bit)
+    _compare(model, compiled, a, b, 0.0)
+
+
+@pytest.mark.parametrize("args", [(2.0, 1.0, 0.2, 48), (2.0, 0.5, 0.0125, 48), (1.0, 1.0, 0.5, 32)])
+def test_gaussian_quadrature_kernel_matches_vectorised(args):
+    # the reference quadrature (kind 0) compiled and vectorised, inside the triangle
+    law = gaussian_everett(*args)
+    compiled = law.compiled()
+    assert compiled.kind == 0 and compiled.table.shape == (0, 0, 0)
+    rng = np.random.default_rng(1)
+    a = rng.uniform(-law.bound, law.bound, 300)
+    b = a - rng.uniform(0.0, law.bound, 300)
+    b = np.maximum(b, -law.bound)
+    got = np.array([compiled(x, y) for x, y in zip(a, b, strict=True)])
+    da, db = law.gradient(a, b)
     # rounding: ~48 terms of size <= 1, each with a few ulps (1e-16): a bound of 1e-14
-    _compare(model, compiled, a, b, 1e-14)
+    scale = max(1.0, float(np.max(np.abs(np.r_[da, db]))))
+    np.testing.assert_allclose(got[:, 0], law.everett(a, b), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(got[:, 1], da, rtol=0, atol=1e-14 * scale)
+    np.testing.assert_allclose(got[:, 2], db, rtol=0, atol=1e-14 * scale)
 
 
 def test_compiled_everett_pickles():
