@@ -24,7 +24,11 @@ deviation matrix is smaller than the number of tracked vectors (memory removed),
 directions are -inf and their columns are continued as zero vectors. Deviation vectors that an
 event set exactly to zero (a relay's Filippov slide collapses ``δq, δv``) are moved behind the
 others before the QR (a column permutation: an orthogonal change of the interval's start
-basis), so a surviving direction (the phase) keeps its exponent.
+basis), so a surviving direction (the phase) keeps its exponent. Likewise a vector that depends
+structurally on the ones before it (its QR residual at round-off) is moved behind them: a
+neutral memory direction that never mixes with the others (a frozen wagon or remembered
+extremum) keeps the start basis non-generic, and without the move a dependent vector would take
+a leading slot and push the neutral exponent 0 into a -inf slot.
 """
 
 from __future__ import annotations
@@ -313,6 +317,41 @@ def _accumulate_logs(diag: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> b
     return collapsed
 
 
+#: a deviation vector whose residual after projection on the vectors before it is below this
+#: fraction of its length counts as structurally dependent (module docstring). Structural
+#: dependence leaves round-off, ~1e-16; two genuine directions starting orthogonal close their
+#: angle only to exp(-Δλ·dt) within one interval, which stays above 1e-10 for Δλ·dt < 23.
+DEPENDENT_ANGLE = 1e-10
+
+
+def _defer_dependent(
+    y: np.ndarray, q: np.ndarray, diag: np.ndarray, rank: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Move the deviation vectors that are structurally dependent on the ones before them (a
+    residual angle below :data:`DEPENDENT_ANGLE`) behind the others, at most ``k − rank`` of
+    them, and redo the QR; ``(y, q, diag)`` unchanged when the first ``rank`` slots hold
+    independent vectors.
+
+    Why: with the tangent rank ``rank < k`` the QR gives ``R_jj = 0`` to the vectors that depend
+    on their predecessors. For a generic basis those sit in the last slots; a neutral memory
+    direction that never mixes with the others (a frozen wagon or extremum, δm' = 0) keeps the
+    start basis non-generic, so a dependent vector can take a leading slot and push the neutral
+    direction's exponent 0 into a -inf slot. The permutation is an orthogonal change of the
+    interval's start basis, as for the zero columns."""
+    k = y.shape[1]
+    moved = 0
+    while moved < k - rank:
+        norms = np.sqrt(np.sum(y[:, :rank] ** 2, axis=0))
+        dependent = np.flatnonzero(diag[:rank] <= DEPENDENT_ANGLE * norms)
+        if dependent.size == 0:
+            break
+        j = int(dependent[0])
+        y = y[:, [c for c in range(k) if c != j] + [j]]
+        q, diag, _ = householder_qr(np.ascontiguousarray(y))
+        moved += 1
+    return y, q, diag
+
+
 def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.ndarray, bool]:
     """One re-orthonormalisation: adds log|R_jj| (or -inf beyond ``rank``) to ``lsum``.
 
@@ -331,6 +370,8 @@ def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.nda
     if not finite:
         raise DivergenceError("the tangent flow became non-finite (deviation vectors overflow)")
     m = q.shape[1]
+    if rank < k:
+        y, q, diag = _defer_dependent(y, q, diag, min(rank, m))
     collapsed = _accumulate_logs(diag, k, min(rank, m), lsum)
     if m == k:
         return q, collapsed
