@@ -215,9 +215,11 @@ def periodic_attractor(system: Any, state: OscillatorState, period: int) -> dict
     Returns ``points`` (k × d: the section columns of the refined orbit, from one more run of
     k periods), ``columns``, ``multipliers`` (complex, by decreasing modulus; a reset memory
     direction exactly 0), ``tangent_space``, ``exponents`` (``log|μ|/(k·T)``), ``stable``,
-    ``residual`` and ``refined`` (True). If Newton does not converge
-    (:class:`~analysis.dynamics.periodic_orbits.OrbitNotFoundError`, e.g. a wagon inside the
-    play for the whole orbit: a continuum of orbits), the orbit is the run's own cycle, the
+    ``residual`` and ``refined`` (True). Memory the orbit never moves (a wagon inside its play,
+    an old remembered extremum) is frozen: its multiplier is exactly 1 and ``stable`` judges
+    the other directions (see :mod:`analysis.dynamics.periodic_orbits`). If Newton does not
+    converge (:class:`~analysis.dynamics.periodic_orbits.OrbitNotFoundError`), the orbit is the
+    run's own cycle, the
     multipliers the eigenvalues of the Jacobian of ``P^k`` at ``state``, ``refined`` is False
     and ``refinement_error`` says why.
     """
