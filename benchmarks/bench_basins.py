@@ -4,8 +4,9 @@ A ``--grid`` × ``--grid`` map (default 200 × 200) over (q0, v0) in [-3, 3]² a
 (default 2.92), every start integrated for ``--periods`` forcing periods (default 100, no
 transient, no extension) and classified by :func:`analysis.dynamics.basins.basins` (chunks of
 ``--chunk`` starts per task, no store), then the orbit refinement and the Lyapunov runs once per
-attractor. The baseline, measured in the same run on ``--baseline-starts`` starts of the same
-grid, is the plain API loop ``system.poincare_section(periods, 0, q0, v0)`` per start (serial).
+attractor. The baseline, measured in the same run right before each setting (the load
+drifts) on ``--baseline-starts`` starts of the same grid, is the plain API loop
+``system.poincare_section(periods, 0, q0, v0)`` per start (serial).
 Prints starts/s of each setting (overall, and in the section runs alone), its ratio to the
 baseline, and the extrapolated wall time of a 1000 × 1000 map: the section runs scaled by the
 number of starts (every start costs the same number of periods) plus the attractor phase
@@ -50,15 +51,18 @@ def measure_basins(
     # warm the numba caches outside the timing
     system.poincare_section(2, 0, 0.0, 0.0)
 
-    base = []
     n_base = min(baseline_starts, starts.shape[0])
     step = max(1, starts.shape[0] // n_base)
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for q0, v0, _w in starts[::step][:n_base]:
-            system.poincare_section(periods, 0, q0, v0)
-        base.append(n_base / (time.perf_counter() - t0))
-    baseline = statistics.median(base)
+
+    def measure_baseline() -> float:
+        base = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            for q0, v0, _w in starts[::step][:n_base]:
+                system.poincare_section(periods, 0, q0, v0)
+            base.append(n_base / (time.perf_counter() - t0))
+        return statistics.median(base)
+
     out = {
         "benchmark": "basins",
         "model": "erf-play",
@@ -70,10 +74,12 @@ def measure_basins(
         "chunk": chunk,
         "cpu_count": os.cpu_count(),
         "machine": platform.machine(),
-        "baseline_starts_per_s": round(baseline, 2),
     }
-    print(f"baseline poincare_section loop: {baseline:.1f} starts/s (median of {repeats})")
     for w in workers:
+        # the baseline next to each setting: the machine's other load drifts over a long run,
+        # and a ratio only means something against a baseline measured under the same load
+        baseline = measure_baseline()
+        print(f"baseline poincare_section loop: {baseline:.1f} starts/s (median of {repeats})")
         t0 = time.perf_counter()
         bm = basins(
             system,
@@ -94,6 +100,7 @@ def measure_basins(
             "sections_starts_per_s": round(starts.shape[0] / sections, 1),
             "attractors_s": round(bm.timings["attractors_s"], 1),
             "starts_per_s": round(rate, 1),
+            "baseline_starts_per_s": round(baseline, 2),
             "ratio_to_baseline": round(rate / baseline, 2),
             # the section runs scale with the starts, the attractor phase does not
             "map_1000x1000_h": round(
