@@ -117,7 +117,8 @@ def register(subparsers: Any) -> None:
         help="smoothing factor SF, or SF_R SF_S (window half-widths across r and along s, in "
         "grid steps, > 0), or 'variforc' (--input: VARIFORC, Egli 2013, parameters --sc0 "
         "--sc1 --sb0 --sb1 --lambda), or 'auto' (--input: VARIFORC with its half-width chosen "
-        "per file by leave-one-out cross-validation); default: none for models, 3 for --input",
+        "per file by a Lepski rule on the density: the largest half-width whose density stays "
+        "within noise of every finer one); default: none for models, 3 for --input",
     )
     defaults = VariforcParameters()
     for name, what in (
@@ -569,7 +570,7 @@ def _run_measured(
     if variforc:
         law = "VARIFORC sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} λ={lam:g}".format(**ident.variforc)
         if ident.smoothing_choice is not None:
-            law += " (chosen by cross-validation)"
+            law += " (chosen automatically)"
     else:
         law = f"SF={smoothing[0]:g}/{smoothing[1]:g}"
     title = f"FORC diagram: {Path(args.input).name}\n{law}, Δ={step:.3g} mT, window={args.window}"

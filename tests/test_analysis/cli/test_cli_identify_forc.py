@@ -161,7 +161,7 @@ def test_automatic_smoothing_is_reported(tmp_path):
     choice = rep["smoothing_choice"]
     assert choice["chosen_s1"] in choice["candidates_s1"]
     assert rep["variforc"]["sc1"] == choice["chosen_s1"] and rep["smoothing_method"] == "variforc"
-    assert "cross-validation" in rep["figure_title"]
+    assert "chosen automatically" in rep["figure_title"]
 
 
 def test_batch_of_a_directory_writes_a_summary(tmp_path, capsys):
