@@ -60,6 +60,8 @@ from analysis.identification.normalization import (
     normalized_unit,
 )
 from analysis.identification.plots import (
+    FORCINEL,
+    colormap_name,
     figure_forc,
     figure_preisach_density,
     figure_single_density,
@@ -77,6 +79,14 @@ PAPER_MODELS = ("dimers", "erf-play")
 FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks", "segments")
 #: the grid step of a model's identification (the paper's fig:preis_dens)
 DEFAULT_STEP = 0.1
+
+
+def _cmap(text: str) -> str:
+    """``--cmap``: a matplotlib colour map name or ``forcinel``."""
+    try:
+        return colormap_name(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def register(subparsers: Any) -> None:
@@ -169,7 +179,29 @@ def register(subparsers: Any) -> None:
         "--uncertainty",
         action="store_true",
         help="--input: standard error of rho at every node, significance contours on the "
-        "diagram, the peak with an interval and the irreversible mass with its error",
+        "diagram, the peak with a bootstrap interval and the irreversible mass with its error",
+    )
+    g.add_argument(
+        "--bootstrap",
+        type=int_at_least(20, 100000),
+        default=200,
+        metavar="N",
+        help="--uncertainty: replicates of the peak's parametric bootstrap (>= 20; default 200)",
+    )
+    g.add_argument(
+        "--bootstrap-seed",
+        type=int_at_least(0),
+        default=0,
+        metavar="S",
+        help="--uncertainty: seed of the bootstrap's noise (>= 0; default 0)",
+    )
+    g.add_argument(
+        "--cmap",
+        type=_cmap,
+        default=None,
+        metavar="NAME",
+        help="colour map of the FORC diagram: any matplotlib map name (default: FORCinel-like, "
+        "white at rho = 0, blue below, green-yellow-red above)",
     )
     g.add_argument(
         "--input",
@@ -268,6 +300,9 @@ def run(args: argparse.Namespace) -> int:
         ("--workers", args.workers != 1),
         ("--grid-step", args.grid_step is not None),
         ("--uncertainty", args.uncertainty),
+        ("--bootstrap", args.bootstrap != 200),
+        ("--cmap", args.cmap is not None),
+        ("--bootstrap-seed", args.bootstrap_seed != 0),
         ("--smoothing", args.smoothing in (["variforc"], ["auto"])),
         ("--normalize", args.normalize != "none"),
         ("--columns", args.columns is not None),
@@ -551,11 +586,12 @@ def _run_measured(
     }
     interval = ""
     if args.uncertainty:
-        u = summarize_uncertainty(ident)
+        u = summarize_uncertainty(ident, n_boot=args.bootstrap, seed=args.bootstrap_seed)
         report.update(
             peak_rho_se=u.peak_rho_se * rho_factor,
             peak_bc_interval_mT=list(u.peak_bc_interval),
             peak_bu_interval_mT=list(u.peak_bu_interval),
+            peak_interval_method=f"parametric bootstrap, {args.bootstrap} replicates, 95 %",
             irreversible_mass_se=u.irreversible_mass_se / amount,
             significant_fraction=u.significant_fraction,
             noise_sigma=u.noise_sigma,
@@ -583,6 +619,7 @@ def _run_measured(
         moment_unit=normalized_unit(data.moment_unit, args.normalize),
         rho_factor=rho_factor,
         rho_unit=rho_name,
+        cmap=args.cmap or FORCINEL,
     )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
