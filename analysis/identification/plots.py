@@ -347,7 +347,7 @@ def forcinel_cmap() -> Any:
     white = 0.5 - 0.5 * 0.025 / FORCINEL_NEGATIVE
     stops = [(0.0, rgb(_FORCINEL_BLUE)), (white, rgb((255, 255, 255)))]
     stops += [(0.5 + 0.5 * f, rgb(c)) for f, c in _FORCINEL_STOPS]
-    return LinearSegmentedColormap.from_list(FORCINEL, stops)
+    return LinearSegmentedColormap.from_list(FORCINEL, stops, N=1024)
 
 
 def colormap_name(text: str) -> str:
