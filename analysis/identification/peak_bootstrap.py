@@ -27,12 +27,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from analysis.identification._checks import positive_number
 from analysis.identification.result import PreisachIdentification
-from analysis.identification.variforc import VariforcParameters, weighted_quadratic_density
+from analysis.identification.variforc import (
+    VariforcParameters,
+    variforc_factors,
+    weighted_quadratic_density,
+)
 
 __all__ = ["PeakBootstrap", "peak_bootstrap", "REGION_Z"]
 
@@ -81,6 +86,24 @@ def _refine(dens: np.ndarray, i: int, j: int) -> tuple[float, float]:
     return out[0], out[1]
 
 
+def _crop(region: np.ndarray, ident: PreisachIdentification, smoothing: Any) -> tuple[slice, slice]:
+    """Index slices of the square sub-lattice ``[k0, k1)²`` that holds ``region`` and the
+    windows of its nodes (``|Δi|, |Δj| <= s_c + s_b``; same first node on both axes, so that
+    the sub-lattice is again ``α_i = β_i``)."""
+    ii, jj = np.nonzero(region)
+    if isinstance(smoothing, VariforcParameters):
+        a, b = ident.alpha[ii], ident.beta[jj]
+        sc, sb = variforc_factors(0.5 * (a - b), 0.5 * (a + b), float(ident.step), smoothing)
+        reach = float(np.max(sc + sb))
+    else:
+        reach = float(smoothing[0] + smoothing[1])
+    halo = int(math.ceil(reach)) + 1
+    n = region.shape[0]
+    k0 = max(0, int(min(ii.min(), jj.min())) - halo)
+    k1 = min(n, int(max(ii.max(), jj.max())) + halo + 1)
+    return slice(k0, k1), slice(k0, k1)
+
+
 def peak_bootstrap(
     ident: PreisachIdentification,
     n_boot: int = 200,
@@ -122,10 +145,15 @@ def peak_bootstrap(
     noisy = measured & (bb <= aa)
     valid = measured | ((bb > aa) if ident.reversible_ridge else False)
     smoothing = _smoothing(ident)
-    step, origin = float(ident.step), float(ident.alpha[0])
+    step = float(ident.step)
+    # the square sub-lattice that holds the region and every window of its nodes
+    box = _crop(region, ident, smoothing)
+    region, noisy, valid, rho_c, se_c = (x[box] for x in (region, noisy, valid, rho, se))
+    alpha = ident.alpha[box[0]]
+    origin = float(alpha[0])
     # unit-noise standard errors of the region: g = se/σ̂ of any fit (here: of white noise)
     probe = weighted_quadratic_density(
-        np.where(noisy, rng.standard_normal(rho.shape), 0.0),
+        np.where(noisy, rng.standard_normal(region.shape), 0.0),
         valid,
         region,
         step,
@@ -134,24 +162,23 @@ def peak_bootstrap(
         True,
     )
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = se / (probe.se / probe.sigma)
+        ratio = se_c / (probe.se / probe.sigma)
     ratio = ratio[region & np.isfinite(ratio)]
     if ratio.size == 0:
         raise ValueError("the peak bootstrap: no standard error in the peak's region")
     sigma = float(np.median(ratio))
-    dens = np.full(rho.shape, -np.inf)
+    dens = np.full(region.shape, -np.inf)
     bc = np.empty(n_boot)
     bu = np.empty(n_boot)
     for b in range(n_boot):
-        eps = np.where(noisy, sigma * rng.standard_normal(rho.shape), 0.0)
+        eps = np.where(noisy, sigma * rng.standard_normal(region.shape), 0.0)
         fit = weighted_quadratic_density(eps, valid, region, step, smoothing, origin, False)
-        dens[region] = rho[region] + fit.rho[region]
-        i, j = np.unravel_index(
-            int(np.nanargmax(np.where(np.isfinite(dens), dens, -np.inf))), dens.shape
-        )
+        dens[region] = rho_c[region] + fit.rho[region]
+        flat = int(np.argmax(np.where(np.isfinite(dens), dens, -np.inf)))
+        i, j = np.unravel_index(flat, dens.shape)
         da, db = _refine(dens, int(i), int(j))
-        a = ident.alpha[i] + da * step
-        c = ident.beta[j] + db * step
+        a = alpha[i] + da * step
+        c = alpha[j] + db * step
         bc[b], bu[b] = 0.5 * (a - c), 0.5 * (a + c)
     q = [50.0 * (1.0 - level), 50.0 * (1.0 + level)]
     lo_c, hi_c = np.percentile(bc, q)
