@@ -1,6 +1,7 @@
 """What ``hyst identify --input`` makes of its smoothing and unit options: the smoothing law
-(a factor, VARIFORC with its parameters, or ``auto``), the normalisation's divisor and the unit
-of ρ. Errors are one line naming the option (:class:`~analysis.cli._parsing.CliError`).
+(a factor, VARIFORC with its parameters, or ``auto``), the normalisation's divisor, the unit
+of ρ, and the uncertainty and colour options. Errors are one line naming the option
+(:class:`~analysis.cli._parsing.CliError`).
 """
 
 from __future__ import annotations
@@ -8,11 +9,18 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from analysis.cli._parsing import CliError, positive_float
+from analysis.cli._parsing import CliError, int_at_least, positive_float
 from analysis.identification.normalization import normalized_unit, sample_amount
+from analysis.identification.plots import colormap_name
 from analysis.identification.variforc import VariforcParameters
 
-__all__ = ["VARIFORC_OPTIONS", "smoothing_option", "amount_option", "rho_unit"]
+__all__ = [
+    "VARIFORC_OPTIONS",
+    "smoothing_option",
+    "amount_option",
+    "rho_unit",
+    "add_uncertainty_options",
+]
 
 VARIFORC_OPTIONS = ("sc0", "sc1", "sb0", "sb1", "lam")
 
@@ -78,3 +86,44 @@ def rho_unit(data: Any, normalize: str = "none") -> tuple[float, str]:
     if data.field_unit == "mT" and data.moment_unit:
         return 1e6, f"{normalized_unit(data.moment_unit, normalize)}/T²"
     return 1.0, "moment/field² (as written)"
+
+
+def _cmap(text: str) -> str:
+    """``--cmap``: a matplotlib colour map name or ``forcinel``."""
+    try:
+        return colormap_name(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_uncertainty_options(g: Any) -> None:
+    """``--uncertainty``, ``--bootstrap``, ``--bootstrap-seed`` and ``--cmap`` (on the group
+    ``g`` of ``hyst identify``)."""
+    g.add_argument(
+        "--uncertainty",
+        action="store_true",
+        help="--input: standard error of rho at every node, significance contours on the "
+        "diagram, the peak with a bootstrap interval and the irreversible mass with its error",
+    )
+    g.add_argument(
+        "--bootstrap",
+        type=int_at_least(20, 100000),
+        default=200,
+        metavar="N",
+        help="--uncertainty: replicates of the peak's parametric bootstrap (>= 20; default 200)",
+    )
+    g.add_argument(
+        "--bootstrap-seed",
+        type=int_at_least(0),
+        default=0,
+        metavar="S",
+        help="--uncertainty: seed of the bootstrap's noise (>= 0; default 0)",
+    )
+    g.add_argument(
+        "--cmap",
+        type=_cmap,
+        default=None,
+        metavar="NAME",
+        help="colour map of the FORC diagram: any matplotlib map name (default: FORCinel-like, "
+        "white at rho = 0, blue below, green-yellow-red above)",
+    )

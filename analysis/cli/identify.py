@@ -25,7 +25,12 @@ from analysis.cli._build import (
     option_error,
 )
 from analysis.cli._identify_batch import input_files, run_batch
-from analysis.cli._identify_measured import amount_option, rho_unit, smoothing_option
+from analysis.cli._identify_measured import (
+    add_uncertainty_options,
+    amount_option,
+    rho_unit,
+    smoothing_option,
+)
 from analysis.cli._options import (
     add_model_options,
     add_output_options,
@@ -61,7 +66,6 @@ from analysis.identification.normalization import (
 )
 from analysis.identification.plots import (
     FORCINEL,
-    colormap_name,
     figure_forc,
     figure_preisach_density,
     figure_single_density,
@@ -79,14 +83,6 @@ PAPER_MODELS = ("dimers", "erf-play")
 FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks", "segments")
 #: the grid step of a model's identification (the paper's fig:preis_dens)
 DEFAULT_STEP = 0.1
-
-
-def _cmap(text: str) -> str:
-    """``--cmap``: a matplotlib colour map name or ``forcinel``."""
-    try:
-        return colormap_name(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def register(subparsers: Any) -> None:
@@ -175,34 +171,7 @@ def register(subparsers: Any) -> None:
         metavar="M3",
         help="--normalize volume: the sample's volume in m³ (> 0; default: the file header's)",
     )
-    g.add_argument(
-        "--uncertainty",
-        action="store_true",
-        help="--input: standard error of rho at every node, significance contours on the "
-        "diagram, the peak with a bootstrap interval and the irreversible mass with its error",
-    )
-    g.add_argument(
-        "--bootstrap",
-        type=int_at_least(20, 100000),
-        default=200,
-        metavar="N",
-        help="--uncertainty: replicates of the peak's parametric bootstrap (>= 20; default 200)",
-    )
-    g.add_argument(
-        "--bootstrap-seed",
-        type=int_at_least(0),
-        default=0,
-        metavar="S",
-        help="--uncertainty: seed of the bootstrap's noise (>= 0; default 0)",
-    )
-    g.add_argument(
-        "--cmap",
-        type=_cmap,
-        default=None,
-        metavar="NAME",
-        help="colour map of the FORC diagram: any matplotlib map name (default: FORCinel-like, "
-        "white at rho = 0, blue below, green-yellow-red above)",
-    )
+    add_uncertainty_options(g)
     g.add_argument(
         "--input",
         type=Path,
