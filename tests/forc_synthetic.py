@@ -16,16 +16,17 @@ from analysis.identification import ReversalCurves
 A_SAT, HA, SA, HB, SB = 1.0, 2.0, 12.0, -4.0, 11.0  # the moment model below (steps of 1)
 
 
-def true_rho(H, Hr):
-    """ρ = −½ ∂²M/∂Hr∂H of ``M = 2A Φ((H − HA)/SA) Φ((HB − Hr)/SB) + m0(Hr)``."""
-    return A_SAT * norm.pdf((H - HA) / SA) * norm.pdf((HB - Hr) / SB) / (SA * SB)
+def true_rho(H, Hr, ha=HA, hb=HB):
+    """ρ = −½ ∂²M/∂Hr∂H of ``M = 2A Φ((H − ha)/SA) Φ((hb − Hr)/SB) + m0(Hr)``."""
+    return A_SAT * norm.pdf((H - ha) / SA) * norm.pdf((hb - Hr) / SB) / (SA * SB)
 
 
-def noisy_curves(rng, noise, grid):
+def noisy_curves(rng, noise, grid, ha=HA, hb=HB):
+    """The curves of the model (peak at ``B_c = (ha − hb)/2``, ``B_u = (ha + hb)/2``)."""
     rev, fields, moments = [], [], []
     for hr in grid:
         h = grid[grid >= hr]
-        m = 2 * A_SAT * norm.cdf((h - HA) / SA) * norm.cdf((HB - hr) / SB) + 0.3 * np.tanh(hr / 7)
+        m = 2 * A_SAT * norm.cdf((h - ha) / SA) * norm.cdf((hb - hr) / SB) + 0.3 * np.tanh(hr / 7)
         rev.append(hr)
         fields.append(h)
         moments.append(m + rng.normal(0.0, noise, h.size))

@@ -19,7 +19,12 @@ sought in the region whose density is within ``5·sqrt(se_peak² + se²)`` of th
 ``< 3·10⁻⁷``); only its nodes are re-smoothed, which keeps 200 replicates to seconds.
 
 What the interval covers: the peak of the smoothed density's expectation ``E ρ̂`` (the
-smoothing's own bias, e.g. a peak pulled by a broad window, is not in it). On the native grid
+smoothing's own bias, e.g. a peak pulled by a broad window, is not in it). Coverage measured on
+synthetic FORCs with a known peak (tests/test_analysis/identification/test_peak_bootstrap.py):
+at least 95 %, and more when the noise is large — 100 % of 100 draws at a standard error of
+~10 % of the peak: the replicates ``ρ̂ + L ε*`` carry the data's noise bumps as well as their
+own, so their peak wanders more than the estimate's does, and the interval is conservative.
+(Centring the replicates on the twice-smoothed data instead under-covered, 87–91 %.) On the native grid
 of simulated data every node below the diagonal counts as measured.
 """
 
