@@ -24,8 +24,8 @@ synthetic FORCs with a known peak (tests/test_analysis/identification/test_peak_
 at least 95 %, and more when the noise is large — 100 % of 100 draws at a standard error of
 ~10 % of the peak: the replicates ``ρ̂ + L ε*`` carry the data's noise bumps as well as their
 own, so their peak wanders more than the estimate's does, and the interval is conservative.
-(Centring the replicates on the twice-smoothed data instead under-covered, 87–91 %.) On the native grid
-of simulated data every node below the diagonal counts as measured.
+(Centring the replicates on the twice-smoothed data instead under-covered, 87–91 %.) On the
+native grid of simulated data every node below the diagonal counts as measured.
 """
 
 from __future__ import annotations
