@@ -70,7 +70,7 @@ def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
             **rep["variforc"]
         )
         if rep.get("smoothing_choice"):
-            smoothing += " (cross-validation)"
+            smoothing += " (auto)"
     elif rep.get("smoothing_factor"):
         smoothing = "SF={:g}/{:g}".format(*rep["smoothing_factor"])
     else:

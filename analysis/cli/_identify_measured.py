@@ -1,8 +1,8 @@
 """What ``hyst identify --input`` makes of its smoothing and unit options: the smoothing law
-(a factor, VARIFORC with its parameters, or ``auto``), the normalisation's divisor and the unit
-of ρ; and what it says about the data: the kind of curves (in-field or remanence FORC) and the
-warnings about them. Errors are one line naming the option
-(:class:`~analysis.cli._parsing.CliError`).
+(a factor, VARIFORC with its parameters, or ``auto``), the normalisation's divisor, the unit
+of ρ, and the uncertainty and colour options; and what it says about the data: the kind of
+curves (in-field or remanence FORC) and the warnings about them. Errors are one line naming
+the option (:class:`~analysis.cli._parsing.CliError`).
 """
 
 from __future__ import annotations
@@ -12,9 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from analysis.cli._parsing import CliError, positive_float
+from analysis.cli._parsing import CliError, int_at_least, positive_float
 from analysis.identification.curves import KIND_NAMES
 from analysis.identification.normalization import normalized_unit, sample_amount
+from analysis.identification.plots import colormap_name
 from analysis.identification.variforc import VariforcParameters
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "curve_kind",
     "diagram_name",
     "data_warnings",
+    "add_uncertainty_options",
 ]
 
 VARIFORC_OPTIONS = ("sc0", "sc1", "sb0", "sb1", "lam")
@@ -128,3 +130,44 @@ def data_warnings(data: Any, ident: Any) -> list[str]:
             "curves cross (noise, drift or an incomplete protocol), check them"
         )
     return out
+
+
+def _cmap(text: str) -> str:
+    """``--cmap``: a matplotlib colour map name or ``forcinel``."""
+    try:
+        return colormap_name(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_uncertainty_options(g: Any) -> None:
+    """``--uncertainty``, ``--bootstrap``, ``--bootstrap-seed`` and ``--cmap`` (on the group
+    ``g`` of ``hyst identify``)."""
+    g.add_argument(
+        "--uncertainty",
+        action="store_true",
+        help="--input: standard error of rho at every node, significance contours on the "
+        "diagram, the peak with a bootstrap interval and the irreversible mass with its error",
+    )
+    g.add_argument(
+        "--bootstrap",
+        type=int_at_least(20, 100000),
+        default=200,
+        metavar="N",
+        help="--uncertainty: replicates of the peak's parametric bootstrap (>= 20; default 200)",
+    )
+    g.add_argument(
+        "--bootstrap-seed",
+        type=int_at_least(0),
+        default=0,
+        metavar="S",
+        help="--uncertainty: seed of the bootstrap's noise (>= 0; default 0)",
+    )
+    g.add_argument(
+        "--cmap",
+        type=_cmap,
+        default=None,
+        metavar="NAME",
+        help="colour map of the FORC diagram: any matplotlib map name (default: FORCinel-like, "
+        "white at rho = 0, blue below, green-yellow-red above)",
+    )

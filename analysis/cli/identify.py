@@ -26,6 +26,7 @@ from analysis.cli._build import (
 )
 from analysis.cli._identify_batch import input_files, run_batch
 from analysis.cli._identify_measured import (
+    add_uncertainty_options,
     amount_option,
     curve_kind,
     data_warnings,
@@ -67,6 +68,7 @@ from analysis.identification.normalization import (
     normalized_unit,
 )
 from analysis.identification.plots import (
+    FORCINEL,
     figure_forc,
     figure_preisach_density,
     figure_single_density,
@@ -124,7 +126,8 @@ def register(subparsers: Any) -> None:
         help="smoothing factor SF, or SF_R SF_S (window half-widths across r and along s, in "
         "grid steps, > 0), or 'variforc' (--input: VARIFORC, Egli 2013, parameters --sc0 "
         "--sc1 --sb0 --sb1 --lambda), or 'auto' (--input: VARIFORC with its half-width chosen "
-        "per file by leave-one-out cross-validation); default: none for models, 3 for --input",
+        "per file by a Lepski rule on the density: the largest half-width whose density stays "
+        "within noise of every finer one); default: none for models, 3 for --input",
     )
     defaults = VariforcParameters()
     for name, what in (
@@ -171,12 +174,7 @@ def register(subparsers: Any) -> None:
         metavar="M3",
         help="--normalize volume: the sample's volume in m³ (> 0; default: the file header's)",
     )
-    g.add_argument(
-        "--uncertainty",
-        action="store_true",
-        help="--input: standard error of rho at every node, significance contours on the "
-        "diagram, the peak with an interval and the irreversible mass with its error",
-    )
+    add_uncertainty_options(g)
     g.add_argument(
         "--input",
         type=Path,
@@ -274,6 +272,9 @@ def run(args: argparse.Namespace) -> int:
         ("--workers", args.workers != 1),
         ("--grid-step", args.grid_step is not None),
         ("--uncertainty", args.uncertainty),
+        ("--bootstrap", args.bootstrap != 200),
+        ("--cmap", args.cmap is not None),
+        ("--bootstrap-seed", args.bootstrap_seed != 0),
         ("--smoothing", args.smoothing in (["variforc"], ["auto"])),
         ("--normalize", args.normalize != "none"),
         ("--columns", args.columns is not None),
@@ -559,11 +560,12 @@ def _run_measured(
     }
     interval = ""
     if args.uncertainty:
-        u = summarize_uncertainty(ident)
+        u = summarize_uncertainty(ident, n_boot=args.bootstrap, seed=args.bootstrap_seed)
         report.update(
             peak_rho_se=u.peak_rho_se * rho_factor,
             peak_bc_interval_mT=list(u.peak_bc_interval),
             peak_bu_interval_mT=list(u.peak_bu_interval),
+            peak_interval_method=f"parametric bootstrap, {args.bootstrap} replicates, 95 %",
             irreversible_mass_se=u.irreversible_mass_se / amount,
             significant_fraction=u.significant_fraction,
             noise_sigma=u.noise_sigma,
@@ -578,7 +580,7 @@ def _run_measured(
     if variforc:
         law = "VARIFORC sc={sc0:g}/{sc1:g} sb={sb0:g}/{sb1:g} λ={lam:g}".format(**ident.variforc)
         if ident.smoothing_choice is not None:
-            law += " (chosen by cross-validation)"
+            law += " (chosen automatically)"
     else:
         law = f"SF={smoothing[0]:g}/{smoothing[1]:g}"
     title = f"{diagram_name(data)}: {Path(args.input).name}\n"
@@ -592,6 +594,7 @@ def _run_measured(
         moment_unit=normalized_unit(data.moment_unit, args.normalize),
         rho_factor=rho_factor,
         rho_unit=rho_name,
+        cmap=args.cmap or FORCINEL,
     )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]

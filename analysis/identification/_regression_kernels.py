@@ -193,8 +193,6 @@ def node_fits(
     se: np.ndarray,
     sigma: np.ndarray,
     npts: np.ndarray,
-    values: np.ndarray,
-    loo: np.ndarray,
 ) -> None:
     """The regression at every target node from the line sums (results written in place).
 
@@ -210,16 +208,15 @@ def node_fits(
         A = S in the basis (1, p, q, p², q², pq) / L (L = max(P, Q)); c = A⁻¹ b (Cholesky)
         ρ = 2 (c_p² − c_q²) / L²               # −∂²v/∂i∂j per step²: p² = (Δi−Δj)², q² = (Δi+Δj)²
         errors: RSS = Σ w v² − cᵀb; σ² = RSS/(Σ w − tr(A⁻¹B)); var = σ² zᵀBz, z = A⁻¹ (e_p² − e_q²)
-        loo = (v_node − c_1) / (1 − (A⁻¹)₁₁)    # leave-one-out residual (the node's weight is 1)
     """
     n = cum.shape[1] - 1
     n_lines = cum.shape[0]
     mom = np.zeros((5, 5))
     mom2 = np.zeros((5, 5))
-    rhs = np.zeros((_N, 3))
+    rhs = np.zeros((_N, 2))
     A = np.zeros((_N, _N))
     B = np.zeros((_N, _N))
-    sol = np.zeros((_N, 3))
+    sol = np.zeros((_N, 2))
     inv = np.zeros((_N, _N))
     eye = np.eye(_N)
     tot = np.zeros(8)
@@ -327,15 +324,9 @@ def node_fits(
         rhs[:, 1] = 0.0
         rhs[3, 1] = 1.0
         rhs[4, 1] = -1.0
-        rhs[:, 2] = 0.0
-        rhs[0, 2] = 1.0
         if not _cholesky_solve(A, rhs, sol):
             continue
         rho[t] = 2.0 * (sol[3, 0] - sol[4, 0]) / (L * L)
-        # the node itself is in its window with weight T(0)² = 1: leverage (A⁻¹)₁₁
-        lev = sol[0, 2]
-        if lev < 1.0 - 1e-9:
-            loo[t] = (values[i0, j0] - sol[0, 0]) / (1.0 - lev)
         npts[t] = int(n_cnt)
         if not errors:
             continue

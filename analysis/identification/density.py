@@ -30,6 +30,7 @@ from analysis.identification.smoothing import (
     grid_quadratic_density,
     local_quadratic_density,
 )
+from analysis.identification.smoothing_choice import auto_candidates, choose_smoothing
 from analysis.identification.variforc import VariforcParameters, weighted_quadratic_density
 from hysteresis._validation import check_grid_nodes
 
@@ -149,11 +150,10 @@ def identify_from_curves(
         :class:`~analysis.identification.variforc.VariforcParameters`: VARIFORC smoothing (Egli
         2013) on the lattice (protocol grid, or a regular native grid), regressed on ``M/2``; or
         ``"auto"``: VARIFORC with the far-field half-width ``s_1`` chosen per data set among
-        ``AUTO_CANDIDATES`` by leave-one-out cross-validation of the lattice values (the
-        choice and the scores in :attr:`PreisachIdentification.smoothing_choice`). Cross-validation
-        picks the smoothing that best predicts ``M``, which for a second derivative tends to be
-        on the light side; on the protocol lattice, whose values are interpolated between
-        neighbouring measurements, lighter still.
+        :data:`~analysis.identification.smoothing_choice.AUTO_CANDIDATES` by a Lepski/ICI
+        rule on ``ρ`` (the largest smoothing whose ``ρ`` stays within noise of every finer
+        one; :mod:`analysis.identification.smoothing_choice`), the criterion, scores and
+        choice in :attr:`PreisachIdentification.smoothing_choice`.
     output_range:
         Saturation outputs (for :attr:`PreisachIdentification.mass_outside_grid`); pass
         ``(-inf, inf)`` for measured data of unknown saturation.
@@ -286,18 +286,6 @@ def identify_from_curves(
     )
 
 
-#: the VARIFORC far-field half-widths s_1 = s_c1 = s_b1 that ``smoothing="auto"`` compares
-#: (ridge half-widths min(3, s_1), λ = 0.07: the defaults' shape, scaled)
-AUTO_CANDIDATES = (2.0, 3.0, 4.0, 5.0, 7.0, 9.0)
-
-
-def auto_candidates() -> list[VariforcParameters]:
-    """The VARIFORC parameter sets ``smoothing="auto"`` chooses from."""
-    return [
-        VariforcParameters(sc0=min(3.0, s), sc1=s, sb0=min(3.0, s), sb1=s) for s in AUTO_CANDIDATES
-    ]
-
-
 def _variforc_or(smoothing: Any) -> Any:
     """``"variforc"`` -> the default :class:`VariforcParameters`; ``"auto"`` kept; anything
     else unchanged."""
@@ -313,27 +301,6 @@ def _variforc_or(smoothing: Any) -> Any:
     return smoothing
 
 
-def _choose(values, valid, evaluate, step, origin) -> tuple[VariforcParameters, dict]:
-    """Leave-one-out cross-validation over :func:`auto_candidates` (the mean squared
-    leave-one-out residual of the node values, on the nodes every candidate evaluates)."""
-    cands = auto_candidates()
-    fits = [
-        weighted_quadratic_density(values, valid, evaluate, step, c, origin, False) for c in cands
-    ]
-    common = np.logical_and.reduce([np.isfinite(f.loo) for f in fits])
-    if not common.any():
-        raise ValueError("automatic smoothing: no node is evaluated by every candidate")
-    scores = [float(np.mean(f.loo[common] ** 2)) for f in fits]
-    best = int(np.argmin(scores))
-    return cands[best], {
-        "criterion": "leave-one-out cross-validation of M/2 (mean squared residual)",
-        "candidates_s1": list(AUTO_CANDIDATES),
-        "scores": scores,
-        "chosen_s1": AUTO_CANDIDATES[best],
-        "nodes": int(common.sum()),
-    }
-
-
 def _lattice_fit(
     values: np.ndarray,
     valid: np.ndarray,
@@ -347,7 +314,7 @@ def _lattice_fit(
     the fields of :class:`PreisachIdentification`."""
     choice = None
     if isinstance(smoothing, str):  # "auto"
-        smoothing, choice = _choose(values, valid, evaluate, step, origin)
+        smoothing, choice = choose_smoothing(values, valid, evaluate, step, origin)
     if isinstance(smoothing, VariforcParameters):
         fit = weighted_quadratic_density(values, valid, evaluate, step, smoothing, origin, errors)
         sm, method, params = None, "variforc", smoothing.as_dict()

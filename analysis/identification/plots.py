@@ -11,8 +11,8 @@ if requested and available, the smoothed one.
 Measured data (:func:`plot_forc_diagram`, :func:`figure_forc`) use the FORC conventions of the
 field: ``B_c = (B − B_r)/2`` and ``B_u = (B + B_r)/2`` in mT (``r`` and ``s``), the FORC
 distribution ``ρ = −½ ∂²M/∂B_r∂B`` (equal to the Preisach ``μ_αβ``; the toolkit's r-s density is
-``μ_rs = 2ρ``), a sequential colour map when the density has no significant negative values
-(diverging, centred at 0, only where they are), contour lines at fixed fractions of the peak,
+``μ_rs = 2ρ``), by default on the FORCinel-like colour scale (:func:`forcinel_cmap`: white at
+``ρ = 0``, blue below, green–yellow–red–purple above), contour lines at fixed fractions of the peak,
 and the colour mesh rasterised inside vector axes, so that a PDF of a 10⁵-node diagram stays
 small and fast to write.
 
@@ -38,7 +38,27 @@ __all__ = [
     "plot_forc_diagram",
     "figure_forc",
     "forc_profiles",
+    "forcinel_cmap",
+    "colormap_name",
+    "FORCINEL",
 ]
+
+#: the name of the FORCinel-like colour scale (:func:`forcinel_cmap`), the FORC default
+FORCINEL = "forcinel"
+#: FORCinel's scale: colour stops at fractions of the peak ρ (positive side) and the colours
+#: (RGB 0–255): white within ±2.5 % of the peak, green, yellow, red, purple, dark purple
+_FORCINEL_STOPS = (
+    (0.025, (255, 255, 255)),
+    (0.19, (102, 178, 102)),
+    (0.48, (204, 204, 76)),
+    (0.64, (204, 76, 76)),
+    (0.80, (153, 102, 153)),
+    (0.97, (76, 25, 76)),
+    (1.0, (76, 25, 76)),
+)
+#: the negative end (light blue) and the smallest negative range drawn, in units of the peak
+_FORCINEL_BLUE = (127, 127, 255)
+FORCINEL_NEGATIVE = 0.19
 
 #: a negative minimum beyond this fraction of the maximum counts as meaningful (diverging map)
 NEGATIVE_FRACTION = 0.05
@@ -239,7 +259,7 @@ def plot_forc_diagram(
     ident: PreisachIdentification,
     field_unit: str | None = "mT",
     moment_unit: str | None = "A·m²",
-    cmap: str = "auto",
+    cmap: str = FORCINEL,
     contours: Sequence[float] = CONTOUR_FRACTIONS,
     scale: float = 1.0,
     significance: bool = True,
@@ -250,10 +270,13 @@ def plot_forc_diagram(
     ``uncertainty=True``, the nodes where ``|ρ| <= 1.96 se`` (not significant at 95 %) are
     hatched and bounded by a dashed grey line.
 
-    ``cmap="auto"``: ``"RdBu_r"`` centred at 0 when at least 1 % of the nodes lie below
-    −5 % of the peak (a negative region, e.g. of interacting single-domain particles), else
-    ``"viridis"`` from 0 (noise-level negatives drawn as 0). NaN nodes
-    (outside the measured region) stay blank. Contours at ``contours`` × the peak.
+    ``cmap="forcinel"`` (default): :func:`forcinel_cmap`, white at ``ρ = 0``
+    (``TwoSlopeNorm``), the negative range down to the lowest value or 19 % of the peak,
+    whichever is lower. Any other matplotlib map name: centred at 0 (``TwoSlopeNorm``, ±the
+    larger extreme) when at least 1 % of the nodes lie below −5 % of the peak (a negative
+    region, e.g. of interacting single-domain particles), else from 0 (noise-level negatives
+    drawn as 0). NaN nodes (outside the measured region) stay blank. Contours at
+    ``contours`` × the peak. ``B_c`` is horizontal, ``B_u`` vertical.
     """
     from matplotlib.colors import Normalize, TwoSlopeNorm
 
@@ -271,9 +294,10 @@ def plot_forc_diagram(
     # meaningful negative region: at least 1 % of the nodes below −5 % of the peak (isolated
     # noise or edge values do not switch the map)
     diverging = float(np.nanpercentile(rho, 1.0)) < -NEGATIVE_FRACTION * top
-    if cmap == "auto":
-        cmap = "RdBu_r" if diverging else "viridis"
-    if diverging:
+    if cmap == FORCINEL:
+        cmap = forcinel_cmap()
+        norm = TwoSlopeNorm(vmin=-max(-low, FORCINEL_NEGATIVE * top), vcenter=0.0, vmax=top)
+    elif diverging:
         bound = max(top, -low)
         norm = TwoSlopeNorm(vmin=-bound, vcenter=0.0, vmax=bound)
     else:
@@ -303,6 +327,41 @@ def plot_forc_diagram(
     return mappable
 
 
+def forcinel_cmap() -> Any:
+    """The FORCinel-like colour scale for ``TwoSlopeNorm(vmin, 0, vmax)``: the lower half of
+    the map is ``[vmin, 0]`` (light blue at ``vmin`` to white), the upper half ``[0, vmax]``
+    (white up to 2.5 % of the peak, then green at 19 %, yellow at 48 %, red at 64 %, purple
+    at 80 % and dark purple from 97 %).
+
+    The scale of FORCinel (Harrison & Feinberg 2008, G-cubed 9, Q05016), as FORCsensei
+    (Heslop et al. 2020) reproduces it for matplotlib (``FORCinel_colormap``: the same colour
+    stops at the same fractions of the peak, a white band of ±2.5 % around zero and a
+    negative range of at least 19 % of the peak). Written here from that description; the
+    negative side's stops are scaled to the negative range drawn
+    (:data:`FORCINEL_NEGATIVE` × the peak unless the data go lower)."""
+    from matplotlib.colors import LinearSegmentedColormap
+
+    def rgb(c: tuple[int, int, int]) -> tuple[float, float, float]:
+        return (c[0] / 255.0, c[1] / 255.0, c[2] / 255.0)
+
+    white = 0.5 - 0.5 * 0.025 / FORCINEL_NEGATIVE
+    stops = [(0.0, rgb(_FORCINEL_BLUE)), (white, rgb((255, 255, 255)))]
+    stops += [(0.5 + 0.5 * f, rgb(c)) for f, c in _FORCINEL_STOPS]
+    return LinearSegmentedColormap.from_list(FORCINEL, stops, N=1024)
+
+
+def colormap_name(text: str) -> str:
+    """``text`` if it names a matplotlib colour map or :data:`FORCINEL`, else ``ValueError``
+    naming the allowed values (for the CLI's ``--cmap``)."""
+    import matplotlib
+
+    if text == FORCINEL or text in matplotlib.colormaps:
+        return text
+    raise ValueError(
+        f"{text!r} is not a matplotlib colour map nor {FORCINEL!r} (e.g. viridis, RdBu_r)"
+    )
+
+
 def forc_profiles(ident: PreisachIdentification) -> tuple[np.ndarray, ...]:
     """Marginal profiles of the smoothed ``ρ``: ``(B_c, ∫ρ dB_u, B_u, ∫ρ dB_c)`` on the
     lattice (regular grids: the nodes with ``i − j = d`` lie at ``B_c = dΔ/2``, ``Δ`` apart
@@ -327,7 +386,7 @@ def figure_forc(
     title: str = "",
     field_unit: str | None = "mT",
     moment_unit: str | None = "A·m²",
-    cmap: str = "auto",
+    cmap: str = FORCINEL,
     rho_factor: float = 1.0,
     rho_unit: str | None = None,
 ) -> list[Path]:
@@ -358,7 +417,8 @@ def figure_forc(
         fig, ax = plt.subplots(figsize=(6.4, 4.8))
     mappable = plot_forc_diagram(ax, ident, field_unit, moment_unit, cmap, scale=scale)
     exp = f"$10^{{{power}}}$ " if power else ""
-    fig.colorbar(mappable, ax=ax, label=f"ρ = −½ ∂²M/∂B_r∂B ({exp}{unit});  μ_rs = 2ρ")
+    bar = fig.colorbar(mappable, ax=ax, label=f"ρ = −½ ∂²M/∂B_r∂B ({exp}{unit});  μ_rs = 2ρ")
+    bar.ax.set_yscale("linear")  # a TwoSlopeNorm bar in proportion to ρ, not half and half
     if profiles:
         # rho_factor converts field unit⁻²; a profile has one field power less
         bc, pc, bu, pu = forc_profiles(ident)

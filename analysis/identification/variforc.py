@@ -123,8 +123,7 @@ class LocalRegression:
 
     ``rho`` is ``μ_αβ = −∂²v/∂α∂β`` and ``se`` its standard error (field units, NaN where not
     evaluated); ``sigma`` the node's residual noise estimate; ``n_points`` the valid nodes in
-    its window; ``sc``, ``sb`` the half-widths used (steps); ``loo`` the leave-one-out residual
-    of the node's own value (``(v − v̂)/(1 − leverage)``, for cross-validation)."""
+    its window; ``sc``, ``sb`` the half-widths used (steps)."""
 
     rho: np.ndarray
     se: np.ndarray
@@ -132,7 +131,6 @@ class LocalRegression:
     n_points: np.ndarray
     sc: np.ndarray
     sb: np.ndarray
-    loo: np.ndarray
 
 
 def _line_prefix_counts(valid: np.ndarray) -> np.ndarray:
@@ -155,10 +153,9 @@ def _fit_by_blocks(values, valid, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box,
     rho = np.full(nt, np.nan)
     se = np.full(nt, np.nan)
     sigma = np.full(nt, np.nan)
-    loo = np.full(nt, np.nan)
     npts = np.zeros(nt, dtype=np.int64)
     if nt == 0:
-        return rho, se, sigma, npts, loo
+        return rho, se, sigma, npts
     cum = _line_prefix_counts(valid)
     u_t = ti - tj
     order = np.argsort(u_t, kind="stable")
@@ -173,7 +170,7 @@ def _fit_by_blocks(values, valid, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box,
         c_lo, c_hi = int(tj[sel].min()) - half, int(tj[sel].max()) + half + 1
         sums = np.empty((u_hi - u_lo + 1, c_hi - c_lo, 2, N_SUMS))
         line_sums(values, valid, u_lo, u_hi, c_lo, c_hi, ss_of_w, qr_of_w, box, errors, sums)
-        r, s, g, o = (np.full(sel.size, np.nan) for _ in range(4))
+        r, s, g = (np.full(sel.size, np.nan) for _ in range(3))
         k = np.zeros(sel.size, dtype=np.int64)
         node_fits(
             sums,
@@ -192,11 +189,15 @@ def _fit_by_blocks(values, valid, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box,
             s,
             g,
             k,
-            values,
-            o,
         )
-        rho[sel], se[sel], sigma[sel], npts[sel], loo[sel] = r, s, g, k, o
-    return rho, se, sigma, npts, loo
+        rho[sel], se[sel], sigma[sel], npts[sel] = r, s, g, k
+    return rho, se, sigma, npts
+
+
+def _reaches(widths: np.ndarray, box: bool) -> np.ndarray:
+    """:func:`reach` of every half-width (computed once per distinct value)."""
+    uniq, inverse = np.unique(widths, return_inverse=True)
+    return np.array([reach(x, box) for x in uniq], dtype=np.int64)[inverse.reshape(-1)]
 
 
 def weighted_quadratic_density(
@@ -262,15 +263,14 @@ def weighted_quadratic_density(
     sc = np.asarray(sc, dtype=float)
     sb = np.asarray(sb, dtype=float)
     ss_of_w = np.ascontiguousarray(ss_of_w, dtype=float)
-    qr_of_w = np.array([reach(x, box) for x in ss_of_w], dtype=np.int64)
-    pr_t = np.array([reach(x, box) for x in sc], dtype=np.int64)
+    qr_of_w = _reaches(ss_of_w, box)
+    pr_t = _reaches(sc, box)
     qr_t = qr_of_w[ti + tj] if ti.size else np.zeros(0, dtype=np.int64)
-    rho_t, se_t, sig_t, n_t, loo_t = _fit_by_blocks(
+    rho_t, se_t, sig_t, n_t = _fit_by_blocks(
         np.where(ok, v, 0.0), ok, ti, tj, sc, pr_t, qr_t, ss_of_w, qr_of_w, box, errors
     )
     shape = v.shape
-    out = {name: np.full(shape, np.nan) for name in ("rho", "se", "sigma", "sc", "sb", "loo")}
-    out["loo"][ti, tj] = loo_t
+    out = {name: np.full(shape, np.nan) for name in ("rho", "se", "sigma", "sc", "sb")}
     out["rho"][ti, tj] = rho_t / step**2
     out["se"][ti, tj] = se_t / step**2
     out["sigma"][ti, tj] = sig_t

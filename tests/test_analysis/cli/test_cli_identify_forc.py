@@ -68,6 +68,7 @@ def test_variforc_and_uncertainty_from_the_command_line(tmp_path):
     lo, hi = rep["peak_bu_interval_mT"]
     assert lo <= rep["peak_bu_mT"] <= hi
     assert rep["irreversible_mass_se"] > 0 and rep["peak_rho_se"] > 0
+    assert rep["peak_interval_method"] == "parametric bootstrap, 200 replicates, 95 %"
     assert rep["rho_unit"] == "A·m²/T²"
     npz = np.load(next(Path(tmp_path).glob("*.npz")))
     assert {"rho", "rho_se", "significance"} <= set(npz.files)
@@ -85,6 +86,8 @@ def test_variforc_and_uncertainty_from_the_command_line(tmp_path):
         (["--smoothing", "abc"], "--smoothing"),
         (["--normalize", "mass"], "--normalize"),  # the header says Mass N/A
         (["--mass", "1e-3"], "--mass"),
+        (["--cmap", "no-such-map"], "--cmap"),
+        (["--uncertainty", "--bootstrap", "5"], "--bootstrap"),
     ],
 )
 def test_bad_options_are_one_line_errors(argv, option, tmp_path, capsys):
@@ -93,7 +96,9 @@ def test_bad_options_are_one_line_errors(argv, option, tmp_path, capsys):
     assert len(err) == 1 and f"argument {option}:" in err[0]
 
 
-@pytest.mark.parametrize("argv", [["--smoothing", "variforc"], ["--uncertainty"]])
+@pytest.mark.parametrize(
+    "argv", [["--smoothing", "variforc"], ["--uncertainty"], ["--cmap", "viridis"]]
+)
 def test_model_runs_refuse_the_measured_options(argv, capsys):
     assert main(["identify", "--model", "erf-play", *argv]) == 2
     assert "only with --input" in capsys.readouterr().err
@@ -161,7 +166,7 @@ def test_automatic_smoothing_is_reported(tmp_path):
     choice = rep["smoothing_choice"]
     assert choice["chosen_s1"] in choice["candidates_s1"]
     assert rep["variforc"]["sc1"] == choice["chosen_s1"] and rep["smoothing_method"] == "variforc"
-    assert "cross-validation" in rep["figure_title"]
+    assert "chosen automatically" in rep["figure_title"]
 
 
 def test_batch_of_a_directory_writes_a_summary(tmp_path, capsys):
