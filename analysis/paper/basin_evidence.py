@@ -372,10 +372,12 @@ def _realization_text(r: dict[str, Any]) -> str:
         )
     else:
         text += " No regular realization among them."
-    if counts.get("undecided"):
+    undecided = [x["max_exponent"] for x in r["records"] if x["kind"] == "undecided"]
+    if undecided:
         text += (
-            " Undecided: no period within the run and λ_max within two errors of 0 (long "
-            "periods, slow approach or weak chaos)."
+            f" Undecided (no period <= {r['max_period']} within the run, λ_max not above twice "
+            f"its error: long periods, slow approach or weak chaos): λ_max {min(undecided):.4f} "
+            f"… {max(undecided):.4f}."
         )
     return text
 

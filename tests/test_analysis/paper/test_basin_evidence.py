@@ -5,6 +5,7 @@ resumes from the report's store."""
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from dataclasses import replace
@@ -238,3 +239,22 @@ def test_an_interrupted_run_resumes_from_the_reports_store(evidence, tmp_path, m
     # and gives what an uninterrupted run in another store gave
     for key in ("neighbourhood", "band", "realizations"):
         assert json.dumps(resumed[key], sort_keys=True) == json.dumps(evidence[key], sort_keys=True)
+
+
+def test_realization_lines_give_each_kind_its_numbers(evidence):
+    ev = copy.deepcopy(evidence)
+    ev["realizations"]["counts"] = {"periodic": 1, "chaotic": 1, "undecided": 1}
+    ev["realizations"]["records"] = [
+        {"index": 0, "seed": 1, "kind": "periodic", "period": 7, "transient": 12,
+         "multipliers": [[0.5, 0.0], [0.1, 0.0]], "max_abs_multiplier": 0.5, "stable": True,
+         "residual": 1e-13},
+        {"index": 1, "seed": 2, "kind": "chaotic", "max_exponent": 0.02,
+         "max_exponent_error": 0.001, "kaplan_yorke": 1.2},
+        {"index": 2, "seed": 3, "kind": "undecided", "max_exponent": -0.004,
+         "max_exponent_error": 0.002, "kaplan_yorke": 0.0},
+    ]  # fmt: skip
+    line = basin_lines(ev)[-2]
+    assert "1 periodic, 1 chaotic, 1 undecided" in line
+    assert "realization 0: period 7 after 12 periods, max |μ| = 0.5" in line
+    assert "Chaotic: λ_max 0.0200 … 0.0200" in line
+    assert "Undecided (no period <= 30" in line and "λ_max -0.0040 … -0.0040" in line
