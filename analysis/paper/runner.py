@@ -17,6 +17,7 @@ from analysis.paper import figures_dynamics as dyn
 from analysis.paper import figures_ensembles as ens
 from analysis.paper import figures_identification as ident
 from analysis.paper import figures_operators as ops
+from analysis.paper.basin_evidence import basin_evidence, basin_lines
 from analysis.paper.context import (
     AGREE,
     DISAGREE,
@@ -171,6 +172,23 @@ def run_paper(
                 file=sys.stderr,
                 flush=True,
             )
+        # the basins of the coexisting attractors and the realizations' attractors (issue 19),
+        # their tasks in the run's store: written as they complete, resumed after a kill
+        start = time.perf_counter()
+        try:
+            report["basins"] = basin_evidence(ctx)
+        except StoreError:  # the run's store, as for the figures
+            raise
+        except Exception as exc:  # evidence, not a figure: report it and keep the run
+            errors.append(
+                {"figure": "basins", "error": repr(exc), "traceback": traceback.format_exc()}
+            )
+        if progress:
+            print(
+                f"[hyst paper] basin evidence in {time.perf_counter() - start:.1f} s",
+                file=sys.stderr,
+                flush=True,
+            )
     write_report(ctx, report)
     return report
 
@@ -227,7 +245,9 @@ def write_report(ctx: PaperContext, report: dict) -> None:
     counts and the summary line) and ``report.md``: the claims table, the summary line, a
     "Discussion" of every claim that does not agree (and, when ``report["orbits"]`` holds
     :func:`~analysis.paper.orbit_evidence.orbit_evidence`, the periodic orbits behind the
-    disputed windows), failed figures, the figures and the run size. Optional ``provenance``
+    disputed windows; when ``report["basins"]`` holds
+    :func:`~analysis.paper.basin_evidence.basin_evidence`, the basins and the realizations'
+    attractors), failed figures, the figures and the run size. Optional ``provenance``
     lines (how and when the run was made) are printed under the title."""
     count = Counter(c["verdict"] for c in report["claims"])
     report["summary"] = {
@@ -255,6 +275,8 @@ def write_report(ctx: PaperContext, report: dict) -> None:
     lines += discussion(report["claims"])
     if report.get("orbits"):
         lines += orbit_lines(report["orbits"])
+    if report.get("basins"):
+        lines += basin_lines(report["basins"])
     if report["errors"]:
         lines += ["## Figures that failed", ""]
         for e in report["errors"]:
