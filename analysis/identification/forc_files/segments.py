@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -160,15 +161,26 @@ def read_segments(path: str | Path) -> MicroMagData:
         f"irregular FORC protocol: {len(rev)} curves reconstructed from {len(script)} segments"
         + (f"; {skipped} points at saturation or outside the curves skipped" if skipped else ""),
     )
+    curves = ReversalCurves(np.array(rev), tuple(fields), tuple(moments), "pike")
+    return _data(curves, units, h_cal, cal_h, cal_m, notes=notes)
+
+
+def _data(
+    curves: ReversalCurves, units: str, h_cal: float, cal_h: list, cal_m: list, **extra: Any
+) -> MicroMagData:
+    """The record of a segments export: ``curves`` (already in mT and A·m²) and the
+    calibration points converted from the file's ``units``; ``extra``: the remaining
+    :class:`MicroMagData` fields (notes, completeness, in-field curves)."""
+    f_fac, m_fac = _UNITS[units]
     return MicroMagData(
-        ReversalCurves(np.array(rev), tuple(fields), tuple(moments), "pike"),
+        curves,
         calibration_field=h_cal * f_fac,
         calibration_moments=np.array(cal_m) * m_fac if cal_m else None,
         calibration_fields=np.array(cal_h) * f_fac if cal_h else None,
         field_unit="mT",
         moment_unit="A·m²",
         units_of_measure={"cgs": "cgs", "si": "SI", "hybrid si": "Hybrid SI"}[units],
-        notes=notes,
+        **extra,
     )
 
 
@@ -188,14 +200,12 @@ def _read_remanence(
         f"from {len(script)} segments"
         + (f"; {skipped} points outside the curves skipped" if skipped else "")
     )
-    return MicroMagData(
+    return _data(
         rem,
-        calibration_field=h_cal * f_fac,
-        calibration_moments=np.array(cal_m) * m_fac if cal_m else None,
-        calibration_fields=np.array(cal_h) * f_fac if cal_h else None,
-        field_unit="mT",
-        moment_unit="A·m²",
-        units_of_measure={"cgs": "cgs", "si": "SI", "hybrid si": "Hybrid SI"}[units],
+        units,
+        h_cal,
+        cal_h,
+        cal_m,
         complete=complete,
         notes=(summary, *notes),
         in_field_curves=in_field,
