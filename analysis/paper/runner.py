@@ -7,7 +7,7 @@ import sys
 import time
 import traceback
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
 
@@ -73,6 +73,27 @@ def check_only(only: Sequence[str] | None) -> None:
         raise ValueError(
             f"only: unknown figure label(s) {', '.join(map(repr, unknown))}; "
             f"choose from {', '.join(labels)}"
+        )
+
+
+def _evidence(
+    report: dict, errors: list, key: str, name: str, compute: Callable[[], dict], progress: bool
+) -> None:
+    """``report[key] = compute()``, timed; an error of the run's store is raised (as for the
+    figures), any other is recorded under ``errors`` and the run goes on (evidence, not a
+    figure)."""
+    start = time.perf_counter()
+    try:
+        report[key] = compute()
+    except StoreError:
+        raise
+    except Exception as exc:
+        errors.append({"figure": key, "error": repr(exc), "traceback": traceback.format_exc()})
+    if progress:
+        print(
+            f"[hyst paper] {name} evidence in {time.perf_counter() - start:.1f} s",
+            file=sys.stderr,
+            flush=True,
         )
 
 
@@ -158,37 +179,11 @@ def run_paper(
         "errors": errors,
     }
     if not only and size != "smoke":
-        # the periodic orbits behind the disputed windows (issue 19), for the Discussion
-        start = time.perf_counter()
-        try:
-            report["orbits"] = orbit_evidence()
-        except Exception as exc:  # evidence, not a figure: report it and keep the run
-            errors.append(
-                {"figure": "orbits", "error": repr(exc), "traceback": traceback.format_exc()}
-            )
-        if progress:
-            print(
-                f"[hyst paper] periodic-orbit evidence in {time.perf_counter() - start:.1f} s",
-                file=sys.stderr,
-                flush=True,
-            )
-        # the basins of the coexisting attractors and the realizations' attractors (issue 19),
-        # their tasks in the run's store: written as they complete, resumed after a kill
-        start = time.perf_counter()
-        try:
-            report["basins"] = basin_evidence(ctx)
-        except StoreError:  # the run's store, as for the figures
-            raise
-        except Exception as exc:  # evidence, not a figure: report it and keep the run
-            errors.append(
-                {"figure": "basins", "error": repr(exc), "traceback": traceback.format_exc()}
-            )
-        if progress:
-            print(
-                f"[hyst paper] basin evidence in {time.perf_counter() - start:.1f} s",
-                file=sys.stderr,
-                flush=True,
-            )
+        # the periodic orbits behind the disputed windows, and the basins of the coexisting
+        # attractors and the realizations' attractors (issue 19; the basins' tasks in the
+        # run's store: written as they complete, resumed after a kill), for the Discussion
+        _evidence(report, errors, "orbits", "periodic-orbit", orbit_evidence, progress)
+        _evidence(report, errors, "basins", "basin", lambda: basin_evidence(ctx), progress)
     write_report(ctx, report)
     return report
 
