@@ -23,7 +23,7 @@ beyond that bound are exactly zero in exact arithmetic: they are recorded as ``l
 deviation matrix is smaller than the number of tracked vectors (memory removed), the missing
 directions are -inf and their columns are continued as zero vectors. Deviation vectors that an
 event set exactly to zero (a relay's Filippov slide collapses ``δq, δv``) are moved behind the
-others before the QR (a column permutation: an orthogonal change of the interval's start
+others and the QR redone (a column permutation: an orthogonal change of the interval's start
 basis), so a surviving direction (the phase) keeps its exponent. Likewise a vector that depends
 structurally on the ones before it (its QR residual at round-off) is moved behind them: a
 neutral memory direction that never mixes with the others (a frozen wagon or remembered
@@ -328,9 +328,9 @@ def _defer_dependent(
     y: np.ndarray, q: np.ndarray, diag: np.ndarray, rank: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Move the deviation vectors that are structurally dependent on the ones before them (a
-    residual angle below :data:`DEPENDENT_ANGLE`) behind the others, at most ``k − rank`` of
-    them, and redo the QR; ``(y, q, diag)`` unchanged when the first ``rank`` slots hold
-    independent vectors.
+    residual angle below :data:`DEPENDENT_ANGLE`; a zero vector, residual 0, is one) behind
+    the others, at most ``k − rank`` of them, and redo the QR; ``(y, q, diag)`` unchanged when
+    the first ``rank`` slots hold independent vectors.
 
     Why: with the tangent rank ``rank < k`` the QR gives ``R_jj = 0`` to the vectors that depend
     on their predecessors. For a generic basis those sit in the last slots; a neutral memory
@@ -358,19 +358,13 @@ def _qr_step(y: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> tuple[np.nda
     Returns the new deviation matrix (same number of rows as ``y``, ``k`` columns) and whether a
     direction collapsed structurally in this interval.
     """
-    if rank < k:
-        # deviation vectors that collapsed exactly to zero (a relay slide sets δq = δv = 0)
-        # go last: a column permutation is an orthogonal change of the interval's start basis,
-        # and the surviving directions keep the first slots of R (else a zero first column
-        # would hide them behind log 0)
-        nonzero = np.any(y != 0.0, axis=0)
-        if not nonzero.all():
-            y = y[:, np.concatenate([np.flatnonzero(nonzero), np.flatnonzero(~nonzero)])]
     q, diag, finite = householder_qr(y if y.flags.c_contiguous else np.ascontiguousarray(y))
     if not finite:
         raise DivergenceError("the tangent flow became non-finite (deviation vectors overflow)")
     m = q.shape[1]
     if rank < k:
+        # vectors that collapsed exactly to zero (a relay slide sets δq = δv = 0) or depend on
+        # their predecessors go last, so the surviving directions keep the first slots of R
         y, q, diag = _defer_dependent(y, q, diag, min(rank, m))
     collapsed = _accumulate_logs(diag, k, min(rank, m), lsum)
     if m == k:
