@@ -453,18 +453,23 @@ def _inside(par, st, t_target, T, diag, ev, cnt, flags):
 # on a wall: smooth nonlinear ODE, fixed-step 8th-order Runge–Kutta (with the tangent flow W1)
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _rhs(par, side, t, y, dy, k):
-    """Right-hand side of (q, v) and of the k tangent columns (paper's W1) on wall ``side``."""
-    zeta = par[0]
-    q = y[0]
-    v = y[1]
+def _accel(par, side, t, q, v):
+    """q'' on wall ``side`` (w = q − side·p/2): −2ζv − q + cos(φ0 + Ωt) + C f(w)."""
     ph = par[6] + par[1] * t
     w = q - side * par[3]
-    dy[0] = v
-    dy[1] = -2.0 * zeta * v - q + math.cos(ph) + par[2] * shape(par, w)
+    return -2.0 * par[0] * v - q + math.cos(ph) + par[2] * shape(par, w)
+
+
+@njit(cache=True)
+def _rhs(par, side, t, y, dy, k):
+    """Right-hand side of (q, v) and of the k tangent columns (paper's W1) on wall ``side``."""
+    dy[0] = y[1]
+    dy[1] = _accel(par, side, t, y[0], y[1])
     if k > 0:
+        w = y[0] - side * par[3]
         kappa = par[2] * shape_slope(par, w)
-        sph = math.sin(ph)
+        zeta = par[0]
+        sph = math.sin(par[6] + par[1] * t)
         for j in range(k):
             b = 2 + 4 * j
             dq = y[b]
@@ -479,7 +484,8 @@ def _rhs(par, side, t, y, dy, k):
 
 @njit(cache=True)
 def _rk8(par, side, t, y, h, out, K, tmp, k):
-    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``."""
+    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``
+    (with the k tangent columns; :func:`_rk8_qv` is the same step of (q, v) alone)."""
     n = y.shape[0]
     for i in range(_N_STAGES):
         for r in range(n):
@@ -496,6 +502,193 @@ def _rk8(par, side, t, y, h, out, K, tmp, k):
 
 
 @njit(cache=True)
+def _rk8_qv(par, side, t, q, v, h, a0):
+    """:func:`_rk8` without tangent columns, written out stage by stage: ``(q, v)`` after one
+    step of length h from (t, q, v), given ``a0 = _accel(par, side, t, q, v)`` (the first stage,
+    which does not depend on h: the previous step's end value, or the same for every trial
+    length of the reversal search).
+
+    The arithmetic is :func:`_rk8`'s in the same order, with the zero coefficients of the
+    Dormand–Prince table left out (adding 0·K changes no bit), so the result is bit-identical
+    (``tests/test_oscillators/test_play_kernel_unrolled.py``); scalars instead of the stage
+    array make it about twice as fast, and the wall motion is most of a basin map's cost.
+    Stage i: v_i = v + h Σ_j a_ij k_j,  k_i = _accel(t + c_i h, q + h Σ_j a_ij v_j, v_i).
+    """
+    v0 = v
+    v1 = v + h * (RK_A[1, 0] * a0)
+    a1 = _accel(par, side, t + RK_C[1] * h, q + h * (RK_A[1, 0] * v0), v1)
+    v2 = v + h * (RK_A[2, 0] * a0 + RK_A[2, 1] * a1)
+    a2 = _accel(par, side, t + RK_C[2] * h, q + h * (RK_A[2, 0] * v0 + RK_A[2, 1] * v1), v2)
+    v3 = v + h * (RK_A[3, 0] * a0 + RK_A[3, 2] * a2)
+    a3 = _accel(par, side, t + RK_C[3] * h, q + h * (RK_A[3, 0] * v0 + RK_A[3, 2] * v2), v3)
+    v4 = v + h * (RK_A[4, 0] * a0 + RK_A[4, 2] * a2 + RK_A[4, 3] * a3)
+    a4 = _accel(
+        par,
+        side,
+        t + RK_C[4] * h,
+        q + h * (RK_A[4, 0] * v0 + RK_A[4, 2] * v2 + RK_A[4, 3] * v3),
+        v4,
+    )
+    v5 = v + h * (RK_A[5, 0] * a0 + RK_A[5, 3] * a3 + RK_A[5, 4] * a4)
+    a5 = _accel(
+        par,
+        side,
+        t + RK_C[5] * h,
+        q + h * (RK_A[5, 0] * v0 + RK_A[5, 3] * v3 + RK_A[5, 4] * v4),
+        v5,
+    )
+    v6 = v + h * (RK_A[6, 0] * a0 + RK_A[6, 3] * a3 + RK_A[6, 4] * a4 + RK_A[6, 5] * a5)
+    a6 = _accel(
+        par,
+        side,
+        t + RK_C[6] * h,
+        q + h * (RK_A[6, 0] * v0 + RK_A[6, 3] * v3 + RK_A[6, 4] * v4 + RK_A[6, 5] * v5),
+        v6,
+    )
+    v7 = v + h * (
+        RK_A[7, 0] * a0 + RK_A[7, 3] * a3 + RK_A[7, 4] * a4 + RK_A[7, 5] * a5 + RK_A[7, 6] * a6
+    )
+    a7 = _accel(
+        par,
+        side,
+        t + RK_C[7] * h,
+        q
+        + h
+        * (RK_A[7, 0] * v0 + RK_A[7, 3] * v3 + RK_A[7, 4] * v4 + RK_A[7, 5] * v5 + RK_A[7, 6] * v6),
+        v7,
+    )
+    v8 = v + h * (
+        RK_A[8, 0] * a0
+        + RK_A[8, 3] * a3
+        + RK_A[8, 4] * a4
+        + RK_A[8, 5] * a5
+        + RK_A[8, 6] * a6
+        + RK_A[8, 7] * a7
+    )
+    a8 = _accel(
+        par,
+        side,
+        t + RK_C[8] * h,
+        q
+        + h
+        * (
+            RK_A[8, 0] * v0
+            + RK_A[8, 3] * v3
+            + RK_A[8, 4] * v4
+            + RK_A[8, 5] * v5
+            + RK_A[8, 6] * v6
+            + RK_A[8, 7] * v7
+        ),
+        v8,
+    )
+    v9 = v + h * (
+        RK_A[9, 0] * a0
+        + RK_A[9, 3] * a3
+        + RK_A[9, 4] * a4
+        + RK_A[9, 5] * a5
+        + RK_A[9, 6] * a6
+        + RK_A[9, 7] * a7
+        + RK_A[9, 8] * a8
+    )
+    a9 = _accel(
+        par,
+        side,
+        t + RK_C[9] * h,
+        q
+        + h
+        * (
+            RK_A[9, 0] * v0
+            + RK_A[9, 3] * v3
+            + RK_A[9, 4] * v4
+            + RK_A[9, 5] * v5
+            + RK_A[9, 6] * v6
+            + RK_A[9, 7] * v7
+            + RK_A[9, 8] * v8
+        ),
+        v9,
+    )
+    v10 = v + h * (
+        RK_A[10, 0] * a0
+        + RK_A[10, 3] * a3
+        + RK_A[10, 4] * a4
+        + RK_A[10, 5] * a5
+        + RK_A[10, 6] * a6
+        + RK_A[10, 7] * a7
+        + RK_A[10, 8] * a8
+        + RK_A[10, 9] * a9
+    )
+    a10 = _accel(
+        par,
+        side,
+        t + RK_C[10] * h,
+        q
+        + h
+        * (
+            RK_A[10, 0] * v0
+            + RK_A[10, 3] * v3
+            + RK_A[10, 4] * v4
+            + RK_A[10, 5] * v5
+            + RK_A[10, 6] * v6
+            + RK_A[10, 7] * v7
+            + RK_A[10, 8] * v8
+            + RK_A[10, 9] * v9
+        ),
+        v10,
+    )
+    v11 = v + h * (
+        RK_A[11, 0] * a0
+        + RK_A[11, 3] * a3
+        + RK_A[11, 4] * a4
+        + RK_A[11, 5] * a5
+        + RK_A[11, 6] * a6
+        + RK_A[11, 7] * a7
+        + RK_A[11, 8] * a8
+        + RK_A[11, 9] * a9
+        + RK_A[11, 10] * a10
+    )
+    a11 = _accel(
+        par,
+        side,
+        t + RK_C[11] * h,
+        q
+        + h
+        * (
+            RK_A[11, 0] * v0
+            + RK_A[11, 3] * v3
+            + RK_A[11, 4] * v4
+            + RK_A[11, 5] * v5
+            + RK_A[11, 6] * v6
+            + RK_A[11, 7] * v7
+            + RK_A[11, 8] * v8
+            + RK_A[11, 9] * v9
+            + RK_A[11, 10] * v10
+        ),
+        v11,
+    )
+    q_end = q + h * (
+        RK_B[0] * v0
+        + RK_B[5] * v5
+        + RK_B[6] * v6
+        + RK_B[7] * v7
+        + RK_B[8] * v8
+        + RK_B[9] * v9
+        + RK_B[10] * v10
+        + RK_B[11] * v11
+    )
+    v_end = v + h * (
+        RK_B[0] * a0
+        + RK_B[5] * a5
+        + RK_B[6] * a6
+        + RK_B[7] * a7
+        + RK_B[8] * a8
+        + RK_B[9] * a9
+        + RK_B[10] * a10
+        + RK_B[11] * a11
+    )
+    return q_end, v_end
+
+
+@njit(cache=True)
 def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
     """Advance on a wall until t_target or the reversal v = 0 where the input re-enters.
 
@@ -503,72 +696,76 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
     contains the reversal; it is located by Newton on v(τ) where each iterate re-steps RK8
     from the step start over τ (so the located state has full RK8 accuracy). A velocity dip
     to zero and back inside one step is caught with the cubic Hermite interpolant of v.
+    (q, v) are stepped by :func:`_rk8_qv`; with tangent columns the full step :func:`_rk8`
+    carries them (its (q, v) are the same bits). The first stage of a step is the previous
+    step's end acceleration, computed once.
     """
     side = st[4]
     hp = par[3]
     k = T.shape[1]
     n = 2 + 4 * k
+    # scratch of the step with tangent columns: state, step end, stage argument, stages
     y = work[0, :n]
     y1 = work[1, :n]
-    dy = work[2, :n]
-    tmp = work[3, :n]
-    K = work[4 : 4 + _N_STAGES, :n]
-    y[0] = st[1]
-    y[1] = st[2]
-    for j in range(k):
-        for r in range(4):
-            y[2 + 4 * j + r] = T[r, j]
+    tmp = work[2, :n]
+    K = work[3 : 3 + _N_STAGES, :n]
     t = st[0]
+    q = st[1]
+    v = st[2]
+    if k > 0:
+        y[0] = q
+        y[1] = v
+        for j in range(k):
+            for r in range(4):
+                y[2 + 4 * j + r] = T[r, j]
+    a = _accel(par, side, t, q, v)
     h_out = par[7]
     reversal = False
     while t < t_target:
         last = t_target - t <= h_out
         h = t_target - t if last else h_out
-        _rk8(par, side, t, y, h, y1, K, tmp, k)
-        va = y[1]
-        vb = y1[1]
-        if side * vb <= 0.0:
+        if k > 0:
+            _rk8(par, side, t, y, h, y1, K, tmp, k)
+            q1 = y1[0]
+            v1 = y1[1]
+        else:
+            q1, v1 = _rk8_qv(par, side, t, q, v, h, a)
+        a1 = 0.0
+        if side * v1 <= 0.0:
             reversal = True
             lo = 0.0
             hi = h
         else:
             # a dip of v to zero and back within the step: cubic Hermite of v (a = v')
-            aa = K[0, 1]
-            _rhs(par, side, t + h, y1[:2], dy[:2], 0)
-            ab = dy[1]
-            vmax, vmin = _hermite_extrema(side * va, side * aa, side * vb, side * ab, h)
+            a1 = _accel(par, side, t + h, q1, v1)
+            vmax, vmin = _hermite_extrema(side * v, side * a, side * v1, side * a1, h)
             if vmin < 0.0:
                 # locate the minimum of the true velocity (sign of a) and test v there
                 lo_s = 0.0
                 hi_s = h
                 for _ in range(60):
                     m = 0.5 * (lo_s + hi_s)
-                    _rk8(par, side, t, y[:2], m, tmp[:2], K[:, :2], dy[:2], 0)
-                    _rhs(par, side, t + m, tmp[:2], dy[:2], 0)
-                    if side * dy[1] < 0.0:
+                    qm, vm = _rk8_qv(par, side, t, q, v, m, a)
+                    if side * _accel(par, side, t + m, qm, vm) < 0.0:
                         lo_s = m
                     else:
                         hi_s = m
                 m = 0.5 * (lo_s + hi_s)
-                _rk8(par, side, t, y[:2], m, tmp[:2], K[:, :2], dy[:2], 0)
-                if side * tmp[1] < 0.0:
+                qm, vm = _rk8_qv(par, side, t, q, v, m, a)
+                if side * vm < 0.0:
                     reversal = True
                     lo = 0.0
                     hi = m
-                    vb = tmp[1]
-                else:
-                    _rk8(par, side, t, y, h, y1, K, tmp, k)
+                    v1 = vm
         if reversal:
             # Newton on v(tau) inside the bracket, each iterate one RK8 step from the step start
-            den = side * va - side * vb
-            tau = lo + (hi - lo) * (side * va) / den if den > 0.0 else 0.5 * (lo + hi)
+            den = side * v - side * v1
+            tau = lo + (hi - lo) * (side * v) / den if den > 0.0 else 0.5 * (lo + hi)
             if not (lo < tau <= hi):
                 tau = 0.5 * (lo + hi)
             for _ in range(60):
-                _rk8(par, side, t, y[:2], tau, y1[:2], K[:, :2], tmp[:2], 0)
-                _rhs(par, side, t + tau, y1[:2], dy[:2], 0)
-                vt = y1[1]
-                at = dy[1]
+                qt, vt = _rk8_qv(par, side, t, q, v, tau, a)
+                at = _accel(par, side, t + tau, qt, vt)
                 if side * vt > 0.0:
                     lo = tau
                 else:
@@ -580,15 +777,23 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
                     tau = tn
                     break
                 tau = tn
-            _rk8(par, side, t, y, tau, y1, K, tmp, k)
-            for r in range(n):
-                y[r] = y1[r]
+            if k > 0:
+                _rk8(par, side, t, y, tau, y1, K, tmp, k)
+                for r in range(n):
+                    y[r] = y1[r]
+                q = y[0]
+                v = y[1]
+            else:
+                q, v = _rk8_qv(par, side, t, q, v, tau, a)
             t = t + tau
             break
-        for r in range(n):
-            y[r] = y1[r]
+        if k > 0:
+            for r in range(n):
+                y[r] = y1[r]
+        q = q1
+        v = v1
+        a = a1
         t = t_target if last else t + h
-    q = y[0]
     st[1] = q
     st[3] = q - side * hp
     for j in range(k):
@@ -604,15 +809,14 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
         _record(ev, cnt, t, q, 0.0, -1.0, st[3])
         # V_in = I. A play of zero width is left at once through the opposite wall.
         if hp == 0.0:
-            _rhs(par, side, t, y, dy, 0)
-            st[4] = 1.0 if dy[1] > 0.0 else -1.0
+            st[4] = 1.0 if _accel(par, side, t, q, v) > 0.0 else -1.0
             if accumulate:
                 diag[0] += 1.0
             _record(ev, cnt, t, q, 0.0, 1.0, st[3])
             leave_play(T, flags[1])
     else:
         st[0] = t_target
-        st[2] = y[1]
+        st[2] = v
 
 
 # --------------------------------------------------------------------------------------------
@@ -634,7 +838,7 @@ def advance(par, st, t_target, T, diag, ev, cnt, flags, work):
 
 def make_work(k: int) -> np.ndarray:
     """Scratch space for :func:`advance` with k tangent columns."""
-    return np.zeros((4 + _N_STAGES, 2 + 4 * k))
+    return np.zeros((3 + _N_STAGES, 2 + 4 * k))
 
 
 @njit(cache=True)
