@@ -45,6 +45,13 @@ _N_STAGES = _dop.N_STAGES
 RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
 RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
+# the table's nonzero coefficients, row by row (stage i uses RK_A[i, NZ_COL[NZ_START[i]:
+# NZ_START[i + 1]]]) and the nonzero weights: adding 0·K changes no bit of a finite sum, so the
+# steps that skip the zeros give the full table's results exactly
+_NZ = [(i, j) for i in range(_N_STAGES) for j in range(i) if RK_A[i, j] != 0.0]
+NZ_START = np.searchsorted([i for i, _ in _NZ], np.arange(_N_STAGES + 1)).astype(np.int64)
+NZ_COL = np.array([j for _, j in _NZ], dtype=np.int64)
+NZ_B = np.flatnonzero(RK_B).astype(np.int64)
 
 #: index in ``par`` where a kind-2 shape table starts
 _TABLE = 15
@@ -484,21 +491,50 @@ def _rhs(par, side, t, y, dy, k):
 
 @njit(cache=True)
 def _rk8(par, side, t, y, h, out, K, tmp, k):
-    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``
-    (with the k tangent columns; :func:`_rk8_qv` is the same step of (q, v) alone)."""
-    n = y.shape[0]
+    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``, with
+    the k tangent columns (:func:`_rk8_qv` is the same step of (q, v) alone).
+
+    Plain reading: stage i evaluates ``K[i] = rhs(t + c_i h, y + h Σ_j a_ij K[j])`` and the step
+    is ``y + h Σ_i b_i K[i]``; the sums run over the table's nonzero coefficients only, and a
+    column's δφ (zero rate) and δw (the rate of δq) reuse what they equal instead of summing.
+    """
     for i in range(_N_STAGES):
-        for r in range(n):
+        s = NZ_START[i]
+        e = NZ_START[i + 1]
+        for r in range(2):
             acc = 0.0
-            for j in range(i):
-                acc += RK_A[i, j] * K[j, r]
+            for jj in range(s, e):
+                acc += RK_A[i, NZ_COL[jj]] * K[NZ_COL[jj], r]
             tmp[r] = y[r] + h * acc
+        for c in range(k):
+            b = 2 + 4 * c
+            acc_q = 0.0
+            acc_v = 0.0
+            for jj in range(s, e):
+                j = NZ_COL[jj]
+                acc_q += RK_A[i, j] * K[j, b]
+                acc_v += RK_A[i, j] * K[j, b + 1]
+            tmp[b] = y[b] + h * acc_q
+            tmp[b + 1] = y[b + 1] + h * acc_v
+            tmp[b + 2] = y[b + 2] + h * 0.0
+            tmp[b + 3] = y[b + 3] + h * acc_q
         _rhs(par, side, t + RK_C[i] * h, tmp, K[i], k)
-    for r in range(n):
+    for r in range(2):
         acc = 0.0
-        for i in range(_N_STAGES):
+        for i in NZ_B:
             acc += RK_B[i] * K[i, r]
         out[r] = y[r] + h * acc
+    for c in range(k):
+        b = 2 + 4 * c
+        acc_q = 0.0
+        acc_v = 0.0
+        for i in NZ_B:
+            acc_q += RK_B[i] * K[i, b]
+            acc_v += RK_B[i] * K[i, b + 1]
+        out[b] = y[b] + h * acc_q
+        out[b + 1] = y[b + 1] + h * acc_v
+        out[b + 2] = y[b + 2] + h * 0.0
+        out[b + 3] = y[b + 3] + h * acc_q
 
 
 @njit(cache=True)
