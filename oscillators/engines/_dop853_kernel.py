@@ -103,3 +103,11 @@ A[11, 7] = np.float64(-2.8589982771350235)
 A[11, 8] = np.float64(-8.87285693353063)
 A[11, 9] = np.float64(12.360567175794303)
 A[11, 10] = np.float64(0.6433927460157636)
+
+# The nonzero pattern (the kernels' sums run over it: adding 0·K changes no bit of a finite sum,
+# so they give the full table's results exactly): stage i uses the columns
+# NZ_COL[NZ_START[i]:NZ_START[i + 1]] of A, the step the weights B[NZ_B].
+_NZ = [(i, j) for i in range(N_STAGES) for j in range(i) if A[i, j] != 0.0]
+NZ_START = np.searchsorted([i for i, _ in _NZ], np.arange(N_STAGES + 1)).astype(np.int64)
+NZ_COL = np.array([j for _, j in _NZ], dtype=np.int64)
+NZ_B = np.flatnonzero(B).astype(np.int64)

@@ -45,13 +45,9 @@ _N_STAGES = _dop.N_STAGES
 RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
 RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
-# the table's nonzero coefficients, row by row (stage i uses RK_A[i, NZ_COL[NZ_START[i]:
-# NZ_START[i + 1]]]) and the nonzero weights: adding 0·K changes no bit of a finite sum, so the
-# steps that skip the zeros give the full table's results exactly
-_NZ = [(i, j) for i in range(_N_STAGES) for j in range(i) if RK_A[i, j] != 0.0]
-NZ_START = np.searchsorted([i for i, _ in _NZ], np.arange(_N_STAGES + 1)).astype(np.int64)
-NZ_COL = np.array([j for _, j in _NZ], dtype=np.int64)
-NZ_B = np.flatnonzero(RK_B).astype(np.int64)
+NZ_START = _dop.NZ_START
+NZ_COL = _dop.NZ_COL
+NZ_B = _dop.NZ_B
 
 #: index in ``par`` where a kind-2 shape table starts
 _TABLE = 15
