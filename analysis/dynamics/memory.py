@@ -15,10 +15,18 @@ Two tools separate them:
   the running estimate (batch means), so that "neutral" means ``|λ| <= 2·error``
   (:func:`neutral_count`);
 * :func:`memory_frozen_exponents` — an independent Benettin loop over two deviation vectors in
-  which every memory direction that survived a whole projection interval (same label, same value)
-  is set to zero at the interval's end: the two exponents of the motion in ``(q, v)`` together
-  with its short-lived memory (the extrema of the current oscillation, a play's ``w`` between
-  wall hits), without the long-lived, neutral extrema.
+  which every memory direction that survived a whole projection interval (carried unchanged by
+  the engine, not pushed again or reset) is set to zero at the interval's end: the two
+  exponents of the motion in ``(q, v)`` together with its short-lived memory (the extrema of the
+  current oscillation, a play's ``w`` between wall hits), without the long-lived, neutral
+  extrema.
+
+Survival is read from a probe column, never from the memory's values: on a periodic orbit the
+own extrema are pushed again every period at the same value, often bit-identical (at a border
+orbit of a continuous Preisach model the base trajectory also leaves near-duplicate pairs
+1e-15 .. 1e-13 apart), and a "same label, same value" test zeroed such fresh rows as if they
+were frozen (the Gaussian period-3 orbit at C = 2: -0.0142 or -0.0175 instead of the Floquet
+exponent -0.0338, depending on round-off of the start and of the Everett function).
 """
 
 from __future__ import annotations
@@ -103,14 +111,6 @@ class MemoryFrozenResult:
         self.transient = transient
 
 
-def _memory(system: Any, stepper: TangentStepper) -> tuple[tuple[str, ...], np.ndarray]:
-    """Labels and values of the memory variables of the branch the engine is on now."""
-    state = stepper.state()
-    direction = 1 if state.v >= 0.0 else -1
-    flow = system.operator.branch_flow(state.operator_state, direction)
-    return tuple(flow.labels), np.asarray(flow.memory, dtype=float)
-
-
 def memory_frozen_exponents(
     system: Any,
     t_end: float,
@@ -122,14 +122,23 @@ def memory_frozen_exponents(
 ) -> MemoryFrozenResult:
     """The two exponents of the motion without its long-lived memory directions.
 
-    Plain reading (two deviation vectors, the other tracked columns kept at zero)::
+    Plain reading (two deviation vectors, a third tracked column as the survival probe, the
+    other tracked columns kept at zero)::
 
         reinit at the initial state, transient without tangent flow; Y := [e_q, e_v]
-        every P forcing periods:  step;  Y = deviations[:, :2]
-            rows of memory variables that existed at the last projection with the same
-            label and value (an extremum frozen through the whole interval) := 0
-            Q R = Y[q, v rows];  Σ += log|diag R|;  deviations := [Y R⁻¹, 0]
+        every P forcing periods:
+            deviations := [Y, p, 0] with the probe p = 1 on every memory row, 0 on q, v
+            step;  Y = deviations[:, :2]
+            rows whose probe is still exactly 1 (carried unchanged through the whole
+            interval: an extremum never wiped out, a wagon that never hit a wall) := 0
+            Q R = Y[q, v rows];  Σ += log|diag R|;  Y := Y R⁻¹
         λ = Σ / (t_end − transient)
+
+    A row pushed again or reset inside the interval holds ``δq`` of the probe column there
+    (its response to the memory, generically not 1 to the last bit). If the start has no
+    memory row (the engine then tracks only two vectors), the engine is restarted from its
+    state after the first interval in which memory appeared (nothing is dropped there: all of
+    it was born in that interval).
 
     Memory born inside an interval (the extrema of the current oscillation, a play's ``w`` set
     at a wall) keeps its deviation; only memory older than ``P`` periods is dropped, so the
@@ -138,8 +147,14 @@ def memory_frozen_exponents(
     chaotic motion) from the long-lived, neutral extrema. The growth is measured in the
     ``(q, v)`` rows (the young memory is a bounded function of the recent ``δq``, so it does not
     change the exponential rates, while counting it in the norm would bias every interval by
-    the memory it is about to drop). For a continuous operator with a
-    ``branch_flow`` (the labels and values come from it).
+    the memory it is about to drop). For a continuous operator (memory rows in the engine's
+    tangent space).
+
+    At a border orbit of a continuous Preisach model (module docstring of
+    :mod:`analysis.dynamics.staircase_orbits`) the result equals the closed-loop map's Floquet
+    exponents plus the boundary term ``B/t`` of the QR average (tested); the linearisation
+    along the base trajectory itself holds only for perturbations below the distance to the
+    border, which there is round-off: use the projection, not the full spectrum.
     """
     t_end, transient = time_window(t_end, transient)
     projection_periods = positive_integer(projection_periods, "projection_periods")
@@ -155,38 +170,41 @@ def memory_frozen_exponents(
         raise ValueError(f"t_end spans more than {MAX_PERIODS:.0e} forcing periods")
     stepper = TangentStepper(system)
     stepper.reinit(system.initial_state(q0, v0, operator_state), transient)
-    k = stepper.deviations().shape[1]
-    labels, values = _memory(system, stepper)
-
-    def set_columns(q2: np.ndarray) -> None:
-        y = np.zeros((len(stepper.tangent_space), k))
-        y[: q2.shape[0], :2] = q2
-        stepper.set_deviations(y)
-
-    rows = len(stepper.tangent_space)
-    set_columns(np.eye(rows, 2))
+    origin = 0.0  # time of the stepper's last (re)start, measured from the run's start
     lsum = np.zeros(2)
     zeroed = 0
+    y = np.eye(len(stepper.tangent_space), 2)
     for i in range(n_steps):
+        k = stepper.deviations().shape[1]
+        probe = k >= 3
+        start = np.zeros((len(stepper.tangent_space), k))
+        start[: y.shape[0], :2] = y
+        if probe:
+            start[2:, 2] = 1.0  # the survival probe: exactly 1 on every memory row
+        stepper.set_deviations(start)
         # absolute targets, as lyapunov_spectrum's loop: the same orbit to the last bit
-        stepper.step(transient + (i + 1) * dt - stepper.elapsed)
-        y = stepper.deviations()[:, :2].copy()
-        names = stepper.tangent_space
-        new_labels, new_values = _memory(system, stepper)
-        if tuple(names[2:]) != new_labels:  # the engine's rows are the branch's memory
-            raise RuntimeError(f"tangent rows {names} do not match the memory {new_labels}")
-        old = dict(zip(labels, values, strict=True))
-        for i, (lab, val) in enumerate(zip(new_labels, new_values, strict=True)):
-            if lab in old and old[lab] == val:
-                y[2 + i] = 0.0
-                zeroed += 1
+        stepper.step(transient + (i + 1) * dt - origin - stepper.elapsed)
+        dev = stepper.deviations()
+        y = dev[:, :2].copy()
+        survived = dev[2:, 2] == 1.0 if probe else np.zeros(y.shape[0] - 2, dtype=bool)
+        y[2:][survived] = 0.0
+        zeroed += int(np.count_nonzero(survived))
         _, r = np.linalg.qr(y[:2])
         diag = np.abs(np.diag(r))
         if not np.all(np.isfinite(diag)) or np.any(diag == 0.0):
             raise RuntimeError("the two deviation vectors became degenerate or non-finite")
         lsum += np.log(diag)
         # Y R⁻¹: the (q, v) block becomes orthonormal, the young memory rows follow it
-        set_columns(np.linalg.solve(r.T, y.T).T)
-        labels, values = new_labels, new_values
+        y = np.linalg.solve(r.T, y.T).T
+        if not probe and y.shape[0] > 2:
+            # the start had no memory row, so the engine tracks two vectors and no probe: restart
+            # it here (every row present now was born in this interval, nothing was dropped)
+            origin += stepper.elapsed
+            stepper.reinit(stepper.state(), 0.0)
+            if len(stepper.tangent_space) != y.shape[0]:
+                raise RuntimeError(
+                    f"restarted tangent rows {stepper.tangent_space} do not match the "
+                    f"{y.shape[0]} rows before the restart"
+                )
     exps = -np.sort(-lsum / (n_steps * dt))
     return MemoryFrozenResult(exps, projection_periods, zeroed / n_steps, t_end, transient)
