@@ -1,14 +1,19 @@
 """Two checkouts of this project measured against each other in the same run.
 
-Runs the relay-kernel measurement (N = 20 000 dimers, seed 0, C = 4, 300 forcing periods from
-the paper's initial condition) alternately in two source trees, ``pairs`` times, each in a fresh
-process with that tree first on ``PYTHONPATH``, and prints the medians and the new/old ratios of
-switches per second for: the trajectory (engine, no tangent flow), the kernel with the tangent
-flow (one engine call, no QR), and ``lyapunov_spectrum`` with QR every 8 periods and every
-period. Alternating pairs keep the ratio meaningful on a shared machine whose speed drifts.
+Runs one measurement alternately in two source trees, ``pairs`` times, each in a fresh process
+with that tree first on ``PYTHONPATH``, and prints the medians and the new/old ratios.
+Alternating pairs keep the ratio meaningful on a shared machine whose speed drifts.
+
+* ``--what relay`` (default): N = 20 000 dimers, seed 0, C = 4, 300 forcing periods from the
+  paper's initial condition; switches per second of the trajectory (engine, no tangent flow),
+  the kernel with the tangent flow (one engine call, no QR), and ``lyapunov_spectrum`` with QR
+  every 8 periods and every period.
+* ``--what play``: the erf-play limit at C = 2.92 (the basin benchmark's system); starts per
+  second of ``poincare_section`` over 100 periods from 40 seeded starts in [-3, 3]² (a basin
+  map's unit of work), and time units per second of ``lyapunov_spectrum`` to t = 4000.
 
     git worktree add /tmp/old <commit>
-    python benchmarks/bench_versions.py /tmp/old . [--pairs 5]
+    python benchmarks/bench_versions.py /tmp/old . [--pairs 5] [--what play]
 
 The last line is one JSON object.
 """
@@ -23,7 +28,34 @@ import subprocess
 import sys
 from pathlib import Path
 
-KEYS = ("trajectory", "kernel_tangent", "lyapunov_qr8", "lyapunov_qr1")
+KEYS = {
+    "relay": ("trajectory", "kernel_tangent", "lyapunov_qr8", "lyapunov_qr1"),
+    "play": ("sections", "lyapunov"),
+}
+
+
+def measure_play() -> dict:
+    """Starts per second and Lyapunov time units per second of the erf play (child's job)."""
+    import time
+
+    import numpy as np
+
+    from analysis import lyapunov_spectrum
+    from hysteresis import GeneralizedPlay
+    from oscillators import ForcedOscillator
+
+    system = ForcedOscillator(GeneralizedPlay.erf(2.0, 1.0), 2.92)
+    system.poincare_section(2, 0, 0.0, 0.0)  # compile
+    lyapunov_spectrum(system, 20.0)
+    starts = np.random.default_rng(1).uniform(-3.0, 3.0, size=(40, 2))
+    t0 = time.perf_counter()
+    for q0, v0 in starts:
+        system.poincare_section(100, 0, q0, v0)
+    out = {"sections": len(starts) / (time.perf_counter() - t0)}
+    t0 = time.perf_counter()
+    lyapunov_spectrum(system, 4000.0)
+    out["lyapunov"] = 4000.0 / (time.perf_counter() - t0)
+    return out
 
 
 def measure() -> dict:
@@ -59,15 +91,17 @@ def main() -> None:
     ap.add_argument("old", type=Path, help="source tree of the old version")
     ap.add_argument("new", type=Path, help="source tree of the new version")
     ap.add_argument("--pairs", type=int, default=5)
+    ap.add_argument("--what", choices=sorted(KEYS), default="relay")
     args = ap.parse_args()
-    rates: dict = {"old": {k: [] for k in KEYS}, "new": {k: [] for k in KEYS}}
-    ratios: dict = {k: [] for k in KEYS}
+    keys = KEYS[args.what]
+    rates: dict = {"old": {k: [] for k in keys}, "new": {k: [] for k in keys}}
+    ratios: dict = {k: [] for k in keys}
     for _ in range(args.pairs):
         pair = {}
         for name, tree in (("old", args.old), ("new", args.new)):
             env = dict(os.environ, PYTHONPATH=str(tree.resolve()))
             child = subprocess.run(
-                [sys.executable, __file__, "--child"],
+                [sys.executable, __file__, "--child", args.what],
                 env=env,
                 cwd=tree,
                 capture_output=True,
@@ -75,24 +109,25 @@ def main() -> None:
                 check=True,
             )
             pair[name] = json.loads(child.stdout.strip().splitlines()[-1])
-            for k in KEYS:
+            for k in keys:
                 rates[name][k].append(pair[name][k])
-        for k in KEYS:
+        for k in keys:
             ratios[k].append(pair["new"][k] / pair["old"][k])
+    unit = "switches/s" if args.what == "relay" else "per s"
     summary = {}
-    for k in KEYS:
+    for k in keys:
         old, new = statistics.median(rates["old"][k]), statistics.median(rates["new"][k])
         r = sorted(ratios[k])
         print(
-            f"{k}: old {old:.3e}, new {new:.3e} switches/s; new/old per pair "
+            f"{k}: old {old:.3e}, new {new:.3e} {unit}; new/old per pair "
             + ", ".join(f"{x:.2f}" for x in r)
         )
         summary[k] = {"old": old, "new": new, "ratio_median": statistics.median(r)}
-    print(json.dumps({"benchmark": "versions", "pairs": args.pairs, **summary}))
+    print(json.dumps({"benchmark": "versions", "what": args.what, "pairs": args.pairs, **summary}))
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--child"]:
-        print(json.dumps(measure()))
+    if sys.argv[1:2] == ["--child"]:
+        print(json.dumps(measure_play() if sys.argv[2:] == ["play"] else measure()))
     else:
         main()

@@ -109,9 +109,15 @@ def cycle_period(points: np.ndarray, tolerance: float, max_period: int) -> int:
     every i of ``points``), else 0. The multi-coordinate form of
     :func:`~analysis.dynamics.bifurcation.orbit_period`."""
     n = points.shape[0]
-    for k in range(1, min(max_period, n - 1) + 1):
+    top = min(max_period, n - 1)
+    if top < 1:
+        return 0
+    # the last point's pairs first, all k at once: a k whose last pair already differs is out
+    # (most of them on an aperiodic section), the full check runs only for the others
+    last = np.all(np.abs(points[-1] - points[-2 : -top - 2 : -1]) <= tolerance, axis=1)
+    for k in np.flatnonzero(last) + 1:
         if np.all(np.abs(points[k:] - points[:-k]) <= tolerance):
-            return k
+            return int(k)
     return 0
 
 
