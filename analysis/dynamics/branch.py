@@ -21,6 +21,7 @@ from analysis.dynamics.periodic_orbits import (
     max_abs_multiplier,
     orbit_shooter,
 )
+from analysis.dynamics.staircase_orbits import StaircaseChangedError
 from oscillators import DivergenceError, GrazingError, OscillatorState
 
 __all__ = [
@@ -139,10 +140,29 @@ class BranchProblem:
         return self.coords.vector(shot.states[-1]) - x, shot
 
     def d_lambda(self, x: np.ndarray, lam: float, template: OscillatorState) -> np.ndarray:
+        """``∂F/∂λ`` by central differences, step ``h = 1e-6·max(1, |λ|)`` (truncation
+        ``h²/6·|F_λλλ|``). Where the staircase changes on one side (the orbit within ``h`` of a
+        grazing of its frozen prefix: ``F`` of these coordinates is not defined beyond it) the
+        one-sided difference on the other side, truncation ``h/2·|F_λλ|``, a relative error
+        ~1e-6: it only sets the predictor's direction and a column of the corrector's
+        Jacobian, whose converged point does not depend on it (the residual test decides).
+        Raises :class:`StaircaseChangedError` if the staircase changes on both sides."""
         h = 1e-6 * max(1.0, abs(lam))
-        plus, _ = self.residual(x, lam + h, template)
-        minus, _ = self.residual(x, lam - h, template)
-        return (plus - minus) / (2.0 * h)
+        side = {}
+        for sign in (1.0, -1.0):
+            try:
+                side[sign] = self.residual(x, lam + sign * h, template)[0]
+            except StaircaseChangedError:
+                continue
+        if len(side) == 2:
+            return (side[1.0] - side[-1.0]) / (2.0 * h)
+        if not side:
+            raise StaircaseChangedError(
+                f"the orbit's staircase changes on both sides of λ = {lam!r} (step {h:.3g})"
+            )
+        centre = self.residual(x, lam, template)[0]
+        sign, other = next(iter(side.items()))
+        return sign * (other - centre) / h
 
     def point(self, x: np.ndarray, lam: float, template: OscillatorState) -> BranchPoint:
         system = self.system(lam)
@@ -159,11 +179,25 @@ class BranchProblem:
             period=self.k,
             multipliers=mu,
             point=np.array(x, dtype=float),
-            sequence=event_sequence(shot.events),
+            sequence=self.sequence(shot.events),
             state=state,
             monodromy=shot.jacobian,
             multiplier_labels=tags,
         )
+
+    def sequence(self, events: np.ndarray) -> tuple:
+        """The event sequence that delimits a smooth piece of the branch:
+        :func:`~analysis.dynamics.periodic_orbits.event_sequence`, for a continuous Preisach
+        staircase its reversals only. A wipe-out (kind +1) can appear or vanish only where a
+        swing's reversal meets the remembered extremum, at ``v = 0`` — on every such orbit's
+        own border it does so at round-off level from one point to the next — and the two
+        sides differ by an Everett mass ``O(δ²)`` (``δ`` the distance to the border): the
+        closed-loop map stays smooth. Its structural changes (a frozen extremum wiped, another
+        number of own extrema) raise :class:`StaircaseChangedError` instead."""
+        seq = event_sequence(events)
+        if self.coords.kind == "staircase":
+            return tuple(e for e in seq if e[0] == -1)
+        return seq
 
     def correct(
         self,

@@ -340,10 +340,13 @@ def _same_event(a: ContinuationEvent, b: ContinuationEvent | None) -> bool:
 
 
 def _secant(points: list[BranchPoint]) -> np.ndarray:
-    """dx/dλ from the last two points of the same period (zero if none)."""
+    """dx/dλ from the last two points of the same period and coordinates (zero if none: a
+    re-detected staircase may have another length)."""
     if len(points) < 2 or points[-1].period != points[-2].period:
         return np.zeros_like(points[-1].point)
     a, b = points[-2], points[-1]
+    if a.point.shape != b.point.shape:
+        return np.zeros_like(b.point)
     dl = b.parameter - a.parameter
     if dl == 0.0 or not same_sequence(a.sequence, b.sequence):
         return np.zeros_like(b.point)

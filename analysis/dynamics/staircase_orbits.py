@@ -48,11 +48,24 @@ import numpy as np
 
 from oscillators import DivergenceError, OscillatorState
 
-__all__ = ["MERGE_TOLERANCE", "StaircaseShot", "closed_loop_shot", "settle_staircase"]
+__all__ = [
+    "MERGE_TOLERANCE",
+    "StaircaseChangedError",
+    "StaircaseShot",
+    "closed_loop_shot",
+    "settle_staircase",
+]
 
 #: relative distance to the orbit's range below which a remembered extremum is collapsed onto
 #: the orbit by :func:`settle_staircase`
 MERGE_TOLERANCE = 1e-6
+
+
+class StaircaseChangedError(ValueError):
+    """The motion's staircase left the structure of the start: a frozen extremum was wiped out
+    (the orbit grew onto it: a grazing of the frozen prefix, a border collision) or the orbit
+    has another number of own extrema. The closed-loop map is not defined there; a
+    continuation treats it like a change of the switching sequence."""
 
 
 @dataclass
@@ -129,7 +142,7 @@ def closed_loop_shot(
     closed = _closed_state(system.operator, frozen, rev, states[-1])
     got = np.asarray(closed.operator_state.extrema, dtype=np.float64)
     if got.size != extrema.size or not np.array_equal(got[:prefix], frozen):
-        raise ValueError(
+        raise StaircaseChangedError(
             f"the orbit's staircase changed: {extrema.size} extrema with {prefix} frozen at the "
             f"start, {got.size} after {k} periods (a frozen extremum was wiped out or the orbit "
             "has another number of own extrema)"
