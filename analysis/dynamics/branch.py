@@ -389,8 +389,12 @@ def smooth_events(
             got = prob.correct(z_pred, c, a.state, arclength)
             if got is None:
                 break
-            at = prob.point(got[0][:d], float(got[0][d]), got[1])
-            g = tests(at, None)[kind]
+            try:
+                at_s = prob.point(got[0][:d], float(got[0][d]), got[1])
+                g = tests(at_s, None)[kind]
+            except StaircaseChangedError:  # no tangent there (both sides change): stop here
+                break
+            at = at_s
             if g * g_lo > 0.0:
                 s_lo, g_lo, lam_lo = s, g, at.parameter
             else:

@@ -75,6 +75,7 @@ from analysis.dynamics.periodic_orbits import (
     find_periodic_orbit,
     refine_periodic_orbit,
 )
+from analysis.dynamics.staircase_orbits import StaircaseChangedError
 from hysteresis._validation import finite_scalar, positive_integer, positive_scalar
 from oscillators import ForcedOscillator
 
@@ -233,11 +234,14 @@ def continue_orbit(
     first = prob.point(coords.vector(orbit.start), start, orbit.start)
     points = [first]
     events: list[ContinuationEvent] = []
-    tangent = prob.tangent(first, None, direction) if arclength else None
     ds = step
     reason = "reached stop"
+    try:
+        tangent = prob.tangent(first, None, direction) if arclength else None
+    except StaircaseChangedError:
+        tangent, reason = None, _no_tangent(parameter, first)
     d = coords.dimension
-    while True:
+    while tangent is not None or not arclength:
         a = points[-1]
         if len(points) >= max_points:
             reason = "max_points"
@@ -302,10 +306,18 @@ def continue_orbit(
             # the new piece continues the old one's orientation (after a fold: backwards); a
             # re-detected orbit (another problem) starts toward stop
             if arclength:
-                tangent = prob.tangent(resumed, None if redetected else tangent, direction)
+                try:
+                    tangent = prob.tangent(resumed, None if redetected else tangent, direction)
+                except StaircaseChangedError:
+                    reason = _no_tangent(parameter, resumed)
+                    break
             ds = step
             continue
-        new_tangent = prob.tangent(new, tangent, direction) if arclength else None
+        try:
+            new_tangent = prob.tangent(new, tangent, direction) if arclength else None
+        except StaircaseChangedError:
+            reason = _no_tangent(parameter, new)
+            break
         found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
         events.extend(replace(e, index=len(points)) for e in found)
         points.append(new)
@@ -320,6 +332,13 @@ def continue_orbit(
         points=tuple(points),
         events=tuple(events),
         stop_reason=reason,
+    )
+
+
+def _no_tangent(parameter: str, bp: BranchPoint) -> str:
+    return (
+        f"the orbit's staircase changes on both sides of {parameter} = {bp.parameter:.10g} "
+        "(no tangent: a frozen extremum within 1e-6 on either side)"
     )
 
 
