@@ -44,7 +44,15 @@ Frozen memory (a wagon strictly inside its play along the whole orbit; see
 and the tangent solve for the other coordinates and λ, and the bifurcation tests use the
 multipliers that are not frozen. Continuous Preisach orbits are continued with the closed-loop
 map of :mod:`analysis.dynamics.staircase_orbits` (its frozen extrema held); an orbit that grows
-onto a frozen extremum changes its staircase, which ends the branch like a grazing.
+onto a frozen extremum changes its staircase
+(:class:`~analysis.dynamics.staircase_orbits.StaircaseChangedError`), which ends the piece like
+a grazing wherever it is met: a trial point or a corrector iterate fails (the step is halved;
+at the smallest step the grazing is located by bisection from the last point), the tangent's
+``∂F/∂λ`` becomes one-sided (:meth:`~analysis.dynamics.branch.BranchProblem.d_lambda`), the
+location of an event stops at the last point that keeps the staircase. The new piece is the
+orbit re-detected past the event (its transient's remnants settled anew). A staircase piece's
+sequence is its reversals (:meth:`~analysis.dynamics.branch.BranchProblem.sequence`): the
+orbit's own wipe-out at its reversal is the border itself, recorded or not at round-off.
 
 Branch switching at a period doubling: :func:`period_doubled_orbit` starts the period-2k orbit
 from the located point plus a perturbation along the eigenvector of ``μ = −1``.

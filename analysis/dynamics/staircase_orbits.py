@@ -133,7 +133,10 @@ def closed_loop_shot(
     engine_options: dict | None = None,
 ) -> StaircaseShot:
     """``P̃`` over ``k`` periods from ``state`` whose first ``prefix`` extrema are frozen, and
-    its Jacobian in the coordinates ``(q, v, extrema[:-1])`` (module docstring)."""
+    its Jacobian in the coordinates ``(q, v, extrema[:-1])`` (module docstring).
+
+    Raises :class:`StaircaseChangedError` if the closed staircase has another length or its
+    frozen prefix is not kept bit for bit (the motion wiped a frozen extremum)."""
     extrema = np.asarray(state.operator_state.extrema, dtype=np.float64)
     d = 2 + extrema.size - 1
     states, dev, events = _run(system, state, k, engine_options)
