@@ -310,19 +310,34 @@ def locate_grazing(
     prob: BranchProblem, a: BranchPoint, trial: float, tol: float
 ) -> tuple[ContinuationEvent | None, BranchPoint]:
     """Bisection on the parameter between ``a`` (old sequence) and ``trial`` (not) for the end
-    of ``a``'s event sequence; ``(None, a)`` if the sequence holds at ``trial``."""
-    lo, hi = a.parameter, trial
+    of ``a``'s event sequence; ``(None, a)`` if the sequence holds at ``trial``.
+
+    A failure at ``mid`` may be Newton's, not the orbit's: the corrector starts from the last
+    orbit of the old sequence, and its first iterate's motion can overshoot a border (wipe a
+    frozen extremum) that the orbit at ``mid`` does not reach. So the failure at the final
+    ``hi`` is verified from the converged orbit at ``lo`` (a step of at most ``tol``); if the
+    orbit of the old sequence exists there, the bisection goes on toward the next failure
+    further out."""
     last = a
-    b = natural_point(prob, a, hi)
+    b = natural_point(prob, a, trial)
     if b is not None and same_sequence(a.sequence, b.sequence):
         return None, a
-    while abs(hi - lo) > tol:
-        mid = 0.5 * (lo + hi)
-        m = natural_point(prob, last, mid)
-        if m is not None and same_sequence(a.sequence, m.sequence):
-            lo, last = mid, m
-        else:
-            hi = mid
+    lo, failed = a.parameter, [trial]  # failing parameters, the nearest last
+    while True:
+        while abs(failed[-1] - lo) > tol:
+            mid = 0.5 * (lo + failed[-1])
+            m = natural_point(prob, last, mid)
+            if m is not None and same_sequence(a.sequence, m.sequence):
+                lo, last = mid, m
+            else:
+                failed.append(mid)
+        if len(failed) == 1:  # trial itself failed from a converged orbit (above)
+            break
+        m = natural_point(prob, last, failed[-1])
+        if m is None or not same_sequence(a.sequence, m.sequence):
+            break
+        lo, last = failed.pop(), m
+    hi = failed[-1]
     event = ContinuationEvent(
         kind="grazing",
         parameter=0.5 * (lo + hi),
