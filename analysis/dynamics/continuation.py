@@ -34,8 +34,11 @@ changes — a relay threshold or a play wall is grazed by a turning point, a bor
 When two consecutive points differ in their sequence (up to a cyclic shift: an event crossing
 the section), or the corrector fails for every step, the parameter where the old sequence stops
 holding is located by bisection in the parameter (natural corrector, from the last point of the
-old sequence) to ``locate_tolerance`` and reported as ``grazing``. The continuation then goes on
-from the first point of the new sequence, re-detecting the period with
+old sequence) to ``locate_tolerance`` and reported as ``grazing`` (a corrector failure at the
+bracket's end is verified from the converged orbit at its other end, a step of at most
+``locate_tolerance``: a failure of Newton's first iterate rather than of the orbit is passed).
+The continuation then goes on from the first point of the new sequence, re-detecting the
+period with
 :func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit` when no orbit of the old period
 follows.
 
