@@ -249,7 +249,10 @@ class BranchProblem:
         bound = 1e3 * self.tol * self.coords.scale(x)
         for m in range(1, self.k):
             if self.k % m == 0:
-                y = self.coords.vector(shot.states[m - 1])
+                try:
+                    y = self.coords.vector(shot.states[m - 1])
+                except ValueError:  # another staircase length there: not the same point
+                    continue
                 if float(np.max(np.abs(y - x))) <= bound:
                     return True
         return False

@@ -40,7 +40,10 @@ bracket's end is verified from the converged orbit at its other end, a step of a
 The continuation then goes on from the first point of the new sequence, re-detecting the
 period with
 :func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit` when no orbit of the old period
-follows.
+follows. After a fold the failing step's grazing is sought ahead along the branch (the sign of
+the tangent's λ component). A branch that comes round to an event already found (a grazing, or
+a fold of an isola: the same kind, period, dimension and parameter to ``10·locate_tolerance``)
+stops there, ``stop_reason`` saying so.
 
 Frozen memory (a wagon strictly inside its play along the whole orbit; see
 :mod:`analysis.dynamics.periodic_orbits`) is held at its value along the branch: the corrector
@@ -289,8 +292,10 @@ def continue_orbit(
                 break
             ds *= 0.5
         if new is None or not same_sequence(a.sequence, new.sequence):
-            # the old sequence ends between a and new (or the next failing step)
-            trial = new.parameter if new is not None else a.parameter + direction * 2 * min_step
+            # the old sequence ends between a and new (or the next failing step: along the
+            # branch, which runs away from stop after a fold)
+            ahead = math.copysign(1.0, tangent[d]) if arclength else direction
+            trial = new.parameter if new is not None else a.parameter + ahead * 2 * min_step
             event, last = locate_grazing(prob, a, trial, locate_tolerance)
             if event is None and new is None:
                 reason = "corrector failed (no grazing found)"
@@ -310,7 +315,7 @@ def continue_orbit(
                 prob = resumed[0]
                 resumed = resumed[1]
                 d = prob.coords.dimension  # a re-detected staircase may have another length
-            if any(_same_event(e, event) for e in events[:-1]):
+            if any(_same_event(e, event, locate_tolerance) for e in events[:-1]):
                 reason = "the branch returned to a grazing already found (a closed loop)"
                 break
             points.append(resumed)
@@ -330,8 +335,12 @@ def continue_orbit(
             reason = _no_tangent(parameter, new)
             break
         found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
+        again = any(_same_event(e, f, locate_tolerance) for f in found for e in events)
         events.extend(replace(e, index=len(points)) for e in found)
         points.append(new)
+        if again:  # an isola: the branch came round to a fold (or other event) already found
+            reason = "the branch returned to an event already found (a closed loop)"
+            break
         tangent = new_tangent
         ds = min(step, ds * 1.5)
         if direction * (new.parameter - start) < -span:
@@ -362,10 +371,15 @@ def _orbit_coordinates(system: Any, orbit: PeriodicOrbit, engine_options: dict |
     return coords
 
 
-def _same_event(a: ContinuationEvent, b: ContinuationEvent | None) -> bool:
+def _same_event(a: ContinuationEvent, b: ContinuationEvent | None, tol: float) -> bool:
+    """The same kind, period and coordinates (a staircase of another length is another
+    family), at the same parameter to ten bracket widths (at least ``10·tol``: a fold's
+    bracket in λ can be far narrower than its location error)."""
     if b is None or a.kind != b.kind or a.period != b.period:
         return False
-    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0])
+    if a.point is not None and b.point is not None and a.point.point.size != b.point.point.size:
+        return False
+    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0], tol)
     return abs(a.parameter - b.parameter) <= 10.0 * width
 
 

@@ -137,3 +137,27 @@ def test_d_lambda_is_one_sided_next_to_a_grazing(downward):
     f_ll = float(np.max(np.abs(f2 - 2 * f1 + centre))) / h**2
     bound = 0.45 * h * 2.0 * f_ll + 2e-13 / (h / 10)
     assert np.all(np.isfinite(got)) and float(np.max(np.abs(got - fine))) <= bound
+
+
+@pytest.mark.slow
+def test_period3_border_orbit_downward_closes_its_loop_without_crashing():
+    # Gaussian period-3 border orbit at C = 2 continued toward C = 1 (~20 s): a fold at
+    # C ≈ 1.7454 turns the branch back up, where the (unstable) orbit grows onto frozen
+    # extrema (grazings located ahead along the branch, not toward stop), and the branch
+    # comes round to the same fold again: an honest stop, no exception. Each grazing is checked
+    # by the engine's motion as above (past the bracket the prefix is wiped at once)
+    system = _system(2.0)
+    orbit = find_periodic_orbit(system, transient=200, max_period=8)
+    assert orbit.period == 3
+    branch = continue_orbit(_system, orbit, 2.0, 1.0)
+    assert branch.stop_reason == "the branch returned to an event already found (a closed loop)"
+    folds = [e for e in branch.events if e.kind == "fold"]
+    grazings = [e for e in branch.events if e.kind == "grazing"]
+    assert len(folds) >= 2 and grazings
+    assert abs(folds[-1].parameter - folds[0].parameter) <= 10 * LOCATE
+    for e in grazings:
+        last = e.point
+        n = _n_frozen(last)
+        prefix = np.asarray(last.state.operator_state.extrema)[:n]
+        beyond = e.bracket[1] + LOCATE if last.parameter < e.bracket[1] else e.bracket[0] - LOCATE
+        assert _wiped_within(last.state, prefix, beyond, 3) > 0
