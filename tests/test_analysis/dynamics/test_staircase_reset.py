@@ -35,13 +35,14 @@ def _principal_minor_sums(a: np.ndarray) -> np.ndarray:
     )
 
 
-@pytest.mark.parametrize("coupling", [1.0, 1.5])
-def test_reset_multipliers_are_exact_zeros_of_the_characteristic_polynomial(coupling):
+@pytest.mark.parametrize("coupling, period", [(1.0, 1), (1.5, 1), (2.0, 3)])
+def test_reset_multipliers_are_exact_zeros_of_the_characteristic_polynomial(coupling, period):
     # Gaussian width disorder p = 2, R = 1, σ_r = 0.1: period-1 orbits with one own extremum
     # (C = 1) and two (C = 1.5, where the computed zero pair splits like a Jordan block,
-    # 3.5e-10 and 1.2e-14, if left to the eigen-solver)
+    # 3.5e-10 and 1.2e-14, if left to the eigen-solver), and the period-3 border orbit at C = 2
     system = ForcedOscillator(ContinuousPreisachModel.gaussian(2.0, 1.0, 0.1), coupling)
-    orbit = find_periodic_orbit(system, transient=200, max_period=4)
+    orbit = find_periodic_orbit(system, transient=200, max_period=8)
+    assert orbit.period == period
     tags = np.array(orbit.multiplier_labels)
     reset = tags == "reset"
     n_frozen = len(orbit.frozen)
