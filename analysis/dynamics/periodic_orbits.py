@@ -27,8 +27,8 @@ orbit must equal the one at its start). For plays and Prandtl–Ishlinskii opera
 positions are coordinates, for continuous Preisach models the remembered extrema of the
 staircase at the section (its length fixed: the orbit's own structure; Newton runs on the
 closed-loop map of :mod:`analysis.dynamics.staircase_orbits`, since every such orbit sits on a
-wipe-out border where the map of the full staircase is not smooth, and its structural zero
-multipliers are round-off small rather than set to 0). A wagon that hits its
+wipe-out border where the map of the full staircase is not smooth; its own extrema, replaced
+inside the orbit, are reset directions counted there). A wagon that hits its
 wall along the orbit, or an extremum wiped out and pushed again, has its perturbation reset
 (``δw := δq``, the paper's ``V_out``), so its direction is mapped to zero: the monodromy matrix
 has the multiplier ``μ = 0`` (exponent ``−∞``). This does **not** make Newton singular — the
@@ -283,8 +283,8 @@ def shoot(
 
 def orbit_shooter(system: Any, coords: StateCoordinates, k: int, engine_options: dict | None):
     """``state, record -> _Shot`` in ``coords``: :func:`shoot`, or for a continuous Preisach
-    staircase the closed-loop map of :mod:`analysis.dynamics.staircase_orbits` (no structural
-    rank bound: its reset directions are round-off small, not set to 0)."""
+    staircase the closed-loop map of :mod:`analysis.dynamics.staircase_orbits` (its own extrema
+    are the reset directions)."""
     if coords.kind != "staircase":
         return lambda state, record=False: shoot(
             system, state, k, record=record, engine_options=engine_options
@@ -292,7 +292,7 @@ def orbit_shooter(system: Any, coords: StateCoordinates, k: int, engine_options:
 
     def run(state: OscillatorState, record: bool = False) -> _Shot:
         got = closed_loop_shot(system, state, k, coords.prefix, engine_options)
-        return _Shot(got.states, got.jacobian, coords.labels, coords.dimension, got.events)
+        return _Shot(got.states, got.jacobian, coords.labels, got.rank, got.events)
 
     return run
 

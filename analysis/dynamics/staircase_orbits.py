@@ -26,6 +26,15 @@ the end; the frozen rows the identity; the row of an own extremum ``R_i`` the ta
 its reversal time (``dR_i = δq(t_i) + v(t_i)·dt_i`` with ``v(t_i) = 0``), from a second pass of
 the tangent flow stopped at the reversal times.
 
+Reset directions: each own extremum is replaced inside the orbit (wiped out at the reversal that
+pushes its successor, a copy of ``δq`` there). At one of the orbit's two extreme reversals every
+own extremum is wiped (they all lie in the orbit's range: the maximum wipes the pairs above the
+lowest own entry, the minimum then wipes that one too), so ``D P̃`` factors through ``(q, v)``
+and the frozen prefix at that instant: its own-extrema directions are structural zero
+multipliers, set to exactly 0 (label ``reset``, exponent −∞) instead of their round-off
+remainder (1e-18 .. 1e-10: a zero pair splits like a Jordan block). Two multipliers are left,
+those of ``(q, v)``.
+
 Lyapunov exponents: ``lyapunov_spectrum`` in the full staircase keeps every extremum that a
 perturbation turning back inside the loop leaves behind (new neutral directions), and finds
 exponents near 0 next to such an orbit; the counterpart of ``P̃``'s Floquet exponents is
@@ -71,11 +80,13 @@ class StaircaseChangedError(ValueError):
 @dataclass
 class StaircaseShot:
     """One closed-loop integration of ``k`` periods: the states after each period (the last one
-    rebuilt as ``F, own extrema, q'``), ``D P̃``, the events."""
+    rebuilt as ``F, own extrema, q'``), ``D P̃``, the events, and the structural rank bound of
+    ``D P̃`` (its dimension minus the reset directions, module docstring)."""
 
     states: list[OscillatorState]
     jacobian: np.ndarray
     events: np.ndarray
+    rank: int
 
 
 def _run(system: Any, state: OscillatorState, k: int, engine_options: dict | None):
@@ -163,4 +174,5 @@ def closed_loop_shot(
         for row, i in enumerate(idx):
             eng.advance(np.array([times[i]]))
             jac[2 + prefix + row] = eng.deviations()[0]
-    return StaircaseShot([*states[:-1], closed], jac, events)
+    # the own extrema are reset directions (module docstring): rank (q, v) plus the frozen prefix
+    return StaircaseShot([*states[:-1], closed], jac, events, 2 + prefix)
