@@ -83,7 +83,9 @@ class ContinuationEvent:
     """A bifurcation on the branch: ``kind`` in :data:`KINDS`, the located ``parameter`` and
     the bracket it was located in; ``point`` the orbit there (smooth events) or the last orbit
     of the old sequence (grazing); ``multipliers`` there; ``index`` the number of branch points
-    before it (``Continuation.points[index]`` is the first point after it)."""
+    before it: ``Continuation.points[index]`` is the first point after a smooth event; after a
+    grazing it is ``point`` (the old sequence's last orbit, within the bracket) when the
+    bisection moved past the previous branch point, else the first point of the new piece."""
 
     kind: str
     parameter: float
