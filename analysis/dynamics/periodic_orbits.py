@@ -72,6 +72,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import warnings
+
 import numpy as np
 
 from analysis.dynamics.bifurcation import orbit_period
@@ -438,9 +440,21 @@ def _orbit(
     states = (start, *shot.states[:-1])
     points = np.array([_point(coords, s) for s in states])
     frozen = frozen_coordinates(shot.jacobian)
-    mu, vec, tags = floquet_multipliers(
-        shot.jacobian, frozen, coords.dimension - shot.rank, coords.labels
-    )
+    n_reset = coords.dimension - shot.rank
+    mu, vec, tags = floquet_multipliers(shot.jacobian, frozen, n_reset, coords.labels)
+    if tags.count("reset") < n_reset:
+        # the structure the engine promised (a map that factors through fewer coordinates)
+        # does not hold for this Jacobian: the orbit touches a border where P^k is not smooth
+        # and the engine took one side's derivative (measured: a from_density Preisach orbit,
+        # whose compiled and generic Jacobians are the two one-sided derivatives)
+        warnings.warn(
+            f"the period-{k} orbit at q = {start.q:.6g}, v = {start.v:.6g} has "
+            f"{n_reset - tags.count('reset')} structural reset direction(s) with |μ| above "
+            "round-off: its stroboscopic map is not smooth there and the multipliers are one "
+            "side's linearization",
+            RuntimeWarning,
+            stacklevel=3,
+        )
     with np.errstate(divide="ignore"):
         exps = np.log(np.abs(mu)) / (k * system.period)
     stable = all(abs(m) < 1.0 for m, t in zip(mu, tags, strict=True) if not t.startswith("frozen"))

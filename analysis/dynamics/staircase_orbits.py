@@ -21,7 +21,12 @@ state_from_extrema`). On the wipe-out side ``P̃ = P^k``; on the others ``P̃`` 
 entries that differs from the new one by the distance to the border (an Everett mass of that
 order), so ``P̃`` and ``P^k`` have the same fixed points, and ``P̃`` is smooth across the border
 (the reversal points and the motion depend smoothly on the state: the branch slope changes at
-a wipe-out, but at ``v = 0``). Its Jacobian: rows ``q, v`` from the engine's tangent flow at
+a wipe-out, but at ``v = 0``). This argument is not a proof, and it fails at some orbits: at the
+period-1 orbit of a ``from_density`` model (64-cell table, C = 1, tested) the one-sided finite
+differences of ``P̃`` differ by 0.04, and the compiled and generic engines each return one of
+them (round-off decides the side). Such a one-sided Jacobian loses the structural rank below
+and :func:`~analysis.dynamics.periodic_orbits.refine_periodic_orbit` warns; the other side's
+Jacobian keeps it and cannot be told apart here. Its Jacobian: rows ``q, v`` from the engine's tangent flow at
 the end; the frozen rows the identity; the row of an own extremum ``R_i`` the tangent ``δq`` at
 its reversal time (``dR_i = δq(t_i) + v(t_i)·dt_i`` with ``v(t_i) = 0``), from a second pass of
 the tangent flow stopped at the reversal times.

@@ -5,6 +5,7 @@ against central finite differences, the compiled engine against the generic one.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -111,17 +112,69 @@ def _bump_mass(n: int = 1200) -> float:
 _BUMP_MASS = _bump_mass()
 
 
-def test_from_density_orbit_found_and_refined_generic():
+@pytest.fixture(scope="module")
+def from_density_orbits():
+    # a from_density model (C¹ Everett table, 64 cells) at C = 1: a stable period-1 orbit,
+    # refined with the compiled engine and again with the generic one
     model = ContinuousPreisachModel.from_density(_bump, -3.0, 3.0, resolution=64)
     system = ForcedOscillator(model, 1.0)
-    orbit = find_periodic_orbit(system, transient=200, max_period=4)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        orbit = find_periodic_orbit(system, transient=200, max_period=4)
+        generic = refine_periodic_orbit(
+            system, orbit.start, orbit.period, engine_options={"method": "generic"}
+        )
+    return system, orbit, generic, caught
+
+
+def test_from_density_orbit_found_and_refined_generic(from_density_orbits):
+    _, orbit, generic, _ = from_density_orbits
     assert orbit.stable
     assert orbit.residual <= orbit.tolerance * max(1.0, float(np.max(np.abs(orbit.points))))
-    generic = refine_periodic_orbit(
-        system, orbit.start, orbit.period, engine_options={"method": "generic"}
-    )
     assert generic.frozen == orbit.frozen
     assert np.max(np.abs(generic.points - orbit.points)) < 1e-8
+
+
+def test_from_density_orbit_sits_on_a_kink_of_the_closed_loop_map(from_density_orbits):
+    # measured defect of the smoothness argument (staircase_orbits docstring): at this orbit
+    # the closed-loop map P̃ has a kink. Independent truth: one-sided finite differences of
+    # P̃ (compiled engine) in the q and M4 columns; the error of a one-sided quotient at h is
+    # bounded by twice its change from h to h/10 (truncation O(h)) plus the round-off of the
+    # h/10 quotient (the engine integrates to ~1e-12). Each engine's Jacobian column is one
+    # of the two one-sided derivatives (which one is decided by round-off at the border);
+    # the engine whose Jacobian lost the structural reset direction warns
+    system, orbit, generic, caught = from_density_orbits
+    coords = StateCoordinates(system, orbit.start)
+    prefix = len(orbit.frozen)
+    x = coords.vector(orbit.start)
+
+    def p_tilde(xx):
+        state = coords.state(xx, orbit.start)
+        return coords.vector(closed_loop_shot(system, state, 1, prefix).states[-1])
+
+    p0 = p_tilde(x)
+    h = 1e-6
+    m4 = orbit.tangent_space.index("M4")
+    for col in (0, m4):
+        sides, errors = [], []
+        for sign in (1.0, -1.0):
+            e = np.zeros(x.size)
+            e[col] = sign * h
+            d_h = sign * (p_tilde(x + e) - p0) / h
+            d_h10 = sign * (p_tilde(x + e / 10) - p0) / (h / 10)
+            sides.append(d_h10)
+            errors.append(2 * np.max(np.abs(d_h - d_h10)) + 2e-12 / (h / 10))
+        jump = float(np.max(np.abs(sides[0] - sides[1])))
+        print(f"column {col}: one-sided derivatives differ by {jump:.3g}, errors {errors}")
+        assert jump > 10 * sum(errors)  # a kink, not finite-difference noise
+        for o in (orbit, generic):
+            got = [float(np.max(np.abs(o.monodromy[:, col] - s))) for s in sides]
+            assert min(got) <= max(errors)
+    warned = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+    own = len(orbit.tangent_space) - 2 - len(orbit.frozen)  # the orbit's own extrema
+    lost = [o for o in (orbit, generic) if o.multiplier_labels.count("reset") < own]
+    assert len(warned) == len(lost)  # a Jacobian of full rank is reported, never zeroed
+    assert all("not smooth" in m for m in warned)
 
 
 def test_gaussian_multipliers_against_the_direct_convergence_rate(gaussian_orbit):
