@@ -37,13 +37,17 @@ holding is located by bisection in the parameter (natural corrector, from the la
 old sequence) to ``locate_tolerance`` and reported as ``grazing`` (a corrector failure at the
 bracket's end is verified from the converged orbit at its other end, a step of at most
 ``locate_tolerance``: a failure of Newton's first iterate rather than of the orbit is passed).
-The continuation then goes on from the first point of the new sequence, re-detecting the
-period with
-:func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit` when no orbit of the old period
-follows. After a fold the failing step's grazing is sought ahead along the branch (the sign of
-the tangent's λ component). A branch that comes round to an event already found (a grazing, or
-a fold of an isola: the same kind, period, dimension and parameter to ``10·locate_tolerance``)
-stops there, ``stop_reason`` saying so.
+The continuation then goes on from the first point of the new sequence. When no orbit in the
+old coordinates follows, the next piece is found past the event along the branch (after a fold
+the failing step's grazing is sought ahead, the sign of the tangent's λ component): first by
+Newton for the old period from the last orbit (it finds unstable pieces too; accepted when it
+continues the last orbit's ``(q, v)`` within :data:`CONTINUITY`), then — only for a stable
+orbit heading toward ``stop`` — by re-detecting the orbit (and period) the motion settles on
+with :func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit`. Past a fold or from an
+unstable orbit a transient would find another attractor, a jump to another branch: the
+continuation stops instead, ``stop_reason`` saying why. A branch that comes round to an event
+already found (a grazing, or a fold of a closed loop: the same kind, period, dimension and
+parameter to ``10·locate_tolerance``) stops there, ``stop_reason`` saying so.
 
 Frozen memory (a wagon strictly inside its play along the whole orbit; see
 :mod:`analysis.dynamics.periodic_orbits`) is held at its value along the branch: the corrector
@@ -118,6 +122,11 @@ METHODS = ("auto", "natural", "pseudo-arclength")
 KINDS = ("fold", "period-doubling", "torus", "grazing")
 #: most accepted branch points of one call
 MAX_POINTS = 100_000
+#: largest relative jump in ``(q, v)`` by which a piece re-found by Newton past a grazing may
+#: continue the last orbit: a branch is continuous through a border collision and moves by
+#: ``|dx/dλ|·Δλ`` with ``Δλ <= 1000`` bracket widths (``<= 1e-5`` at the default
+#: ``locate_tolerance``), within 1e-3 for slopes up to 100; another orbit lies O(1) away
+CONTINUITY = 1e-3
 
 
 @dataclass(frozen=True)
@@ -306,11 +315,22 @@ def continue_orbit(
                     points.append(last)
             resumed, redetected = new, new is None
             if resumed is None:
+                # a transient finds attractors only: it may stand in for the branch where the
+                # branch heads toward stop from a stable orbit; past a fold, or from an
+                # unstable orbit, only Newton can follow it (else it would jump)
+                settle = ahead == direction and last.max_abs_multiplier < 1.0
                 resumed = _redetect(
-                    prob, event, direction, stop, step, transient, max_period, tolerance
+                    prob, event, ahead, settle, stop, step, transient, max_period, tolerance
                 )
                 if resumed is None:
-                    reason = "no periodic orbit after the grazing"
+                    reason = (
+                        "no periodic orbit after the grazing"
+                        if settle
+                        else "no orbit continues the branch past the grazing (Newton from the "
+                        "last orbit failed; it runs "
+                        + ("against stop after a fold" if ahead != direction else "unstable")
+                        + ", where a transient would find another attractor)"
+                    )
                     break
                 prob = resumed[0]
                 resumed = resumed[1]
@@ -323,7 +343,7 @@ def continue_orbit(
             # re-detected orbit (another problem) starts toward stop
             if arclength:
                 try:
-                    tangent = prob.tangent(resumed, None if redetected else tangent, direction)
+                    tangent = prob.tangent(resumed, None if redetected else tangent, ahead)
                 except StaircaseChangedError:
                     reason = _no_tangent(parameter, resumed)
                     break
@@ -338,7 +358,7 @@ def continue_orbit(
         again = any(_same_event(e, f, locate_tolerance) for f in found for e in events)
         events.extend(replace(e, index=len(points)) for e in found)
         points.append(new)
-        if again:  # an isola: the branch came round to a fold (or other event) already found
+        if again:  # a closed loop: the branch came round to a fold (or other event) already found
             reason = "the branch returned to an event already found (a closed loop)"
             break
         tangent = new_tangent
@@ -397,23 +417,56 @@ def _secant(points: list[BranchPoint]) -> np.ndarray:
     return (b.point - a.point) / dl
 
 
-def _redetect(prob, event, direction, stop, step, transient, max_period, tolerance):
-    """After a grazing with no orbit of the old period: the orbit the motion settles on past
-    the event, from the last orbit's state, tried at ``10·bracket``, then ``step``, ``2·step``,
-    ``4·step``, ... beyond the event (not beyond ``stop``; at most 8 tries)."""
+def _redetect(prob, event, side, settle, stop, step, transient, max_period, tolerance):
+    """After a grazing with no orbit in the old coordinates: the branch's next piece past the
+    event on ``side`` (the sign of the branch's λ direction there).
+
+    First Newton for the old period from the last orbit's state
+    (:func:`~analysis.dynamics.periodic_orbits.refine_periodic_orbit`, which finds unstable
+    orbits as well) at 10, 100 and 1000 bracket widths past the event, accepted when one of its
+    section points continues the last orbit's ``(q, v)`` within
+    :data:`CONTINUITY` ``·max(1, |x|_∞)`` (a branch is continuous through a border collision).
+    Then, only if ``settle`` (a stable orbit heading toward ``stop``), the orbit the motion
+    settles on (:func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit`: an attractor,
+    maybe of another period, as in the period-adding cascade) at ``10·bracket``, ``step``,
+    ``2·step``, ... beyond the event (not beyond ``stop``; at most 8 tries)."""
     if event is None:
         return None
-    edge = event.bracket[1] if direction > 0 else event.bracket[0]
-    offsets = [10.0 * (event.bracket[1] - event.bracket[0])] + [step * 2**i for i in range(7)]
+    edge = event.bracket[1] if side > 0 else event.bracket[0]
+    width = event.bracket[1] - event.bracket[0]
+    last = event.point
+    scale = CONTINUITY * max(1.0, float(np.max(np.abs(last.point))))
+    for offset in (10.0 * width, 100.0 * width, 1000.0 * width):
+        lam = edge + side * offset
+        if settle and _beyond(lam, stop, side):
+            break
+        system = prob.system(lam)
+        try:
+            orbit = refine_periodic_orbit(
+                system,
+                last.state,
+                last.period,
+                tolerance=tolerance,
+                max_iterations=prob.iters,
+                engine_options=prob.eo,
+            )
+        except FAILURES:
+            continue
+        gap = np.min(np.max(np.abs(orbit.points[:, :2] - last.point[:2]), axis=1))
+        if gap <= scale:
+            return _resume(prob, system, orbit, lam)
+    if not settle:
+        return None
+    offsets = [10.0 * width] + [step * 2**i for i in range(7)]
     for offset in offsets:
-        lam = edge + direction * offset
-        if direction * (lam - stop) > 0.0:
+        lam = edge + side * offset
+        if _beyond(lam, stop, side):
             lam = stop
         system = prob.system(lam)
         try:
             orbit = find_periodic_orbit(
                 system,
-                event.point.state,
+                last.state,
                 transient=transient,
                 max_period=max_period,
                 tolerance=tolerance,
@@ -423,10 +476,20 @@ def _redetect(prob, event, direction, stop, step, transient, max_period, toleran
             if lam == stop:
                 return None
             continue
-        coords = _orbit_coordinates(system, orbit, prob.eo)
-        new = BranchProblem(prob.factory, coords, orbit.period, prob.tol, prob.iters, prob.eo)
-        return new, new.point(coords.vector(orbit.start), lam, orbit.start)
+        return _resume(prob, system, orbit, lam)
     return None
+
+
+def _beyond(lam: float, stop: float, side: float) -> bool:
+    """``lam`` lies beyond ``stop`` seen along ``side``."""
+    return side * (lam - stop) > 0.0
+
+
+def _resume(prob, system, orbit, lam):
+    """The new piece's problem and first point from an orbit found at ``lam``."""
+    coords = _orbit_coordinates(system, orbit, prob.eo)
+    new = BranchProblem(prob.factory, coords, orbit.period, prob.tol, prob.iters, prob.eo)
+    return new, new.point(coords.vector(orbit.start), lam, orbit.start)
 
 
 def period_doubled_orbit(

@@ -140,12 +140,14 @@ def test_d_lambda_is_one_sided_next_to_a_grazing(downward):
 
 
 @pytest.mark.slow
-def test_period3_border_orbit_downward_closes_its_loop_without_crashing():
+def test_period3_border_orbit_downward_follows_the_unstable_piece_through_its_grazing():
     # Gaussian period-3 border orbit at C = 2 continued toward C = 1 (~20 s): a fold at
-    # C ≈ 1.7454 turns the branch back up, where the (unstable) orbit grows onto frozen
-    # extrema (grazings located ahead along the branch, not toward stop), and the branch
-    # comes round to the same fold again: an honest stop, no exception. Each grazing is checked
-    # by the engine's motion as above (past the bracket the prefix is wiped at once)
+    # C ≈ 1.7454 turns the branch back up, where the (unstable) orbit grows onto a frozen
+    # extremum (a grazing, located ahead along the branch). Past it the branch goes on with the
+    # shorter staircase — still unstable, continuous in (q, v) — instead of jumping to the
+    # stable orbit a transient would find there (the former behaviour); it then closes a loop
+    # between two folds of that staircase and stops there, no exception. Each grazing is
+    # checked by the engine's motion as above (past the bracket the prefix is wiped at once)
     system = _system(2.0)
     orbit = find_periodic_orbit(system, transient=200, max_period=8)
     assert orbit.period == 3
@@ -154,10 +156,27 @@ def test_period3_border_orbit_downward_closes_its_loop_without_crashing():
     folds = [e for e in branch.events if e.kind == "fold"]
     grazings = [e for e in branch.events if e.kind == "grazing"]
     assert len(folds) >= 2 and grazings
-    assert abs(folds[-1].parameter - folds[0].parameter) <= 10 * LOCATE
+    # the last fold is one found before, on the same staircase (a closed loop, not a jump)
+    assert any(
+        abs(f.parameter - folds[-1].parameter) <= 10 * LOCATE
+        and f.point.point.size == folds[-1].point.point.size
+        for f in folds[:-1]
+    )
     for e in grazings:
         last = e.point
         n = _n_frozen(last)
         prefix = np.asarray(last.state.operator_state.extrema)[:n]
         beyond = e.bracket[1] + LOCATE if last.parameter < e.bracket[1] else e.bracket[0] - LOCATE
         assert _wiped_within(last.state, prefix, beyond, 3) > 0
+        # continuity through the border collision: the next piece's first point lies within
+        # twice the old piece's slope (secant of its last two points) times the λ gap
+        i = next(j for j, p in enumerate(branch.points) if p is last)
+        prev, nxt = branch.points[i - 1], branch.points[i + 1]
+        assert nxt.point.size < last.point.size  # the grown orbit wiped a frozen extremum
+        slope = np.max(np.abs(last.point[:2] - prev.point[:2])) / abs(
+            last.parameter - prev.parameter
+        )
+        gap = np.max(np.abs(nxt.point[:2] - last.point[:2]))
+        assert gap <= 2.0 * slope * abs(nxt.parameter - last.parameter) + 1e-9
+        if last.max_abs_multiplier > 1.0:  # an unstable piece goes on unstable
+            assert nxt.max_abs_multiplier > 1.0
