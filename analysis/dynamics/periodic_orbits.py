@@ -69,10 +69,9 @@ records), the Newton residuals, and :meth:`PeriodicOrbit.to_dict` for JSON.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
-
-import warnings
 
 import numpy as np
 

@@ -26,10 +26,12 @@ period-1 orbit of a ``from_density`` model (64-cell table, C = 1, tested) the on
 differences of ``P̃`` differ by 0.04, and the compiled and generic engines each return one of
 them (round-off decides the side). Such a one-sided Jacobian loses the structural rank below
 and :func:`~analysis.dynamics.periodic_orbits.refine_periodic_orbit` warns; the other side's
-Jacobian keeps it and cannot be told apart here. Its Jacobian: rows ``q, v`` from the engine's tangent flow at
-the end; the frozen rows the identity; the row of an own extremum ``R_i`` the tangent ``δq`` at
-its reversal time (``dR_i = δq(t_i) + v(t_i)·dt_i`` with ``v(t_i) = 0``), from a second pass of
-the tangent flow stopped at the reversal times.
+Jacobian keeps it and cannot be told apart here.
+
+Its Jacobian: rows ``q, v`` from the engine's tangent flow at the end; the frozen rows the
+identity; the row of an own extremum ``R_i`` the tangent ``δq`` at its reversal time
+(``dR_i = δq(t_i) + v(t_i)·dt_i`` with ``v(t_i) = 0``), from a second pass of the tangent flow
+stopped at the reversal times.
 
 Reset directions: each own extremum is replaced inside the orbit (wiped out at the reversal that
 pushes its successor, a copy of ``δq`` there). At one of the orbit's two extreme reversals every
