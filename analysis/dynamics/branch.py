@@ -315,7 +315,8 @@ def locate_grazing(
     prob: BranchProblem, a: BranchPoint, trial: float, tol: float
 ) -> tuple[ContinuationEvent | None, BranchPoint]:
     """Bisection on the parameter between ``a`` (old sequence) and ``trial`` (not) for the end
-    of ``a``'s event sequence; ``(None, a)`` if the sequence holds at ``trial``.
+    of ``a``'s event sequence; ``(None, orbit at trial)`` if the sequence holds at ``trial``
+    (``(None, a)`` when ``a`` reaches it in one step).
 
     A failure at ``mid`` may be Newton's, not the orbit's: the corrector starts from the last
     orbit of the old sequence, and its first iterate's motion can overshoot a border (wipe a
@@ -336,8 +337,13 @@ def locate_grazing(
                 lo, last = mid, m
             else:
                 failed.append(mid)
-        if len(failed) == 1:  # trial itself failed from a converged orbit (above)
-            break
+        if len(failed) == 1:  # every midpoint held: trial failed from a, verify it from last
+            if last is a:
+                break
+            m = natural_point(prob, last, failed[-1])
+            if m is None or not same_sequence(a.sequence, m.sequence):
+                break
+            return None, m  # the sequence holds at trial: no grazing up to there
         m = natural_point(prob, last, failed[-1])
         if m is None or not same_sequence(a.sequence, m.sequence):
             break

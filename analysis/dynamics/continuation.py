@@ -393,10 +393,13 @@ def _orbit_coordinates(system: Any, orbit: PeriodicOrbit, engine_options: dict |
 
 def _same_event(a: ContinuationEvent, b: ContinuationEvent | None, tol: float) -> bool:
     """The same kind, period and coordinates (a staircase of another length is another
-    family), at the same parameter to ten bracket widths (at least ``10·tol``: a fold's
-    bracket in λ can be far narrower than its location error)."""
+    family), both located (brackets within ``10·tol``), at the same parameter to ten bracket
+    widths (at least ``10·tol``: a fold's bracket in λ can be far narrower than its location
+    error)."""
     if b is None or a.kind != b.kind or a.period != b.period:
         return False
+    if max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0]) > 10.0 * tol:
+        return False  # not located (its corrector failed): it cannot close a loop
     if a.point is not None and b.point is not None and a.point.point.size != b.point.point.size:
         return False
     width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0], tol)
