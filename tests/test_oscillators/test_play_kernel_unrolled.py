@@ -5,7 +5,10 @@ conditions ``test_dop853.py`` checks) with the kernel's right-hand side. The ker
 out the zero coefficients (``_rk8_qv`` also carries (q, v) in scalars, ``_rk8`` reuses the δq
 sums for δw and keeps δφ); adding ``0·K`` changes no bit of a finite sum, so they must agree
 exactly, for every shape kind, both walls, any step length and with tangent columns — and whole
-runs with and without tangent columns must give the same trajectory bits.
+runs with and without tangent columns must give the same trajectory bits. Bit identity holds
+because neither the play kernels nor ``_table_step`` allow fused multiply-add (numba emits no
+``contract`` flag without ``fastmath``); compiling the play kernels with ``fastmath`` would
+change bits and must replace these assertions by a bound.
 """
 
 from __future__ import annotations
