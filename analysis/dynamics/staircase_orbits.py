@@ -21,12 +21,19 @@ state_from_extrema`). On the wipe-out side ``P̃ = P^k``; on the others ``P̃`` 
 entries that differs from the new one by the distance to the border (an Everett mass of that
 order), so ``P̃`` and ``P^k`` have the same fixed points, and ``P̃`` is smooth across the border
 (the reversal points and the motion depend smoothly on the state: the branch slope changes at
-a wipe-out, but at ``v = 0``). This argument is not a proof, and it fails at some orbits: at the
-period-1 orbit of a ``from_density`` model (64-cell table, C = 1, tested) the one-sided finite
-differences of ``P̃`` differ by 0.04, and the compiled and generic engines each return one of
-them (round-off decides the side). Such a one-sided Jacobian loses the structural rank below
-and :func:`~analysis.dynamics.periodic_orbits.refine_periodic_orbit` warns; the other side's
-Jacobian keeps it and cannot be told apart here.
+a wipe-out, but at ``v = 0``). This holds for one border per orbit period; it fails where the
+orbit's own maximum *and* minimum both sit on their borders and the density couples them. At
+the period-1 orbit of a ``from_density`` model (C = 1, tested) the one-sided finite differences
+of ``P̃`` differ by 0.0167 in the ``q`` column, the same at 32, 64, 128 and 256 table cells (so
+not the table's error), and the engines return one side each (round-off decides). The reading:
+a maximum just above the remembered one wipes that pair, and the output after the next minimum
+depends on the new maximum through ``2∫ μ(R_max, β) dβ`` over the frozen minimum .. ``R_min``;
+just below, the minimum wipes the pair ``(R_max, m)`` and the output returns to the branch of
+the remembered maximum, independent of ``R_max``: a first-order difference. A one-sided
+Jacobian that loses the structural rank below makes
+:func:`~analysis.dynamics.periodic_orbits.refine_periodic_orbit` warn; the other side's
+Jacobian keeps it and cannot be told apart here. Newton converges either way (both sides share
+the fixed point), and so does the continuation; the multipliers are one side's.
 
 Its Jacobian: rows ``q, v`` from the engine's tangent flow at the end; the frozen rows the
 identity; the row of an own extremum ``R_i`` the tangent ``δq`` at its reversal time
