@@ -79,6 +79,12 @@ def register(subparsers: Any) -> None:
         default=1e-8,
         help="width in the parameter to which events are located",
     )
+    g.add_argument(
+        "--symmetric",
+        action="store_true",
+        help="the model is odd (x -> -x with a half-period shift maps orbits to orbits): stop "
+        "where the branch reaches the symmetric partner of an event found before",
+    )
     add_orbit_options(g)
     add_output_options(p, writes="continuation.json, the --json record")
     p.set_defaults(func=run)
@@ -127,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
         locate_tolerance=args.locate_tolerance,
         transient=args.transient,
         max_period=args.max_period,
+        symmetric=args.symmetric,
     )
     record: dict[str, Any] = model_record(args)
     record.update(

@@ -185,6 +185,7 @@ def continue_orbit(
     transient: int = 200,
     max_period: int = 64,
     engine_options: dict | None = None,
+    symmetric: bool = False,
 ) -> Continuation:
     """Continue ``orbit`` (a periodic orbit of the system at ``parameter = start``) to ``stop``.
 
@@ -218,6 +219,12 @@ def continue_orbit(
         Width in the parameter to which events are located (bisection / secant).
     transient, max_period:
         For re-detecting the orbit (period) after a grazing, from the last state.
+    symmetric:
+        The system is invariant under ``x → −x`` with a half-period shift (an odd operator —
+        plays, symmetric relays, symmetric Preisach densities — under ``cos`` forcing): every
+        orbit has a partner, ``−x(t + T/2)``. A branch that reaches an event of the partner of
+        an event found before (the same kind, parameter and multipliers) has closed its loop
+        up to the symmetry and stops there, ``stop_reason`` saying so.
     """
     start = finite_scalar(start, "start")
     stop = finite_scalar(stop, "stop")
@@ -338,6 +345,9 @@ def continue_orbit(
             if any(_same_event(e, event, locate_tolerance) for e in events[:-1]):
                 reason = "the branch returned to a grazing already found (a closed loop)"
                 break
+            if symmetric and any(_mirror(prob, e, event, locate_tolerance) for e in events[:-1]):
+                reason = _MIRRORED
+                break
             points.append(resumed)
             # the new piece continues the old one's orientation (after a fold: backwards); a
             # re-detected orbit (another problem) starts toward stop
@@ -356,10 +366,16 @@ def continue_orbit(
             break
         found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
         again = any(_same_event(e, f, locate_tolerance) for f in found for e in events)
+        mirrored = symmetric and any(
+            _mirror(prob, e, f, locate_tolerance) for f in found for e in events
+        )
         events.extend(replace(e, index=len(points)) for e in found)
         points.append(new)
         if again:  # a closed loop: the branch came round to a fold (or other event) already found
             reason = "the branch returned to an event already found (a closed loop)"
+            break
+        if mirrored:
+            reason = _MIRRORED
             break
         tangent = new_tangent
         ds = min(step, ds * 1.5)
@@ -395,15 +411,57 @@ def _same_event(a: ContinuationEvent, b: ContinuationEvent | None, tol: float) -
     """The same kind, period and coordinates (a staircase of another length is another
     family), both located (brackets within ``10·tol``), at the same parameter to ten bracket
     widths (at least ``10·tol``: a fold's bracket in λ can be far narrower than its location
-    error)."""
+    error) and at the same orbit (``(q, v)`` within :data:`CONTINUITY`)."""
     if b is None or a.kind != b.kind or a.period != b.period:
         return False
     if max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0]) > 10.0 * tol:
         return False  # not located (its corrector failed): it cannot close a loop
-    if a.point is not None and b.point is not None and a.point.point.size != b.point.point.size:
-        return False
+    if a.point is not None and b.point is not None:
+        x, y = a.point.point, b.point.point
+        if x.size != y.size:
+            return False
+        # the same orbit: a branch followed continuously keeps its section point, so a
+        # genuine return meets it again (two events at one λ on two sheets are not a loop)
+        if np.max(np.abs(x[:2] - y[:2])) > CONTINUITY * max(1.0, float(np.max(np.abs(x)))):
+            return False
     width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0], tol)
     return abs(a.parameter - b.parameter) <= 10.0 * width
+
+
+_MIRRORED = (
+    "the branch reached the symmetric partner of an event already found (a closed loop up to "
+    "x -> -x with a half-period shift)"
+)
+
+
+def _mirror(prob: BranchProblem, a: ContinuationEvent, b: ContinuationEvent, tol: float) -> bool:
+    """``b`` is the event of ``a``'s symmetric partner: the same kind, period, both located at
+    the same parameter (as in :func:`_same_event`) with the same multipliers (to 1e-6), and
+    ``b``'s orbit point is ``−x(t + T/2)`` of ``a``'s orbit, for one of its ``k`` half-period
+    points (all coordinates, to :data:`CONTINUITY`)."""
+    if a.point is None or b.point is None or a.kind != b.kind or a.period != b.period:
+        return False
+    if a.point.point.size != b.point.point.size:
+        return False
+    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0])
+    if width > 10.0 * tol or abs(a.parameter - b.parameter) > 10.0 * max(width, tol):
+        return False
+    mu_a, mu_b = np.sort(np.abs(a.multipliers)), np.sort(np.abs(b.multipliers))
+    if mu_a.size != mu_b.size or np.max(np.abs(mu_a - mu_b), initial=0.0) > 1e-6:
+        return False
+    system = prob.system(a.point.parameter)
+    eng = system.engine(a.point.state, **(prob.eo or {}))
+    x = b.point.point
+    scale = CONTINUITY * max(1.0, float(np.max(np.abs(x))))
+    for j in range(a.period):
+        eng.advance(np.array([(j + 0.5) * system.period]))
+        try:
+            image = -StateCoordinates(system, eng.state(), prob.eo).vector(eng.state())
+        except ValueError:  # another number of memory coordinates there
+            continue
+        if image.size == x.size and np.max(np.abs(image - x)) <= scale:
+            return True
+    return False
 
 
 def _secant(points: list[BranchPoint]) -> np.ndarray:

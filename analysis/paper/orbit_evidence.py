@@ -73,7 +73,9 @@ def _window(system: ForcedOscillator, c0: float, lo: float, hi: float) -> dict[s
         return {"coupling": c0, "orbit": None, "why": str(exc)}
     rec: dict[str, Any] = {"coupling": c0, "orbit": _orbit_record(orbit)}
     for key, stop in (("up", hi), ("down", lo)):
-        branch = continue_orbit(system, orbit, c0, stop, step=0.005, max_points=150)
+        # the erf play is odd: every orbit has a partner −x(t + T/2), whose branch a fold can
+        # lead onto (the window's lower fold at C = 3.7575 does)
+        branch = continue_orbit(system, orbit, c0, stop, step=0.005, max_points=150, symmetric=True)
         rec[key] = stable_range(branch)
     return rec
 

@@ -103,6 +103,42 @@ def test_fold_of_the_erf_play_window_checked_by_newton():
         assert np.max(np.abs(o.points[0] - fold.point.point)) > 1e-2
 
 
+def test_erf_window_lower_fold_leads_onto_the_symmetric_partner():
+    # the erf play is odd, so (q, v, w)(t) -> −(q, v, w)(t + T/2) maps orbits to orbits. The
+    # window's orbit continued down from C = 3.85 passes a grazing, a fold near C = 3.7575 and
+    # a second grazing at the same C: there the branch carries the partner of the first
+    # grazing's orbit (a distinct orbit with the same multipliers). With symmetric=True the
+    # continuation stops there; without it the two are not taken for the same event.
+    system = ForcedOscillator(build_operator("erf-play"), 3.85)
+    orbit = find_periodic_orbit(system)
+    branch = continue_orbit(system, orbit, 3.85, 3.74, step=0.005, max_points=60, symmetric=True)
+    assert branch.stop_reason.startswith("the branch reached the symmetric partner")
+    kinds = [e.kind for e in branch.events]
+    assert kinds == ["grazing", "fold", "grazing"], kinds
+    first, _, second = branch.events
+    assert abs(first.parameter - second.parameter) <= 1e-7
+    # independent construction of the partner: the trajectory from the first orbit (dense
+    # output, not the section map) at half periods, negated, against the second orbit's
+    # section points refined by Newton at the same C
+    c = first.parameter
+    sys_c = ForcedOscillator(build_operator("erf-play"), c)
+    a = refine_periodic_orbit(sys_c, first.point.state, 5)
+    b = refine_periodic_orbit(sys_c, second.point.state, 5)
+    assert np.min(np.max(np.abs(a.points[:, :2] - b.points[0, :2]), axis=1)) > 0.1  # distinct
+    t = sys_c.period
+    traj = sys_c.trajectory(
+        5 * t, a.start.q, a.start.v, a.start.operator_state, sample_dt=t / 2, phi0=a.start.phi
+    )
+    at = [int(np.argmin(np.abs(traj.t - (j + 0.5) * t))) for j in range(5)]
+    assert np.allclose(traj.t[at], (np.arange(5) + 0.5) * t, rtol=0, atol=1e-9)
+    half = -np.column_stack([traj.q[at], traj.v[at]])  # t = T/2, 3T/2, ..., 9T/2
+    gap = max(np.min(np.max(np.abs(half - p), axis=1)) for p in b.points[:, :2])
+    assert gap < 1e-8  # both orbits converged to 1e-10; the dense output to ~1e-11
+    assert np.allclose(np.sort(np.abs(a.multipliers)), np.sort(np.abs(b.multipliers)), atol=1e-8)
+    plain = continue_orbit(system, orbit, 3.85, 3.74, step=0.005, max_points=45)
+    assert "closed loop" not in plain.stop_reason  # two sheets' events are not one event
+
+
 @pytest.mark.slow
 def test_period_doubling_and_branch_switching_on_the_erf_play():
     # on the erf play's period-5 branch continued through its folds (C = 3.85 -> 3.95) the
