@@ -394,7 +394,8 @@ def continue_orbit(
 def _no_tangent(parameter: str, bp: BranchPoint) -> str:
     return (
         f"the orbit's staircase changes on both sides of {parameter} = {bp.parameter:.10g} "
-        "(no tangent: a frozen extremum within 1e-6 on either side)"
+        "(no tangent: a frozen extremum within 1e-6·max(1, |λ|), the λ-difference step, on "
+        "either side)"
     )
 
 
