@@ -15,6 +15,7 @@ Markdown lines that :func:`analysis.paper.runner.write_report` appends to the Di
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -32,17 +33,16 @@ _BETA = -1.0
 CASCADE_CLOSED_FORM = 1.0 / (2.0 * DAMPING_RATIO) + _BETA
 
 
-def stable_range(branch: Continuation) -> dict[str, Any]:
+def stable_range(branch: Continuation, direction: float) -> dict[str, Any]:
     """From the branch's first point, the stretch of stable points (every ``|μ| < 1``) in order:
-    its farthest parameter in the continuation direction, the event that ends it (the last
-    event before the first unstable point, if the branch turns unstable) and every event."""
+    its farthest parameter in the continuation ``direction`` (+1 upward, −1 downward; a branch
+    that turns back past its start at a fold keeps the side it was continued to), the event
+    that ends it (the last event before the first unstable point, if the branch turns
+    unstable) and every event."""
     pts = branch.points
     end = next((i for i, p in enumerate(pts) if p.max_abs_multiplier >= 1.0), len(pts))
     stretch = [p.parameter for p in pts[: max(end, 1)]]
-    sign = 1.0 if len(pts) < 2 or pts[-1].parameter >= pts[0].parameter else -1.0
-    down = any(p.parameter < pts[0].parameter for p in pts[1:])
-    up = any(p.parameter > pts[0].parameter for p in pts[1:])
-    sign = -1.0 if down and not up else (1.0 if up and not down else sign)
+    sign = math.copysign(1.0, direction)
     extreme = max(stretch) if sign > 0 else min(stretch)
     ending = [e for e in branch.events if e.index <= end] if end < len(pts) else []
     event = ending[-1] if ending else None
@@ -76,7 +76,7 @@ def _window(system: ForcedOscillator, c0: float, lo: float, hi: float) -> dict[s
         # the erf play is odd: every orbit has a partner −x(t + T/2), whose branch a fold can
         # lead onto (the window's lower fold at C = 3.7575 does)
         branch = continue_orbit(system, orbit, c0, stop, step=0.005, max_points=150, symmetric=True)
-        rec[key] = stable_range(branch)
+        rec[key] = stable_range(branch, stop - c0)
     return rec
 
 

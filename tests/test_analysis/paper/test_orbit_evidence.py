@@ -70,3 +70,9 @@ def test_orbit_evidence_numbers():
     assert w["up"]["ended_by"] == "fold"
     assert abs(w["up"]["event_max_abs_multiplier"] - 1.0) < 1e-2
     assert 3.88 < w["up"]["event_parameter"] < 3.89
+    # continued downward, the period-3 orbit of C = 1.8 is stable down to its fold, where the
+    # branch turns back past its start: the stable stretch reaches the fold from above, within
+    # one step (0.005) of the located fold, not the start (which a turned branch had reported)
+    down = next(r for r in ev["window_1_7"] if r["coupling"] == 1.8)["down"]
+    assert down["ended_by"] == "fold"
+    assert 0.0 <= down["extreme_stable_parameter"] - down["event_parameter"] <= 0.005
