@@ -342,11 +342,9 @@ def continue_orbit(
                 prob = resumed[0]
                 resumed = resumed[1]
                 d = prob.coords.dimension  # a re-detected staircase may have another length
-            if any(_same_event(e, event, locate_tolerance) for e in events[:-1]):
-                reason = "the branch returned to a grazing already found (a closed loop)"
-                break
-            if symmetric and any(_mirror(prob, e, event, locate_tolerance) for e in events[:-1]):
-                reason = _MIRRORED
+            closed = _loop_closed(prob, [event], events[:-1], locate_tolerance, symmetric)
+            if closed:
+                reason = closed.format("a grazing")
                 break
             points.append(resumed)
             # the new piece continues the old one's orientation (after a fold: backwards); a
@@ -365,17 +363,11 @@ def continue_orbit(
             reason = _no_tangent(parameter, new)
             break
         found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
-        again = any(_same_event(e, f, locate_tolerance) for f in found for e in events)
-        mirrored = symmetric and any(
-            _mirror(prob, e, f, locate_tolerance) for f in found for e in events
-        )
+        closed = _loop_closed(prob, found, events, locate_tolerance, symmetric)
         events.extend(replace(e, index=len(points)) for e in found)
         points.append(new)
-        if again:  # a closed loop: the branch came round to a fold (or other event) already found
-            reason = "the branch returned to an event already found (a closed loop)"
-            break
-        if mirrored:
-            reason = _MIRRORED
+        if closed:  # the branch came round to a fold (or other event) already found
+            reason = closed.format("an event")
             break
         tangent = new_tangent
         ds = min(step, ds * 1.5)
@@ -408,61 +400,81 @@ def _orbit_coordinates(system: Any, orbit: PeriodicOrbit, engine_options: dict |
     return coords
 
 
-def _same_event(a: ContinuationEvent, b: ContinuationEvent | None, tol: float) -> bool:
+def _within(d: np.ndarray, x: np.ndarray) -> bool:
+    """``|d|_∞ <= CONTINUITY·max(1, |x|_∞)``: ``d`` is a continuation-sized move at ``x``."""
+    return float(np.max(np.abs(d))) <= CONTINUITY * max(1.0, float(np.max(np.abs(x))))
+
+
+def _comparable(a: ContinuationEvent, b: ContinuationEvent, tol: float) -> bool:
     """The same kind, period and coordinates (a staircase of another length is another
     family), both located (brackets within ``10·tol``), at the same parameter to ten bracket
     widths (at least ``10·tol``: a fold's bracket in λ can be far narrower than its location
-    error) and at the same orbit (``(q, v)`` within :data:`CONTINUITY`)."""
-    if b is None or a.kind != b.kind or a.period != b.period:
+    error)."""
+    if a.kind != b.kind or a.period != b.period:
         return False
-    if max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0]) > 10.0 * tol:
+    if a.point is not None and b.point is not None and a.point.point.size != b.point.point.size:
+        return False
+    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0])
+    if width > 10.0 * tol:
         return False  # not located (its corrector failed): it cannot close a loop
-    if a.point is not None and b.point is not None:
-        x, y = a.point.point, b.point.point
-        if x.size != y.size:
-            return False
-        # the same orbit: a branch followed continuously keeps its section point, so a
-        # genuine return meets it again (two events at one λ on two sheets are not a loop)
-        if np.max(np.abs(x[:2] - y[:2])) > CONTINUITY * max(1.0, float(np.max(np.abs(x)))):
-            return False
-    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0], tol)
-    return abs(a.parameter - b.parameter) <= 10.0 * width
+    return abs(a.parameter - b.parameter) <= 10.0 * max(width, tol)
 
 
-_MIRRORED = (
-    "the branch reached the symmetric partner of an event already found (a closed loop up to "
-    "x -> -x with a half-period shift)"
-)
+def _same_event(a: ContinuationEvent, b: ContinuationEvent, tol: float) -> bool:
+    """:func:`_comparable` and at the same orbit (``(q, v)`` within :data:`CONTINUITY`): a
+    branch followed continuously keeps its section point, so a genuine return meets it again
+    (two events at one λ on two sheets are not a loop)."""
+    if not _comparable(a, b, tol):
+        return False
+    return (
+        a.point is None
+        or b.point is None
+        or _within(a.point.point[:2] - b.point.point[:2], a.point.point)
+    )
 
 
 def _mirror(prob: BranchProblem, a: ContinuationEvent, b: ContinuationEvent, tol: float) -> bool:
-    """``b`` is the event of ``a``'s symmetric partner: the same kind, period, both located at
-    the same parameter (as in :func:`_same_event`) with the same multipliers (to 1e-6), and
-    ``b``'s orbit point is ``−x(t + T/2)`` of ``a``'s orbit, for one of its ``k`` half-period
-    points (all coordinates, to :data:`CONTINUITY`)."""
-    if a.point is None or b.point is None or a.kind != b.kind or a.period != b.period:
-        return False
-    if a.point.point.size != b.point.point.size:
-        return False
-    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0])
-    if width > 10.0 * tol or abs(a.parameter - b.parameter) > 10.0 * max(width, tol):
+    """``b`` is the event of ``a``'s symmetric partner: :func:`_comparable`, the same
+    multipliers (to 1e-6), and ``b``'s orbit point is ``−x(t + T/2)`` of ``a``'s orbit, for one
+    of its ``k`` half-period points (all coordinates, to :data:`CONTINUITY`)."""
+    if a.point is None or b.point is None or not _comparable(a, b, tol):
         return False
     mu_a, mu_b = np.sort(np.abs(a.multipliers)), np.sort(np.abs(b.multipliers))
-    if mu_a.size != mu_b.size or np.max(np.abs(mu_a - mu_b), initial=0.0) > 1e-6:
+    if np.max(np.abs(mu_a - mu_b), initial=0.0) > 1e-6:
         return False
     system = prob.system(a.point.parameter)
     eng = system.engine(a.point.state, **(prob.eo or {}))
     x = b.point.point
-    scale = CONTINUITY * max(1.0, float(np.max(np.abs(x))))
     for j in range(a.period):
         eng.advance(np.array([(j + 0.5) * system.period]))
         try:
             image = -StateCoordinates(system, eng.state(), prob.eo).vector(eng.state())
         except ValueError:  # another number of memory coordinates there
             continue
-        if image.size == x.size and np.max(np.abs(image - x)) <= scale:
+        if image.size == x.size and _within(image - x, x):
             return True
     return False
+
+
+def _loop_closed(
+    prob: BranchProblem,
+    new: list[ContinuationEvent | None],
+    found: list[ContinuationEvent],
+    tol: float,
+    symmetric: bool,
+) -> str | None:
+    """The stop reason (``{}`` for the event's name) if one of the ``new`` events is one
+    already ``found`` (:func:`_same_event`) or, for a ``symmetric`` system, its partner's
+    (:func:`_mirror`); else ``None``."""
+    new = [b for b in new if b is not None]
+    if any(_same_event(a, b, tol) for b in new for a in found):
+        return "the branch returned to {} already found (a closed loop)"
+    if symmetric and any(_mirror(prob, a, b, tol) for b in new for a in found):
+        return (
+            "the branch reached the symmetric partner of an event already found (a closed loop "
+            "up to x -> -x with a half-period shift)"
+        )
+    return None
 
 
 def _secant(points: list[BranchPoint]) -> np.ndarray:
@@ -497,7 +509,6 @@ def _redetect(prob, event, side, settle, stop, step, transient, max_period, tole
     edge = event.bracket[1] if side > 0 else event.bracket[0]
     width = event.bracket[1] - event.bracket[0]
     last = event.point
-    scale = CONTINUITY * max(1.0, float(np.max(np.abs(last.point))))
     for offset in (10.0 * width, 100.0 * width, 1000.0 * width):
         lam = edge + side * offset
         if settle and _beyond(lam, stop, side):
@@ -514,8 +525,7 @@ def _redetect(prob, event, side, settle, stop, step, transient, max_period, tole
             )
         except FAILURES:
             continue
-        gap = np.min(np.max(np.abs(orbit.points[:, :2] - last.point[:2]), axis=1))
-        if gap <= scale:
+        if any(_within(p - last.point[:2], last.point) for p in orbit.points[:, :2]):
             return _resume(prob, system, orbit, lam)
     if not settle:
         return None

@@ -441,14 +441,15 @@ def _orbit(
     frozen = frozen_coordinates(shot.jacobian)
     n_reset = coords.dimension - shot.rank
     mu, vec, tags = floquet_multipliers(shot.jacobian, frozen, n_reset, coords.labels)
-    if tags.count("reset") < n_reset:
+    lost = n_reset - tags.count("reset")
+    if lost:
         # the structure the engine promised (a map that factors through fewer coordinates)
         # does not hold for this Jacobian: the orbit touches a border where P^k is not smooth
         # and the engine took one side's derivative (measured: a from_density Preisach orbit,
         # whose compiled and generic Jacobians are the two one-sided derivatives)
         warnings.warn(
             f"the period-{k} orbit at q = {start.q:.6g}, v = {start.v:.6g} has "
-            f"{n_reset - tags.count('reset')} structural reset direction(s) with |μ| above "
+            f"{lost} structural reset direction(s) with |μ| above "
             "round-off: its stroboscopic map is not smooth there and the multipliers are one "
             "side's linearization",
             RuntimeWarning,

@@ -53,9 +53,21 @@ def test_gaussian_orbit_structure_and_frozen_extrema(gaussian_orbit):
     assert d["frozen"] == list(orbit.frozen) and len(d["multiplier_labels"]) == len(labels)
 
 
+def _closed_loop_map(system, orbit):
+    """The orbit's coordinates and ``x -> P̃(x)`` over one period (``closed_loop_shot``)."""
+    coords = StateCoordinates(system, orbit.start)
+    n = len(orbit.frozen)
+
+    def p_tilde(x):
+        state = coords.state(x, orbit.start)
+        return coords.vector(closed_loop_shot(system, state, 1, n).states[-1])
+
+    return coords, p_tilde
+
+
 def test_gaussian_closed_loop_jacobian_against_central_differences(gaussian_orbit):
     system, orbit = gaussian_orbit
-    coords = StateCoordinates(system, orbit.start)
+    coords, p_tilde = _closed_loop_map(system, orbit)
     x = coords.vector(orbit.start)
     n = len(orbit.frozen)
     free = [0, 1, *range(2 + n, x.size)]
@@ -69,9 +81,7 @@ def test_gaussian_closed_loop_jacobian_against_central_differences(gaussian_orbi
     for j in free:
         e = np.zeros(x.size)
         e[j] = h
-        plus = closed_loop_shot(system, coords.state(x + e, orbit.start), 1, n).states[-1]
-        minus = closed_loop_shot(system, coords.state(x - e, orbit.start), 1, n).states[-1]
-        cols.append(((coords.vector(plus) - coords.vector(minus)) / (2 * h))[free])
+        cols.append(((p_tilde(x + e) - p_tilde(x - e)) / (2 * h))[free])
     fd = np.column_stack(cols)
     jac = orbit.monodromy[np.ix_(free, free)]
     print("h", h, "|FD − J|", np.max(np.abs(fd - jac)))
@@ -144,14 +154,8 @@ def test_from_density_orbit_sits_on_a_kink_of_the_closed_loop_map(from_density_o
     # of the two one-sided derivatives (which one is decided by round-off at the border);
     # the engine whose Jacobian lost the structural reset direction warns
     system, orbit, generic, caught = from_density_orbits
-    coords = StateCoordinates(system, orbit.start)
-    prefix = len(orbit.frozen)
+    coords, p_tilde = _closed_loop_map(system, orbit)
     x = coords.vector(orbit.start)
-
-    def p_tilde(xx):
-        state = coords.state(xx, orbit.start)
-        return coords.vector(closed_loop_shot(system, state, 1, prefix).states[-1])
-
     p0 = p_tilde(x)
     h = 1e-6
     m4 = orbit.tangent_space.index("M4")
