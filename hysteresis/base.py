@@ -10,29 +10,43 @@ never mutates anything and the memory never grows with the length of the input.
 
 Two families exist, and the forced-oscillator engines (:func:`oscillators.engines.select_engine`)
 treat them differently. The contract is exactly what those engines use; its required methods
-are abstract, so a class that misses one cannot be instantiated (Python's ``TypeError`` names
-the method).
+are abstract, so a class that misses one cannot be instantiated (the ``TypeError`` names the
+method and what it must return).
 
 * **Piecewise-constant** operators (``piecewise_constant = True``: ``Relay``, discrete
   ``PreisachModel``, ``SpinDimerEnsemble``): the output is constant between switching inputs.
   Required: :meth:`~PiecewiseConstantHysteron.relay_table` (the relays and their weights, which
   the event-driven engine integrates), :meth:`~PiecewiseConstantHysteron.relay_outputs` and
   :meth:`~PiecewiseConstantHysteron.state_from_relay_outputs` (the state to and from the
-  relays' outputs), and :meth:`~PiecewiseConstantHysteron.switching` (next switching inputs and
-  jumps, the Python reference engine's view). Between switches the coupled oscillator is linear
-  with a constant force ``C*M``; at a switch it applies the saltation matrix with entry
-  ``C*ΔM/v*`` (paper eq. ``salt_matrix``).
+  relays' outputs). Everything else is derived from these three in the base class:
+  ``initial_state``, ``output``, ``apply`` (the relays driven one by one, O(N) per input) and
+  ``switching`` (next switching inputs and jumps, the Python reference engine's view); the
+  library's operators override them with faster versions. Between switches the coupled
+  oscillator is linear with a constant force ``C*M``; at a switch it applies the saltation
+  matrix with entry ``C*ΔM/v*`` (paper eq. ``salt_matrix``).
 * **Continuous** operators (``PlayOperator``, ``GeneralizedPlay``, continuous ``PreisachModel``,
   ``PrandtlIshlinskii``): for a fixed direction of input motion the output follows a smooth
-  monotone branch between breakpoints. Required: :meth:`~ContinuousHysteron.branch_flow` (the
-  branch as a function of the input, with its memory variables and breakpoint,
-  :class:`hysteresis.flow.BranchFlow`), which the generic continuous engine integrates.
-  Optional: :meth:`~ContinuousHysteron.compiled_play` (a fast path) and
+  monotone branch between breakpoints. Required: ``initial_state``, ``apply`` (the state
+  transition: a branch flow describes a branch but builds no state) and
+  :meth:`~ContinuousHysteron.branch_flow` (the branch as a function of the input, with its
+  memory variables and breakpoint, :class:`hysteresis.flow.BranchFlow`), which the generic
+  continuous engine integrates. Derived from ``branch_flow`` in the base class: ``output``
+  (the branch's value at the state's input), ``branch`` (value, slope, breakpoint) and
+  ``linearize`` (derivatives with respect to the input and the memory variables). Optional:
+  :meth:`~ContinuousHysteron.compiled_play` and :meth:`~ContinuousHysteron.compiled_flow` (fast
+  paths; an operator that offers one also offers the state constructor the compiled engine
+  builds its states with, checked by :func:`oscillators.engines.select_engine`) and
   :attr:`~Hysteron.max_slope` (the largest branch slope, for the oscillator's instability
-  warning). ``branch`` (value, slope,
-  breakpoint) and ``linearize`` (derivatives with respect to the input and the memory
-  variables) are not part of what an operator must provide: they are derived from
-  ``branch_flow`` once, here.
+  warning).
+
+States: every operator state is immutable and exposes the input it last saw as ``.input``
+(:class:`HysteronState`); an operator is generic in its state type, ``Hysteron[StateT]``.
+
+The seam: what an operator hands an engine is checked where it is handed over (once per call
+of the operator's method, never inside compiled loops), and a wrong answer raises one sentence
+naming the method, what it returned and what it must return (:mod:`hysteresis.seam`). A class that
+misses a required method cannot be instantiated; the ``TypeError`` names the method, its
+arguments and what it must return.
 
 Conventions (see docs/architecture.md): a relay with thresholds ``alpha >= beta`` outputs +1
 once the input has reached ``u >= alpha`` and -1 once it has fallen to ``u < beta``.
@@ -42,22 +56,74 @@ once the input has reached ``u >= alpha`` and -1 once it has fallen to ``u < bet
 
 from __future__ import annotations
 
+import inspect
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Generic, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
 
+from hysteresis._validation import as_input_sequence
 from hysteresis.flow import BranchFlow
+from hysteresis.relay_table import RelayTable
+from hysteresis.seam import checked_relay_outputs, checked_relay_table
 
 __all__ = [
     "Hysteron",
+    "HysteronState",
     "PiecewiseConstantHysteron",
     "ContinuousHysteron",
+    "StateT",
     "Switching",
     "Branch",
     "Linearization",
 ]
+
+
+@runtime_checkable
+class HysteronState(Protocol):
+    """What every operator state offers: the input it last saw.
+
+    States are immutable objects of the operator's own type (a frozen dataclass, say) holding
+    the memory; the engines read ``input`` (where the state's input must equal the oscillator's
+    ``q``) and hand the state back to the operator, never looking inside otherwise.
+    """
+
+    @property
+    def input(self) -> float:
+        """The input the operator last saw (a finite real number)."""
+        ...
+
+
+#: The state type of an operator: ``class MyPlay(ContinuousHysteron[MyPlayState])``.
+StateT = TypeVar("StateT", bound=HysteronState)
+
+
+#: What each required method returns, for the error of an operator class that misses one.
+_MUST_RETURN = {
+    "initial_state": "the state reached by rising from negative saturation to u0",
+    "apply": "the pair (outputs, final state)",
+    "branch_flow": "a hysteresis.flow.BranchFlow, the branch followed while the input moves in "
+    "direction",
+    "relay_table": "a hysteresis.relay_table.RelayTable (thresholds and weights)",
+    "relay_outputs": "an array of the relays' outputs +1/-1 in table order",
+    "state_from_relay_outputs": "the state whose relays output outputs at that input",
+}
+
+
+def _missing_methods_message(cls: type) -> str:
+    """One sentence naming the required methods ``cls`` misses and what they must return."""
+    parts = []
+    for name in sorted(cls.__abstractmethods__):
+        params = list(inspect.signature(getattr(cls, name)).parameters)[1:]
+        what = _MUST_RETURN.get(name, "what its docstring in hysteresis.base says")
+        parts.append(f"{name}({', '.join(params)}) returning {what}")
+    needs = "; and ".join(parts)
+    return (
+        f"Can't instantiate abstract class {cls.__name__}: it must implement {needs} (the "
+        "operator contract, hysteresis.base)"
+    )
 
 
 @dataclass(frozen=True)
@@ -123,21 +189,29 @@ class Linearization:
     reset_on_leave: np.ndarray
 
 
-class Hysteron(ABC):
-    """Abstract rate-independent hysteresis operator.
+class Hysteron(ABC, Generic[StateT]):
+    """Abstract rate-independent hysteresis operator with states of type ``StateT``.
 
-    Subclasses are immutable parameter holders. Their state objects are immutable too.
+    Subclasses are immutable parameter holders. Their state objects are immutable too and
+    expose ``.input`` (:class:`HysteronState`).
     """
 
     #: True for operators whose output is constant between switching inputs.
     piecewise_constant: bool = False
 
+    def __new__(cls, *args: Any, **kwargs: Any) -> Any:
+        # Python's own error names the missing methods only; this one also says what they
+        # return (the contract a newcomer implements)
+        if getattr(cls, "__abstractmethods__", None):
+            raise TypeError(_missing_methods_message(cls))
+        return super().__new__(cls)
+
     @abstractmethod
-    def initial_state(self, u0: float) -> Any:
+    def initial_state(self, u0: float) -> StateT:
         """State after rising monotonically from negative saturation to ``u0``."""
 
     @abstractmethod
-    def apply(self, inputs: Any, state: Any = None) -> tuple[np.ndarray, Any]:
+    def apply(self, inputs: Any, state: StateT | None = None) -> tuple[np.ndarray, StateT]:
         """Drive the operator with ``inputs`` (1-D, length >= 1) starting from ``state``.
 
         ``state=None`` means ``initial_state(inputs[0])``. Returns the outputs (same length as
@@ -145,7 +219,7 @@ class Hysteron(ABC):
         """
 
     @abstractmethod
-    def output(self, state: Any) -> float:
+    def output(self, state: StateT) -> float:
         """Output of the operator in ``state``."""
 
     @property
@@ -194,39 +268,113 @@ def _new_instance(cls: type) -> Any:
     return cls.__new__(cls)
 
 
-class PiecewiseConstantHysteron(Hysteron):
-    """Operator whose output is constant between switching inputs (relay-type)."""
+class PiecewiseConstantHysteron(Hysteron[StateT]):
+    """Operator whose output is constant between switching inputs (relay-type).
+
+    A new operator writes the three abstract methods (its relays, and its state to and from
+    their outputs); everything else is derived from them here, once, generic and O(N) per
+    call: a library operator overrides it with a faster version of the same answer.
+    """
 
     piecewise_constant = True
 
     # -- what the oscillator's relay engine needs (oscillators.engines.select_engine) ----------
     @abstractmethod
-    def relay_table(self) -> Any:
+    def relay_table(self) -> RelayTable:
         """The operator as a table of relays (:class:`hysteresis.relay_table.RelayTable`):
         thresholds, weights, ``M = Σ weights·y``. The oscillator's event-driven engine runs on
         it."""
 
     @abstractmethod
-    def relay_outputs(self, state: Any) -> np.ndarray:
+    def relay_outputs(self, state: StateT) -> np.ndarray:
         """Outputs ``y_i = ±1`` of the relays of :meth:`relay_table` in ``state`` (table order)."""
 
     @abstractmethod
-    def state_from_relay_outputs(self, outputs: np.ndarray, input: float) -> Any:
+    def state_from_relay_outputs(self, outputs: np.ndarray, input: float) -> StateT:
         """The operator state whose relays output ``outputs`` at the current ``input``."""
 
+    # -- derived from the three above ---------------------------------------------------------
+    def initial_state(self, u0: float) -> StateT:
+        """Rising from negative saturation to ``u0`` leaves exactly the relays with
+        ``alpha <= u0`` up (:meth:`RelayTable.initial_outputs`)."""
+        return self.state_from_relay_outputs(checked_relay_table(self).initial_outputs(u0), u0)
+
+    def output(self, state: StateT) -> float:
+        """``M = Σ weights·y`` of the relays in ``state`` (correctly rounded sum)."""
+        table = checked_relay_table(self)
+        return float(table.output(checked_relay_outputs(self, table, state)))
+
+    def apply(self, inputs: Any, state: StateT | None = None) -> tuple[np.ndarray, StateT]:
+        """Drive every relay of the table through ``inputs`` (the relay rule per relay: an
+        input ``u >= alpha`` sets +1, ``u < beta`` sets -1, any other keeps the last value),
+        O(N) per input; the final state through :meth:`state_from_relay_outputs`."""
+        u = as_input_sequence(inputs)
+        if state is None:
+            state = self.initial_state(float(u[0]))
+        table = checked_relay_table(self)
+        outputs, y = _drive_relays(table, checked_relay_outputs(self, table, state), u)
+        return outputs, self.state_from_relay_outputs(y, float(u[-1]))
+
     # -- what the Python reference engine needs (RelayEngine(method="generic")) ---------------
-    @abstractmethod
-    def switching(self, state: Any) -> Switching:
-        """Next switching inputs below/above the state's current input and the jumps there."""
+    def switching(self, state: StateT) -> Switching:
+        """Next switching inputs below/above the state's current input and the jumps there,
+        read from the relays: ``upper`` is the least ``alpha`` of the down relays, ``lower``
+        the greatest ``beta`` of the up relays, each jump ``2·Σ w`` over the relays at that
+        threshold (relays of zero weight never change the output and are left out)."""
+        table = checked_relay_table(self)
+        y = checked_relay_outputs(self, table, state)
+        live = table.weights > 0.0
+        down, up = live & (y < 0.0), live & (y > 0.0)
+        upper, jump_up, lower, jump_down = math.inf, 0.0, -math.inf, 0.0
+        if np.any(down):
+            upper = float(np.min(table.alpha[down]))
+            jump_up = 2.0 * math.fsum(table.weights[down & (table.alpha == upper)])
+        if np.any(up):
+            lower = float(np.max(table.beta[up]))
+            jump_down = -2.0 * math.fsum(table.weights[up & (table.beta == lower)])
+        return Switching(lower=lower, upper=upper, jump_down=jump_down, jump_up=jump_up)
 
 
-class ContinuousHysteron(Hysteron):
-    """Operator with continuous, piecewise-smooth branches (play-type)."""
+#: inputs × relays driven at once by the derived ``apply`` (bounds its work arrays)
+_DRIVE_BLOCK = 1 << 20
+
+
+def _drive_relays(table: RelayTable, y: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Outputs ``M`` at every input and the final relay outputs, from outputs ``y`` before
+    ``u[0]``: per relay, the last input that set it (``u >= alpha``: +1, ``u < beta``: -1) by a
+    running maximum of the setting indices (a forward fill), in blocks of inputs."""
+    alpha, beta, weights = table.alpha, table.beta, table.weights
+    outputs = np.empty(u.size)
+    rows = max(1, _DRIVE_BLOCK // table.n_relays)
+    y = np.array(y, dtype=np.float64)
+    for i0 in range(0, u.size, rows):
+        block = u[i0 : i0 + rows, None]
+        marks = np.where(block >= alpha, 1.0, np.where(block < beta, -1.0, 0.0))
+        setter = np.where(marks != 0.0, np.arange(block.shape[0])[:, None], -1)
+        np.maximum.accumulate(setter, axis=0, out=setter)
+        ys = np.where(setter >= 0, np.take_along_axis(marks, np.maximum(setter, 0), 0), y)
+        outputs[i0 : i0 + block.shape[0]] = ys @ weights
+        y = ys[-1].copy()
+    return outputs, y
+
+
+class ContinuousHysteron(Hysteron[StateT]):
+    """Operator with continuous, piecewise-smooth branches (play-type).
+
+    A new operator writes ``initial_state``, ``apply`` and :meth:`branch_flow`; ``output``,
+    :meth:`branch` and :meth:`linearize` are derived from the branch flow here.
+    """
 
     piecewise_constant = False
 
+    def output(self, state: StateT) -> float:
+        """The output in ``state``: the rising branch's value at the state's input (the output
+        is continuous, so either branch gives it)."""
+        flow = self.branch_flow(state, 1)
+        return float(flow.output(flow.input))
+
     # -- derived from branch_flow (one implementation for every continuous operator) ---------
-    def branch(self, state: Any, direction: int) -> Branch:
+    def branch(self, state: StateT, direction: int) -> Branch:
         """Branch followed when the input moves in ``direction`` (+1 rising, -1 falling):
         the output in ``state``, the slope ``dy/du`` of :meth:`branch_flow` at the state's input
         (:meth:`BranchFlow.slope <hysteresis.flow.BranchFlow.slope>`) and its breakpoint."""
@@ -237,7 +385,7 @@ class ContinuousHysteron(Hysteron):
             breakpoint=float(flow.breakpoint),
         )
 
-    def linearize(self, state: Any, direction: int) -> Linearization:
+    def linearize(self, state: StateT, direction: int) -> Linearization:
         """Derivatives on the branch followed in ``direction`` (+1 rising, -1 falling), read
         from :meth:`branch_flow`: its partials at the state's input, its memory variables
         (frozen or slaved) and the ones whose perturbation is reset at the breakpoint."""
@@ -255,7 +403,7 @@ class ContinuousHysteron(Hysteron):
 
     # -- what the oscillator's continuous engines need (oscillators.engines.select_engine) -----
     @abstractmethod
-    def branch_flow(self, state: Any, direction: int) -> BranchFlow:
+    def branch_flow(self, state: StateT, direction: int) -> BranchFlow:
         """The branch followed in ``direction`` (+1 rising, -1 falling) as a function of the
         input, with its memory variables, their linearization and the next breakpoint
         (:class:`hysteresis.flow.BranchFlow`). The generic continuous engine of the oscillator

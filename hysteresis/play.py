@@ -131,7 +131,7 @@ def _touches_wall(position: float, input: float, half_width: float, direction: i
     return gap >= half_width - _wall_tolerance(position, input, half_width)
 
 
-class _PlayBase(ContinuousHysteron):
+class _PlayBase(ContinuousHysteron[PlayState]):
     """Shared machinery of the play and the generalized play (memory: wagon position)."""
 
     def __init__(self, width: float) -> None:

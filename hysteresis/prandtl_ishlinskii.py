@@ -95,7 +95,7 @@ def _wagon_label(index: int) -> str:
     return f"w{index}"
 
 
-class PrandtlIshlinskii(ContinuousHysteron):
+class PrandtlIshlinskii(ContinuousHysteron[PIState]):
     """``y = Σ_i weights_i · play_{widths_i}(u)``.
 
     Parameters

@@ -38,7 +38,7 @@ class RelayState:
     input: float
 
 
-class Relay(PiecewiseConstantHysteron):
+class Relay(PiecewiseConstantHysteron[RelayState]):
     """Elementary hysteresis loop with upper threshold ``alpha`` and lower threshold ``beta``.
 
     Parameters

@@ -43,7 +43,7 @@ from hysteresis._validation import (
     scalar_in_open_interval,
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
-from hysteresis.preisach import PreisachModel
+from hysteresis.preisach import PreisachModel, PreisachState
 
 __all__ = ["SpinDimerEnsemble", "DimerThresholds", "MAX_SPINS"]
 
@@ -150,7 +150,7 @@ def _spin_coupling_alias(spin_coupling: float | None, coupling: float | None) ->
     return spin_coupling
 
 
-class SpinDimerEnsemble(PiecewiseConstantHysteron):
+class SpinDimerEnsemble(PiecewiseConstantHysteron[PreisachState]):
     """Independent spin dimers: the magnetization ``M[q]`` as a hysteresis operator.
 
     Parameters

@@ -135,7 +135,7 @@ def _gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
     return readonly_array(0.5 * (x + 1.0)), readonly_array(0.5 * w)  # on [0, 1]
 
 
-class PreisachModel(Hysteron):
+class PreisachModel(Hysteron[PreisachState]):
     """Preisach model. Build it with :meth:`from_relays` (discrete), :meth:`from_density` or
     :meth:`from_everett` (continuous); these return a :class:`DiscretePreisachModel`
     (piecewise constant) or a :class:`ContinuousPreisachModel`.

@@ -71,7 +71,7 @@ def _gaussian_model(width: float, spread: float, width_spread: float, nodes: int
     return ContinuousPreisachModel.gaussian(width, spread, width_spread, nodes)
 
 
-class ContinuousPreisachModel(PreisachModel, ContinuousHysteron, kind="continuous"):
+class ContinuousPreisachModel(PreisachModel, ContinuousHysteron[PreisachState], kind="continuous"):
     """Preisach model with a density on the triangle ``lower <= β <= α <= upper``.
 
     Memory variables for :meth:`linearize`: the staircase extrema (see there). Branch slopes are

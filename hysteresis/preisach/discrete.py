@@ -30,7 +30,9 @@ __all__ = ["DiscretePreisachModel"]
 _WEIGHT_TOLERANCE = 1e-9
 
 
-class DiscretePreisachModel(PreisachModel, PiecewiseConstantHysteron, kind="discrete"):
+class DiscretePreisachModel(
+    PreisachModel, PiecewiseConstantHysteron[PreisachState], kind="discrete"
+):
     """Finite set of relays with weights: ``M = Σ_i w_i y_{α_i β_i}[u]``.
 
     Attributes: ``alpha``, ``beta``, ``weights`` (read-only, in the given order), ``n_relays``,

@@ -1,7 +1,8 @@
 """The engines integrating the forced oscillator (the seam: :mod:`oscillators.engines.base`).
 
-* :mod:`~oscillators.engines.base` — :class:`Engine` (clock, time checks, divergence test,
-  tangent bookkeeping), :class:`DivergenceError`, :class:`GrazingError`,
+* :mod:`~oscillators.engines.base` — :class:`Engine` (the motion: clock, time checks,
+  divergence test), :class:`TangentFlow` (the tangent bookkeeping an engine adds),
+  :class:`DivergenceError`, :class:`GrazingError`,
   :class:`SlidingError`, :class:`SwitchBudgetError` (the switch budget),
   :class:`StepBudgetError` (the step budget);
 * :mod:`~oscillators.engines.relay` — :class:`RelayEngine`: :class:`RelayKernelEngine`
@@ -25,6 +26,7 @@ from oscillators.engines.base import (
     SlidingError,
     StepBudgetError,
     SwitchBudgetError,
+    TangentFlow,
     split_times,
     wrap_phase,
 )
@@ -48,6 +50,7 @@ __all__ = [
     "SlidingError",
     "StepBudgetError",
     "SwitchBudgetError",
+    "TangentFlow",
     "select_engine",
     "split_times",
     "wrap_phase",

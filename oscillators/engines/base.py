@@ -39,9 +39,9 @@ Motion
     ``output_integral()`` is ``∫ M dt`` since the start where the engine can give it exactly
     (relay engines; time averages such as the paper's ``M_T`` come from it in the same pass as
     the tangent flow), else ``NotImplementedError``.
-Tangent flow
+Tangent flow (:class:`TangentFlow`, a second base an engine adds)
     ``start_tangent(include_phase)`` switches the variational flow on with the identity as
-    deviation vectors. :attr:`Engine.tangent_space` names the rows of the deviation matrix:
+    deviation vectors. :attr:`TangentFlow.tangent_space` names the rows of the deviation matrix:
     ``("q", "v"[, "phi"], *memory)`` where ``memory`` are the operator's memory directions
     (none for relays; ``"w"`` for the play; the wagon positions of a Prandtl–Ishlinskii
     operator; the remembered extrema of a continuous Preisach staircase, a number that changes
@@ -55,9 +55,12 @@ Tangent flow
 
 What every engine shares lives here, in :class:`Engine`: the clock (period index and time in the
 period, the forcing phase, ``elapsed``), the checks of requested times (one tolerance,
-:data:`TIME_TOLERANCE`), the divergence test (one bound, the system's
-``ForcedOscillator.divergence_bound``) and the tangent bookkeeping (the flow is on, the shape of
-``set_deviations``). This module never imports an engine; :mod:`oscillators.engines.select`
+:data:`TIME_TOLERANCE`) and the divergence test (one bound, the system's
+``ForcedOscillator.divergence_bound``); the tangent bookkeeping (the flow is on, the shape of
+``set_deviations``) lives in :class:`TangentFlow`. An engine writes five motion members
+(``_clock``, ``_advance``, ``state``, ``records``, ``n_events``) and, with a tangent flow, five
+more (``_start_tangent``, ``tangent_space``, ``_deviations``, ``_set_deviations``,
+``_rank_bound``). This module never imports an engine; :mod:`oscillators.engines.select`
 does.
 
 Engines raise :class:`DivergenceError` when the state becomes non-finite or runs away, and
@@ -94,6 +97,8 @@ __all__ = [
     "SwitchBudgetError",
     "SWITCH_DTYPE",
     "TIME_TOLERANCE",
+    "TangentFlow",
+    "TangentFlowOff",
     "split_times",
     "step_budget",
     "wrap_phase",
@@ -226,18 +231,20 @@ def split_times(times: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarra
 
 
 class Engine(ABC):
-    """Integrator of one trajectory of a :class:`~oscillators.system.ForcedOscillator`.
+    """Integrator of one trajectory of a :class:`~oscillators.system.ForcedOscillator`: the
+    motion contract.
 
-    Subclasses implement the motion and tangent-flow primitives below; see the module docstring
-    for the contract. Engines are created by :meth:`ForcedOscillator.engine`.
+    A subclass implements five members: :meth:`_clock`, :meth:`_advance`, :meth:`state`,
+    :meth:`records` and :attr:`n_events` (see the module docstring for the contract);
+    :attr:`sample_columns` and :meth:`output_integral` have defaults. An engine with a tangent
+    flow also derives from :class:`TangentFlow` (every engine of this package does). Engines are
+    created by :meth:`ForcedOscillator.engine`.
 
     The clock: an engine reports its time as (period index ``n``, time ``tau`` since the start
     of that period) through :meth:`_clock`; ``elapsed = n·T + tau`` and the forcing phase
     ``φ0 + Ω·tau`` (mod 2π) follow here, so the phase never loses digits on long runs. The
-    tangent flow: :meth:`start_tangent` records the number of tracked vectors (0: off);
-    :meth:`deviations`, :meth:`set_deviations` and :meth:`rank_bound` check that it is on and
-    the shape of what is set, then call the engine's ``_deviations``, ``_set_deviations``,
-    ``_rank_bound``.
+    public :meth:`advance` checks the requested times and ``out`` here, always, then calls the
+    engine's :meth:`_advance`.
     """
 
     #: Short name reported in results (``"relay kernel"``, ``"play kernel"``, ...).
@@ -249,7 +256,7 @@ class Engine(ABC):
         self._omega = float(system.frequency)
         self._period = 2.0 * math.pi / self._omega
         self._phi0 = float(state.phi)
-        self._ntan = 0  # tracked tangent vectors; 0: the tangent flow is off
+        self._one_time = np.zeros(1)  # the single target of a float advance (see advance)
 
     @classmethod
     def check_system(cls, system: Any) -> None:
@@ -337,7 +344,19 @@ class Engine(ABC):
         """Move through the sorted elapsed ``times``; fill ``out`` rows (see module docstring).
 
         The checks of ``times`` and ``out`` live here, once; engines implement :meth:`_advance`.
+        A float ``times`` (one target: the Lyapunov stepper's call once per QR interval) is
+        checked as a scalar and handed over in a reused one-element array, without the array
+        validation.
         """
+        if type(times) is float:
+            if not math.isfinite(times):
+                raise ValueError("times must be finite")
+            self._check_first_time(times)
+            self._check_out(out, 1)
+            one = self._one_time
+            one[0] = times
+            self._advance(one, out, bool(record))
+            return
         times = self._target_times(times)
         if times.size == 0:
             return
@@ -347,7 +366,8 @@ class Engine(ABC):
     @abstractmethod
     def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
         """:meth:`advance` after the checks: ``times`` a non-empty sorted 1-D array not before
-        now, ``out`` ``None`` or of ``(times.size, >= 3)``."""
+        now (read it during the call, do not keep it: the base reuses a one-element array),
+        ``out`` ``None`` or of ``(times.size, >= 3)``."""
 
     @abstractmethod
     def state(self) -> OscillatorState:
@@ -377,7 +397,25 @@ class Engine(ABC):
     def n_events(self) -> int:
         """Number of events (switches, wall hits, reversals) since the start."""
 
-    # -- tangent flow --------------------------------------------------------------------------
+
+class TangentFlow(ABC):
+    """The tangent (variational) flow an engine adds to its motion: ``class MyEngine(TangentFlow,
+    Engine)``.
+
+    What Lyapunov spectra (:mod:`analysis.dynamics.lyapunov`), flow-map Jacobians
+    (:meth:`ForcedOscillator.jacobian <oscillators.system.ForcedOscillator.jacobian>`) and
+    periodic orbits need; an engine that only moves (:class:`Engine`) does without it. The
+    checks live here, once: :meth:`start_tangent` records the number of tracked vectors
+    (``_ntan``, 0 while the flow is off, which the engine's integration reads);
+    :meth:`deviations`, :meth:`set_deviations` and :meth:`rank_bound` check that the flow is on
+    and the shape of what is set, then call the engine's ``_deviations``, ``_set_deviations``,
+    ``_rank_bound``. An engine implements those three, ``_start_tangent`` and
+    :attr:`tangent_space` (module docstring: the meaning of each).
+    """
+
+    #: tracked tangent vectors; 0: the tangent flow is off (set by :meth:`start_tangent`)
+    _ntan: int = 0
+
     def start_tangent(self, include_phase: bool = False) -> None:
         """Switch the variational flow on; deviations := identity on :attr:`tangent_space`."""
         self._ntan = self._start_tangent(bool(include_phase))
@@ -411,13 +449,16 @@ class Engine(ABC):
         return self._rank_bound()
 
     @abstractmethod
-    def _deviations(self) -> np.ndarray: ...
+    def _deviations(self) -> np.ndarray:
+        """The deviation matrix (rows :attr:`tangent_space`, ``_ntan`` columns), a copy."""
 
     @abstractmethod
-    def _set_deviations(self, y: np.ndarray) -> None: ...
+    def _set_deviations(self, y: np.ndarray) -> None:
+        """Replace the deviations by ``y`` (shape checked)."""
 
     @abstractmethod
-    def _rank_bound(self) -> int: ...
+    def _rank_bound(self) -> int:
+        """The structural rank bound since the last start/set (module docstring)."""
 
     def _need_tangent(self) -> None:
         if self._ntan == 0:
@@ -425,5 +466,5 @@ class Engine(ABC):
 
 
 class TangentFlowOff(RuntimeError, ValueError):
-    """Deviations asked for before :meth:`Engine.start_tangent` (a ``RuntimeError`` and, as
+    """Deviations asked for before :meth:`TangentFlow.start_tangent` (a ``RuntimeError`` and, as
     the relay engine raised before, a ``ValueError``)."""

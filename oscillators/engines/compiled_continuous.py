@@ -59,6 +59,7 @@ from oscillators.engines.base import (
     DivergenceError,
     Engine,
     StepBudgetError,
+    TangentFlow,
     split_times,
     step_budget,
     wrap_phase,
@@ -91,7 +92,7 @@ def _slope_bound(spec: Any) -> float:
     return 0.0
 
 
-class CompiledContinuousEngine(Engine):
+class CompiledContinuousEngine(TangentFlow, Engine):
     """Compiled engine for operators with ``compiled_flow()`` (see the module docstring).
 
     Parameters

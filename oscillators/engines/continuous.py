@@ -59,11 +59,13 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar, positive_scalar
 from hysteresis.base import ContinuousHysteron
+from hysteresis.seam import check_state, checked_apply, checked_branch_flow
 from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
     Engine,
     StepBudgetError,
+    TangentFlow,
     split_times,
     step_budget,
     wrap_phase,
@@ -80,7 +82,7 @@ EVENT_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("kind", "i1")
 _MAX_CALL = 20.0
 
 
-class ContinuousEngine(Engine):
+class ContinuousEngine(TangentFlow, Engine):
     """Engine for any operator with ``branch_flow`` (see the module docstring).
 
     Parameters
@@ -139,18 +141,16 @@ class ContinuousEngine(Engine):
         op_state = state.operator_state
         if op_state is None:
             op_state = op.initial_state(self._q)
-        u = getattr(op_state, "input", None)
-        if u is not None and abs(float(u) - self._q) > 1e-12 * max(1.0, abs(self._q)):
-            raise ValueError(
-                f"state.operator_state.input ({float(u)}) must equal state.q ({self._q})"
-            )
+        u = check_state(op_state, "given as state.operator_state")
+        if abs(u - self._q) > 1e-12 * max(1.0, abs(self._q)):
+            raise ValueError(f"state.operator_state.input ({u}) must equal state.q ({self._q})")
         self._op_state = op_state
         self._n = 0  # elapsed = n·T + tau, tau in [0, T)
         self._tau = 0.0
         self._events: list[tuple[float, float, float, int, float]] = []
         self._n_events = 0
         self._direction = self._initial_direction()
-        self._flow = op.branch_flow(op_state, self._direction)
+        self._flow = checked_branch_flow(op, op_state, self._direction)
         self._has_w = tuple(self._flow.labels) == ("w",)
         self._include_phase = False
         self._dqv = np.zeros((2, 0))
@@ -429,11 +429,11 @@ class ContinuousEngine(Engine):
 
     def _event(self, kind: str) -> None:
         old = self._flow
-        _, self._op_state = self._op.apply(np.array([self._q]), self._op_state)
+        _, self._op_state = checked_apply(self._op, np.array([self._q]), self._op_state)
         if kind == "reversal":
             self._direction = -self._direction
         self._n_events += 1
-        new = self._op.branch_flow(self._op_state, self._direction)
+        new = checked_branch_flow(self._op, self._op_state, self._direction)
         if self._record:
             self._events.append(
                 (
@@ -470,7 +470,7 @@ class ContinuousEngine(Engine):
         self._dm = dm
 
     def state(self) -> OscillatorState:
-        _, op_state = self._op.apply(np.array([self._q]), self._op_state)
+        _, op_state = checked_apply(self._op, np.array([self._q]), self._op_state)
         return OscillatorState(
             q=self._q,
             v=self._v,

@@ -64,7 +64,13 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar
 from oscillators.engines import _play_kernels as _k
-from oscillators.engines.base import STEPS_PER_TIME, Engine, StepBudgetError, step_budget
+from oscillators.engines.base import (
+    STEPS_PER_TIME,
+    Engine,
+    StepBudgetError,
+    TangentFlow,
+    step_budget,
+)
 from oscillators.linear import particular_amplitudes
 from oscillators.parameters import check_closed_form
 from oscillators.results import OscillatorState
@@ -213,7 +219,7 @@ def _events_array(ev: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # the engine
 # --------------------------------------------------------------------------------------------
-class PlayEngine(Engine):
+class PlayEngine(TangentFlow, Engine):
     """Compiled play-limit engine: plain play, ``GeneralizedPlay.erf`` (the paper's limit) and
     a ``GeneralizedPlay`` with a tabulated user shape.
 

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from hysteresis._validation import real_array
+from hysteresis.seam import check_state, checked_apply, checked_relay_outputs, checked_relay_table
 from oscillators.engines import _relay_kernels as kern
 from oscillators.engines import _sliding as slide
 from oscillators.engines.base import (
@@ -53,6 +53,7 @@ from oscillators.engines.base import (
     GrazingError,
     SlidingError,
     SwitchBudgetError,
+    TangentFlow,
     split_times,
 )
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
@@ -91,7 +92,7 @@ def _switch_budget(n_relays: int, omega: float, span: float) -> int:
     return int(min(b, 2.0**62))
 
 
-class RelayEngine(slide.SlidingMixin, Engine):
+class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
     """Event-driven engine for piecewise-constant operators (see the module docstring).
 
     ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or,
@@ -113,8 +114,10 @@ class RelayEngine(slide.SlidingMixin, Engine):
 
     @classmethod
     def check_system(cls, system: Any) -> None:
-        """Refuse (ζ, Ω) within :data:`~oscillators.parameters.RESONANCE_LIMIT` of resonance."""
+        """Refuse (ζ, Ω) within :data:`~oscillators.parameters.RESONANCE_LIMIT` of resonance,
+        and an operator whose ``relay_table()`` is not a relay table."""
         check_closed_form(float(system.damping_ratio), float(system.frequency))
+        checked_relay_table(system.operator)
 
     def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **_: Any):
         if cls is RelayEngine:
@@ -137,7 +140,7 @@ class RelayEngine(slide.SlidingMixin, Engine):
         opstate = state.operator_state
         if opstate is None:
             opstate = op.initial_state(q0)
-        _, opstate = op.apply(np.array([q0]), opstate)
+        _, opstate = checked_apply(op, np.array([q0]), opstate)
         self._opstate0 = opstate
         zeta = float(system.damping_ratio)
         amp_a, amp_b = particular_amplitudes(zeta, self._omega)
@@ -217,8 +220,8 @@ class RelayKernelEngine(RelayEngine):
             raise ValueError("method='generic' is the Python reference path (RelayEngine)")
         op = self._op
         q0, v0 = float(state.q), float(state.v)
-        table = op.relay_table()
-        y0 = table.check_outputs(op.relay_outputs(self._opstate0), q0)
+        table = checked_relay_table(op)
+        y0 = checked_relay_outputs(op, table, self._opstate0)
         self._table = table
         self._active, work = table.positive_part()
         self._work = work
@@ -347,33 +350,19 @@ class RelayKernelEngine(RelayEngine):
     def n_events(self) -> int:
         return int(self._ist[kern.I_NSW])
 
-    def advance(
-        self, times: np.ndarray | float, out: np.ndarray | None = None, record: bool = False
-    ) -> None:
-        if type(times) is float or np.size(times) == 1:
-            # one target (the Lyapunov stepper's case): no array bookkeeping on the way in
-            if type(times) is not float:
-                times = real_array(times, "times")
-                if np.ndim(times) > 1:
-                    raise ValueError("times must be a scalar or a 1-D array")
-                times = float(np.reshape(times, -1)[0])
-            t = times
-            if not math.isfinite(t):
-                raise ValueError("times must be finite")
-            self._check_first_time(t)
+    def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
+        if times.size == 1:
+            # one target (the Lyapunov stepper's case): the clock reading by scalar arithmetic
+            # into the reused target arrays, no array bookkeeping
+            t = float(times[0])
             tgt_n, tgt_tau = self._tn1, self._tt1
             n = math.floor(t / self._period)
             tau = t - n * self._period
             if tau >= self._period:
                 n, tau = n + 1, 0.0
             tgt_n[0], tgt_tau[0] = n, max(tau, 0.0)
-            self._check_out(out, 1)
-            self._run_targets(tgt_n, tgt_tau, out, bool(record))
         else:
-            super().advance(times, out, record)
-
-    def _advance(self, times: np.ndarray, out: np.ndarray | None, record: bool) -> None:
-        tgt_n, tgt_tau = split_times(times, self._period)
+            tgt_n, tgt_tau = split_times(times, self._period)
         self._run_targets(tgt_n, tgt_tau, out, record)
 
     def _run_targets(
@@ -462,7 +451,9 @@ class RelayKernelEngine(RelayEngine):
         if np.any(~zero & (table.alpha <= u) & (y < 0.0)):
             u = float(np.nextafter(q, -np.inf))
         y[zero] = table.initial_outputs(u)[zero]
-        return q, v, self._op.state_from_relay_outputs(y, u)
+        opstate = self._op.state_from_relay_outputs(y, u)
+        check_state(opstate, f"returned by {type(self._op).__name__}.state_from_relay_outputs")
+        return q, v, opstate
 
 
 class RelayReferenceEngine(RelayEngine):

@@ -21,7 +21,11 @@ def select_engine(operator: Any) -> type[Engine]:
     reference path for ``method="generic"``); ``operator.compiled_play()`` not ``None`` ->
     :class:`PlayEngine`; else ``operator.compiled_flow()`` not ``None`` ->
     :class:`CompiledContinuousEngine` (``method="generic"``: the generic engine); any other
-    (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow``.
+    (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow``. A fast path
+    comes with the state constructor its engine needs (``state(position, input)`` for a compiled
+    play, ``state(positions, input)`` for Prandtl–Ishlinskii plays, ``state_from_extrema``
+    for a Preisach model's Everett function): checked here, so that a missing one is refused
+    when the system is built.
     """
     if operator.piecewise_constant:
         return RelayEngine
@@ -31,7 +35,27 @@ def select_engine(operator: Any) -> type[Engine]:
             "neither a PiecewiseConstantHysteron nor a ContinuousHysteron (see hysteresis.base)"
         )
     if operator.compiled_play() is not None:
+        _require(operator, "state", "compiled_play()", "state(position, input)", "the wagon")
         return PlayEngine
-    if operator.compiled_flow() is not None:
+    spec = operator.compiled_flow()
+    if spec is not None:
+        if spec.kind == "preisach":
+            _require(
+                operator, "state_from_extrema", "compiled_flow()", "state_from_extrema(extrema)",
+                "the staircase of remembered extrema",
+            )  # fmt: skip
+        else:
+            _require(operator, "state", "compiled_flow()", "state(positions, input)", "the wagons")
         return CompiledContinuousEngine
     return ContinuousEngine
+
+
+def _require(operator: Any, method: str, fast_path: str, call: str, memory: str) -> None:
+    """The state constructor a compiled engine builds its states with (the contract requires it
+    of an operator whose fast path is not ``None``), or one sentence saying what is missing."""
+    if not callable(getattr(operator, method, None)):
+        raise TypeError(
+            f"operator {type(operator).__name__} has a {fast_path} description but no {call}: "
+            f"an operator offering that fast path must also offer {call} returning the state "
+            f"with {memory} at the given values (the compiled engine builds its states with it)"
+        )

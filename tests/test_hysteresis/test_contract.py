@@ -26,48 +26,70 @@ from hysteresis.base import Branch, Linearization
 from hysteresis.flow import BranchFlow
 from oscillators import ForcedOscillator
 
-PC_REQUIRED = ("relay_table", "relay_outputs", "state_from_relay_outputs", "switching")
-CONTINUOUS_REQUIRED = ("branch_flow",)
+#: what a new operator of each family must write (everything else is derived or optional)
+PC_REQUIRED = ("relay_table", "relay_outputs", "state_from_relay_outputs")
+CONTINUOUS_REQUIRED = ("initial_state", "apply", "branch_flow")
+#: the sentence part naming what each returns
+RETURNS = {
+    "relay_table": "relay_table() returning a hysteresis.relay_table.RelayTable",
+    "relay_outputs": "relay_outputs(state) returning an array of the relays' outputs",
+    "state_from_relay_outputs": "state_from_relay_outputs(outputs, input) returning the state",
+    "initial_state": "initial_state(u0) returning the state reached by rising",
+    "apply": "apply(inputs, state) returning the pair (outputs, final state)",
+    "branch_flow": "branch_flow(state, direction) returning a hysteresis.flow.BranchFlow",
+}
 
 
-class _Common:
-    """The Hysteron part of an operator (state = the current input)."""
-
-    def initial_state(self, u0):
-        return float(u0)
-
-    def apply(self, inputs, state=None):
-        u = np.asarray(inputs, dtype=float)
-        return np.sign(u), float(u[-1])
-
-    def output(self, state):
-        return 1.0
+def _method(name):
+    params = {
+        "relay_table": "self",
+        "relay_outputs": "self, state",
+        "state_from_relay_outputs": "self, outputs, input",
+        "initial_state": "self, u0",
+        "apply": "self, inputs, state=None",
+        "branch_flow": "self, state, direction",
+    }[name]
+    namespace: dict = {}
+    exec(f"def {name}({params}):\n    return None", namespace)
+    return namespace[name]
 
 
 def _subclass(family, required, missing):
     """A subclass of ``family`` implementing every required method but ``missing``."""
-    body = {name: (lambda self, *args: None) for name in required if name != missing}
-    return type(f"Without_{missing}", (_Common, family), body)
+    body = {name: _method(name) for name in required if name != missing}
+    return type(f"Without_{missing}", (family,), body)
 
 
-@pytest.mark.parametrize("missing", PC_REQUIRED)
-def test_piecewise_constant_operator_missing_a_method_cannot_be_constructed(missing):
-    cls = _subclass(PiecewiseConstantHysteron, PC_REQUIRED, missing)
-    with pytest.raises(TypeError, match=missing):
+@pytest.mark.parametrize(
+    ("family", "required", "missing"),
+    [(PiecewiseConstantHysteron, PC_REQUIRED, m) for m in PC_REQUIRED]
+    + [(ContinuousHysteron, CONTINUOUS_REQUIRED, m) for m in CONTINUOUS_REQUIRED],
+)
+def test_operator_missing_a_method_gets_one_sentence_naming_it(family, required, missing):
+    """The error names the class, the method with its arguments and what it must return."""
+    cls = _subclass(family, required, missing)
+    with pytest.raises(TypeError) as info:
         cls()
+    message = str(info.value)
+    assert message == (
+        f"Can't instantiate abstract class Without_{missing}: it must implement "
+        f"{RETURNS[missing]}{message.split(RETURNS[missing])[1]}"
+    )
+    assert message.endswith("(the operator contract, hysteresis.base)")
+    assert message.count(". ") == 0 and "\n" not in message  # one sentence
 
 
-@pytest.mark.parametrize("missing", CONTINUOUS_REQUIRED)
-def test_continuous_operator_missing_a_method_cannot_be_constructed(missing):
-    cls = _subclass(ContinuousHysteron, CONTINUOUS_REQUIRED, missing)
-    with pytest.raises(TypeError, match=missing):
-        cls()
+def test_the_required_methods_are_exactly_the_abstract_ones():
+    assert PiecewiseConstantHysteron.__abstractmethods__ == frozenset(PC_REQUIRED)
+    assert ContinuousHysteron.__abstractmethods__ == frozenset(CONTINUOUS_REQUIRED)
 
 
 def test_complete_operators_construct_and_optional_methods_default():
     _subclass(PiecewiseConstantHysteron, PC_REQUIRED, None)()
     op = _subclass(ContinuousHysteron, CONTINUOUS_REQUIRED, None)()
     assert op.compiled_play() is None
+    assert op.compiled_flow() is None
+    assert op.max_slope is None
 
 
 def _piecewise_constant_operators():
