@@ -67,7 +67,7 @@ import numpy as np
 from hysteresis._validation import as_input_sequence
 from hysteresis.flow import BranchFlow
 from hysteresis.relay_table import RelayTable
-from hysteresis.seam import checked_relay_outputs, checked_relay_table
+from hysteresis.seam import checked_branch_flow, checked_relay_outputs, checked_relay_table
 
 __all__ = [
     "Hysteron",
@@ -370,7 +370,7 @@ class ContinuousHysteron(Hysteron[StateT]):
     def output(self, state: StateT) -> float:
         """The output in ``state``: the rising branch's value at the state's input (the output
         is continuous, so either branch gives it)."""
-        flow = self.branch_flow(state, 1)
+        flow = checked_branch_flow(self, state, 1)
         return float(flow.output(flow.input))
 
     # -- derived from branch_flow (one implementation for every continuous operator) ---------
@@ -419,7 +419,8 @@ class ContinuousHysteron(Hysteron[StateT]):
         An operator whose ``compiled_play()`` is not ``None`` also offers
         ``state(position, input)``, the state with the wagon at ``position`` and the input at
         ``input``: the oscillator's play engine builds the operator states it hands back through
-        it (it does not construct the play's state class itself).
+        it (it does not construct the play's state class itself). Required in code:
+        :func:`oscillators.engines.select_engine` refuses the operator without it.
         """
         return None
 
@@ -428,5 +429,8 @@ class ContinuousHysteron(Hysteron[StateT]):
         (:class:`hysteresis.flow.CompiledFlow`: Prandtl–Ishlinskii plays, or a Preisach
         model's compiled Everett function), else ``None`` (the default: the generic continuous
         engine integrates the operator through :meth:`branch_flow`). A fast path only: the
-        compiled engine follows the same branches, events and memory labels."""
+        compiled engine follows the same branches, events and memory labels. Such an operator
+        also offers the state constructor the engine builds its states with,
+        ``state(positions, input)`` (plays) or ``state_from_extrema(extrema)`` (Preisach),
+        required by :func:`oscillators.engines.select_engine`."""
         return None

@@ -41,6 +41,7 @@ def test_docs_build_with_warnings_as_errors(tmp_path):
         "forc_uncertainty",
         "fit_and_compensate",
         "bifurcation_sweep",
+        "writing_operators",
     ):
         assert (html / "tutorials" / f"{page}.html").is_file(), page
     # the API reference is generated from the code: the registry and the oscillator are there

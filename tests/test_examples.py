@@ -54,6 +54,7 @@ def test_examples_exist() -> None:
         "fig_attractors.py",
         "fig_dky_initial_conditions.py",
         "fig_ensembles.py",
+        "custom_operator.py",
     }
     assert expected <= names, f"missing: {sorted(expected - names)}"
 

@@ -256,11 +256,12 @@ SEAM_ERRORS = [
 ]
 
 
+@pytest.mark.parametrize("v0", [0.3, 0.0])  # at rest the engine first asks for the output
 @pytest.mark.parametrize(("cls", "error", "message"), SEAM_ERRORS, ids=lambda x: str(x)[:30])
-def test_a_wrong_answer_at_the_seam_is_one_sentence(cls, error, message):
+def test_a_wrong_answer_at_the_seam_is_one_sentence(cls, error, message, v0):
     system = ForcedOscillator(cls(), coupling=0.5)
     with pytest.raises(error) as info:
-        system.trajectory(5.0, q0=0.0, v0=0.3)
+        system.trajectory(5.0, q0=0.0, v0=v0)
     if cls is _ApplyReturnsOutputs:  # the input of the first event is in the message
         assert re.fullmatch(message, str(info.value)), str(info.value)
     else:
