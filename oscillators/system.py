@@ -22,7 +22,7 @@ import numpy as np
 
 from hysteresis._progress import progress_bar
 from hysteresis._validation import nonnegative_integer, positive_integer
-from hysteresis.base import Hysteron
+from hysteresis.base import Hysteron, HysteronState
 from oscillators.engines import DivergenceError, Engine, TangentFlow, select_engine, wrap_phase
 from oscillators.engines.base import SWITCH_DTYPE
 from oscillators.parameters import (
@@ -148,7 +148,7 @@ class ForcedOscillator:
         self,
         q0: float = DEFAULT_Q0,
         v0: float = DEFAULT_V0,
-        operator_state: Any = None,
+        operator_state: HysteronState | None = None,
         phi0: float = 0.0,
         t0: float = 0.0,
     ) -> OscillatorState:
@@ -194,7 +194,7 @@ class ForcedOscillator:
         t_end: float,
         q0: float = DEFAULT_Q0,
         v0: float = DEFAULT_V0,
-        operator_state: Any = None,
+        operator_state: HysteronState | None = None,
         sample_dt: float = 0.01,
         phi0: float = 0.0,
         *,
@@ -247,7 +247,7 @@ class ForcedOscillator:
         transient_periods: int = 0,
         q0: float = DEFAULT_Q0,
         v0: float = DEFAULT_V0,
-        operator_state: Any = None,
+        operator_state: HysteronState | None = None,
         *,
         engine_options: dict | None = None,
         progress: bool = False,
