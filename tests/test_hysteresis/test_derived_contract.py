@@ -29,7 +29,7 @@ from hysteresis import (
     SpinDimerEnsemble,
 )
 from hysteresis.base import HysteronState
-from hysteresis.flow import BranchFlow
+from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.play import CompiledPlay
 from oscillators import ForcedOscillator
 from oscillators.engines import ContinuousEngine
@@ -313,12 +313,36 @@ class _CompiledPlayWithoutState(PlainPlay):
         return CompiledPlay(width=1.0, shape="identity")
 
 
-def test_a_fast_path_without_its_state_constructor_is_refused_when_the_system_is_built():
+class _PlaysWithoutState(PlainPlay):
+    def compiled_flow(self):
+        return CompiledFlow("prandtl_ishlinskii", str, half_widths=[0.5], weights=[1.0])
+
+
+class _EverettWithoutStaircase(PlainPlay):
+    def compiled_flow(self):
+        return CompiledFlow("preisach", str, everett=object())
+
+
+@pytest.mark.parametrize(
+    ("cls", "fast_path", "call", "memory"),
+    [
+        (_CompiledPlayWithoutState, "compiled_play()", "state(position, input)", "the wagon"),
+        (_PlaysWithoutState, "compiled_flow()", "state(positions, input)", "the wagons"),
+        (
+            _EverettWithoutStaircase,
+            "compiled_flow()",
+            "state_from_extrema(extrema)",
+            "the staircase of remembered extrema",
+        ),
+    ],
+)
+def test_a_fast_path_without_its_state_constructor_is_refused_when_the_system_is_built(
+    cls, fast_path, call, memory
+):
     with pytest.raises(TypeError) as info:
-        ForcedOscillator(_CompiledPlayWithoutState(), coupling=0.5)
+        ForcedOscillator(cls(), coupling=0.5)
     assert str(info.value) == (
-        "operator _CompiledPlayWithoutState has a compiled_play() description but no "
-        "state(position, input): an operator offering that fast path must also offer "
-        "state(position, input) returning the state with the wagon at the given values (the "
-        "compiled engine builds its states with it)"
+        f"operator {cls.__name__} has a {fast_path} description but no {call}: an operator "
+        f"offering that fast path must also offer {call} returning the state with {memory} at "
+        "the given values (the compiled engine builds its states with it)"
     )
