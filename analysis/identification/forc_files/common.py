@@ -26,6 +26,24 @@ NUM_START = re.compile(rf"^\s*({NUM})")
 CAL_REL_TOL = 0.05
 CAL_ABS_TOL_MT = 5.0  # the measured calibration field drifts by a few mT
 DriftMode = str | bool | None
+#: field units (lower case, spaces removed) to mT, moment units to A·m², as column titles and
+#: header values write them (``[T]``, ``(Am²)``, ``(emu)``, ``0.5 T``)
+FIELD_UNITS = {"t": 1e3, "mt": 1.0, "oe": 0.1, "a/m": 4e-4 * math.pi, "ka/m": 0.4 * math.pi}
+MOMENT_UNITS = {"a·m²": 1.0, "am²": 1.0, "am2": 1.0, "a·m2": 1.0, "emu": 1e-3}
+_UNIT_IN_BRACKETS = re.compile(r"[\[(]([^\])]*)[\])]")
+
+
+def unit_factor(unit: str, table: dict[str, float]) -> float | None:
+    """The factor of ``unit`` (as written: case, spaces and ``^2`` for ``²`` do not matter) in
+    ``table`` (:data:`FIELD_UNITS` or :data:`MOMENT_UNITS`), or ``None``."""
+    key = unit.strip().lower().replace("^2", "²").replace(" ", "")
+    return table.get(key)
+
+
+def bracketed_units(text: str) -> list[str]:
+    """The units written in brackets or parentheses in ``text``, in order
+    (``"Field (µ0H) [T]"`` -> ``["µ0H", "T"]``)."""
+    return _UNIT_IN_BRACKETS.findall(text)
 
 
 def parse_float(token: str, lineno: int, what: str) -> float:

@@ -20,8 +20,6 @@ curve to curve (a FORC measurement steps them one way).
 
 from __future__ import annotations
 
-import math
-import re
 from pathlib import Path
 
 import numpy as np
@@ -29,29 +27,30 @@ import numpy as np
 from analysis.identification.forc_files.common import (
     CAL_ABS_TOL_MT,
     CAL_REL_TOL,
+    FIELD_UNITS,
+    MOMENT_UNITS,
+    NUM_START,
     DriftMode,
     MicroMagData,
+    bracketed_units,
     build_curves,
     check_magnitudes,
     decode,
     drift_mode,
     header_number,
     parse_float,
+    unit_factor,
 )
 
 __all__ = ["read_lakeshore_csv"]
 
-_FIELD_UNITS = {"t": 1e3, "mt": 1.0, "oe": 0.1, "a/m": 4e-4 * math.pi, "ka/m": 0.4 * math.pi}
-_MOMENT_UNITS = {"a·m²": 1.0, "am²": 1.0, "am2": 1.0, "a·m2": 1.0, "a m²": 1.0, "emu": 1e-3}
 
 
 def _column_unit(title: str, table: dict[str, float], lineno: int, what: str) -> float:
-    units = re.findall(r"[\[(]([^\])]*)[\])]", title)
-    for u in reversed(units):
-        key = u.strip().lower().replace("^2", "²").replace(" ", "")
-        for name, fac in table.items():
-            if key == name.replace(" ", ""):
-                return fac
+    for u in reversed(bracketed_units(title)):
+        fac = unit_factor(u, table)
+        if fac is not None:
+            return fac
     raise ValueError(
         f"line {lineno}: cannot tell the unit of the {what} column {title!r} "
         f"(expected one of {', '.join(table)} in brackets)"
@@ -89,6 +88,53 @@ def _check_curve_order(curves: list[list[tuple[float, float, int, bool]]]) -> No
         )
 
 
+def _title_row(cells: list[str]) -> bool:
+    """A column-title row: one cell naming a field and another naming a moment, each with a
+    unit in brackets or parentheses (a header line such as ``Moment X calibration field: 0.5 T``
+    names both in one cell, without brackets, and is no title row)."""
+    fields = {i for i, c in enumerate(cells) if bracketed_units(c) and "field" in c.lower()}
+    moments = {i for i, c in enumerate(cells) if bracketed_units(c) and "moment" in c.lower()}
+    return any(i != j for i in fields for j in moments)
+
+
+def _header_entry(raw: str) -> tuple[str, str] | None:
+    """``key,value`` or ``key: value`` (the 8600 software writes the latter), else ``None``."""
+    line = raw.strip()
+    colon, comma = line.find(":"), line.find(",")
+    if colon > 0 and (comma < 0 or colon < comma):
+        return line[:colon].strip(), line[colon + 1 :].strip()
+    cells = [c.strip().strip('"') for c in line.split(",")]
+    if len(cells) >= 2 and cells[0]:
+        return cells[0].rstrip(":"), cells[1]
+    return None
+
+
+def _header_field(key: str, value: str, lineno: int, column_factor: float) -> float | None:
+    """A header field value in mT: its unit written after the number (``0.3 T``), else in
+    brackets in the key (``Calibration field [T]``), else the field column's unit."""
+    num = header_number(value, lineno, key, False)
+    if num is None:
+        return None
+    rest = value[NUM_START.match(value).end() :].strip()
+    if rest:
+        fac = unit_factor(rest, FIELD_UNITS)
+        if fac is None:
+            raise ValueError(f"line {lineno}: cannot tell the unit of {key} {value!r}")
+        return num * fac
+    if bracketed_units(key):
+        return num * _column_unit(key, FIELD_UNITS, lineno, "calibration")
+    return num * column_factor
+
+
+def _announced_curves(header: dict[str, str], lines: dict[str, int]) -> tuple[int, int] | None:
+    """The header's ``Number of FORCs`` and its line, or ``None``."""
+    for k, v in header.items():
+        if k.lower() in ("number of forcs", "number of curves"):
+            n = header_number(v, lines[k], k, True)
+            return None if n is None else (int(n), lines[k])
+    return None
+
+
 def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) -> MicroMagData:
     """Read a Lake Shore 8600-series FORC CSV export (layout assumed in the module docstring).
 
@@ -101,26 +147,31 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     header_line: dict[str, int] = {}
     title_line = None
     for idx, raw in enumerate(lines):
-        cells = [c.strip().strip('"') for c in raw.split(",")]
-        low = [c.lower() for c in cells]
-        if any("field" in c for c in low) and any("moment" in c for c in low):
+        if raw.lstrip().startswith("#"):
+            continue  # section titles of the 8600 export: "#FORC MEASUREMENT", "##DATA TABLE ..."
+        if _title_row([c.strip().strip('"') for c in raw.split(",")]):
             title_line = idx
             break
-        if len(cells) >= 2 and cells[0]:
-            header[cells[0].rstrip(":")] = cells[1]
-            header_line[cells[0].rstrip(":")] = idx + 1
+        entry = _header_entry(raw)
+        if entry is not None:
+            header[entry[0]] = entry[1]
+            header_line[entry[0]] = idx + 1
     if title_line is None:
         raise ValueError(
-            f"{path}: no column-title row naming a field and a moment column "
+            f"{path}: no column-title row naming a field and a moment column with their units "
             "(Lake Shore 8600 FORC CSV)"
         )
     titles = [c.strip().strip('"') for c in lines[title_line].split(",")]
     ln_t = title_line + 1
-    i_h = next(i for i, c in enumerate(titles) if "field" in c.lower())
-    i_m = next(i for i, c in enumerate(titles) if "moment" in c.lower())
-    f_fac = _column_unit(titles[i_h], _FIELD_UNITS, ln_t, "field")
-    m_fac = _column_unit(titles[i_m], _MOMENT_UNITS, ln_t, "moment")
+    i_h = next(i for i, c in enumerate(titles) if "field" in c.lower() and bracketed_units(c))
+    i_m = next(i for i, c in enumerate(titles) if "moment" in c.lower() and bracketed_units(c))
+    i_status = [i for i, c in enumerate(titles) if "status" in c.lower()]
+    flagged = 0  # rows with a status cell other than GOOD
+    f_fac = _column_unit(titles[i_h], FIELD_UNITS, ln_t, "field")
+    m_fac = _column_unit(titles[i_m], MOMENT_UNITS, ln_t, "moment")
     i_t = next((i for i, c in enumerate(titles) if "time" in c.lower()), None)
+    i_seg = next((i for i, c in enumerate(titles) if c.lower() == "segment"), None)
+    segments: list[str] = []
     pts: list[tuple[float, float, int]] = []
     written: list[tuple[float, float]] = []  # as written, for check_magnitudes
     stamps: list[str] = []
@@ -140,6 +191,9 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
         pts.append((h_w * f_fac, m_w * m_fac, idx + 1))
         if i_t is not None:
             stamps.append(cells[i_t])
+        flagged += any(cells[i].upper() != "GOOD" for i in i_status)
+        if i_seg is not None:
+            segments.append(cells[i_seg])
     if not pts:
         raise ValueError(f"{path}: no data rows after the column titles (line {ln_t})")
     point_lines = [p[2] for p in pts]
@@ -150,14 +204,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     h_cal: float | None = None
     for k, v in header.items():
         if k.lower().startswith("calibration field"):
-            num = header_number(v, header_line[k], k, False)
-            if num is not None:
-                unit = (
-                    _column_unit(k + " " + v, _FIELD_UNITS, header_line[k], "calibration")
-                    if ("[" in k or "(" in k)
-                    else f_fac
-                )
-                h_cal = num * unit
+            h_cal = _header_field(k, v, header_line[k], f_fac)
     # calibration points: near HCal, reached by a jump up (> 2 field steps) and followed by a
     # fall (or the end); curves: split where the field falls
     h = np.array([p[0] for p in pts])
@@ -165,11 +212,21 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     step = float(np.median(rises[rises > 0])) if np.any(rises > 0) else 0.0
     if h_cal is None and h.size > 1 and h[1] < h[0]:
         h_cal = float(h[0])
-    blocks: list[list[tuple[float, float, int]]] = []
-    for i, p in enumerate(pts):
+    tol = max(CAL_REL_TOL * abs(h_cal), CAL_ABS_TOL_MT) if h_cal is not None else 0.0
+    blocks: list[list[tuple[float, float, int, bool]]] = []
+    if segments:
+        # the export numbers its segments: a curve, or a calibration point (one point at HCal)
+        for i, p in enumerate(pts):
+            if not blocks or segments[i] != segments[i - 1]:
+                blocks.append([])
+            blocks[-1].append((*p, False))
+        for b in blocks:
+            if len(b) == 1 and h_cal is not None and abs(b[0][0] - h_cal) <= tol:
+                b[0] = (*b[0][:3], True)
+    for i, p in enumerate([] if segments else pts):
         is_cal = (
             h_cal is not None
-            and abs(p[0] - h_cal) <= max(CAL_REL_TOL * abs(h_cal), CAL_ABS_TOL_MT)
+            and abs(p[0] - h_cal) <= tol
             and (i == 0 or p[0] - h[i - 1] > 2 * step)
             and (i == h.size - 1 or h[i + 1] < p[0])
         )
@@ -188,6 +245,21 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
             "remanence curve or a single sweep; FORCs rise once from every reversal field)"
         )
     notes = []
+    complete = True
+    announced = _announced_curves(header, header_line)
+    if announced is not None and curves.n_curves > announced[0]:
+        raise ValueError(
+            f"line {announced[1]}: the header announces {announced[0]} FORCs but the file holds "
+            f"{curves.n_curves}"
+        )
+    if announced is not None and curves.n_curves < announced[0]:
+        complete = False
+        notes.append(
+            f"{curves.n_curves} of the {announced[0]} FORCs the header announces (the run "
+            "stopped, or an excerpt)"
+        )
+    if flagged:
+        notes.append(f"{flagged} rows with a status other than GOOD (kept as measured)")
     if drift is not None and cal_m is not None:
         notes.append(f"{drift} drift correction from {cal_m.size} calibration points")
     return MicroMagData(
@@ -198,7 +270,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
         field_unit="mT",
         moment_unit="A·m²",
         units_of_measure=None,
-        complete=True,
+        complete=complete,
         notes=tuple(notes),
         calibration_fields=cal_h,
     )
