@@ -51,8 +51,13 @@ from pathlib import Path
 from typing import Any
 
 from analysis.identification.curves import ReversalCurves
-from analysis.identification.forc_files.blocks import is_blocks_row, read_blocks, write_blocks
-from analysis.identification.forc_files.common import DATA_LINE, MicroMagData, decode
+from analysis.identification.forc_files.blocks import (
+    is_blocks_row,
+    read_blocks,
+    skip_titles,
+    write_blocks,
+)
+from analysis.identification.forc_files.common import DATA_LINE, END_MARK, MicroMagData, decode
 from analysis.identification.forc_files.csv_format import read_csv, write_csv
 from analysis.identification.forc_files.lakeshore import read_lakeshore_csv
 from analysis.identification.forc_files.micromag import read_micromag, write_micromag
@@ -130,8 +135,9 @@ def detect_format(path: str | Path) -> str:
         if any(i != j for i in fields for j in moments) and after and DATA_LINE.match(after[0]):
             return "lakeshore"
     content = _content(lines)
-    if content and all(is_blocks_row(line) for line in content[:50]):
-        return "blocks"  # two numbers per row, no header: a data-only file
+    rows = [line for line in _content(lines[skip_titles(lines)[0] :]) if line != END_MARK]
+    if rows and all(is_blocks_row(line) for line in rows[:50]):
+        return "blocks"  # two numbers per row, no header (column titles at most): data only
     if not content or any(DATA_LINE.match(line) for line in content[:2]):
         return "csv"
     raise ValueError(f"{path}: not a FORC file this toolkit recognises; it reads {KNOWN_FORMATS}")

@@ -24,6 +24,8 @@ NUM = r"[+\-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+\-]?\d+)?"
 DATA_LINE = re.compile(rf"^\s*{NUM}\s*,\s*\S")
 NUM_START = re.compile(rf"^\s*({NUM})")
 CAL_REL_TOL = 0.05
+#: the last line of a MicroMag export (also ending the data sections saved without a header)
+END_MARK = "MicroMag 2900/3900 Data File ends"
 CAL_ABS_TOL_MT = 5.0  # the measured calibration field drifts by a few mT
 DriftMode = str | bool | None
 #: field units (lower case, spaces removed) to mT, moment units to A·m², as column titles and

@@ -45,7 +45,6 @@ from analysis.identification.forc_files.common import (
 __all__ = ["read_lakeshore_csv"]
 
 
-
 def _column_unit(title: str, table: dict[str, float], lineno: int, what: str) -> float:
     for u in reversed(bracketed_units(title)):
         fac = unit_factor(u, table)

@@ -51,6 +51,7 @@ from analysis.identification.curves import ReversalCurves
 from analysis.identification.forc_files.common import (
     CAL_ABS_TOL_MT,
     DATA_LINE,
+    END_MARK,
     DriftMode,
     MicroMagData,
     build_curves,
@@ -63,7 +64,6 @@ from analysis.identification.forc_files.common import (
 
 __all__ = ["read_micromag", "write_micromag"]
 
-_END_MARK = "MicroMag 2900/3900 Data File ends"
 _KEY_VALUE = re.compile(r"^([A-Za-z][^=:\t]*?)\s*(?:=|:|\t|\s{2,})\s*(\S.*)$")
 _KEYS = {
     "n_curves": ("ncrv", "nforc", "number of forcs", "number of curves"),
@@ -288,7 +288,7 @@ def write_micromag(
         for h, m in zip(curves.fields[c], curves.moments[c], strict=True):
             out.append(f"{h:+.16E},{m:+.16E}")
         out.append("")
-    out.append(_END_MARK)
+    out.append(END_MARK)
     path = Path(path)
     path.write_text("\n".join(out) + "\n")
     return path

@@ -50,6 +50,8 @@ from analysis.identification.forc_files.common import (
 )
 from analysis.identification.forc_files.remanence import (
     is_remanence_script,
+    measures_ramps,
+    reconstruct_ramps,
     reconstruct_remanence,
     remanence_curves,
 )
@@ -189,15 +191,27 @@ def _read_remanence(
 ) -> MicroMagData:
     """A remanence FORC script (:mod:`~analysis.identification.forc_files.remanence`)."""
     f_fac, m_fac = _UNITS[units]
-    curves, cal_h, cal_m, _, notes, skipped, complete = reconstruct_remanence(
-        script, data, h_cal, tol
-    )
+    ramps = measures_ramps(script)
+    if ramps:
+        # the calibration points are the single-point segments at zero field
+        h_top = max(max(abs(s[0]), abs(s[2])) for s in script)
+        h_cal = 0.0
+        result = reconstruct_ramps(script, data, 1e-3 * h_top)
+    else:
+        result = reconstruct_remanence(script, data, h_cal, tol)
+    curves, cal_h, cal_m, _, notes, skipped, complete = result
     if not curves:
         raise ValueError(f"{path}: no remanence FORC in the script")
     rem, in_field = remanence_curves(curves, f_fac, m_fac)
     summary = (
         f"remanence FORC protocol: {rem.n_curves} curves of zero-field moments reconstructed "
         f"from {len(script)} segments"
+        + (
+            " (ramps measuring both ends; points measured one after another at one commanded "
+            "field averaged)"
+            if ramps
+            else ""
+        )
         + (f"; {skipped} points outside the curves skipped" if skipped else "")
     )
     return _data(
