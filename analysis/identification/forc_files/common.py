@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -188,7 +189,7 @@ def _binary_kind(raw: bytes) -> str | None:
     return f"binary data: NUL byte at offset {nul}"
 
 
-def decode(path: str | Path) -> str:
+def decode(path: str | Path, head: bool = False) -> str:
     """File text: UTF-8 if valid, else cp1252 (Latin-1 for bytes cp1252 leaves undefined);
     UTF-16 and UTF-32 with a byte-order mark are decoded as such.
 
@@ -197,13 +198,22 @@ def decode(path: str | Path) -> str:
     bytes (UTF-16 without a byte-order mark is named as such), more than 30 % non-ASCII bytes
     in a file that is not UTF-8, or more than 1 % control characters (tab, line ends, form
     feed and the DOS end-of-file mark excepted); the first 64 KiB decide.
+
+    ``head=True`` decodes only the first 64 KiB (up to their last complete line): enough to
+    tell a format, without reading a large file.
     """
-    raw = Path(path).read_bytes()
+    with open(path, "rb") as fh:
+        raw = fh.read(_SNIFF + 1) if head else fh.read()
+    cut = head and len(raw) > _SNIFF
+    if cut:
+        raw = raw[:_SNIFF]
+        if not raw.startswith(tuple(bom for bom, _ in _BOMS)):
+            raw = raw[: raw.rfind(b"\n") + 1] or raw  # whole lines (and whole characters)
     text = None
     for bom, codec in _BOMS:
         if raw.startswith(bom):
             try:
-                text = raw.decode(codec)
+                text = raw.decode(codec, errors="ignore" if cut else "strict")
             except UnicodeDecodeError:
                 raise _not_text(
                     path, f"{codec.upper()} byte-order mark, but not {codec.upper()}"
@@ -291,6 +301,16 @@ def drift_mode(drift_correction: DriftMode) -> str | None:
         "drift_correction must be False, True, 'multiplicative' or 'additive', "
         f"got {drift_correction!r}"
     )
+
+
+def warn_no_calibration(path: str | Path, drift: str | None, has_calibration: bool) -> None:
+    """One-line warning when a drift correction was asked of a file without calibration
+    points: the curves are returned uncorrected (nothing in the file samples the drift)."""
+    if drift is not None and not has_calibration:
+        warnings.warn(
+            f"{path}: drift_correction={drift!r} not applied: the file has no calibration points",
+            stacklevel=3,
+        )
 
 
 def header_number(text: str, lineno: int, key: str, integer: bool) -> float | int | None:

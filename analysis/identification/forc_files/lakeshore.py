@@ -40,6 +40,7 @@ from analysis.identification.forc_files.common import (
     header_number,
     parse_float,
     unit_factor,
+    warn_no_calibration,
 )
 
 __all__ = ["read_lakeshore_csv"]
@@ -235,6 +236,7 @@ def read_lakeshore_csv(path: str | Path, drift_correction: DriftMode = False) ->
     _check_curve_order([b for b in blocks if not b[0][3]])
     blocks = [[q[:3] for q in b] for b in blocks]
     curves, cal_m, cal_h = build_curves(blocks, h_cal, drift, None, CAL_ABS_TOL_MT)
+    warn_no_calibration(path, drift, cal_m is not None)
     rising = sum(f.size >= 2 for f in curves.fields)
     if rising < 2:
         # a loop splits into one-point "curves" on its falling branch and one rising branch

@@ -60,9 +60,10 @@ from analysis.identification.forc_files.common import (
     drift_mode,
     header_number,
     parse_float,
+    warn_no_calibration,
 )
 
-__all__ = ["read_micromag", "write_micromag"]
+__all__ = ["read_micromag", "write_micromag", "check_variant"]
 
 _KEY_VALUE = re.compile(r"^([A-Za-z][^=:\t]*?)\s*(?:=|:|\t|\s{2,})\s*(\S.*)$")
 _KEYS = {
@@ -83,6 +84,19 @@ _REFUSED = (
     ("remanence", "MicroMag remanence-curve export"),
     ("hysteresis loop", "MicroMag hysteresis-loop export"),
 )
+
+
+def check_variant(lines: list[str]) -> None:
+    """Refuse (one line) a MicroMag export whose line 2 names a variant this reader does not
+    read: a hysteresis loop, a remanence curve, a "Multiple segments" script."""
+    if len(lines) > 1:
+        kind = lines[1].strip().lower()
+        for needle, name in _REFUSED:
+            if needle in kind:
+                raise ValueError(
+                    f"line 2: {name} is not supported; export the measurement as "
+                    "'First-order reversal curves'"
+                )
 
 
 def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> MicroMagData:
@@ -110,14 +124,7 @@ def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> Micr
     lines = decode(path).splitlines()
     if not lines:
         raise ValueError(f"{path}: empty file")
-    if len(lines) > 1:
-        kind = lines[1].strip().lower()
-        for needle, name in _REFUSED:
-            if needle in kind:
-                raise ValueError(
-                    f"line 2: {name} is not supported; export the measurement as "
-                    "'First-order reversal curves'"
-                )
+    check_variant(lines)
     header: dict[str, str] = {}
     where: dict[str, int] = {}
     names: dict[str, str] = {}
@@ -206,6 +213,7 @@ def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> Micr
     )
     notes = []
     complete = True
+    warn_no_calibration(path, drift, cal_m is not None)
     n_cal = 0 if cal_m is None else cal_m.size
     if curves.n_curves < n_curves:
         complete = False
