@@ -8,6 +8,7 @@ Apart from :class:`MicroMagData` and ``DriftMode`` these are helpers of the read
 
 from __future__ import annotations
 
+import inspect
 import math
 import re
 import warnings
@@ -303,14 +304,22 @@ def drift_mode(drift_correction: DriftMode) -> str | None:
     )
 
 
+_READERS = ("analysis.identification.forc_files", "analysis.identification.forc_io")
+
+
 def warn_no_calibration(path: str | Path, drift: str | None, has_calibration: bool) -> None:
     """One-line warning when a drift correction was asked of a file without calibration
     points: the curves are returned uncorrected (nothing in the file samples the drift)."""
-    if drift is not None and not has_calibration:
-        warnings.warn(
-            f"{path}: drift_correction={drift!r} not applied: the file has no calibration points",
-            stacklevel=3,
-        )
+    if drift is None or has_calibration:
+        return
+    # point the warning at the first caller outside the readers (read_forc_file or a reader)
+    level, frame = 1, inspect.currentframe()
+    while frame is not None and frame.f_globals.get("__name__", "").startswith(_READERS):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(
+        f"{path}: drift_correction={drift!r} not applied: the file has no calibration points",
+        stacklevel=level,
+    )
 
 
 def header_number(text: str, lineno: int, key: str, integer: bool) -> float | int | None:
