@@ -25,9 +25,11 @@ line 2); remanence FORC scripts (every point measured again at zero field) by
 that are no FORC measurement are refused in one line saying what they are not: MicroMag
 hysteresis-loop and remanence-curve exports (line 2), Lake Shore exports whose field rises on
 fewer than two stretches (a loop, a remanence curve), binary content and empty files.
-Data-only files (two columns, no header, a blank line after every curve; ``columns=``
+Data-only files (two columns, a blank line after every curve or segment, no header but the
+column titles and units a MicroMag data section keeps, the MicroMag end marker; ``columns=``
 ``"field,moment"`` or ``"moment,field"``) are read by
 :mod:`~analysis.identification.forc_files.blocks` (format ``"blocks"``).
+:func:`find_forc_files` searches a folder for the files :func:`detect_format` recognises.
 
 Formats (one module each in :mod:`analysis.identification.forc_files`):
 :mod:`~analysis.identification.forc_files.csv_format` (three columns
@@ -41,6 +43,9 @@ before every curve, sample the instrument's drift. ``"multiplicative"`` (or ``Tr
 ``"additive"`` shifts every point to the first calibration moment, with the drift interpolated
 linearly in measurement order (file position) between consecutive calibration points and held
 constant after the last; the calibration field's own drift is neglected. Off by default.
+Asked of a file without calibration points it is not applied, with a one-line ``UserWarning``;
+the data-only and "Multiple segments" readers read calibration points but do not correct
+drift, and refuse it when the file has them.
 """
 
 from __future__ import annotations

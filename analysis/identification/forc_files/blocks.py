@@ -1,13 +1,40 @@
-"""Data-only FORC files (:func:`read_blocks`, :func:`write_blocks`): no header, two columns.
+"""Data-only FORC files (:func:`read_blocks`, :func:`write_blocks`): two columns, no header.
 
 Rows of two numbers (separated by a comma, a semicolon, tabs or spaces), one point each, in
-measurement order; a blank line ends a curve (the data section of an instrument export, saved
-without its header). ``columns`` says which column is which (``"field,moment"``, the default,
-or ``"moment,field"``). A block of one point is a calibration point (a FORC has at least two
-points; MicroMag and PMC exports measure one before every curve); every other block is a curve
-whose first point is its reversal field. The convention follows the direction of the fields
-(rising: Pike, falling: Mayergoyz). The units are unknown (as written); lines starting with
-``#`` are comments. Errors name the line, as for every reader.
+measurement order; a blank line ends a block (the data section of an instrument export, saved
+without its header). Lines starting with ``#`` are comments. Before the first row the data
+section of a MicroMag export keeps its column titles: a names line (``Field  Moment``, either
+order: it sets ``columns``, and a different ``columns=`` is refused) and a units line
+(``(T)  (Am²)``: fields and moments are then converted to mT and A·m², an unknown unit is
+refused; without it the units are unknown, as written). The line ``MicroMag 2900/3900 Data
+File ends`` ends the data. ``columns`` otherwise says which column is which
+(``"field,moment"``, the default, or ``"moment,field"``).
+
+Blocks are read in one of two layouts, told apart block by block:
+
+* **one block per curve** (PMC/MicroMag FORC data): a block of one point is a calibration point
+  (a FORC has at least two points; the instruments measure one before every curve); every
+  other block is a curve whose first point is its reversal field;
+* **one block per segment** (the data section of a "Multiple segments" irregular FORC export,
+  :mod:`~analysis.identification.forc_files.segments`, saved without its script): the
+  reversal point is a block of one point, and every ramp of the curve a block that starts
+  where the block before it ended (the same commanded field measured again). A block of two or
+  more points continues the curve before it when that is a reversal point (one point below the
+  calibration field) and the block does not fall, or when that is a curve whose last field
+  the block's first field repeats (within :data:`SAME_FIELD` of the largest field, or closer
+  than half the block's first step). Points of a joined curve measured one after another at
+  one field (within :data:`SAME_FIELD`) are averaged, as the segments reader averages the
+  points of one commanded field; without the commanded fields, two points whose commanded
+  fields lie close to that tolerance can be grouped otherwise than with the script (in the
+  pyFORC examples: 0 of 40 curves of the shipped export, one point in 4 of 99 and 4 of 119
+  curves of two larger ones). The calibration field is the largest one-point field; a block
+  lying at it (a ramp at saturation before the first curve) and, among segments, a falling
+  block (the sweep back at the end of the run) are skipped and counted in the notes.
+
+The convention follows the direction of the fields (rising: Pike, falling: Mayergoyz). A
+remanence script's data section alone (blocks alternating zero and the field) is not
+recognised as such: without the script the zero-field points cannot be told from a curve, and
+the reader refuses the falling blocks. Errors name the line, as for every reader.
 """
 
 from __future__ import annotations

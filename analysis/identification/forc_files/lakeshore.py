@@ -1,13 +1,31 @@
 """Lake Shore 8600-series FORC CSV exports (:func:`read_lakeshore_csv`).
 
-Assumed layout (stated, not taken from a vendor specification): optional ``key,value`` header
-rows, then one column-title row naming a field column and a moment column with their units in
-brackets or parentheses (``Field (µ0H) [T]``, ``Moment (m) [A·m²]``; a ``Time Stamp [s]``
-column is allowed), then one data row per point in measurement order with no blank lines.
-Units ``T``, ``mT``, ``Oe``, ``A/m`` (fields) and ``A·m²``/``Am²``, ``emu`` (moments) are
-converted to mT and A·m². Curves are split where the field falls; a single point within 5 % of
-the calibration field (header ``Calibration field``, else the first point when it is followed
-by a fall) is a calibration point, usable for the same drift correction.
+Layout, as a real 8600 export writes it (tests/data/forc_public/, software version 1.3; no
+vendor specification was at hand): Latin-1 text; header rows ``key: value`` (``Saturation
+field: 1.5 T``, ``Number of FORCs: 251``, ``Field step size: 1.6 mT``) under ``#`` section
+titles (``#FORC MEASUREMENT``, ``##DATA TABLE ...``, skipped), or ``key,value`` rows; then the
+column-title row, ``Step,Iteration,Segment,Field (µ0H) [T],Moment (m) [A·m²],Time Stamp [s],
+Field Status,Moment (m) Status``; then one data row per point in measurement order, a blank
+line after every segment. The column-title row is the first row (``#`` titles aside) in which
+one comma-separated cell names a field and another a moment, each with a unit in brackets or
+parentheses: header rows such as ``Moment X calibration field: 0.5 T`` (the moment meter's
+calibration, no FORC calibration point) name both in one cell and stay header. Units ``T``,
+``mT``, ``Oe``, ``A/m`` (fields) and ``A·m²``/``Am²``, ``emu`` (moments) are converted to mT and
+A·m².
+
+Curves: with a ``Segment`` column, every segment is a curve or, when it is one point within
+5 % (or 5 mT) of the calibration field, a calibration point (the export alternates them; a
+curve reaching the top of the protocol ends next to the calibration field and is kept apart
+from the calibration point after it by its segment number alone). Without one (the assumed
+minimal layout: optional ``key,value`` rows, a ``Time Stamp [s]`` column at most) curves are
+split where the field falls and a calibration point is a single point near the calibration
+field reached by a jump up (more than two field steps) and followed by a fall. The calibration
+field is the header's ``Calibration field`` (its unit written after the number, in brackets in
+the key, or the field column's), else the first point when a fall follows it. A header
+``Number of FORCs`` announces the curves: fewer in the file (a run that stopped, an excerpt) is
+read and flagged ``complete=False``, more is refused. The ``Step``/``Iteration`` columns are
+not interpreted; rows whose status cells read other than ``GOOD`` are kept and counted in the
+notes (no other status value was seen in a real export).
 
 A file whose field rises over two or more points on fewer than two stretches (a hysteresis
 loop, a remanence curve, a single sweep: no FORC measurement) is refused in one line.

@@ -30,6 +30,27 @@ segment script that :mod:`~analysis.identification.forc_files.segments` parses:
   are skipped; a segment measuring several points cannot interleave zero-field points and is
   refused, as is a field point followed by another field point. A field point left without
   its zero-field point at the end of the file (an aborted run) is dropped and noted.
+
+The instrument's own remanence scripts (tests/data/forc_public/, recognised by
+:func:`measures_ramps`: ramps that measure points) measure differently and are reconstructed by
+:func:`reconstruct_ramps`: every ramp ``0 -> B`` and ``B -> 0`` is one step long and measures
+both its ends, and a single-point segment at zero field follows the excursion to the
+saturating field that ends every curve. There
+
+* the points of one commanded field measured one after another (the end of a ramp and the
+  start of the next) are one *station*, their fields and moments averaged (the zero-field
+  station after ``B`` thus averages the point at the end of the ramp back, whose field
+  overshoots zero by up to about 0.5 % of ``B``, and the settled start of the next ramp);
+* a station at a non-zero field is a field point; the zero-field station after it is its
+  remanence point; the curve rules are those above (a new curve after a calibration point or
+  when the field is not above the curve's last);
+* the single-point segment at zero field (with the start of the ramp after it) is a
+  calibration point, at ``calibration_field = 0`` (the remanence after saturation, measured
+  before every curve); a field point at the saturating field (the largest commanded field)
+  that would start a curve (the excursion before the first calibration point) has no reversal
+  before it and is skipped with its zero-field point, counted in the notes;
+* a measured field farther than 10 % of the largest commanded field from its commanded field
+  means the data do not follow the script and is refused.
 """
 
 from __future__ import annotations

@@ -22,8 +22,9 @@ measured fields:
   curve and are skipped (counted in the notes).
 
 Remanence FORCs (every field point followed by a point measured back at zero field, written
-as single-point segments commanded at 0) are recognised from the script (two or more such
-segments) and reconstructed by :mod:`~analysis.identification.forc_files.remanence`: the
+as single-point segments commanded at 0, or as ramps ``0 -> B -> 0`` measuring both their ends
+as the instrument's own scripts do) are recognised from the script (two or more single-point
+segments at 0) and reconstructed by :mod:`~analysis.identification.forc_files.remanence`: the
 curves are the zero-field moments at the fields of their field points
 (``curves.kind == "remanence"``), the in-field moments are kept as
 :attr:`MicroMagData.in_field_curves`. In an in-field script a point whose measured field is

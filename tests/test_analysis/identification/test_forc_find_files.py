@@ -127,3 +127,43 @@ def test_drift_correction_is_refused_where_calibration_points_are_not_used(tmp_p
             ),
             drift_correction="cubic",
         )
+
+
+def _stub_one_file(args, path, out):
+    """A batch worker that identifies nothing: the report of a file read, for the summary."""
+    data = read_forc_file(path)
+    return {"input": str(path), "status": "ok", "n_curves": data.curves.n_curves}
+
+
+def test_batch_helper_searches_directories_and_lists_the_skipped(tmp_path, capsys):
+    import csv
+    import json
+
+    from analysis.cli import build_parser
+    from analysis.cli._identify_batch import forc_input_files, run_batch
+    from analysis.cli._parsing import CliError
+
+    folder = tmp_path / "in"
+    (folder / "sub").mkdir(parents=True)
+    shutil.copy(PUBLIC / "ps97-085-3-d472_9.irforc", folder / "sub" / "ir.txt")
+    shutil.copy(ROOT / "README.md", folder / "README.md")
+    single = DATA / "forc_erf_play_mayergoyz.csv"
+    files, skipped = forc_input_files([single, folder])
+    assert files == [single, folder / "sub" / "ir.txt"]
+    assert skipped == [(folder / "README.md", "not a FORC file this toolkit recognises")]
+    out = tmp_path / "out"
+    args = build_parser().parse_args(["identify", "--input", str(folder), "--out", str(out)])
+    assert run_batch(args, files, _stub_one_file, skipped) == 0
+    rows = list(csv.DictReader(open(out / "summary.csv", encoding="utf-8")))
+    assert [(r["status"], r["n_curves"]) for r in rows] == [
+        ("ok", "25"),
+        ("ok", "40"),
+        ("skipped", ""),
+    ]
+    assert rows[2]["warnings"] == "not a FORC file this toolkit recognises"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["n_files"] == 2 and summary["n_failed"] == 0 and summary["n_skipped"] == 1
+    assert "1 files skipped (no FORC file)" in capsys.readouterr().out
+    (folder / "sub" / "ir.txt").unlink()
+    with pytest.raises(CliError, match=r"no FORC file in the directory \(1 files skipped; README"):
+        forc_input_files([folder])
