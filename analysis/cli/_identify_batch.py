@@ -17,8 +17,9 @@ from typing import Any
 
 from analysis.cli._output import emit, prepare_out, progress_enabled, to_json
 from analysis.cli._parsing import CliError
+from analysis.identification.forc_io import find_forc_files
 
-__all__ = ["SUMMARY_COLUMNS", "input_files", "run_batch"]
+__all__ = ["SUMMARY_COLUMNS", "forc_input_files", "input_files", "run_batch"]
 
 #: columns of summary.csv
 SUMMARY_COLUMNS = (
@@ -58,6 +59,31 @@ def input_files(paths: list[Path]) -> list[Path]:
         else:
             files.append(path)
     return files
+
+
+def forc_input_files(paths: list[Path]) -> tuple[list[Path], list[tuple[Path, str]]]:
+    """The files of ``--input`` with directories searched recursively for FORC files by content
+    (:func:`~analysis.identification.forc_io.find_forc_files`): ``(files, skipped)``, files as
+    given first in order, the skipped files of the directories with a one-line reason each.
+    One-line errors naming the option (no such file, a directory without FORC files)."""
+    files: list[Path] = []
+    skipped: list[tuple[Path, str]] = []
+    for path in paths:
+        if path.is_dir():
+            found, passed = find_forc_files(path)
+            if not found:
+                why = f"; {passed[0][0].name}: {passed[0][1]}" if passed else ""
+                raise CliError(
+                    f"argument --input: {path}: no FORC file in the directory ({len(passed)} "
+                    f"files skipped{why})"
+                )
+            files += found
+            skipped += passed
+        elif not path.exists():
+            raise CliError(f"argument --input: {path}: no such file")
+        else:
+            files.append(path)
+    return files, skipped
 
 
 def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
@@ -107,11 +133,16 @@ def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
 
 
 def run_batch(
-    args: argparse.Namespace, files: list[Path], one_file: Callable[..., dict[str, Any]]
+    args: argparse.Namespace,
+    files: list[Path],
+    one_file: Callable[..., dict[str, Any]],
+    skipped: list[tuple[Path, str]] | None = None,
 ) -> int:
     """Every file into ``OUT/<stem>/``, progress on stderr, ``summary.csv`` and
     ``summary.json``; a file that fails is recorded and the batch goes on (exit status 2 and one
-    line at the end if any failed)."""
+    line at the end if any failed). ``skipped`` (from :func:`forc_input_files`): files of the
+    directories that are no FORC files, listed as rows of status ``skipped`` (the reason in
+    ``warnings``) and under ``skipped`` in ``summary.json``; they do not fail the batch."""
     out = prepare_out(args)
     stems: dict[str, int] = {}
     targets = []
@@ -139,8 +170,10 @@ def run_batch(
                 if show:
                     print(f"[{k}/{len(files)}] {rep['input']}: {rep['status']}", file=sys.stderr)
     rows = [_summary_row(r) for r in reports]
+    skips = [{"file": str(p), "reason": why} for p, why in skipped or []]
+    rows += [{"file": k["file"], "status": "skipped", "warnings": k["reason"]} for k in skips]
     with open(out / "summary.csv", "w", newline="", encoding="utf-8") as fh:
-        writer = csv.DictWriter(fh, fieldnames=SUMMARY_COLUMNS)
+        writer = csv.DictWriter(fh, fieldnames=SUMMARY_COLUMNS, restval="")
         writer.writeheader()
         writer.writerows(rows)
     failed = [r for r in reports if r["status"] != "ok"]
@@ -152,9 +185,13 @@ def run_batch(
         "files": rows,
         "reports": reports,
     }
+    if skipped is not None:
+        summary["n_skipped"] = len(skips)
+        summary["skipped"] = skips
     (out / "summary.json").write_text(to_json(summary, indent=2) + "\n")
     lines = [
-        f"{len(files)} files, {len(files) - len(failed)} identified, {len(failed)} failed",
+        f"{len(files)} files, {len(files) - len(failed)} identified, {len(failed)} failed"
+        + (f"; {len(skips)} files skipped (no FORC file)" if skips else ""),
         f"wrote {out / 'summary.csv'}, {out / 'summary.json'} and one folder per file",
     ]
     emit(args, summary, lines)

@@ -8,8 +8,10 @@ Apart from :class:`MicroMagData` and ``DriftMode`` these are helpers of the read
 
 from __future__ import annotations
 
+import inspect
 import math
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,8 +26,28 @@ NUM = r"[+\-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+\-]?\d+)?"
 DATA_LINE = re.compile(rf"^\s*{NUM}\s*,\s*\S")
 NUM_START = re.compile(rf"^\s*({NUM})")
 CAL_REL_TOL = 0.05
+#: the last line of a MicroMag export (also ending the data sections saved without a header)
+END_MARK = "MicroMag 2900/3900 Data File ends"
 CAL_ABS_TOL_MT = 5.0  # the measured calibration field drifts by a few mT
 DriftMode = str | bool | None
+#: field units (lower case, spaces removed) to mT, moment units to A·m², as column titles and
+#: header values write them (``[T]``, ``(Am²)``, ``(emu)``, ``0.5 T``)
+FIELD_UNITS = {"t": 1e3, "mt": 1.0, "oe": 0.1, "a/m": 4e-4 * math.pi, "ka/m": 0.4 * math.pi}
+MOMENT_UNITS = {"a·m²": 1.0, "am²": 1.0, "am2": 1.0, "a·m2": 1.0, "emu": 1e-3}
+_UNIT_IN_BRACKETS = re.compile(r"[\[(]([^\])]*)[\])]")
+
+
+def unit_factor(unit: str, table: dict[str, float]) -> float | None:
+    """The factor of ``unit`` (as written: case, spaces and ``^2`` for ``²`` do not matter) in
+    ``table`` (:data:`FIELD_UNITS` or :data:`MOMENT_UNITS`), or ``None``."""
+    key = unit.strip().lower().replace("^2", "²").replace(" ", "")
+    return table.get(key)
+
+
+def bracketed_units(text: str) -> list[str]:
+    """The units written in brackets or parentheses in ``text``, in order
+    (``"Field (µ0H) [T]"`` -> ``["µ0H", "T"]``)."""
+    return _UNIT_IN_BRACKETS.findall(text)
 
 
 def parse_float(token: str, lineno: int, what: str) -> float:
@@ -168,7 +190,7 @@ def _binary_kind(raw: bytes) -> str | None:
     return f"binary data: NUL byte at offset {nul}"
 
 
-def decode(path: str | Path) -> str:
+def decode(path: str | Path, head: bool = False) -> str:
     """File text: UTF-8 if valid, else cp1252 (Latin-1 for bytes cp1252 leaves undefined);
     UTF-16 and UTF-32 with a byte-order mark are decoded as such.
 
@@ -177,13 +199,22 @@ def decode(path: str | Path) -> str:
     bytes (UTF-16 without a byte-order mark is named as such), more than 30 % non-ASCII bytes
     in a file that is not UTF-8, or more than 1 % control characters (tab, line ends, form
     feed and the DOS end-of-file mark excepted); the first 64 KiB decide.
+
+    ``head=True`` decodes only the first 64 KiB (up to their last complete line): enough to
+    tell a format, without reading a large file.
     """
-    raw = Path(path).read_bytes()
+    with open(path, "rb") as fh:
+        raw = fh.read(_SNIFF + 1) if head else fh.read()
+    cut = head and len(raw) > _SNIFF
+    if cut:
+        raw = raw[:_SNIFF]
+        if not raw.startswith(tuple(bom for bom, _ in _BOMS)):
+            raw = raw[: raw.rfind(b"\n") + 1] or raw  # whole lines (and whole characters)
     text = None
     for bom, codec in _BOMS:
         if raw.startswith(bom):
             try:
-                text = raw.decode(codec)
+                text = raw.decode(codec, errors="ignore" if cut else "strict")
             except UnicodeDecodeError:
                 raise _not_text(
                     path, f"{codec.upper()} byte-order mark, but not {codec.upper()}"
@@ -270,6 +301,24 @@ def drift_mode(drift_correction: DriftMode) -> str | None:
     raise ValueError(
         "drift_correction must be False, True, 'multiplicative' or 'additive', "
         f"got {drift_correction!r}"
+    )
+
+
+_READERS = ("analysis.identification.forc_files", "analysis.identification.forc_io")
+
+
+def warn_no_calibration(path: str | Path, drift: str | None, has_calibration: bool) -> None:
+    """One-line warning when a drift correction was asked of a file without calibration
+    points: the curves are returned uncorrected (nothing in the file samples the drift)."""
+    if drift is None or has_calibration:
+        return
+    # point the warning at the first caller outside the readers (read_forc_file or a reader)
+    level, frame = 1, inspect.currentframe()
+    while frame is not None and frame.f_globals.get("__name__", "").startswith(_READERS):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(
+        f"{path}: drift_correction={drift!r} not applied: the file has no calibration points",
+        stacklevel=level,
     )
 
 

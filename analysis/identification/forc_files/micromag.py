@@ -51,6 +51,7 @@ from analysis.identification.curves import ReversalCurves
 from analysis.identification.forc_files.common import (
     CAL_ABS_TOL_MT,
     DATA_LINE,
+    END_MARK,
     DriftMode,
     MicroMagData,
     build_curves,
@@ -59,11 +60,11 @@ from analysis.identification.forc_files.common import (
     drift_mode,
     header_number,
     parse_float,
+    warn_no_calibration,
 )
 
-__all__ = ["read_micromag", "write_micromag"]
+__all__ = ["read_micromag", "write_micromag", "check_variant"]
 
-_END_MARK = "MicroMag 2900/3900 Data File ends"
 _KEY_VALUE = re.compile(r"^([A-Za-z][^=:\t]*?)\s*(?:=|:|\t|\s{2,})\s*(\S.*)$")
 _KEYS = {
     "n_curves": ("ncrv", "nforc", "number of forcs", "number of curves"),
@@ -83,6 +84,19 @@ _REFUSED = (
     ("remanence", "MicroMag remanence-curve export"),
     ("hysteresis loop", "MicroMag hysteresis-loop export"),
 )
+
+
+def check_variant(lines: list[str]) -> None:
+    """Refuse (one line) a MicroMag export whose line 2 names a variant this reader does not
+    read: a hysteresis loop, a remanence curve, a "Multiple segments" script."""
+    if len(lines) > 1:
+        kind = lines[1].strip().lower()
+        for needle, name in _REFUSED:
+            if needle in kind:
+                raise ValueError(
+                    f"line 2: {name} is not supported; export the measurement as "
+                    "'First-order reversal curves'"
+                )
 
 
 def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> MicroMagData:
@@ -110,14 +124,7 @@ def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> Micr
     lines = decode(path).splitlines()
     if not lines:
         raise ValueError(f"{path}: empty file")
-    if len(lines) > 1:
-        kind = lines[1].strip().lower()
-        for needle, name in _REFUSED:
-            if needle in kind:
-                raise ValueError(
-                    f"line 2: {name} is not supported; export the measurement as "
-                    "'First-order reversal curves'"
-                )
+    check_variant(lines)
     header: dict[str, str] = {}
     where: dict[str, int] = {}
     names: dict[str, str] = {}
@@ -206,6 +213,7 @@ def read_micromag(path: str | Path, drift_correction: DriftMode = False) -> Micr
     )
     notes = []
     complete = True
+    warn_no_calibration(path, drift, cal_m is not None)
     n_cal = 0 if cal_m is None else cal_m.size
     if curves.n_curves < n_curves:
         complete = False
@@ -288,7 +296,7 @@ def write_micromag(
         for h, m in zip(curves.fields[c], curves.moments[c], strict=True):
             out.append(f"{h:+.16E},{m:+.16E}")
         out.append("")
-    out.append(_END_MARK)
+    out.append(END_MARK)
     path = Path(path)
     path.write_text("\n".join(out) + "\n")
     return path

@@ -30,6 +30,27 @@ segment script that :mod:`~analysis.identification.forc_files.segments` parses:
   are skipped; a segment measuring several points cannot interleave zero-field points and is
   refused, as is a field point followed by another field point. A field point left without
   its zero-field point at the end of the file (an aborted run) is dropped and noted.
+
+The instrument's own remanence scripts (tests/data/forc_public/, recognised by
+:func:`measures_ramps`: ramps that measure points) measure differently and are reconstructed by
+:func:`reconstruct_ramps`: every ramp ``0 -> B`` and ``B -> 0`` is one step long and measures
+both its ends, and a single-point segment at zero field follows the excursion to the
+saturating field that ends every curve. There
+
+* the points of one commanded field measured one after another (the end of a ramp and the
+  start of the next) are one *station*, their fields and moments averaged (the zero-field
+  station after ``B`` thus averages the point at the end of the ramp back, whose field
+  overshoots zero by up to about 0.5 % of ``B``, and the settled start of the next ramp);
+* a station at a non-zero field is a field point; the zero-field station after it is its
+  remanence point; the curve rules are those above (a new curve after a calibration point or
+  when the field is not above the curve's last);
+* the single-point segment at zero field (with the start of the ramp after it) is a
+  calibration point, at ``calibration_field = 0`` (the remanence after saturation, measured
+  before every curve); a field point at the saturating field (the largest commanded field)
+  that would start a curve (the excursion before the first calibration point) has no reversal
+  before it and is skipped with its zero-field point, counted in the notes;
+* a measured field farther than 10 % of the largest commanded field from its commanded field
+  means the data do not follow the script and is refused.
 """
 
 from __future__ import annotations
@@ -39,7 +60,13 @@ import numpy as np
 from analysis.identification.curves import ReversalCurves
 from analysis.identification.forc_files.common import check_curve
 
-__all__ = ["is_remanence_script", "reconstruct_remanence", "remanence_curves"]
+__all__ = [
+    "is_remanence_script",
+    "measures_ramps",
+    "reconstruct_remanence",
+    "reconstruct_ramps",
+    "remanence_curves",
+]
 
 Point = tuple[float, float, int]  # field, moment, line
 Segment = tuple[float, float, float, int, int]  # initial, increment, final, final index, line
@@ -117,6 +144,114 @@ def reconstruct_remanence(
                     "after it"
                 )
             pending = (initial, p)
+    notes = []
+    complete = True
+    if pending is not None:
+        complete = False
+        notes.append(
+            f"the last field point (line {pending[1][2]}) has no zero-field point (the run "
+            "stopped): dropped"
+        )
+    for curve in curves:
+        fields = [q[0] for q, _ in curve]
+        check_curve(fields[0], fields, [q[2] for q, _ in curve], "pike")
+    return curves, cal_h, cal_m, cal_lines, notes, skipped, complete
+
+
+def measures_ramps(script: list[Segment]) -> bool:
+    """Whether the script's ramps (segments that are not single-point) measure points: the
+    layout of the instrument's own remanence FORC scripts (module docstring)."""
+    before = 0
+    for s in script:
+        if not _single(s) and s[3] > before:
+            return True
+        before = s[3]
+    return False
+
+
+def _ramp_stations(script: list[Segment], data: list[Point], tol: float, h_top: float) -> list:
+    """The measuring stations of a ramp script: ``[commanded field, points, single]`` in order;
+    a ramp's first point joins the station before it when commanded at the same field."""
+    stations: list[list] = []
+    start = 0
+    for initial, step, final, index, lineno in script:
+        if index < start:
+            raise ValueError(f"line {lineno}: final index {index} goes back (was {start})")
+        points = data[start:index]
+        start = index
+        if not points:
+            continue  # the sweep from saturation
+        single = step == 0.0 and initial == final
+        if single and len(points) != 1:
+            raise ValueError(f"line {lineno}: a single-point segment measured {len(points)}")
+        if not single and len(points) < 2:
+            raise ValueError(
+                f"line {lineno}: a ramp from {initial} to {final} measured {len(points)} point; "
+                "the ramps of a remanence FORC script measure both their ends"
+            )
+        way = 1.0 if final >= initial else -1.0
+        commanded = [initial + way * abs(step) * k for k in range(len(points))]
+        if abs(commanded[-1] - final) > tol:
+            raise ValueError(
+                f"line {lineno}: {len(points)} points from {initial} by {step} do not end at "
+                f"{final}"
+            )
+        for k, (c, p) in enumerate(zip(commanded, points, strict=True)):
+            if abs(p[0] - c) > 0.1 * h_top:
+                raise ValueError(
+                    f"line {p[2]}: measured field {p[0]} is far from the script's {c}: the data "
+                    "do not follow the script"
+                )
+            if k == 0 and not single and stations and abs(stations[-1][0] - c) <= tol:
+                stations[-1][1].append(p)  # the ramp starts where the segment before ended
+            else:
+                stations.append([c, [p], single])
+    return stations
+
+
+def reconstruct_ramps(
+    script: list[Segment], data: list[Point], tol: float
+) -> tuple[list, list, list, list, list, int, bool]:
+    """Curves of a remanence script whose ramps measure their ends (module docstring), in the
+    return layout of :func:`reconstruct_remanence`; each point of a curve is a station's mean
+    (field, moment, line of its first point)."""
+    h_top = max(max(abs(s[0]), abs(s[2])) for s in script)
+    h_sat = max(max(s[0], s[2]) for s in script)  # where every curve ends, before calibration
+    curves: list[list[tuple[Point, Point]]] = []
+    cal_h, cal_m, cal_lines = [], [], []
+    pending: tuple[float, Point, int] | None = None
+    last_commanded: float | None = None
+    skipped = 0
+    for commanded, points, single in _ramp_stations(script, data, tol, h_top):
+        p = (
+            float(np.mean([q[0] for q in points])),
+            float(np.mean([q[1] for q in points])),
+            points[0][2],
+        )
+        if abs(commanded) > tol:
+            if pending is not None:
+                raise ValueError(
+                    f"line {pending[1][2]}: the field point has no zero-field (remanence) point "
+                    "after it"
+                )
+            pending = (commanded, p, len(points))
+        elif pending is not None:
+            field, q, n_q = pending
+            pending = None
+            if last_commanded is None and abs(field - h_sat) <= tol:
+                skipped += n_q + len(points)  # a saturating excursion: no reversal before it
+                continue
+            if last_commanded is None or field <= last_commanded:
+                curves.append([])
+            curves[-1].append((q, p))
+            last_commanded = field
+        elif single:
+            cal_h.append(p[0])
+            cal_m.append(p[1])
+            cal_lines.append(p[2])
+            last_commanded = None
+        else:
+            skipped += len(points)  # at zero field before any field point
     notes = []
     complete = True
     if pending is not None:

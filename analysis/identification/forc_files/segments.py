@@ -22,8 +22,9 @@ measured fields:
   curve and are skipped (counted in the notes).
 
 Remanence FORCs (every field point followed by a point measured back at zero field, written
-as single-point segments commanded at 0) are recognised from the script (two or more such
-segments) and reconstructed by :mod:`~analysis.identification.forc_files.remanence`: the
+as single-point segments commanded at 0, or as ramps ``0 -> B -> 0`` measuring both their ends
+as the instrument's own scripts do) are recognised from the script (two or more single-point
+segments at 0) and reconstructed by :mod:`~analysis.identification.forc_files.remanence`: the
 curves are the zero-field moments at the fields of their field points
 (``curves.kind == "remanence"``), the in-field moments are kept as
 :attr:`MicroMagData.in_field_curves`. In an in-field script a point whose measured field is
@@ -50,6 +51,8 @@ from analysis.identification.forc_files.common import (
 )
 from analysis.identification.forc_files.remanence import (
     is_remanence_script,
+    measures_ramps,
+    reconstruct_ramps,
     reconstruct_remanence,
     remanence_curves,
 )
@@ -189,15 +192,27 @@ def _read_remanence(
 ) -> MicroMagData:
     """A remanence FORC script (:mod:`~analysis.identification.forc_files.remanence`)."""
     f_fac, m_fac = _UNITS[units]
-    curves, cal_h, cal_m, _, notes, skipped, complete = reconstruct_remanence(
-        script, data, h_cal, tol
-    )
+    ramps = measures_ramps(script)
+    if ramps:
+        # the calibration points are the single-point segments at zero field
+        h_top = max(max(abs(s[0]), abs(s[2])) for s in script)
+        h_cal = 0.0
+        result = reconstruct_ramps(script, data, 1e-3 * h_top)
+    else:
+        result = reconstruct_remanence(script, data, h_cal, tol)
+    curves, cal_h, cal_m, _, notes, skipped, complete = result
     if not curves:
         raise ValueError(f"{path}: no remanence FORC in the script")
     rem, in_field = remanence_curves(curves, f_fac, m_fac)
     summary = (
         f"remanence FORC protocol: {rem.n_curves} curves of zero-field moments reconstructed "
         f"from {len(script)} segments"
+        + (
+            " (ramps measuring both ends; points measured one after another at one commanded "
+            "field averaged)"
+            if ramps
+            else ""
+        )
         + (f"; {skipped} points outside the curves skipped" if skipped else "")
     )
     return _data(
