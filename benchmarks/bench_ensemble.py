@@ -113,7 +113,9 @@ _TIMED = (
 
 
 class _Timers:
-    """Exclusive wall time per component of the functions in :data:`_TIMED` while active."""
+    """Exclusive CPU time of this process per component of the functions in :data:`_TIMED`
+    while active (CPU time, not wall time: on the shared machine another process's load then
+    changes the shares little)."""
 
     def __init__(self) -> None:
         self.acc: dict[str, float] = {}
@@ -142,13 +144,13 @@ class _Timers:
         stack, acc = self._stack, self.acc
 
         def timed(*args, **kwargs):
-            frame = [time.perf_counter(), 0.0]
+            frame = [time.process_time(), 0.0]
             stack.append(frame)
             try:
                 return func(*args, **kwargs)
             finally:
                 stack.pop()
-                total = time.perf_counter() - frame[0]
+                total = time.process_time() - frame[0]
                 acc[label] = acc.get(label, 0.0) + total - frame[1]
                 if stack:
                     stack[-1][1] += total
@@ -172,32 +174,29 @@ def _mean_components(run, reps: int, timers: _Timers) -> tuple[dict[str, float],
 
 
 def _pool_costs() -> tuple[float, float]:
-    """(wall seconds per task of the pool and store, numba load of a fresh worker's first task).
+    """(CPU seconds of the client process per task of a pool run with a store, CPU seconds of a
+    fresh worker's numba load).
 
-    The first: small ensemble tasks through ``run_tasks`` with two workers and a store, minus
-    their serial compute time halved. The second: a fresh interpreter's first task minus its
-    second (what every new worker pool pays once, in both workers at the same time).
+    The first: 80 small ensemble tasks through ``run_tasks`` with two workers and a store,
+    the client's own CPU time (submitting, unpickling, the SQLite writes) per task. The second:
+    a fresh interpreter's first task minus its second (the cached kernels' load, which every new
+    worker pool pays once, in both workers at the same time).
     """
     import subprocess
     import sys
     import tempfile
 
     small = [dict(spins=100, coupling=4.0, seed=s, t_end=200.0, transient=10.0) for s in range(80)]
-    start = time.perf_counter()
-    for t in small:
-        ensemble_task(**t)
-    compute = time.perf_counter() - start
     with tempfile.TemporaryDirectory() as tmp:
-        start = time.perf_counter()
+        start = time.process_time()
         run_tasks("bench", small, ensemble_task, store=Path(tmp) / "s.sqlite", workers=2,
                   progress=False)  # fmt: skip
-        pooled = time.perf_counter() - start
-    per_task = max(pooled - compute / 2.0, 0.0) / len(small)
+        per_task = (time.process_time() - start) / len(small)
     probe = (
         "import time\nfrom analysis.experiments.ensemble import ensemble_task as f\n"
-        "a = time.perf_counter(); f(100, 4.0, seed=1, t_end=50.0, transient=10.0)\n"
-        "b = time.perf_counter(); f(100, 4.0, seed=2, t_end=50.0, transient=10.0)\n"
-        "print((b - a) - (time.perf_counter() - b))\n"
+        "a = time.process_time(); f(100, 4.0, seed=1, t_end=50.0, transient=10.0)\n"
+        "b = time.process_time(); f(100, 4.0, seed=2, t_end=50.0, transient=10.0)\n"
+        "print((b - a) - (time.process_time() - b))\n"
     )
     root = str(Path(__file__).resolve().parents[1])  # this checkout, as in this process
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([root, os.environ.get("PYTHONPATH", "")]))
@@ -211,12 +210,14 @@ def full_run_profile(reps: int, speedup: float, full_report: str) -> dict:
 
     Method: every (N, C) of the full ensemble and every N of the iid reference is timed on its
     first ``reps`` realizations of the full run (the same seeds and sizes), split into the
-    components of :data:`_TIMED`; the two limit tasks once. A component's wall time in the
-    full run is its mean per task × the number of such tasks ÷ the measured 2-worker speed-up
-    (``speedup``; the limits: the longer one, they run side by side), plus per task the pool,
-    pickling and store cost and per worker pool the numba load of fresh workers (three pools:
-    ensemble, limits, iid). Shares of this model, applied to the measured fig:dim seconds of
-    ``full_report``, say where the full run's time went; the machine's load cancels in them.
+    components of :data:`_TIMED` (CPU time of this process); the two limit tasks once. A
+    component's time in the full run is its mean per task × the number of such tasks ÷ the
+    2-worker speed-up ``speedup`` measured before (the limits: the longer one, they run side by
+    side), plus the client's CPU time per task (submitting, unpickling, storing: it shares the
+    two cores with the workers, so half of it) and per worker pool the numba load of fresh
+    workers (three pools: ensemble, limits, iid). Shares of this model, applied to the measured
+    fig:dim seconds of ``full_report``, say where the full run's time went; the machine's load
+    mostly cancels in them (the absolute model does not: it is this run's conditions).
     """
     # the task functions are called through their modules: the timers wrap those attributes
     import analysis.experiments.ensemble as ensemble
@@ -280,7 +281,7 @@ def full_run_profile(reps: int, speedup: float, full_report: str) -> dict:
     per_task, cold = _pool_costs()
     n_tasks = len(full.ensemble_spins) * len(ENSEMBLE_COUPLINGS) * full.ensemble_realizations
     n_tasks += len(full.iid_spins) * full.iid_realizations + len(ENSEMBLE_COUPLINGS)
-    wall["pool, pickling, store (parent)"] = per_task * n_tasks
+    wall["pool, pickling, store (client)"] = per_task * n_tasks / 2.0
     wall["new worker pools (numba load)"] = 3 * cold
     model = sum(wall.values())
     res: dict = {
@@ -296,7 +297,7 @@ def full_run_profile(reps: int, speedup: float, full_report: str) -> dict:
         measured_dim = sum(f["seconds"] for f in figs if f["label"] in ENSEMBLE_FIGURES)
         other = sum(f["seconds"] for f in figs if f["label"] not in ENSEMBLE_FIGURES)
         other += float(data.get("basins", {}).get("seconds") or 0.0)
-    print("fig:dim by component (model wall s in this run, share"
+    print("fig:dim by component (model s in this run, share"
           + (f", of the full run's {measured_dim:.0f} s)" if measured_dim else ")"))  # fmt: skip
     for k, v in sorted(wall.items(), key=lambda kv: -kv[1]):
         line = f"  {k:40s} {v:8.1f} s  {v / model:6.1%}"
