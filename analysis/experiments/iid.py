@@ -49,6 +49,7 @@ __all__ = [
     "iid_inputs",
     "iid_task",
     "iid_magnetization",
+    "iid_tasks",
     "iid_variance_scaling",
     "IidScaling",
     "DEFAULT_INPUT_STD",
@@ -60,6 +61,8 @@ DEFAULT_INPUT_STD = 2.0
 
 #: longest input sequence of one realization (8 bytes per step)
 MAX_STEPS = 500_000_000
+#: keyword arguments of :func:`iid_magnetization` that say how to run, not what
+_RUN_OPTIONS = ("store", "workers", "scheduler", "progress", "allow_version_mismatch")
 
 
 def iid_inputs(n_steps: int, input_std: float, seed: int) -> np.ndarray:
@@ -102,7 +105,7 @@ def iid_task(
     return {"magnetization": float(outputs.mean())}
 
 
-def iid_magnetization(
+def iid_tasks(
     n_spins: int,
     n_steps: int,
     realizations: int,
@@ -114,21 +117,14 @@ def iid_magnetization(
     width: float = WIDTH,
     spread: float = SPREAD,
     spin_coupling: float = SPIN_COUPLING,
-    store: ResultStore | str | os.PathLike | None = None,
-    workers: int | None = 1,
-    scheduler: str | None = None,
-    progress: bool = False,
-    allow_version_mismatch: bool = False,
-) -> np.ndarray:
-    """Time-averaged magnetization ``M_T`` for ``realizations`` disorder realizations.
+) -> list[dict]:
+    """The :func:`iid_task` parameter dicts of :func:`iid_magnetization` (every argument checked
+    here, before a task reaches a worker process).
 
     Disorder seeds are ``spawn_seeds(seed, realizations)``; the input seed is derived from
     ``seed`` too (one shared sequence if ``common_input``, else one per realization), so the
-    result is reproducible from ``seed`` alone. Tasks go through :func:`run_tasks` (store,
-    workers, scheduler, allow_version_mismatch as there; experiment name ``"iid"``).
+    tasks are reproducible from ``seed`` alone.
     """
-
-    # everything checked here, before a task reaches a worker process
     n_spins = positive_integer(n_spins, "n_spins", minimum=2)
     if n_spins % 2:
         raise ValueError(f"n_spins must be even (the spins come in dimers), got {n_spins}")
@@ -149,7 +145,7 @@ def iid_magnetization(
     input_seeds = spawn_seeds(input_base, realizations)
     if common_input:
         input_seeds = [input_seeds[0]] * realizations
-    tasks = [
+    return [
         dict(
             spins=int(n_spins),
             n_steps=int(n_steps),
@@ -163,6 +159,16 @@ def iid_magnetization(
         )
         for s, i in zip(disorder_seeds, input_seeds, strict=True)
     ]
+
+
+def _run_iid(
+    tasks: list[dict],
+    store: ResultStore | str | os.PathLike | None,
+    workers: int | None,
+    scheduler: str | None,
+    progress: bool,
+    allow_version_mismatch: bool,
+) -> np.ndarray:
     results = run_tasks(
         "iid",
         tasks,
@@ -174,6 +180,45 @@ def iid_magnetization(
         allow_version_mismatch=allow_version_mismatch,
     )
     return np.array([r["magnetization"] for r in results])
+
+
+def iid_magnetization(
+    n_spins: int,
+    n_steps: int,
+    realizations: int,
+    seed: int,
+    *,
+    input_std: float = DEFAULT_INPUT_STD,
+    common_input: bool = True,
+    transient_steps: int = 0,
+    width: float = WIDTH,
+    spread: float = SPREAD,
+    spin_coupling: float = SPIN_COUPLING,
+    store: ResultStore | str | os.PathLike | None = None,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    progress: bool = False,
+    allow_version_mismatch: bool = False,
+) -> np.ndarray:
+    """Time-averaged magnetization ``M_T`` for ``realizations`` disorder realizations.
+
+    The tasks are :func:`iid_tasks` (seeds and input modes there); they go through
+    :func:`run_tasks` (store, workers, scheduler, allow_version_mismatch as there; experiment
+    name ``"iid"``).
+    """
+    tasks = iid_tasks(
+        n_spins,
+        n_steps,
+        realizations,
+        seed,
+        input_std=input_std,
+        common_input=common_input,
+        transient_steps=transient_steps,
+        width=width,
+        spread=spread,
+        spin_coupling=spin_coupling,
+    )
+    return _run_iid(tasks, store, workers, scheduler, progress, allow_version_mismatch)
 
 
 def _seed_for(seed: int, n_spins: int) -> int:
@@ -201,15 +246,26 @@ def iid_variance_scaling(
     """``VAR[M]`` over realizations for each N in ``spins`` and the fit ``VAR[M] ∝ N^b``.
 
     The standard error of a sample variance is estimated as ``VAR·sqrt(2/(K−1))`` (normal
-    approximation), and the log-log fit is weighted with it. Keyword arguments go to
+    approximation), and the log-log fit is weighted with it. Keyword arguments are those of
     :func:`iid_magnetization`. Each N gets its own base seed ``SeedSequence([seed, N])``, so
-    the ensembles of different N are independent (not nested subsets of one another).
+    the ensembles of different N are independent (not nested subsets of one another). The
+    tasks of every N run in one :func:`run_tasks` call (one worker pool instead of one per N).
     """
     n = np.asarray(spins, dtype=int)
-    mags = tuple(
-        iid_magnetization(int(k), n_steps, realizations, _seed_for(seed, int(k)), **kwargs)
-        for k in n
+    run = {k: kwargs.pop(k) for k in _RUN_OPTIONS if k in kwargs}
+    per_n = [iid_tasks(int(k), n_steps, realizations, _seed_for(seed, int(k)), **kwargs) for k in n]
+    # one run_tasks call for every N: one worker pool, no barrier between the sizes (the same
+    # tasks, so the same results and store keys as one iid_magnetization call per N)
+    flat = _run_iid(
+        [t for tasks in per_n for t in tasks],
+        run.get("store"),
+        run.get("workers", 1),
+        run.get("scheduler"),
+        run.get("progress", False),
+        run.get("allow_version_mismatch", False),
     )
+    bounds = np.cumsum([0] + [len(tasks) for tasks in per_n])
+    mags = tuple(flat[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True))
     var = np.array([magnetization_variance(m) for m in mags])
     err = var * np.sqrt(2.0 / max(realizations - 1, 1))
     fit = power_law_fit(n.astype(float), var, sigma_y=err)

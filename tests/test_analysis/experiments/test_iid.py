@@ -90,3 +90,28 @@ def test_store_of_another_code_version_is_reused_only_when_allowed(tmp_path, mon
     with pytest.warns(UserWarning, match="other code versions"):
         again = iid_magnetization(20, 200, 3, seed=1, store=store, allow_version_mismatch=True)
     assert np.array_equal(first, again)
+
+
+def test_variance_scaling_runs_every_size_at_once_with_the_per_size_tasks(tmp_path):
+    # iid_variance_scaling sends the tasks of every N through one run_tasks call (one worker
+    # pool); they must be exactly the tasks of one iid_magnetization call per N: the same
+    # magnetizations bit for bit, and the same store keys (a per-N rerun finds every task)
+    from analysis.experiments.iid import _seed_for
+    from analysis.experiments.store import ResultStore
+
+    store = tmp_path / "iid.sqlite"
+    sizes, steps, k = [20, 60, 200], 150, 4
+    res = iid_variance_scaling(sizes, n_steps=steps, realizations=k, seed=3, store=store)
+    with ResultStore(store) as s:
+        stored = set(s.keys("iid"))
+    assert len(stored) == len(sizes) * k
+    for n, mags in zip(sizes, res.magnetizations, strict=True):
+        alone = iid_magnetization(n, steps, k, _seed_for(3, n))  # no store: computed afresh
+        assert mags.tolist() == alone.tolist()
+        served = iid_magnetization(n, steps, k, _seed_for(3, n), store=store)
+        assert served.tolist() == alone.tolist()
+    with ResultStore(store) as s:
+        assert set(s.keys("iid")) == stored  # nothing new was computed for the per-N calls
+    # a pool of two workers gives the same values as the serial run
+    pooled = iid_variance_scaling(sizes, n_steps=steps, realizations=k, seed=3, workers=2)
+    assert [m.tolist() for m in pooled.magnetizations] == [m.tolist() for m in res.magnetizations]
