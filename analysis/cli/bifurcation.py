@@ -110,10 +110,7 @@ def _values(args: argparse.Namespace) -> np.ndarray:
 
 def plot_diagram(diagram: Any, path: Path, title: str | None = None) -> Path:
     """Two panels: Poincaré q per value (top) and λ_max (bottom)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     has_lyap = np.any(np.isfinite(diagram.max_exponent))
     fig, axes = plt.subplots(

@@ -196,10 +196,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _plot(sec: Any, bc: Any, title: str, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     fig, axes = plt.subplots(1, 2, figsize=(9, 4.3))
     axes[0].plot(sec.q, sec.v, ".k", ms=1.0)

@@ -86,10 +86,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _plot(sec: Any, title: str, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     fig, ax = plt.subplots(figsize=(6.5, 5))
     sc = ax.scatter(sec.q, sec.v, c=sec.M, s=2, cmap="coolwarm", lw=0)

@@ -106,10 +106,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _plot(traj: Any, title: str, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     fig, ax = plt.subplots(1, 3, figsize=(13, 4))
     ax[0].plot(traj.t, traj.q, lw=0.6)
