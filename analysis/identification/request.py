@@ -13,10 +13,12 @@ moment unit, its fields) is checked by the methods that take it.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from analysis.identification.curves import protocol_lattice
 from analysis.identification.density import auto_grid
@@ -190,7 +192,7 @@ class IdentifyRequest:
             name
             for name in _MEASURED_ONLY
             if (
-                self.smoothing in ("variforc", "auto")
+                isinstance(self.smoothing, str) and self.smoothing in ("variforc", "auto")
                 if name == "smoothing"
                 else getattr(self, name) != defaults[name]
             )
@@ -198,22 +200,25 @@ class IdentifyRequest:
 
     def _smoothing_law(self) -> Smoothing:
         sm = self.smoothing
+        word = sm if isinstance(sm, str) else None
         given = [n for n in VARIFORC_PARAMETERS if n in self.variforc]
-        if sm == "variforc":
+        if word == "variforc":
             return VariforcParameters(**self.variforc)
         if given:
             name = "lambda" if given[0] == "lam" else given[0]  # VariforcParameters' wording
-            chooses = " (auto chooses)" if sm == "auto" else ""
+            chooses = " (auto chooses)" if word == "auto" else ""
             raise ValueError(f"{name} is only for smoothing='variforc'{chooses}")
-        if sm == "auto":
+        if word == "auto":
             return "auto"
-        if sm is None:
-            return (DEFAULT_MEASURED_SMOOTHING,) * 2 if self.measured else None
-        if isinstance(sm, str):
+        if word is not None:
             raise ValueError(
                 f"smoothing must be a factor, a pair, 'variforc' or 'auto', got {sm!r}"
             )
-        pair = (sm, sm) if not isinstance(sm, Sequence) else tuple(sm)
+        if sm is None:
+            return (DEFAULT_MEASURED_SMOOTHING,) * 2 if self.measured else None
+        pair = tuple(np.atleast_1d(np.asarray(sm, dtype=object)).tolist())
+        if len(pair) == 1:
+            pair = pair * 2
         if len(pair) != 2:
             raise ValueError(f"smoothing takes one factor SF or two, SF_R SF_S; got {len(pair)}")
         return (_positive(pair[0], "smoothing"), _positive(pair[1], "smoothing"))
