@@ -50,11 +50,11 @@ def window_mask(cs: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 
 def is_period_adding(cascade: PeriodAdding) -> bool:
-    """Whether the windows below the onset (:func:`~analysis.dynamics.period_adding.
-    period_adding`) are a period-adding cascade: at least :data:`CASCADE_MIN_WINDOWS` wide
-    windows whose periods fall monotonically by small steps (1 or 2) as C moves away from the
-    onset, and long periods (or none resolved) right below the onset, where they grow without
-    bound."""
+    """Whether the windows below the onset (measured by
+    :func:`~analysis.dynamics.period_adding.period_adding`) are a period-adding cascade: at
+    least :data:`CASCADE_MIN_WINDOWS` wide windows whose periods fall monotonically by small
+    steps (1 or 2) as C moves away from the onset, and long periods (or none resolved) right
+    below the onset, where they grow without bound."""
     steps = np.asarray(cascade.steps, dtype=int)
     return bool(
         len(cascade.wide) >= CASCADE_MIN_WINDOWS
