@@ -4,9 +4,7 @@ Preisach-plane identification, figures and the ``hyst`` command line.
 Grouped by purpose: :mod:`analysis.dynamics` (one system: Lyapunov spectra, dimensions,
 bifurcations, statistics), :mod:`analysis.experiments` (the paper's parameters, the model
 registry, ensembles, task execution and the results store), :mod:`analysis.identification`,
-:mod:`analysis.paper` (``hyst paper``) and :mod:`analysis.cli` (``hyst``). The module paths
-before this grouping (``analysis.lyapunov``, ...) still import for one release, with a
-``DeprecationWarning`` (:mod:`analysis._legacy`).
+:mod:`analysis.paper` (``hyst paper``) and :mod:`analysis.cli` (``hyst``).
 
 Public names are imported lazily so that a command line subcommand only loads what it uses.
 (The import-name check below imports :mod:`hysteresis`, which every analysis needs anyway.)
@@ -17,14 +15,11 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from analysis import _legacy
 from hysteresis._distribution import check_import_name as _check_import_name
 from hysteresis._version import __version__ as __version__
 
 # "analysis" is also the import name of an unrelated PyPI distribution: refuse to run mixed
 _check_import_name("analysis")
-# the module paths before the grouping by purpose (analysis.lyapunov, ...): one more release
-_legacy.install()
 
 _LAZY = {
     "lyapunov_spectrum": "analysis.dynamics.lyapunov",

@@ -33,7 +33,6 @@ from analysis.cli import (
     trajectory,
     width_disorder,
 )
-from analysis.cli._build import last_system
 from analysis.cli._parsing import (
     EXIT_USAGE,
     CliError,
@@ -84,7 +83,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Errors — bad options, and errors raised later inside the library or a worker process — are
     reported as one line on stderr without a traceback; ``HYST_DEBUG=1`` re-raises them. A
-    :class:`~oscillators.engines.base.DivergenceError` names the system's parameters (C, ζ, Ω).
+    :class:`~oscillators.engines.base.DivergenceError` names the parameters (C, ζ, Ω) of the
+    system the command attached to it (:func:`~analysis.cli._build.naming_divergence`).
     Warnings of the library are one line each on stderr, ``hyst COMMAND: warning: <message>``,
     without source location, and each kind (category and place of origin) once per run.
     """
@@ -118,7 +118,7 @@ def _run(prog: str, args: argparse.Namespace) -> int:
             return fail(prog, f"task {exc.task} failed: {_describe(cause)}")
         message = _describe(exc)
         if isinstance(exc, DivergenceError):
-            message += _parameters(last_system())
+            message += _parameters(getattr(exc, "system", None))
         return fail(prog, message)
 
 

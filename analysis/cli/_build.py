@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,7 @@ from analysis.experiments.models import build_operator as build_model
 from analysis.experiments.models import model_record as record_model
 from analysis.experiments.store import ResultStore, StoreError
 from oscillators import MAX_PERIODS, ForcedOscillator
+from oscillators.engines import DivergenceError
 
 __all__ = [
     "MODEL_OPTIONS",
@@ -31,6 +33,7 @@ __all__ = [
     "check_store",
     "check_transient",
     "initial_operator_state",
+    "naming_divergence",
     "initial_record",
     "model_parameters",
     "model_record",
@@ -78,8 +81,10 @@ def option_error(exc: BaseException, default_option: str | None = None) -> CliEr
     return _option_error(exc, OPTION_OF, default_option)
 
 
-def model_parameters(args: argparse.Namespace) -> Any:
-    """The :class:`~analysis.experiments.models.ModelParameters` given by the options."""
+def model_parameters(args: argparse.Namespace, half_extent: float | None = None) -> Any:
+    """The :class:`~analysis.experiments.models.ModelParameters` given by the options
+    (``half_extent``: the ``preisach-uniform`` triangle of a command that gives it one, e.g.
+    ``hyst identify --saturation``)."""
     spins = args.spins[0] if isinstance(args.spins, list) else args.spins
     fields = None
     if getattr(args, "fields", None) is not None:
@@ -95,8 +100,7 @@ def model_parameters(args: argparse.Namespace) -> Any:
         alpha=args.alpha,
         beta=args.beta,
         plays=args.plays,
-        # set by commands that give preisach-uniform its half-extent (hyst identify --saturation)
-        half_extent=getattr(args, "half_extent", None),
+        half_extent=half_extent,
     )
 
 
@@ -142,9 +146,10 @@ def check_model_options(args: argparse.Namespace) -> None:
             )
 
 
-def model_record(args: argparse.Namespace) -> dict[str, Any]:
-    """The model and the parameters it reads, JSON-ready."""
-    return record_model(args.model, model_parameters(args))
+def model_record(args: argparse.Namespace, half_extent: float | None = None) -> dict[str, Any]:
+    """The model and the parameters it reads, JSON-ready (``half_extent``: as for
+    :func:`model_parameters`)."""
+    return record_model(args.model, model_parameters(args, half_extent))
 
 
 def initial_record(args: argparse.Namespace) -> dict[str, Any]:
@@ -169,20 +174,21 @@ def build_system(
     c = args.coupling if coupling is None else coupling
     op = build_operator(args) if operator is None else operator
     with library_errors(OSCILLATOR_OPTIONS, "--model"):
-        system = ForcedOscillator(op, c, args.damping_ratio, args.frequency)
-    _built.clear()
-    _built.append(system)
-    return system
+        return ForcedOscillator(op, c, args.damping_ratio, args.frequency)
 
 
-#: the system :func:`build_system` built last (a sweep builds one per value, in order)
-_built: list[Any] = []
-
-
-def last_system() -> Any:
-    """The system :func:`build_system` built last in this process, or ``None``: the one a
-    :class:`~oscillators.engines.base.DivergenceError` raised in this process came from."""
-    return _built[-1] if _built else None
+@contextmanager
+def naming_divergence(current_system: Callable[[], Any]) -> Iterator[None]:
+    """Within the block, a :class:`~oscillators.engines.base.DivergenceError` carries the
+    system it came from (attribute ``system``, for the error line's C, ζ, Ω):
+    called when the error passes — a one-system command gives ``lambda: system``, a sweep the
+    system it built last (it builds one per value, in order). An inner block's system wins."""
+    try:
+        yield
+    except DivergenceError as exc:
+        if getattr(exc, "system", None) is None:
+            exc.system = current_system()  # type: ignore[attr-defined]
+        raise
 
 
 def initial_operator_state(args: argparse.Namespace, operator: Any) -> Any:

@@ -1,8 +1,8 @@
-"""What ``hyst identify --input`` makes of its smoothing and unit options: the smoothing law
-(a factor, VARIFORC with its parameters, or ``auto``), the normalisation's divisor, the unit
-of ρ, and the uncertainty and colour options; and what it says about the data: the kind of
-curves (in-field or remanence FORC) and the warnings about them. Errors are one line naming
-the option (:class:`~analysis.cli._parsing.CliError`).
+"""``hyst identify --input``: the words of ``--smoothing`` (a factor or two, ``variforc``,
+``auto``), the unit of ρ, the uncertainty and colour options; and what the command says about
+the data: the kind of curves (in-field or remanence FORC) and the warnings about them. Errors
+are one line naming the option (:class:`~analysis.cli._parsing.CliError`); what the options
+mean together is decided by :class:`~analysis.identification.request.IdentifyRequest`.
 """
 
 from __future__ import annotations
@@ -14,14 +14,11 @@ import numpy as np
 
 from analysis.cli._parsing import CliError, int_at_least, positive_float
 from analysis.identification.curves import KIND_NAMES
-from analysis.identification.normalization import normalized_unit, sample_amount
+from analysis.identification.normalization import normalized_unit
 from analysis.identification.plots import colormap_name
-from analysis.identification.variforc import VariforcParameters
 
 __all__ = [
-    "VARIFORC_OPTIONS",
-    "smoothing_option",
-    "amount_option",
+    "smoothing_words",
     "rho_unit",
     "curve_kind",
     "diagram_name",
@@ -29,61 +26,27 @@ __all__ = [
     "add_uncertainty_options",
 ]
 
-VARIFORC_OPTIONS = ("sc0", "sc1", "sb0", "sb1", "lam")
 
-
-def smoothing_option(
-    args: argparse.Namespace, default: float | None
-) -> tuple[float, float] | VariforcParameters | None:
-    """``--smoothing`` (and the VARIFORC options) as the library takes it."""
-    sm = args.smoothing
-    given = [n for n in VARIFORC_OPTIONS if getattr(args, n, None) is not None]
-    if sm == ["auto"]:
-        if given:
-            option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
-            raise CliError(f"argument {option}: only with --smoothing variforc (auto chooses)")
-        return "auto"  # type: ignore[return-value]
-    if sm is not None and len(sm) == 1 and sm[0] == "variforc":
-        kw = {n: getattr(args, n) for n in given}
-        try:
-            return VariforcParameters(**kw)
-        except ValueError as exc:
-            name = str(exc).split()[0]
-            option = "--lambda" if name == "lambda" else f"--{name}"
-            raise CliError(f"argument {option}: {exc}") from exc
-    if given:
-        option = "--lambda" if given[0] == "lam" else f"--{given[0]}"
-        raise CliError(f"argument {option}: only with --smoothing variforc")
-    if sm is None:
-        return None if default is None else (default, default)
-    if len(sm) not in (1, 2):
+def smoothing_words(
+    words: list[str] | None,
+) -> float | tuple[float, float] | str | None:
+    """``--smoothing`` parsed: ``None``, ``"variforc"``, ``"auto"`` or one or two positive
+    factors (the library's :class:`~analysis.identification.request.IdentifyRequest` decides
+    what the source and the VARIFORC options make of them)."""
+    if words is None:
+        return None
+    if words in (["variforc"], ["auto"]):
+        return words[0]
+    if len(words) not in (1, 2):
         raise CliError(
             f"argument --smoothing: takes one factor SF or two, SF_R SF_S, or 'variforc'; got "
-            f"{len(sm)} values"
+            f"{len(words)} values"
         )
     try:
-        values = [positive_float(x) for x in sm]
+        factors = tuple(positive_float(x) for x in words)
     except (argparse.ArgumentTypeError, ValueError) as exc:
         raise CliError(f"argument --smoothing: {exc} (or 'variforc', 'auto')") from exc
-    return (values[0], values[0]) if len(values) == 1 else (values[0], values[1])
-
-
-def amount_option(args: argparse.Namespace, data: Any) -> float:
-    """The divisor of ``--normalize`` (1 for none), checked before any output is written."""
-    for option, kind in (("--mass", "mass"), ("--volume", "volume")):
-        if getattr(args, kind) is not None and args.normalize != kind:
-            raise CliError(f"argument {option}: only with --normalize {kind}")
-    if args.normalize == "none":
-        return 1.0
-    if data.moment_unit is None:
-        raise CliError(
-            f"argument --normalize: {args.input}: the file states no moment unit, so the "
-            "normalised unit would be unknown"
-        )
-    try:
-        return sample_amount(data.header, args.normalize, getattr(args, args.normalize))
-    except ValueError as exc:
-        raise CliError(f"argument --normalize: {args.input}: {exc}") from exc
+    return factors[0] if len(factors) == 1 else factors
 
 
 def rho_unit(data: Any, normalize: str = "none") -> tuple[float, str]:

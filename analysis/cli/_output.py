@@ -83,8 +83,12 @@ def emit(args: argparse.Namespace, record: dict[str, Any], lines: Sequence[str])
             print(line)
 
 
-def figure_title(args: argparse.Namespace, what: str, **extra: Any) -> str:
-    """``"<what>: <model and parameters>, C=..., zeta=..., Omega=..."`` for a figure title."""
+def figure_title(
+    args: argparse.Namespace, what: str, model: dict[str, Any] | None = None, **extra: Any
+) -> str:
+    """``"<what>: <model and parameters>, C=..., zeta=..., Omega=..."`` for a figure title
+    (``model``: the model record, default :func:`~analysis.cli._build.model_record` of the
+    options)."""
     pairs: list[tuple[str, Any]] = []
     if getattr(args, "coupling", None) is not None and not isinstance(args.coupling, list):
         pairs.append(("C", float(args.coupling)))
@@ -92,7 +96,8 @@ def figure_title(args: argparse.Namespace, what: str, **extra: Any) -> str:
         if getattr(args, name, None) is not None:  # commands without an oscillator omit them
             pairs.append((symbol, float(getattr(args, name))))
     pairs.extend(extra.items())
-    return f"{what}: {describe_model(model_record(args), pairs)}"
+    record = model_record(args) if model is None else model
+    return f"{what}: {describe_model(record, pairs)}"
 
 
 def prepare_out(args: argparse.Namespace) -> Path:

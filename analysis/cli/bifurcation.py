@@ -24,6 +24,7 @@ from analysis.cli._build import (
     check_run_length,
     initial_operator_state,
     model_record,
+    naming_divergence,
 )
 from analysis.cli._options import (
     add_initial_options,
@@ -110,10 +111,7 @@ def _values(args: argparse.Namespace) -> np.ndarray:
 
 def plot_diagram(diagram: Any, path: Path, title: str | None = None) -> Path:
     """Two panels: Poincaré q per value (top) and λ_max (bottom)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     has_lyap = np.any(np.isfinite(diagram.max_exponent))
     fig, axes = plt.subplots(
@@ -147,11 +145,14 @@ def run(args: argparse.Namespace) -> int:
     operator = build_operator(args)
     fixed = dict(coupling=args.coupling, damping_ratio=args.damping_ratio, frequency=args.frequency)
 
+    built: list[Any] = []  # the sweep builds one system per value, in order: the last runs
+
     def make_system(value: float) -> Any:
         params = dict(fixed)
         params[args.parameter] = value
         ns = argparse.Namespace(**{**vars(args), **params})
-        return build_system(ns, operator=operator)
+        built.append(build_system(ns, operator=operator))
+        return built[-1]
 
     # every value must give a valid system: check them all before the sweep starts
     option = "--values" if args.values is not None else "--start/--stop"
@@ -163,20 +164,21 @@ def run(args: argparse.Namespace) -> int:
     state = initial_operator_state(args, operator)
     out = prepare_out(args)
     announce_compilation(args)
-    diagram = bifurcation_diagram(
-        make_system,
-        values,
-        args.periods,
-        args.transient,
-        continuation=not args.no_continuation,
-        lyapunov=args.lyapunov_t > 0,
-        lyapunov_t_end=max(args.lyapunov_t, 1e-9),
-        q0=args.q0,
-        v0=args.v0,
-        operator_state=state,
-        parameter=args.parameter,
-        progress=progress_enabled(args),
-    )
+    with naming_divergence(lambda: built[-1]):
+        diagram = bifurcation_diagram(
+            make_system,
+            values,
+            args.periods,
+            args.transient,
+            continuation=not args.no_continuation,
+            lyapunov=args.lyapunov_t > 0,
+            lyapunov_t_end=max(args.lyapunov_t, 1e-9),
+            q0=args.q0,
+            v0=args.v0,
+            operator_state=state,
+            parameter=args.parameter,
+            progress=progress_enabled(args),
+        )
     npz = diagram.save(out / "bifurcation.npz")
     title = figure_title(args, f"bifurcation in {args.parameter}")
     png = plot_diagram(diagram, out / "bifurcation.png", title)

@@ -23,6 +23,7 @@ from analysis.cli._build import (
     check_model_options,
     initial_record,
     model_record,
+    naming_divergence,
 )
 from analysis.cli._options import (
     add_initial_options,
@@ -101,9 +102,12 @@ def run(args: argparse.Namespace) -> int:
     operator = build_operator(args)
     fixed = dict(coupling=args.coupling, damping_ratio=args.damping_ratio, frequency=args.frequency)
 
+    built: list[Any] = []  # the continuation builds one system per value, in order
+
     def make_system(value: float) -> Any:
         ns = argparse.Namespace(**{**vars(args), **fixed, args.parameter: value})
-        return build_system(ns, operator=operator)
+        built.append(build_system(ns, operator=operator))
+        return built[-1]
 
     for option, value in (("--start", args.start), ("--stop", args.stop)):
         try:
@@ -113,28 +117,29 @@ def run(args: argparse.Namespace) -> int:
     system = make_system(args.start)
     out = prepare_out(args)
     announce_compilation(args)
-    orbit = find_periodic_orbit(
-        system,
-        start_state(args, system),
-        transient=args.transient,
-        max_period=args.max_period,
-        tolerance=args.tolerance,
-    )
-    branch = continue_orbit(
-        make_system,
-        orbit,
-        args.start,
-        args.stop,
-        parameter=args.parameter,
-        method=args.method,
-        step=abs(args.stop - args.start) / args.steps,
-        max_points=args.max_points,
-        tolerance=args.tolerance,
-        locate_tolerance=args.locate_tolerance,
-        transient=args.transient,
-        max_period=args.max_period,
-        symmetric=args.symmetric,
-    )
+    with naming_divergence(lambda: built[-1]):
+        orbit = find_periodic_orbit(
+            system,
+            start_state(args, system),
+            transient=args.transient,
+            max_period=args.max_period,
+            tolerance=args.tolerance,
+        )
+        branch = continue_orbit(
+            make_system,
+            orbit,
+            args.start,
+            args.stop,
+            parameter=args.parameter,
+            method=args.method,
+            step=abs(args.stop - args.start) / args.steps,
+            max_points=args.max_points,
+            tolerance=args.tolerance,
+            locate_tolerance=args.locate_tolerance,
+            transient=args.transient,
+            max_period=args.max_period,
+            symmetric=args.symmetric,
+        )
     record: dict[str, Any] = model_record(args)
     record.update(
         damping_ratio=args.damping_ratio,

@@ -21,6 +21,7 @@ from analysis.cli._build import (
     initial_operator_state,
     initial_record,
     model_record,
+    naming_divergence,
 )
 from analysis.cli._options import (
     add_initial_options,
@@ -121,30 +122,8 @@ def run(args: argparse.Namespace) -> int:
     state = initial_operator_state(args, system.operator)
     out = prepare_out(args)
     announce_compilation(args)
-    if args.points is None:
-        # one integration: spectrum and section over the whole forcing periods in the window
-        ly, sq, sv, _, _ = one_pass_measurements(
-            system,
-            args.t_end,
-            transient,
-            args.q0,
-            args.v0,
-            operator_state=state,
-            magnetization=False,
-            progress=progress_enabled(args),
-        )
-        sec = SimpleNamespace(q=sq, v=sv)
-    else:
-        ly = lyapunov_spectrum(
-            system,
-            t_end=args.t_end,
-            transient=transient,
-            q0=args.q0,
-            v0=args.v0,
-            operator_state=state,
-            progress=progress_enabled(args),
-        )
-        sec = system.poincare_section(n, transient_periods, args.q0, args.v0, operator_state=state)
+    with naming_divergence(lambda: system):
+        ly, sec = _measure(args, system, transient, transient_periods, n, state)
     points = np.column_stack([sec.q, sec.v])
     period = section_period(sec.q, sec.v)
     bc, bc_error = None, ""
@@ -195,11 +174,42 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _plot(sec: Any, bc: Any, title: str, path: Path) -> None:
-    import matplotlib
+def _measure(
+    args: argparse.Namespace,
+    system: Any,
+    transient: float,
+    transient_periods: int,
+    n: int,
+    state: Any,
+) -> tuple[Any, Any]:
+    """The Lyapunov spectrum and the Poincaré section of ``n`` points after the transient."""
+    if args.points is None:
+        # one integration: spectrum and section over the whole forcing periods in the window
+        ly, sq, sv, _, _ = one_pass_measurements(
+            system,
+            args.t_end,
+            transient,
+            args.q0,
+            args.v0,
+            operator_state=state,
+            magnetization=False,
+            progress=progress_enabled(args),
+        )
+        return ly, SimpleNamespace(q=sq, v=sv)
+    ly = lyapunov_spectrum(
+        system,
+        t_end=args.t_end,
+        transient=transient,
+        q0=args.q0,
+        v0=args.v0,
+        operator_state=state,
+        progress=progress_enabled(args),
+    )
+    return ly, system.poincare_section(n, transient_periods, args.q0, args.v0, operator_state=state)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+
+def _plot(sec: Any, bc: Any, title: str, path: Path) -> None:
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     fig, axes = plt.subplots(1, 2, figsize=(9, 4.3))
     axes[0].plot(sec.q, sec.v, ".k", ms=1.0)

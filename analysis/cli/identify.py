@@ -5,6 +5,12 @@ Two sources: an operator of the model registry (``--model``, the shared model op
 measured FORC file (``--input``). The paper's ridge metrics (``N(s; 0, R²) δ(r − p/2)``) are
 computed only for the paper's models (``dimers``, ``erf-play``); other models and measured data
 get data-driven summaries (masses, peak of the FORC density).
+
+The command parses the options into the library's
+:class:`~analysis.identification.request.IdentifyRequest`, which checks them as a whole and
+makes the decisions (the grid, the smoothing law, the paper's reference); the command prints
+the library's message after the option it names, reads the file or builds the operator, and
+renders the report, the figure and the lines.
 """
 
 from __future__ import annotations
@@ -27,12 +33,11 @@ from analysis.cli._build import (
 from analysis.cli._identify_batch import input_files, run_batch
 from analysis.cli._identify_measured import (
     add_uncertainty_options,
-    amount_option,
     curve_kind,
     data_warnings,
     diagram_name,
     rho_unit,
-    smoothing_option,
+    smoothing_words,
 )
 from analysis.cli._options import (
     add_model_options,
@@ -50,18 +55,17 @@ from analysis.cli._parsing import (
     CliError,
     add_subcommand,
     int_at_least,
+    library_errors,
     nonnegative_float,
     positive_float,
 )
 from analysis.experiments.models import build_operator
 from analysis.identification import (
-    auto_grid,
     compare_with_ridge,
     identify_from_curves,
     identify_preisach,
-    protocol_lattice,
 )
-from analysis.identification.forc_io import detect_format, read_forc_file
+from analysis.identification.forc_io import FORMATS, detect_format, read_forc_file
 from analysis.identification.memory import MemoryBoundError
 from analysis.identification.normalization import (
     NORMALIZATIONS,
@@ -73,19 +77,21 @@ from analysis.identification.plots import (
     figure_preisach_density,
     figure_single_density,
 )
+from analysis.identification.request import (
+    COLUMN_LAYOUTS,
+    DEFAULT_MODEL_STEP,
+    DRIFT_CORRECTIONS,
+    VARIFORC_PARAMETERS,
+    IdentifyRequest,
+)
+from analysis.identification.smoothing import WINDOWS
 from analysis.identification.uncertainty import summarize_uncertainty
 from analysis.identification.variforc import VariforcParameters
-from hysteresis._validation import check_grid_nodes
 
 __all__ = ["register", "run"]
 
 #: models this command identifies (the registry's names)
 IDENTIFY_MODELS = ("dimers", "erf-play", "play", "preisach-uniform")
-#: models whose density the paper states (N(s; 0, R²) δ(r − p/2)): only these get its metrics
-PAPER_MODELS = ("dimers", "erf-play")
-FORMATS = ("auto", "csv", "micromag", "lakeshore", "blocks", "segments")
-#: the grid step of a model's identification (the paper's fig:preis_dens)
-DEFAULT_STEP = 0.1
 
 
 def register(subparsers: Any) -> None:
@@ -109,7 +115,7 @@ def register(subparsers: Any) -> None:
         "--step",
         type=positive_float,
         default=None,
-        help=f"models: grid step Delta (> 0; default {DEFAULT_STEP:g})",
+        help=f"models: grid step Delta (> 0; default {DEFAULT_MODEL_STEP:g})",
     )
     g.add_argument(
         "--saturation",
@@ -199,7 +205,7 @@ def register(subparsers: Any) -> None:
     )
     g.add_argument(
         "--columns",
-        choices=("field,moment", "moment,field"),
+        choices=COLUMN_LAYOUTS,
         default=None,
         help="--input data-only file (two columns, no header): which column is which "
         "(default field,moment)",
@@ -212,13 +218,13 @@ def register(subparsers: Any) -> None:
     )
     g.add_argument(
         "--drift-correction",
-        choices=("none", "multiplicative", "additive"),
+        choices=DRIFT_CORRECTIONS,
         default="none",
         help="--input: linear drift correction from the calibration points (MicroMag, Lake Shore)",
     )
     g.add_argument(
         "--window",
-        choices=("rs", "pike"),
+        choices=WINDOWS,
         default="rs",
         help="--input: smoothing window, |dr|,|ds| <= SF steps (rs) or Pike et al. (1999)'s "
         "square |dB|,|dB_r| <= SF steps (pike)",
@@ -242,119 +248,140 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _max_memory(args: argparse.Namespace) -> float | None:
-    """``--max-memory`` in bytes (``None``: the library's default bound)."""
-    gb = getattr(args, "max_memory", None)
-    return None if gb is None else gb * 1e9
+#: library parameter -> the option of this command that carries it
+OPTIONS = {
+    "model": "--model",
+    "inputs": "--input",
+    "workers": "--workers",
+    "step": "--step",
+    "saturation": "--saturation",
+    "smoothing": "--smoothing",
+    "sc0": "--sc0",
+    "sc1": "--sc1",
+    "sb0": "--sb0",
+    "sb1": "--sb1",
+    "lam": "--lambda",
+    "lambda": "--lambda",
+    "file_format": "--format",
+    "columns": "--columns",
+    "drift_correction": "--drift-correction",
+    "normalize": "--normalize",
+    "mass": "--mass",
+    "volume": "--volume",
+    "grid_step": "--grid-step",
+    "window": "--window",
+    "reversible_ridge": "--reversible-ridge",
+    "uncertainty": "--uncertainty",
+    "bootstrap": "--bootstrap",
+    "bootstrap_seed": "--bootstrap-seed",
+    "cmap": "--cmap",
+    "max_memory": "--max-memory",
+}
+
+
+def request_from(args: argparse.Namespace) -> IdentifyRequest:
+    """The library's :class:`~analysis.identification.request.IdentifyRequest` of the options
+    (it checks them as a whole; its message is printed after the option it names). With
+    ``--input`` the model options are not read."""
+    variforc = {n: getattr(args, n) for n in VARIFORC_PARAMETERS if getattr(args, n) is not None}
+    with library_errors(OPTIONS):
+        return IdentifyRequest(
+            model=None if args.input is not None else args.model,
+            explicit_fields=args.fields is not None,
+            inputs=tuple(args.input or ()),
+            workers=args.workers,
+            step=args.step,
+            saturation=args.saturation,
+            smoothing=smoothing_words(args.smoothing),
+            variforc=variforc,
+            file_format=args.format,
+            columns=args.columns,
+            drift_correction=args.drift_correction,
+            normalize=args.normalize,
+            mass=args.mass,
+            volume=args.volume,
+            grid_step=args.grid_step,
+            window=args.window,
+            reversible_ridge=args.reversible_ridge,
+            uncertainty=args.uncertainty,
+            bootstrap=args.bootstrap,
+            bootstrap_seed=args.bootstrap_seed,
+            cmap=args.cmap,
+            max_memory=None if args.max_memory is None else args.max_memory * 1e9,
+        )
 
 
 def run(args: argparse.Namespace) -> int:
-    """Validate every option (and read ``--input`` or build the model), then identify."""
+    """Check the options (the request), read ``--input`` or build the model, identify, write
+    and report."""
     t0 = time.perf_counter()
-    if args.input is not None:
-        for option, given in (("--step", args.step), ("--saturation", args.saturation)):
-            if given is not None:
-                raise CliError(
-                    f"argument {option}: only for models; with --input the lattice comes from "
-                    "the measurement (--grid-step)"
-                )
-        files = input_files(args.input)
-        if len(files) > 1 or any(p.is_dir() for p in args.input):
-            smoothing_option(args, 3.0)  # option errors before any work
+    request = request_from(args)
+    if request.measured:
+        files = input_files(list(request.inputs))
+        if request.batch:
             return run_batch(args, files, _one_file)
-        if args.workers != 1:
-            raise CliError("argument --workers: only for a batch (a directory or several files)")
-        args.input = files[0]
-        measured = _prepare_measured(args)
+        measured = _read_measured(request, files[0])
         out = prepare_out(args)
-        return _run_measured(args, out, t0, *measured)
-    for option, given in (
-        ("--workers", args.workers != 1),
-        ("--grid-step", args.grid_step is not None),
-        ("--uncertainty", args.uncertainty),
-        ("--bootstrap", args.bootstrap != 200),
-        ("--cmap", args.cmap is not None),
-        ("--bootstrap-seed", args.bootstrap_seed != 0),
-        ("--smoothing", args.smoothing in (["variforc"], ["auto"])),
-        ("--normalize", args.normalize != "none"),
-        ("--columns", args.columns is not None),
-        ("--mass", args.mass is not None),
-        ("--volume", args.volume is not None),
-        ("--reversible-ridge", args.reversible_ridge),
-        ("--drift-correction", args.drift_correction != "none"),
-        ("--format", args.format != "auto"),
-    ):
-        if given:
-            raise CliError(f"argument {option}: only with --input (a measured FORC file)")
-    if args.step is None:
-        args.step = DEFAULT_STEP
-    model = _prepare_model(args)
-    out = prepare_out(args)
-    announce_compilation(args)
-    return _run_model(args, out, t0, *model)
+        report, lines = _identify_measured(request, files[0], out, t0, *measured)
+    else:
+        model = _prepare_model(args, request)
+        out = prepare_out(args)
+        announce_compilation(args)
+        report, lines = _identify_model(args, request, out, t0, *model)
+    emit(args, report, lines)
+    return 0
 
 
 # -- models ----------------------------------------------------------------------------------
 
 
-def _prepare_model(args: argparse.Namespace) -> tuple[Any, Any, float, Any]:
-    """The operator, its thresholds (dimers), the grid's half-extent and the smoothing."""
-
+def _prepare_model(args: argparse.Namespace, request: IdentifyRequest) -> tuple[Any, Any, float]:
+    """The operator, its thresholds (dimers) and the grid's half-extent."""
     check_model_options(args)
-    smoothing = smoothing_option(args, None)
-    # preisach-uniform: the triangle is the grid (--saturation), so records and titles name it
-    args.half_extent = args.saturation if args.model == "preisach-uniform" else None
-    params = model_parameters(args)
+    params = model_parameters(args, half_extent=request.operator_half_extent)
     try:
         operator = build_operator(args.model, params)
     except (ValueError, TypeError) as exc:
         raise option_error(exc, "--model") from exc
-    saturation = args.saturation or (5.0 * args.spread + 0.5 * args.width)
-    thresholds = None
-    if args.model == "dimers":
-        thresholds = operator.thresholds()
-        if args.saturation is None:
-            extreme = float(np.max(np.abs([thresholds.alpha, thresholds.beta])))
-            saturation = max(saturation, extreme)
-    try:
-        # the reversal curves cost nodes²/2 operator steps: refuse a grid without bound here,
-        # naming the option, rather than inside the identification
-        check_grid_nodes(args.step, saturation)
-    except ValueError as exc:
-        raise CliError(f"argument --step: {exc}") from exc
-    return operator, thresholds, float(saturation), smoothing
+    thresholds = operator.thresholds() if args.model == "dimers" else None
+    extreme = None
+    if thresholds is not None:
+        extreme = float(np.max(np.abs([thresholds.alpha, thresholds.beta])))
+    # the reversal curves cost nodes²/2 operator steps: a grid without bound is refused here,
+    # naming the option, rather than inside the identification
+    with library_errors(OPTIONS, "--step"):
+        saturation = request.grid_half_extent(args.width, args.spread, extreme)
+    return operator, thresholds, saturation
 
 
-def _run_model(
+def _identify_model(
     args: argparse.Namespace,
+    request: IdentifyRequest,
     out: Path,
     t0: float,
     operator: Any,
     thresholds: Any,
     saturation: float,
-    smoothing: tuple[float, float] | None,
-) -> int:
-
+) -> tuple[dict[str, Any], list[str]]:
+    """Identify the operator, write identify.json and the figure; the report and its lines."""
     centres = None if thresholds is None else thresholds.centre
+    smoothing = request.smoothing
     try:
         ident = identify_preisach(
             operator,
-            args.step,
+            request.step,
             saturation,
             smoothing=smoothing,
             progress=progress_enabled(args),
-            max_memory=_max_memory(args),
+            max_memory=request.max_memory,
         )
     except MemoryBoundError as exc:
         raise CliError(f"argument --step: {exc}") from exc
-    report: dict[str, Any] = model_record(args)
-    report.update(step=args.step, saturation=saturation, grid_nodes=int(ident.alpha.size))
-    # the paper's ridge metrics: only for the paper's models (dimers, erf play), never over
-    # user data or other operators
+    model = model_record(args, half_extent=request.operator_half_extent)
+    report: dict[str, Any] = dict(model)
+    report.update(step=request.step, saturation=saturation, grid_nodes=int(ident.alpha.size))
     cmp = None
-    # explicit --fields are the user's dimers, not the paper's disorder N(s; 0, R²)
-    paper = args.model in PAPER_MODELS and args.fields is None
-    if paper:
+    if request.paper_reference:
         cmp = compare_with_ridge(ident, args.width, args.spread, centres=centres)
         report.update(cmp.as_dict())
     else:
@@ -365,14 +392,13 @@ def _run_model(
         )
     report["mass_outside_grid"] = ident.mass_outside_grid
     report["smoothing"] = list(smoothing) if smoothing else None
-    title = figure_title(args, "Preisach density", **{"Δ": float(args.step)})
-    if paper and args.model == "dimers":
-        # the paper's figure: the erf play (N -> infinity) next to the finite ensemble
+    title = figure_title(args, "Preisach density", model=model, **{"Δ": float(request.step)})
+    if request.paper_figure:
         limit = identify_preisach(
             build_operator("erf-play", width=args.width, spread=args.spread),
-            args.step,
+            request.step,
             saturation,
-            max_memory=_max_memory(args),
+            max_memory=request.max_memory,
         )
         report["erf_play"] = compare_with_ridge(limit, args.width, args.spread).as_dict()
         paths = figure_preisach_density(
@@ -392,7 +418,7 @@ def _run_model(
             f"identify_{args.model}".replace(".", "_"),
             title=title,
             smoothed=smoothing is not None,
-            spread=args.spread if paper else None,
+            spread=args.spread if request.paper_reference else None,
         )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
@@ -415,54 +441,43 @@ def _run_model(
             )
         )
     written = f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}"
-    emit(args, report, [summary, written])
-    return 0
+    return report, [summary, written]
 
 
 # -- measured data ---------------------------------------------------------------------------
 
 
-def _prepare_measured(args: argparse.Namespace) -> tuple[str, Any, tuple[float, float]]:
-    """Check ``--input`` and the options that go with it and read the file (before any output
-    is written); errors name the option (and the file and line)."""
-
-    path = Path(args.input)
+def _read_measured(request: IdentifyRequest, path: Path) -> tuple[str, Any, float]:
+    """Read one FORC file (before any output is written): its format, its data and the
+    normalisation's divisor; errors name the option (and the file and line)."""
     if not path.exists():
         raise CliError(f"argument --input: {path}: no such file")
     if not path.is_file():
         raise CliError(f"argument --input: {path}: not a regular file")
     if not os.access(path, os.R_OK):
         raise CliError(f"argument --input: {path}: not readable")
-    smoothing = smoothing_option(args, 3.0)
     try:
-        fmt = detect_format(path) if args.format == "auto" else args.format
+        fmt = detect_format(path) if request.file_format == "auto" else request.file_format
     except (ValueError, OSError) as exc:
         raise CliError(f"argument --input: {_about(path, exc)}") from exc
-    kwargs: dict[str, Any] = {}
-    if args.columns is not None:
-        if fmt != "blocks":
-            raise CliError(
-                f"argument --columns: for data-only files (two columns, no header), not {fmt!r}"
-            )
-        kwargs["columns"] = args.columns
-    if args.drift_correction != "none":
-        if fmt not in ("micromag", "lakeshore"):
-            raise CliError(
-                "argument --drift-correction: needs calibration points (MicroMag or Lake Shore "
-                f"files), not {fmt!r}"
-            )
-        kwargs["drift_correction"] = args.drift_correction
+    with library_errors(OPTIONS):
+        reader_options = request.reader_options(fmt)
     try:
-        data = read_forc_file(path, fmt, max_memory=_max_memory(args), **kwargs)
+        data = read_forc_file(path, fmt, max_memory=request.max_memory, **reader_options)
     except MemoryBoundError as exc:
         raise CliError(f"argument --input: {path}: {exc}") from exc
     except (ValueError, OSError) as exc:
         # a user's file: one line naming the problem (and its line), not a traceback
         raise CliError(f"argument --input: {_about(path, exc)}") from exc
-    if args.grid_step is not None:
-        _check_grid_step(args, data.curves)
-    args.amount = amount_option(args, data)
-    return fmt, data, smoothing  # type: ignore[return-value]
+    try:
+        request.check_grid_step(data.curves)
+    except ValueError as exc:
+        raise CliError(f"argument --grid-step: {_about(path, exc)}") from exc
+    try:
+        amount = request.amount(data.moment_unit, data.header)
+    except ValueError as exc:
+        raise CliError(f"argument --normalize: {_about(path, exc)}") from exc
+    return fmt, data, amount
 
 
 def _about(path: Path, exc: Exception) -> str:
@@ -471,63 +486,42 @@ def _about(path: Path, exc: Exception) -> str:
     return msg if msg.startswith(f"{path}: ") else f"{path}: {msg}"
 
 
-def _check_grid_step(args: argparse.Namespace, curves: Any) -> None:
-    """``--grid-step`` applies to the protocol lattice only (fields that differ from curve to
-    curve); refuse it on data whose fields share one grid (it would be ignored) and refuse a
-    lattice too fine or too coarse for the data, before any output is written."""
-
-    # the rule of identify_from_curves(grid="auto"): measured fields -> protocol lattice
-    if auto_grid(curves) == "native":
-        raise CliError(
-            f"argument --grid-step: {args.input} has its fields on one shared grid (identified "
-            "on that grid); --grid-step applies to measured fields that differ curve by curve"
-        )
-    try:
-        protocol_lattice(curves, args.grid_step)
-    except ValueError as exc:
-        raise CliError(f"argument --grid-step: {args.input}: {exc}") from exc
-
-
-def _run_measured(
-    args: argparse.Namespace,
+def _identify_measured(
+    request: IdentifyRequest,
+    path: Path,
     out: Path,
     t0: float,
     fmt: str,
     data: Any,
-    smoothing: tuple[float, float] | VariforcParameters,
-) -> int:
-    """Measured FORC data: data-driven summaries only (no paper overlay)."""
-
+    amount: float,
+) -> tuple[dict[str, Any], list[str]]:
+    """Measured FORC data: data-driven summaries only (no paper overlay); writes
+    identify.json and the FORC diagram into ``out``; the report and its lines."""
+    smoothing = request.smoothing
     variforc = isinstance(smoothing, (VariforcParameters, str))
-    if (variforc or args.uncertainty) and args.window != "rs":
-        raise CliError(
-            "argument --window: VARIFORC and --uncertainty use the rs window (the VARIFORC "
-            "law is defined across Bc and along Bu)"
-        )
     try:
         ident = identify_from_curves(
             data.curves,
             smoothing=smoothing,
             output_range=(-math.inf, math.inf),
-            extend=args.reversible_ridge,
-            step=args.grid_step,
-            window=args.window,
-            max_memory=_max_memory(args),
-            uncertainty=args.uncertainty,
+            extend=request.reversible_ridge,
+            step=request.grid_step,
+            window=request.window,
+            max_memory=request.max_memory,
+            uncertainty=request.uncertainty,
         )
     except MemoryBoundError as exc:
-        raise CliError(f"argument --input: {args.input}: {exc}") from exc
+        raise CliError(f"argument --input: {path}: {exc}") from exc
     except ValueError as exc:
         option = "--grid-step" if str(exc).startswith("step") else "--input"
-        raise CliError(f"argument {option}: {args.input}: {exc}") from exc
+        raise CliError(f"argument {option}: {path}: {exc}") from exc
     bc, bu, rho = ident.density_peak()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
     # ρ in the field's unit: moment per T² (the readers give fields in mT: 1/mT² = 10⁶/T²)
-    rho_factor, rho_name = rho_unit(data, args.normalize)
-    amount = getattr(args, "amount", 1.0)
+    rho_factor, rho_name = rho_unit(data, request.normalize)
     rho_factor /= amount
     report: dict[str, Any] = {
-        "input": str(args.input),
+        "input": str(path),
         "format": fmt,
         "curve_kind": curve_kind(data),
         "warnings": data_warnings(data, ident),
@@ -545,27 +539,27 @@ def _run_measured(
         "smoothing_factor": None if variforc else list(smoothing),
         "variforc": ident.variforc,
         "smoothing_choice": ident.smoothing_choice,
-        "window": args.window,
-        "reversible_ridge": args.reversible_ridge,
+        "window": request.window,
+        "reversible_ridge": request.reversible_ridge,
         "peak_bc_mT": bc,
         "peak_bu_mT": bu,
         "peak_rho": rho * rho_factor,
         "rho_unit": rho_name,
         "irreversible_mass": ident.irreversible_mass / amount,
         "reversible_mass": ident.reversible_mass / amount,
-        "mass_unit": normalized_unit(data.moment_unit, args.normalize),
-        "normalize": args.normalize,
-        "normalized_by": None if args.normalize == "none" else amount,
-        "drift_correction": args.drift_correction,
+        "mass_unit": normalized_unit(data.moment_unit, request.normalize),
+        "normalize": request.normalize,
+        "normalized_by": None if request.normalize == "none" else amount,
+        "drift_correction": request.drift_correction,
     }
     interval = ""
-    if args.uncertainty:
-        u = summarize_uncertainty(ident, n_boot=args.bootstrap, seed=args.bootstrap_seed)
+    if request.uncertainty:
+        u = summarize_uncertainty(ident, n_boot=request.bootstrap, seed=request.bootstrap_seed)
         report.update(
             peak_rho_se=u.peak_rho_se * rho_factor,
             peak_bc_interval_mT=list(u.peak_bc_interval),
             peak_bu_interval_mT=list(u.peak_bu_interval),
-            peak_interval_method=f"parametric bootstrap, {args.bootstrap} replicates, 95 %",
+            peak_interval_method=f"parametric bootstrap, {request.bootstrap} replicates, 95 %",
             irreversible_mass_se=u.irreversible_mass_se / amount,
             significant_fraction=u.significant_fraction,
             noise_sigma=u.noise_sigma,
@@ -574,7 +568,7 @@ def _run_measured(
             f" (Bc in [{u.peak_bc_interval[0]:.4g}, {u.peak_bc_interval[1]:.4g}], Bu in "
             f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
         )
-    stem = "identify_" + Path(args.input).stem.replace(".", "_")
+    stem = "identify_" + path.stem.replace(".", "_")
     # measured data: the title names the file and the identification's parameters (there is
     # no model)
     if variforc:
@@ -583,35 +577,32 @@ def _run_measured(
             law += " (chosen automatically)"
     else:
         law = f"SF={smoothing[0]:g}/{smoothing[1]:g}"
-    title = f"{diagram_name(data)}: {Path(args.input).name}\n"
-    title += f"{law}, Δ={step:.3g} mT, window={args.window}"
+    title = f"{diagram_name(data)}: {path.name}\n"
+    title += f"{law}, Δ={step:.3g} mT, window={request.window}"
     paths = figure_forc(
         ident,
         out,
         stem,
         title=title,
         field_unit="mT",
-        moment_unit=normalized_unit(data.moment_unit, args.normalize),
+        moment_unit=normalized_unit(data.moment_unit, request.normalize),
         rho_factor=rho_factor,
         rho_unit=rho_name,
-        cmap=args.cmap or FORCINEL,
+        cmap=request.cmap or FORCINEL,
     )
     report["figure_title"] = title
     report["figures"] = [str(p) for p in paths]
     report["seconds"] = time.perf_counter() - t0
     (out / "identify.json").write_text(to_json(report, indent=2) + "\n")
     mass = f"{report['irreversible_mass']:.4g}"
-    if args.uncertainty:
+    if request.uncertainty:
         mass += f" ± {report['irreversible_mass_se']:.2g}"
     lines = [
         f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
         f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}; irreversible mass {mass}",
         f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}",
     ]
-    if getattr(args, "batch_child", False):
-        return report  # type: ignore[return-value]
-    emit(args, report, lines)
-    return 0
+    return report, lines
 
 
 # -- batches (the loop and the summary: analysis/cli/_identify_batch.py) ------------------
@@ -619,16 +610,12 @@ def _run_measured(
 
 def _one_file(args: argparse.Namespace, path: Path, out: Path) -> dict[str, Any]:
     """Identify one file of a batch into ``out``; the report, or the error as one line."""
-    child = argparse.Namespace(**vars(args))
-    child.input = path
-    child.out = out
-    child.batch_child = True
-    child.json = False
     try:
-        measured = _prepare_measured(child)
+        request = request_from(args)
+        measured = _read_measured(request, path)
         out.mkdir(parents=True, exist_ok=True)
-        report = _run_measured(child, out, time.perf_counter(), *measured)
-        report["status"] = "ok"
-        return report  # type: ignore[return-value]
+        report, _ = _identify_measured(request, path, out, time.perf_counter(), *measured)
     except CliError as exc:
         return {"input": str(path), "status": "failed", "error": str(exc)}
+    report["status"] = "ok"
+    return report

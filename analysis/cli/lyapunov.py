@@ -18,6 +18,7 @@ from analysis.cli._build import (
     initial_operator_state,
     initial_record,
     model_record,
+    naming_divergence,
 )
 from analysis.cli._options import (
     add_initial_options,
@@ -68,16 +69,17 @@ def run(args: argparse.Namespace) -> int:
     state = initial_operator_state(args, system.operator)
     out = prepare_out(args)
     announce_compilation(args)
-    res = lyapunov_spectrum(
-        system,
-        t_end=args.t_end,
-        transient=transient,
-        q0=args.q0,
-        v0=args.v0,
-        operator_state=state,
-        include_phase=args.include_phase,
-        progress=progress_enabled(args),
-    )
+    with naming_divergence(lambda: system):
+        res = lyapunov_spectrum(
+            system,
+            t_end=args.t_end,
+            transient=transient,
+            q0=args.q0,
+            v0=args.v0,
+            operator_state=state,
+            include_phase=args.include_phase,
+            progress=progress_enabled(args),
+        )
     record: dict[str, Any] = model_record(args)
     record.update(
         coupling=args.coupling,

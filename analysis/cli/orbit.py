@@ -26,6 +26,7 @@ from analysis.cli._build import (
     initial_operator_state,
     initial_record,
     model_record,
+    naming_divergence,
 )
 from analysis.cli._options import (
     add_initial_options,
@@ -87,13 +88,14 @@ def run(args: argparse.Namespace) -> int:
     state = start_state(args, system)
     out = prepare_out(args)
     announce_compilation(args)
-    orbit = find_periodic_orbit(
-        system,
-        state,
-        transient=args.transient,
-        max_period=args.max_period,
-        tolerance=args.tolerance,
-    )
+    with naming_divergence(lambda: system):
+        orbit = find_periodic_orbit(
+            system,
+            state,
+            transient=args.transient,
+            max_period=args.max_period,
+            tolerance=args.tolerance,
+        )
     record: dict[str, Any] = model_record(args)
     record.update(
         coupling=args.coupling,

@@ -14,6 +14,7 @@ from analysis.cli._build import (
     initial_operator_state,
     initial_record,
     model_record,
+    naming_divergence,
 )
 from analysis.cli._options import (
     add_initial_options,
@@ -62,9 +63,10 @@ def run(args: argparse.Namespace) -> int:
     state = initial_operator_state(args, system.operator)
     out = prepare_out(args)
     announce_compilation(args)
-    sec = system.poincare_section(
-        args.periods, args.transient, args.q0, args.v0, operator_state=state
-    )
+    with naming_divergence(lambda: system):
+        sec = system.poincare_section(
+            args.periods, args.transient, args.q0, args.v0, operator_state=state
+        )
     data = {"q": sec.q, "v": sec.v, "M": sec.M}
     if sec.w is not None:
         data["w"] = sec.w
@@ -86,10 +88,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _plot(sec: Any, title: str, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     fig, ax = plt.subplots(figsize=(6.5, 5))
     sc = ax.scatter(sec.q, sec.v, c=sec.M, s=2, cmap="coolwarm", lw=0)

@@ -15,6 +15,7 @@ from analysis.cli._build import (
     initial_operator_state,
     initial_record,
     model_record,
+    naming_divergence,
 )
 from analysis.cli._options import (
     add_initial_options,
@@ -73,9 +74,10 @@ def run(args: argparse.Namespace) -> int:
     state = initial_operator_state(args, system.operator)
     out = prepare_out(args)
     announce_compilation(args)
-    traj = system.trajectory(
-        args.t_end, args.q0, args.v0, operator_state=state, sample_dt=args.sample_dt
-    )
+    with naming_divergence(lambda: system):
+        traj = system.trajectory(
+            args.t_end, args.q0, args.v0, operator_state=state, sample_dt=args.sample_dt
+        )
     data = {"t": traj.t, "q": traj.q, "v": traj.v, "phi": traj.phi, "M": traj.M}
     if traj.w is not None:
         data["w"] = traj.w
@@ -106,10 +108,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _plot(traj: Any, title: str, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     fig, ax = plt.subplots(1, 3, figsize=(13, 4))
     ax[0].plot(traj.t, traj.q, lw=0.6)

@@ -26,10 +26,7 @@ def plot_study(record: dict, path: str | os.PathLike) -> None:
     both, D_BC of the section), the neutral exponents and live memory directions against σ_r
     for the continuum (σ_r = 0, the erf play, drawn at the left edge), and the finite-N means
     of D_KY and D_BC against σ_r per N."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # drawing only; the backend stays the caller's
 
     fig, axes = plt.subplots(2, 2, figsize=(12, 8.5))
     (ax_l, ax_d), (ax_n, ax_f) = axes

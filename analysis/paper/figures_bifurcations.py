@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from analysis.dynamics.period_adding import period_adding
 from analysis.experiments.parameters import (
     DAMPING_RATIO,
     FREQUENCY,
@@ -39,6 +40,7 @@ from analysis.paper.verdicts import (
     CASCADE_MIN_WINDOWS,
     MIN_WINDOW_VALUES,
     cascade_verdict,
+    is_period_adding,
     window_mask,
 )
 
@@ -52,41 +54,26 @@ CASCADE_ZOOM = (9.3, 7.0)
 
 def _cascade_claim(zoom: dict, n_periods: int, run: str) -> Claim:
     """Onset of the period-adding cascade and the periods below it (zoomed sweep)."""
-    cs = np.asarray(zoom["couplings"])
     per = np.asarray(zoom["period"])
-    no_switch = np.nonzero(per == 1)[0]
-    # the onset: between the last C (coming from above) still on the period-1 orbit and the next
-    first = int(np.argmax(per != 1)) if np.any(per != 1) else cs.size
-    onset = 0.5 * (cs[first - 1] + cs[first]) if 0 < first < cs.size else float("nan")
-    below = [(float(c), int(p)) for c, p in zip(cs[first:], per[first:], strict=True)]
-    # periodic windows in sweep order (C decreasing); "wide" ones hold for >= 2 successive C
-    windows: list[list[int]] = []  # [period, number of successive C]
-    for _, p in below:
-        if windows and windows[-1][0] == p:
-            windows[-1][1] += 1
-        else:
-            windows.append([p, 1])
-    wide = [p for p, count in windows if p > 1 and count >= 2]
-    steps = np.diff(wide) if len(wide) > 1 else np.array([], dtype=int)
-    # period-adding: the periods of the periodic windows fall monotonically as C moves away from
-    # the onset (grow without bound as C -> onset), by small steps
-    # (period 0: none up to n/2 found, i.e. longer, or chaos)
-    long_near_onset = any(p == 0 or p >= 20 for _, p in below[:5])
-    adding = bool(len(wide) >= 3 and np.all(steps < 0) and np.all(steps >= -2) and long_near_onset)
-    narrow = [p for p, count in windows if p > 1 and count < 2]
+    cascade = period_adding(zoom["couplings"], per)
+    below, wide, step = cascade.below, list(cascade.wide), cascade.grid_step
     seq = ", ".join(f"{c:.2f}:{p if p else f'>{n_periods // 2}'}" for c, p in below[:10])
-    step = float(abs(cs[1] - cs[0])) if cs.size > 1 else float("inf")
-    outcome = cascade_verdict(onset, step, adding, len(below), int(per[0]) if per.size else 0)
+    outcome = cascade_verdict(
+        cascade.onset,
+        step,
+        is_period_adding(cascade),
+        len(below),
+        int(per[0]) if per.size else 0,
+    )
     return Claim(
         claim="N=2, b=(1,-1): coming from large C, a period-adding cascade starts at C ≈ 9 "
         "(verdict: onset within 0.25 of 9; periods >= 20 right below the onset; the periods of "
         "successive windows (>= 2 grid values wide) fall monotonically by 1 or 2 as C decreases)",
         paper="period-adding cascade at C = 9 (theory: 1/(2ζ) + β = 9)",
-        measured=f"period-1 orbit (no switch) down to C="
-        f"{cs[no_switch[-1]] if no_switch.size else float('nan'):.3f}; onset C≈"
-        f"{fmt_value(onset)}; periodic windows (>= 2 successive C) in sweep order {wide} "
-        f"(steps {sorted(set(steps.tolist()))}); narrow windows between them {narrow}; "
-        f"C:period {seq}",
+        measured=f"period-1 orbit (no switch) down to C={cascade.no_switch_end:.3f}; onset C≈"
+        f"{fmt_value(cascade.onset)}; periodic windows (>= 2 successive C) in sweep order {wide} "
+        f"(steps {sorted(set(cascade.steps))}); narrow windows between them "
+        f"{list(cascade.narrow)}; C:period {seq}",
         run=run,
         verdict=outcome,
         evidence=f"zoom grid step ΔC = {step:.3f}: the onset is known to ±{0.5 * step:.3f} "

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from analysis.dynamics.period_adding import PeriodAdding
 from analysis.experiments.parameters import (
     PAPER_LARGEST_N,
 )
@@ -26,6 +27,7 @@ __all__ = [
     "MIN_WINDOW_VALUES",
     "CASCADE_MIN_WINDOWS",
     "window_mask",
+    "is_period_adding",
     "cascade_verdict",
     "sap_falls",
     "local_exponent",
@@ -45,6 +47,21 @@ CASCADE_MIN_WINDOWS = 3
 
 def window_mask(cs: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return (cs >= lo - 1e-9) & (cs <= hi + 1e-9)
+
+
+def is_period_adding(cascade: PeriodAdding) -> bool:
+    """Whether the windows below the onset (measured by
+    :func:`~analysis.dynamics.period_adding.period_adding`) are a period-adding cascade: at
+    least :data:`CASCADE_MIN_WINDOWS` wide windows whose periods fall monotonically by small
+    steps (1 or 2) as C moves away from the onset, and long periods (or none resolved) right
+    below the onset, where they grow without bound."""
+    steps = np.asarray(cascade.steps, dtype=int)
+    return bool(
+        len(cascade.wide) >= CASCADE_MIN_WINDOWS
+        and np.all(steps < 0)
+        and np.all(steps >= -2)
+        and cascade.long_near_onset
+    )
 
 
 def cascade_verdict(

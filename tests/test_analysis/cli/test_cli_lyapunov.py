@@ -164,3 +164,33 @@ def test_trajectory_and_poincare_files(tmp_path, capsys):
     sec = np.load(tmp_path / "poincare.npz")
     assert sec["q"].size == 30
     assert (tmp_path / "poincare.png").stat().st_size > 1000
+
+
+def test_drawing_commands_keep_the_callers_matplotlib_backend(tmp_path):
+    """A program that chose a backend and calls the commands (or imports their modules) keeps it:
+    the commands draw without ``matplotlib.use``."""
+    relay = ["--model", "relay", "--out", str(tmp_path), "--quiet"]
+    commands = [
+        ["trajectory", *relay, "--coupling", "2", "--t-end", "10"],
+        ["poincare", *relay, "--coupling", "2", "--periods", "10", "--transient-periods", "2"],
+        ["bifurcation", *relay, "--values", "1", "2", "--periods", "4", "--transient", "2",
+         "--lyapunov-t", "0"],
+        ["dimension", *relay, "--coupling", "2", "--t-end", "600", "--transient", "20"],
+    ]  # fmt: skip
+    code = (
+        "import sys, json, matplotlib; matplotlib.use('svg'); "
+        "from analysis.cli import main; "
+        "codes = [main(argv) for argv in json.loads(sys.argv[1])]; "
+        "print(codes, matplotlib.get_backend())"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code, json.dumps(commands)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] == "[0, 0, 0, 0] svg"
+    for name in ("trajectory", "poincare", "bifurcation", "dimension"):
+        assert (tmp_path / f"{name}.png").stat().st_size > 1000

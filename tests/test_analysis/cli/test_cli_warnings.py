@@ -10,8 +10,10 @@ from pathlib import Path
 
 import pytest
 
+from analysis.cli._build import naming_divergence
 from hysteresis import PlayOperator, PrandtlIshlinskii
 from oscillators import ForcedOscillator
+from oscillators.engines import DivergenceError
 
 
 def test_warning_only_where_c_times_the_largest_slope_reaches_one():
@@ -78,3 +80,20 @@ def test_divergence_in_a_sweep_names_the_value_and_warns_once(tmp_path):
     assert lines[0].startswith("hyst bifurcation: warning: ") and "C = 2.5" in lines[0]
     assert lines[1].startswith("hyst bifurcation: error: DivergenceError")
     assert lines[1].endswith("(coupling C = 2.5, ζ = 0.05, Ω = 1)")
+
+
+def test_naming_divergence_attaches_the_running_system_and_an_inner_one_wins():
+    outer, inner = object(), object()
+    with pytest.raises(DivergenceError) as exc:
+        with naming_divergence(lambda: outer):
+            raise DivergenceError("diverged")
+    assert exc.value.system is outer
+    with pytest.raises(DivergenceError) as exc:
+        with naming_divergence(lambda: outer), naming_divergence(lambda: inner):
+            raise DivergenceError("diverged")
+    assert exc.value.system is inner
+    # other errors pass untouched
+    with pytest.raises(ValueError) as other:
+        with naming_divergence(lambda: outer):
+            raise ValueError("bad")
+    assert not hasattr(other.value, "system")

@@ -176,3 +176,33 @@ def test_cli_error_from_a_real_process(tmp_path):
     assert (
         proc.stderr.strip() == "hyst width-disorder: error: argument --spins: must be even, got 7"
     )
+
+
+def test_plot_study_keeps_the_callers_matplotlib_backend(tmp_path):
+    """Importing and calling the plot leaves the backend a program chose (no ``matplotlib.use``)."""
+    row = {"width_spread": 0.2, "spins": 40, "coupling": 2.9, "realizations": 2}
+    record = {
+        "continuum": [],
+        "finite": [{**row, "mean_kaplan_yorke": 1.5, "mean_box_counting": 1.2}],
+        "size": {
+            "projection_periods": [],
+            "t_end": 10,
+            "finite_t_end": 10,
+            "initial_conditions": 1,
+        },
+    }
+    code = (
+        "import sys, json, matplotlib; matplotlib.use('svg'); "
+        "from analysis.experiments.width_disorder_plot import plot_study; "
+        "plot_study(json.loads(sys.argv[1]), sys.argv[2]); print(matplotlib.get_backend())"
+    )
+    png = tmp_path / "wd.png"
+    proc = subprocess.run(
+        [sys.executable, "-c", code, json.dumps(record), str(png)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "svg"
+    assert png.stat().st_size > 10_000

@@ -240,15 +240,3 @@ def test_record_fit_argument_checks():
         fit_preisach_record(np.r_[u[:-1], np.nan], u, [0.0, 1.0])
     with pytest.raises(ValueError, match="nodes"):
         fit_preisach_record(u, u, [1.0, 0.0])
-
-
-def test_old_module_path_still_imports_and_warns():
-    """``hysteresis.fitting`` (moved to ``hysteresis.preisach.projection``) is kept one release."""
-    import importlib
-    import sys
-
-    sys.modules.pop("hysteresis.fitting", None)
-    with pytest.warns(DeprecationWarning, match="hysteresis.preisach.projection"):
-        old = importlib.import_module("hysteresis.fitting")
-    assert old.project_identification is project_identification
-    assert old._everett_apply is _everett_apply

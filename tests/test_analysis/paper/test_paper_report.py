@@ -8,11 +8,14 @@ from dataclasses import asdict
 import numpy as np
 import pytest
 
+from analysis.dynamics.period_adding import period_adding
 from analysis.paper import decisions as dec
 from analysis.paper.context import SIZES, Claim, PaperContext, reading
+from analysis.paper.figures_bifurcations import _cascade_claim
 from analysis.paper.runner import write_report
 from analysis.paper.verdicts import (
     cascade_verdict,
+    is_period_adding,
     sap_falls,
     std_ratio_verdict,
     variance_slope_stderr,
@@ -192,6 +195,104 @@ def test_cascade_verdict():
     assert cascade_verdict(float("nan"), 0.33, False, 8, first_period=0) == INC
     # the sweep stayed on the period-1 orbit throughout: no cascade at all
     assert cascade_verdict(float("nan"), 0.023, False, 0, first_period=1) == "disagree"
+
+
+def test_is_period_adding():
+    cs = 9.5 - 0.1 * np.arange(12)
+    # three wide windows falling by 2, unresolved periods at the onset
+    assert is_period_adding(period_adding(cs, [1, 1, 0, 0, 31, 31, 29, 29, 27, 27, 25, 25]))
+    # steps of -1 are adding too (a cascade of all periods)
+    assert is_period_adding(period_adding(cs, [1, 1, 24, 24, 23, 23, 22, 22, 21, 21, 1, 1]))
+    # two wide windows only
+    assert not is_period_adding(period_adding(cs, [1, 1, 0, 0, 31, 31, 29, 29, 1, 1, 1, 1]))
+    # a step of -4: not small
+    assert not is_period_adding(period_adding(cs, [1, 1, 0, 0, 31, 31, 27, 27, 25, 25, 1, 1]))
+    # periods growing away from the onset
+    assert not is_period_adding(period_adding(cs, [1, 1, 0, 0, 21, 21, 23, 23, 25, 25, 1, 1]))
+    # short periods at the onset
+    assert not is_period_adding(period_adding(cs, [1, 1, 9, 9, 7, 7, 5, 5, 3, 3, 1, 1]))
+    # no onset
+    assert not is_period_adding(period_adding(cs, [1] * 12))
+
+
+#: the Claim of fig:bif_0 on hand-made zoom sweeps, as the report printed it before the
+#: detector moved to analysis.dynamics.period_adding (the text must not change)
+_CASCADE_TEXT = {
+    "clean": (
+        (
+            "period-1 orbit (no switch) down to C=8.840; onset C≈8.763; periodic windows (>= 2 "
+            "successive C) in sweep order [31, 29, 27, 25, 23] (steps [-2]); narrow windows "
+            "between them []; C:period 8.69:>30, 8.53:>30, 8.38:31, 8.23:31, 8.07:29, 7.92:29, "
+            "7.77:27, 7.61:27, 7.46:25, 7.31:25"
+        ),
+        (
+            "zoom grid step ΔC = 0.153: the onset is known to ±0.077 against the tolerance 0.25; "
+            "12 grid values below the onset (all if none found; three windows of >= 2 values "
+            "need >= 6); 5 wide windows found; periods are resolved up to 30 forcing periods (60 "
+            "section points per C)"
+        ),
+        "inconclusive at this run size",
+    ),
+    "narrow": (
+        (
+            "period-1 orbit (no switch) down to C=8.946; onset C≈8.858; periodic windows (>= 2 "
+            "successive C) in sweep order [31, 29, 27] (steps [-2]); narrow windows between them "
+            "[45, 3, 5, 25]; C:period 8.77:>30, 8.59:45, 8.42:31, 8.24:31, 8.06:3, 7.88:29, "
+            "7.71:29, 7.53:27, 7.35:27, 7.18:5"
+        ),
+        (
+            "zoom grid step ΔC = 0.177: the onset is known to ±0.088 against the tolerance 0.25; "
+            "11 grid values below the onset (all if none found; three windows of >= 2 values "
+            "need >= 6); 3 wide windows found; periods are resolved up to 30 forcing periods (60 "
+            "section points per C)"
+        ),
+        "agree",
+    ),
+    "not_adding": (
+        (
+            "period-1 orbit (no switch) down to C=8.882; onset C≈8.777; periodic windows (>= 2 "
+            "successive C) in sweep order [3, 7, 5, 9] (steps [-2, 4]); narrow windows between "
+            "them [4]; C:period 8.67:3, 8.46:3, 8.25:7, 8.05:7, 7.84:5, 7.63:5, 7.42:9, 7.21:9, "
+            "7.00:4"
+        ),
+        (
+            "zoom grid step ΔC = 0.209: the onset is known to ±0.105 against the tolerance 0.25; "
+            "9 grid values below the onset (all if none found; three windows of >= 2 values need "
+            ">= 6); 4 wide windows found; periods are resolved up to 30 forcing periods (60 "
+            "section points per C)"
+        ),
+        "disagree",
+    ),
+    "no_onset": (
+        (
+            "period-1 orbit (no switch) down to C=7.000; onset C≈nan; periodic windows (>= 2 "
+            "successive C) in sweep order [] (steps []); narrow windows between them []; "
+            "C:period "
+        ),
+        (
+            "zoom grid step ΔC = 0.329: the onset is known to ±0.164 against the tolerance 0.25; "
+            "0 grid values below the onset (all if none found; three windows of >= 2 values need "
+            ">= 6); 0 wide windows found; periods are resolved up to 30 forcing periods (60 "
+            "section points per C)"
+        ),
+        "disagree",
+    ),
+}
+
+_CASCADE_SWEEPS = {
+    "clean": (16, [1, 1, 1, 1, 0, 0, 31, 31, 29, 29, 27, 27, 25, 25, 23, 23]),
+    "narrow": (14, [1, 1, 1, 0, 45, 31, 31, 3, 29, 29, 27, 27, 5, 25]),
+    "not_adding": (12, [1, 1, 1, 3, 3, 7, 7, 5, 5, 9, 9, 4]),
+    "no_onset": (8, [1] * 8),
+}
+
+
+@pytest.mark.parametrize("name", sorted(_CASCADE_SWEEPS))
+def test_cascade_claim_text_is_unchanged(name):
+    n, periods = _CASCADE_SWEEPS[name]
+    zoom = {"couplings": np.linspace(9.3, 7.0, n).tolist(), "period": periods}
+    claim = _cascade_claim(zoom, 60, "zoom run")
+    assert (claim.measured, claim.evidence, claim.verdict) == _CASCADE_TEXT[name]
 
 
 def test_ks_claim_within_its_sampling_scale_is_inconclusive():
