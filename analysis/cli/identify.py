@@ -18,7 +18,9 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +32,7 @@ from analysis.cli._build import (
     model_record,
     option_error,
 )
-from analysis.cli._identify_batch import input_files, run_batch
+from analysis.cli._identify_batch import forc_input_files, input_files, run_batch
 from analysis.cli._identify_measured import (
     add_uncertainty_options,
     curve_kind,
@@ -317,9 +319,10 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     request = request_from(args)
     if request.measured:
+        if request.batch:  # folders searched recursively; files no reader recognises skipped
+            files, skipped = forc_input_files(list(request.inputs))
+            return run_batch(args, files, _one_file, skipped)
         files = input_files(list(request.inputs))
-        if request.batch:
-            return run_batch(args, files, _one_file)
         measured = _read_measured(request, files[0])
         out = prepare_out(args)
         report, lines = _identify_measured(request, files[0], out, t0, *measured)
@@ -463,7 +466,11 @@ def _read_measured(request: IdentifyRequest, path: Path) -> tuple[str, Any, floa
     with library_errors(OPTIONS):
         reader_options = request.reader_options(fmt)
     try:
-        data = read_forc_file(path, fmt, max_memory=request.max_memory, **reader_options)
+        with warnings.catch_warnings(record=True) as notes:  # a note, not a failure
+            warnings.simplefilter("always")
+            data = read_forc_file(path, fmt, max_memory=request.max_memory, **reader_options)
+        for note in notes:
+            print(f"hyst identify: note: {note.message}", file=sys.stderr)
     except MemoryBoundError as exc:
         raise CliError(f"argument --input: {path}: {exc}") from exc
     except (ValueError, OSError) as exc:

@@ -48,8 +48,6 @@ DEFAULT_MEASURED_SMOOTHING = 3.0
 #: the readers' drift corrections (from the calibration points) and two-column layouts
 DRIFT_CORRECTIONS = ("none", "multiplicative", "additive")
 COLUMN_LAYOUTS = ("field,moment", "moment,field")
-#: the formats whose files carry calibration points
-_CALIBRATED = ("micromag", "lakeshore")
 VARIFORC_PARAMETERS = ("sc0", "sc1", "sb0", "sb1", "lam")
 #: the options of measured data, refused with a model when not at their defaults
 _MEASURED_ONLY = (
@@ -270,8 +268,9 @@ class IdentifyRequest:
 
     def reader_options(self, file_format: str) -> dict[str, Any]:
         """The reader's keyword arguments for a file of ``file_format`` (as detected):
-        ``columns`` for data-only files, ``drift_correction`` for files with calibration
-        points; either given for another format is a ``ValueError`` naming it."""
+        ``columns`` for data-only files (a ``ValueError`` naming it for another format) and
+        ``drift_correction`` for every format: the reader warns in one line where a file has
+        no calibration points and refuses a format whose calibration points it cannot use."""
         out: dict[str, Any] = {}
         if self.columns is not None:
             if file_format != "blocks":
@@ -279,12 +278,8 @@ class IdentifyRequest:
                     f"columns is for data-only files (two columns, no header), not {file_format!r}"
                 )
             out["columns"] = self.columns
-        if self.drift_correction != "none":
-            if file_format not in _CALIBRATED:
-                raise ValueError(
-                    "drift_correction needs calibration points (MicroMag or Lake Shore files), "
-                    f"not {file_format!r}"
-                )
+        if self.drift_correction != "none":  # the reader warns where there are no calibration
+            # points and refuses a format that has them but cannot correct with them
             out["drift_correction"] = self.drift_correction
         return out
 

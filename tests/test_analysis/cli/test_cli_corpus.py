@@ -207,16 +207,6 @@ CASES: list[tuple[list[str], str]] = [
     (["identify", "--window", "hann"], "--window"),
     (["identify", "--drift-correction", "cubic"], "--drift-correction"),
     (["identify", "--drift-correction", "additive"], "--drift-correction"),
-    (
-        [
-            "identify",
-            "--input",
-            str(DATA / "forc_erf_play_mayergoyz.csv"),
-            "--drift-correction",
-            "additive",
-        ],
-        "--drift-correction",
-    ),  # fmt: skip
     (["identify", "--grid-step", "0"], "--grid-step"),
     (
         ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--grid-step", "0.1"],

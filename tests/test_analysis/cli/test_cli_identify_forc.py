@@ -175,24 +175,34 @@ def test_batch_of_a_directory_writes_a_summary(tmp_path, capsys):
     import shutil
 
     folder = tmp_path / "in"
-    folder.mkdir()
-    for name in ("forc_micromag_0015_cgs.frc", "forc_lakeshore_8600.csv", "make_forc_data.py"):
-        shutil.copy(DATA / name, folder / name)
+    (folder / "sub").mkdir(parents=True)
+    shutil.copy(DATA / "forc_micromag_0015_cgs.frc", folder / "forc_micromag_0015_cgs.frc")
+    shutil.copy(DATA / "forc_lakeshore_8600.csv", folder / "sub" / "forc_lakeshore_8600.csv")
+    shutil.copy(DATA / "make_forc_data.py", folder / "make_forc_data.py")
     out = tmp_path / "out"
-    # one file is not a FORC file: recorded, the batch goes on, exit status 2 at the end
-    assert main(["identify", "--input", str(folder), "--out", str(out), "--quiet"]) == 2
-    assert "1 of 3 files failed" in capsys.readouterr().err
+    # the folder is searched recursively; a file no reader recognises is listed as skipped,
+    # not failed, and the batch succeeds
+    assert main(["identify", "--input", str(folder), "--out", str(out), "--quiet"]) == 0
     rows = list(csv.DictReader(open(out / "summary.csv", encoding="utf-8")))
-    assert [r["status"] for r in rows] == ["ok", "ok", "failed"]
-    assert "not a FORC file" in rows[2]["warnings"]
+    status = {Path(r["file"]).name: r["status"] for r in rows}
+    assert status == {
+        "forc_micromag_0015_cgs.frc": "ok",
+        "forc_lakeshore_8600.csv": "ok",
+        "make_forc_data.py": "skipped",
+    }
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["n_files"] == 3 and summary["n_failed"] == 1
-    for row in rows[:2]:
+    assert summary["n_skipped"] == 1 and summary["n_failed"] == 0
+    rows = [r for r in rows if r["status"] == "ok"]
+    for row in rows:
         stem = Path(row["file"]).stem.replace(".", "_")
         assert (out / stem / "identify.json").exists()
         assert (out / stem / f"identify_{stem}.png").exists()
+    # a file named explicitly that is not a FORC file fails, the batch goes on, exit status 2
+    files = [str(folder / "forc_micromag_0015_cgs.frc"), str(folder / "make_forc_data.py")]
+    assert main(["identify", "--input", *files, "--out", str(tmp_path / "o3"), "--quiet"]) == 2
+    assert "1 of 2 files failed" in capsys.readouterr().err
     # the same files on two workers: the same numbers
-    files = [str(folder / "forc_micromag_0015_cgs.frc"), str(folder / "forc_lakeshore_8600.csv")]
+    files = [str(folder / "forc_micromag_0015_cgs.frc"), str(folder / "sub/forc_lakeshore_8600.csv")]
     rep = run_json(["--input", *files, "--workers", "2", "--out", str(tmp_path / "out2")])
     by_name = {Path(r["file"]).name: float(r["peak_bc_mT"]) for r in rows[:2]}
     assert {Path(r["file"]).name: r["peak_bc_mT"] for r in rep["files"]} == by_name
@@ -213,3 +223,18 @@ def test_batch_summary_carries_the_data_warnings(tmp_path):
     single = json.loads((out / "aborted" / "identify.json").read_text())
     assert single["warnings"] and all(w in row["warnings"] for w in single["warnings"])
     assert "aborted measurement" in row["warnings"]
+
+
+def test_drift_correction_without_calibration_points_is_a_note(tmp_path, capsys):
+    """--drift-correction on a file with no calibration points: one note on stderr, the
+    identification runs (exit 0), nothing corrected."""
+    out = tmp_path / "out"
+    argv = ["identify", "--input", str(DATA / "forc_erf_play_mayergoyz.csv"), "--out", str(out)]
+    assert main([*argv, "--drift-correction", "additive", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    notes = [line for line in err.splitlines() if "note:" in line]
+    assert len(notes) == 1 and "no calibration points" in notes[0]
+    with_note = json.loads((out / "identify.json").read_text())
+    assert main([*argv[:-1], str(tmp_path / "plain"), "--quiet"]) == 0
+    plain = json.loads((tmp_path / "plain" / "identify.json").read_text())
+    assert with_note["peak_bc_mT"] == plain["peak_bc_mT"]
