@@ -202,7 +202,10 @@ def test_batch_of_a_directory_writes_a_summary(tmp_path, capsys):
     assert main(["identify", "--input", *files, "--out", str(tmp_path / "o3"), "--quiet"]) == 2
     assert "1 of 2 files failed" in capsys.readouterr().err
     # the same files on two workers: the same numbers
-    files = [str(folder / "forc_micromag_0015_cgs.frc"), str(folder / "sub/forc_lakeshore_8600.csv")]
+    files = [
+        str(folder / "forc_micromag_0015_cgs.frc"),
+        str(folder / "sub/forc_lakeshore_8600.csv"),
+    ]
     rep = run_json(["--input", *files, "--workers", "2", "--out", str(tmp_path / "out2")])
     by_name = {Path(r["file"]).name: float(r["peak_bc_mT"]) for r in rows[:2]}
     assert {Path(r["file"]).name: r["peak_bc_mT"] for r in rep["files"]} == by_name
