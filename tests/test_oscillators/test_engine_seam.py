@@ -131,3 +131,31 @@ def test_the_float_fast_path_gives_the_array_path_bits():
             arr.advance(np.array([t]), out2)
             assert np.array_equal(out1, out2)
         assert one.state() == arr.state()
+
+
+def test_short_arrays_split_and_check_as_the_numpy_path():
+    """split_times and the time checks take a plain-Python path for short arrays
+    (SHORT_ARRAY): the same bits as the numpy path, the same errors."""
+    from oscillators.engines import base
+
+    period = 2.0 * np.pi / 1.3
+    rng = np.random.default_rng(4)
+    t = np.concatenate(
+        [
+            np.sort(rng.uniform(0.0, 1e4, 40)),
+            np.arange(5) * period,  # exact multiples: tau on the boundary
+            np.nextafter(np.arange(1, 6) * period, 0.0),
+            [0.0, 1e-300],
+        ]
+    )
+    for chunk in (t[:40], t[40:45], t[45:50], t[50:]):
+        short = base.split_times(chunk, period)
+        long_n, long_tau = base.split_times(np.tile(chunk, 20), period)  # > SHORT_ARRAY
+        assert np.array_equal(np.tile(short[0], 20), long_n)
+        assert np.array_equal(np.tile(short[1], 20), long_tau)
+        assert short[0].dtype == np.int64 and short[1].dtype == np.float64
+    eng = ForcedOscillator(Relay(1.0, -1.0), coupling=1.0).engine()
+    for bad, message in (([1.0, np.nan], "finite"), ([2.0, 1.0], "sorted"), ([-1.0], ">=")):
+        for times in (np.array(bad), np.tile(np.array(bad), 40)):
+            with pytest.raises(ValueError, match=message):
+                eng.advance(times)
