@@ -93,9 +93,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors (already printed)
         return int(exc.code or 0) if not isinstance(exc.code, str) else EXIT_USAGE
-    if getattr(args, "func", None) is None:
-        parser.print_help()
-        return 0
+    if getattr(args, "func", None) is None:  # no command: the usage, and a failure status
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
     prog = f"hyst {args.command}"
     with one_line_warnings(prog):
         return _run(prog, args)
