@@ -4,15 +4,16 @@
         [--t-end T] [--realizations R]
 
 The same study as ``hyst width-disorder`` (see its help and README "What the reproduction
-finds"), through the library: :func:`analysis.experiments.width_disorder.run_study`. By default a small
-run (about a minute on two cores: σ_r ∈ {0.05, 0.2}, C ∈ {2.9, 4}, one initial condition,
-t = 2000; finite N = 1000 with 10 realizations) that shows every quantity with finite-time
-errors of a few hundredths; ``--full`` runs the study's sizes (σ_r ∈ {0.0125 … 0.4}, three
+finds"), through the library: :func:`analysis.experiments.width_disorder.run_study`. By
+default a small run (about half a minute on two cores: σ_r ∈ {0.05, 0.2}, C ∈ {2.9, 4}, one
+initial condition, t = 2000; finite N = 1000 with 10 realizations) that shows every quantity
+with its finite-time errors; ``--full`` runs the study's sizes (σ_r ∈ {0.0125 … 0.4}, three
 initial conditions, t = 2·10⁴, transient 160 periods; finite N ∈ {10³, 5·10³, 2·10⁴} with 100
-realizations each: hours on two cores), resumable through ``OUT/results.sqlite``, then :func:`~analysis.experiments.width_disorder_plot.plot_study`.
-For every (C, σ_r) it gives the spectrum with memory directions and its neutral exponents, the
-exponents without long-lived memory, D_KY of both and D_BC of the section; σ_r = 0 is the erf
-play. ``--smoke`` runs a tiny configuration (seconds).
+realizations each: hours on two cores), resumable through ``OUT/results.sqlite``, then
+:func:`~analysis.experiments.width_disorder_plot.plot_study`. For every (C, σ_r) it gives the
+spectrum with memory directions and its neutral exponents, the exponents without long-lived
+memory, D_KY of both and D_BC of the section; σ_r = 0 is the erf play. ``--smoke`` runs a tiny
+configuration (seconds).
 """
 
 from __future__ import annotations
