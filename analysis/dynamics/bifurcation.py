@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 
 from analysis.dynamics.lyapunov import lyapunov_spectrum
-from analysis.experiments.parameters import V0
 from hysteresis._progress import progress_bar
 from hysteresis._validation import (
     bounded_work,
@@ -26,7 +25,7 @@ from hysteresis._validation import (
     positive_integer,
     real_array,
 )
-from oscillators import DEFAULT_Q0
+from oscillators import DEFAULT_Q0, DEFAULT_V0
 
 #: most parameter values in one sweep
 MAX_VALUES = 1_000_000
@@ -180,7 +179,7 @@ def bifurcation_diagram(
     lyapunov: bool = True,
     lyapunov_t_end: float = 1000.0,
     q0: float = DEFAULT_Q0,
-    v0: float = V0,
+    v0: float = DEFAULT_V0,
     operator_state: Any = None,
     parameter: str = "coupling",
     progress: bool = False,

@@ -42,10 +42,16 @@ import numpy as np
 from numba import njit
 
 from analysis.dynamics.dimensions import kaplan_yorke_dimension
-from analysis.experiments.parameters import V0
 from hysteresis._progress import progress_bar
 from hysteresis._validation import finite_scalar, positive_integer, time_window
-from oscillators import DEFAULT_Q0, MAX_PERIODS, DivergenceError, Engine, OscillatorState
+from oscillators import (
+    DEFAULT_Q0,
+    DEFAULT_V0,
+    MAX_PERIODS,
+    DivergenceError,
+    Engine,
+    OscillatorState,
+)
 
 __all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]
 
@@ -389,7 +395,7 @@ def lyapunov_spectrum(
     t_end: float,
     transient: float = 0.0,
     q0: float = DEFAULT_Q0,
-    v0: float = V0,
+    v0: float = DEFAULT_V0,
     operator_state: Any = None,
     include_phase: bool = False,
     progress: bool = False,
