@@ -12,15 +12,14 @@ from typing import Any
 
 import numpy as np
 
-from analysis.dynamics.orbit_coordinates import StateCoordinates
-from analysis.dynamics.periodic_orbits import (
-    OrbitNotFoundError,
-    event_sequence,
+from analysis.dynamics.floquet import (
+    active_multipliers,
     floquet_multipliers,
     frozen_coordinates,
     max_abs_multiplier,
-    orbit_shooter,
 )
+from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.periodic_orbits import OrbitNotFoundError, event_sequence, orbit_shooter
 from analysis.dynamics.staircase_orbits import StaircaseChangedError
 from oscillators import DivergenceError, GrazingError, OscillatorState
 
@@ -62,10 +61,7 @@ class BranchPoint:
     @property
     def active_multipliers(self) -> np.ndarray:
         """The multipliers not labelled frozen (those the bifurcation tests use)."""
-        if not self.multiplier_labels:
-            return self.multipliers
-        keep = np.array([not t.startswith("frozen") for t in self.multiplier_labels])
-        return self.multipliers[keep]
+        return active_multipliers(self.multipliers, self.multiplier_labels)
 
     def to_dict(self) -> dict[str, Any]:
         return {

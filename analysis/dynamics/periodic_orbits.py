@@ -5,9 +5,10 @@ stroboscopic map ``P`` (section ``φ = φ0``). :func:`find_periodic_orbit`:
 
 1. integrates a transient of whole forcing periods from the start;
 2. detects a candidate period ``k <= max_period`` from ``2·max_period`` stroboscopic points
-   (:func:`~analysis.dynamics.bifurcation.orbit_period` at relative tolerances 1e-8, 1e-6,
+   (:func:`~analysis.dynamics.periods.smallest_period` at relative tolerances 1e-8, 1e-6,
    1e-4, 1e-3 of the section's extent, the tightest first; then, for a transient still
-   decaying, the k whose points come back closest if within 5 % of the extent);
+   decaying, the k whose points come back closest if within 5 % of the extent:
+   :func:`~analysis.dynamics.periods.return_distances`);
 3. refines it by Newton on ``F(x) = P^k(x) − x`` in the state coordinates
    ``x = (q, v, *memory)`` (:class:`~analysis.dynamics.orbit_coordinates.StateCoordinates`)::
 
@@ -75,9 +76,15 @@ from typing import Any
 
 import numpy as np
 
-from analysis.dynamics.bifurcation import orbit_period
-from analysis.dynamics.floquet import floquet_multipliers, frozen_coordinates, max_abs_multiplier
+from analysis.dynamics.floquet import (
+    floquet_exponents,
+    floquet_multipliers,
+    frozen_coordinates,
+    is_stable,
+    max_abs_multiplier,
+)
 from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.periods import return_distances, section_extent, smallest_period
 from analysis.dynamics.staircase_orbits import closed_loop_shot, settle_staircase
 from hysteresis._validation import (
     finite_scalar,
@@ -455,9 +462,8 @@ def _orbit(
             RuntimeWarning,
             stacklevel=3,
         )
-    with np.errstate(divide="ignore"):
-        exps = np.log(np.abs(mu)) / (k * system.period)
-    stable = all(abs(m) < 1.0 for m, t in zip(mu, tags, strict=True) if not t.startswith("frozen"))
+    exps = floquet_exponents(mu, k * system.period)
+    stable = is_stable(mu, tags)
     return PeriodicOrbit(
         period=k,
         forcing_period=system.period,
@@ -476,15 +482,6 @@ def _orbit(
         frozen=tuple(lab for lab, f in zip(coords.labels, frozen, strict=True) if f),
         multiplier_labels=tags,
     )
-
-
-def _minimal_period(points: np.ndarray, k: int, tolerance: float) -> int:
-    """The smallest divisor ``d`` of ``k`` with ``x_{i+d} = x_i`` on the refined orbit."""
-    scale = max(1.0, float(np.max(np.abs(points))))
-    for d in range(1, k):
-        if k % d == 0 and np.all(np.abs(points[d:] - points[:-d]) <= 1e3 * tolerance * scale):
-            return d
-    return k
 
 
 def find_periodic_orbit(
@@ -575,16 +572,14 @@ def find_periodic_orbit(
     eng.advance(times, out)
     eng.check_finite(out[:, :2])
     pts = np.vstack([[start.q, start.v], out[:, :2]])
-    scale = max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1])), 1.0)
     tried: list[int] = []
     failures: list[str] = []
     candidates = [
-        orbit_period(pts[:, 0], pts[:, 1], rel * scale, max_period=max_period)
-        for rel in DETECTION_TOLERANCES
+        smallest_period(pts, rel, max_period, relative_to="extent") for rel in DETECTION_TOLERANCES
     ]
     # a transient still decaying: the period whose points come back closest (below
     # FALLBACK_MISMATCH of the extent) is a candidate too; Newton decides
-    mismatch = [float(np.max(np.abs(pts[m:] - pts[:-m]))) / scale for m in range(1, max_period + 1)]
+    mismatch = return_distances(pts, max_period) / section_extent(pts)
     best = int(np.argmin(mismatch))
     if mismatch[best] <= FALLBACK_MISMATCH:
         candidates.append(best + 1)
@@ -604,8 +599,10 @@ def find_periodic_orbit(
         except OrbitNotFoundError as exc:
             failures.append(f"k = {k}: {exc}")
             continue
-        d = _minimal_period(orbit.points, k, tolerance)
-        if d < k:
+        # the smallest divisor d of k with x_{i+d} = x_i on the refined orbit (to 1e3 times
+        # Newton's tolerance relative to its size): a multiple cover of a shorter orbit
+        d = smallest_period(orbit.points, 1e3 * tolerance, relative_to="magnitude", divisors_of=k)
+        if 0 < d < k:
             orbit = refine_periodic_orbit(
                 system,
                 orbit.start,
