@@ -83,6 +83,7 @@ from analysis.dynamics.floquet import (
     is_stable,
     max_abs_multiplier,
 )
+from analysis.dynamics.newton import Linearization, NewtonError, newton
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periods import return_distances, section_extent, smallest_period
 from analysis.dynamics.staircase_orbits import closed_loop_shot, settle_staircase
@@ -314,68 +315,66 @@ def _newton(
     max_iterations: int,
     engine_options: dict | None,
 ) -> tuple[OscillatorState, list[float]]:
-    """Newton on ``P^k(x) − x`` from ``start``; returns the converged state and residuals."""
-    template = start
-    x = coords.vector(start)
+    """Newton on ``P^k(x) − x`` from ``start`` (the damped loop of
+    :func:`~analysis.dynamics.newton.newton`); returns the converged state and residuals.
+
+    Each iterate is integrated from the relay configuration the previous one produced (the
+    start's for the first); converged also needs that configuration to close on itself.
+    Frozen memory (identity rows of ``D P^k``) is a parameter of the family: held, not solved
+    for."""
     run = orbit_shooter(system, coords, k, engine_options)
-    try:
-        shot = run(coords.state(x, template))
-    except ValueError as exc:  # the memory's structure is not that of the start
-        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
-    image = shot.states[-1]
-    try:
-        r = coords.vector(image) - x
-    except ValueError as exc:  # the memory's structure is not that of the start
-        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
-    res = float(np.max(np.abs(r)))
-    residuals = [res]
-    for _ in range(max_iterations):
-        if res <= tolerance * coords.scale(x) and coords.same_memory(
-            coords.state(x, template), image
-        ):
-            return coords.state(x, template), residuals
-        # frozen memory (identity rows) is a parameter of the family: held, not solved for
-        free = np.nonzero(~frozen_coordinates(shot.jacobian))[0]
-        step = np.zeros(coords.dimension)
+
+    def evaluate(x: np.ndarray, previous: Linearization | None) -> Linearization:
+        template = start if previous is None else previous.data[0].states[-1]
         try:
-            step[free] = np.linalg.solve(
-                shot.jacobian[np.ix_(free, free)] - np.eye(free.size), -r[free]
-            )
-        except np.linalg.LinAlgError:
-            raise OrbitNotFoundError(
+            shot = run(coords.state(x, template))
+            r = coords.vector(shot.states[-1]) - x
+        except ValueError as exc:  # the memory's structure is not that of the start
+            if previous is not None:
+                raise
+            raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
+        return Linearization(
+            residual=r,
+            jacobian=lambda: shot.jacobian - np.eye(coords.dimension),
+            free=np.nonzero(~frozen_coordinates(shot.jacobian))[0],
+            data=(shot, template),
+        )
+
+    def closed(x: np.ndarray, ev: Linearization) -> bool:
+        shot, template = ev.data
+        return coords.same_memory(coords.state(x, template), shot.states[-1])
+
+    try:
+        got = newton(
+            evaluate,
+            coords.vector(start),
+            tolerance=tolerance,
+            max_iterations=max_iterations,
+            scale=coords.scale,
+            max_halvings=MAX_HALVINGS,
+            converged=closed,
+            trial_failures=(ValueError, DivergenceError),
+        )
+    except NewtonError as exc:
+        residuals = exc.residuals
+        if exc.reason == "singular":
+            why = (
                 f"P^{k} − I is singular at the iterate (a multiplier is 1 in the coordinates "
-                "the orbit moves: a fold)",
-                tuple(residuals),
-            ) from None
-        template = image  # the relay configuration the orbit produced
-        lam = 1.0
-        for _halving in range(MAX_HALVINGS + 1):
-            trial = x + lam * step
-            try:
-                t_shot = run(coords.state(trial, template))
-                t_image = t_shot.states[-1]
-                t_r = coords.vector(t_image) - trial
-                t_res = float(np.max(np.abs(t_r)))
-            except (ValueError, DivergenceError):
-                t_res = math.inf
-            if t_res < res or t_res <= tolerance * coords.scale(trial):
-                break
-            lam *= 0.5
-        else:
-            raise OrbitNotFoundError(
-                f"Newton on P^{k}(x) − x stalled at residual {res:.3g} (no decrease along the "
-                f"step after {MAX_HALVINGS} halvings)",
-                tuple(residuals),
+                "the orbit moves: a fold)"
             )
-        x, shot, image, r, res = trial, t_shot, t_image, t_r, t_res
-        residuals.append(res)
-    if res <= tolerance * coords.scale(x) and coords.same_memory(coords.state(x, template), image):
-        return coords.state(x, template), residuals
-    raise OrbitNotFoundError(
-        f"Newton on P^{k}(x) − x did not reach |F| <= {tolerance:g}·max(1, |x|) in "
-        f"{max_iterations} iterations (residuals {', '.join(f'{e:.2e}' for e in residuals)})",
-        tuple(residuals),
-    )
+        elif exc.reason == "stalled":
+            why = (
+                f"Newton on P^{k}(x) − x stalled at residual {residuals[-1]:.3g} (no decrease "
+                f"along the step after {MAX_HALVINGS} halvings)"
+            )
+        else:
+            why = (
+                f"Newton on P^{k}(x) − x did not reach |F| <= {tolerance:g}·max(1, |x|) in "
+                f"{max_iterations} iterations (residuals "
+                f"{', '.join(f'{e:.2e}' for e in residuals)})"
+            )
+        raise OrbitNotFoundError(why, residuals) from None
+    return coords.state(got.z, got.evaluation.data[1]), got.residuals
 
 
 def refine_periodic_orbit(
