@@ -84,6 +84,17 @@ def smallest_period(
     """The smallest ``k`` with ``|x_{i+k} − x_i| <= tol`` in every coordinate for every ``i``;
     0 if no candidate fits.
 
+    Plain reading::
+
+        for k in 1 .. min(max_period, n − 1):
+            if divisors_of is None or divisors_of % k == 0:
+                if max_i |x_{i+k} − x_i|_∞ <= tol: return k
+        return 0
+
+    The pairs of the last point are checked first for every k at once: a k whose last pair
+    already differs is out (most of them on an aperiodic section), so the full check runs only
+    for the others (the same answer, faster).
+
     Parameters
     ----------
     points:
@@ -98,17 +109,6 @@ def smallest_period(
         (scale ``max(1, max|x|)``).
     divisors_of:
         Only candidates that divide this number (the length of a closed orbit).
-
-    Plain reading::
-
-        for k in 1 .. min(max_period, n − 1):
-            if divisors_of is None or divisors_of % k == 0:
-                if max_i |x_{i+k} − x_i|_∞ <= tol: return k
-        return 0
-
-    The pairs of the last point are checked first for every k at once: a k whose last pair
-    already differs is out (most of them on an aperiodic section), so the full check runs only
-    for the others (the same answer, faster).
     """
     pts = _points(points)
     tol = float(tolerance)
