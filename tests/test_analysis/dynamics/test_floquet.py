@@ -1,6 +1,7 @@
 """The one home of Floquet multipliers (:mod:`analysis.dynamics.floquet`) against matrices whose
 eigenvalues are constructed: ``J = V diag(μ) V⁻¹``, a block-triangular ``[[A, B], [0, I]]``
-(frozen memory) and a rank-deficient block (a reset direction)."""
+(frozen memory) and a rank-deficient block (a reset direction); and the basins' unrefined cycle
+through it."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from analysis.dynamics.attractors import periodic_attractor, section_run, start_state
 from analysis.dynamics.floquet import (
     active_multipliers,
     floquet_exponents,
@@ -17,6 +19,8 @@ from analysis.dynamics.floquet import (
     is_stable,
     max_abs_multiplier,
 )
+from analysis.experiments.models import build_operator
+from oscillators import ForcedOscillator
 
 #: eigenvalues of a well-conditioned 4 × 4 matrix built from them are recovered to a few ulp
 #: times the condition number of V (below 10 here): 1e-12 is far above round-off
@@ -97,3 +101,24 @@ def test_exponents_stability_and_the_empty_cases():
     assert not is_stable(np.array([-1.000001]))
     assert max_abs_multiplier(np.array([1.0]), ("frozen: w",)) == 1.0  # all frozen: 1
     assert max_abs_multiplier(np.array([-2.0, 0.5])) == 2.0
+
+
+def test_an_unrefined_cycle_gets_the_jacobians_multipliers():
+    # periodic_attractor's fallback: on the chaotic erf-play attractor (C = 2.9) no period-3
+    # orbit is next to the state, Newton fails, and the multipliers are those of the Jacobian
+    # of P^3 at the state itself: complex, by decreasing modulus, their product det J (an
+    # invariant of the eigenvalue problem; round-off ~1e-15·|J|^d), exponents log|μ|/(3T)
+    system = ForcedOscillator(build_operator("erf-play"), 2.9)
+    run = section_run(
+        system, start_state(system, -1.0, 0.0), 100, 40, max_period=20, keep_state=True
+    )
+    assert run.period == 0  # chaotic
+    got = periodic_attractor(system, run.final, 3)
+    assert got["refined"] is False
+    mu = got["multipliers"]
+    jac, _ = system.jacobian(3 * system.period, run.final, include_phase=False)
+    assert mu.dtype == complex
+    assert np.all(np.diff(np.abs(mu)) <= 0.0)
+    assert abs(np.prod(mu) - np.linalg.det(jac)) <= 1e-12 * max(1.0, np.max(np.abs(jac))) ** 3
+    assert np.array_equal(got["exponents"], np.log(np.abs(mu)) / (3 * system.period))
+    assert got["stable"] == bool(np.all(np.abs(mu) < 1.0))
