@@ -6,12 +6,13 @@ The pieces that :mod:`analysis.dynamics.basins` (many starts) and
 * :func:`section_run` — the Poincaré (stroboscopic) section of one start at ``φ = 0``, from the
   start itself (point 0) through ``transient + periods`` forcing periods (extended by
   ``periods`` at a time up to ``max_periods`` while no period shows), without the tangent
-  flow. The measured window (the last ``periods`` points) gives the section
-  period ``k`` (:func:`cycle_period`: the smallest ``k <= max_period`` with
+  flow. The measured window (the last ``periods`` points) gives the section period ``k``
+  (:func:`~analysis.dynamics.periods.smallest_period`: the smallest ``k <= max_period`` with
   ``|x_{i+k} − x_i| <= tolerance`` in every coordinate over the whole window, so the cycle is
   seen at least twice when ``max_period <= periods/2``); the transient length is the first
   section index ``j`` from which ``|x_{i+k} − x_i| <= tolerance`` holds for every later ``i``
-  (the start has come within the tolerance of its final cycle and stays there). A run that
+  (the start has come within the tolerance of its final cycle and stays there:
+  :func:`~analysis.dynamics.periods.transient_length`). A run that
   leaves the divergence bound is ``divergent``; one without a period is ``aperiodic``.
 * :func:`periodic_attractor` — the one place where a cycle found on the section is turned into
   a refined periodic orbit with its Floquet multipliers
@@ -33,8 +34,10 @@ from typing import Any
 import numpy as np
 
 from analysis.dynamics.dimensions import kaplan_yorke_dimension
+from analysis.dynamics.floquet import floquet_exponents, floquet_multipliers, is_stable
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from analysis.dynamics.periodic_orbits import OrbitNotFoundError, refine_periodic_orbit
+from analysis.dynamics.periods import smallest_period, transient_length
 from hysteresis._validation import finite_scalar, nonnegative_integer, positive_integer
 from oscillators import MAX_PERIODS, DivergenceError, OscillatorState
 
@@ -104,28 +107,9 @@ def start_state(system: Any, q0: float, v0: float, w0: float | None = None) -> O
     return system.initial_state(q0, v0, system.operator.state(position=w0, input=q0))
 
 
-def cycle_period(points: np.ndarray, tolerance: float, max_period: int) -> int:
-    """Smallest k in ``1..max_period`` with ``|x_{i+k} − x_i| <= tolerance`` (every coordinate,
-    every i of ``points``), else 0. The multi-coordinate form of
-    :func:`~analysis.dynamics.bifurcation.orbit_period`."""
-    n = points.shape[0]
-    top = min(max_period, n - 1)
-    if top < 1:
-        return 0
-    # the last point's pairs first, all k at once: a k whose last pair already differs is out
-    # (most of them on an aperiodic section), the full check runs only for the others
-    last = np.all(np.abs(points[-1] - points[-2 : -top - 2 : -1]) <= tolerance, axis=1)
-    for k in np.flatnonzero(last) + 1:
-        if np.all(np.abs(points[k:] - points[:-k]) <= tolerance):
-            return int(k)
-    return 0
-
-
-def _transient_length(points: np.ndarray, k: int, tolerance: float) -> int:
-    """First index j with ``|x_{i+k} − x_i| <= tolerance`` for every i >= j."""
-    bad = np.any(np.abs(points[k:] - points[:-k]) > tolerance, axis=1)
-    idx = np.flatnonzero(bad)
-    return int(idx[-1] + 1) if idx.size else 0
+#: the section's period test (:func:`~analysis.dynamics.periods.smallest_period`, absolute
+#: tolerance) under the name the basins used first
+cycle_period = smallest_period
 
 
 def section_run(
@@ -179,7 +163,7 @@ def section_run(
             empty = np.empty((0, len(columns)))
             return SectionRun(DIVERGENT, 0, -1, empty, empty, columns, None)
         done = target
-        k = cycle_period(out[done + 1 - periods : done + 1], tolerance, max_period)
+        k = smallest_period(out[done + 1 - periods : done + 1], tolerance, max_period)
         if k or done >= total:
             break
         target = min(total, done + periods)
@@ -189,7 +173,7 @@ def section_run(
     if k == 0:
         return SectionRun(APERIODIC, 0, -1, np.empty((0, len(columns))), tail_pts, columns, final)
     return SectionRun(
-        PERIODIC, k, _transient_length(pts, k, tolerance), pts[-k:].copy(), tail_pts, columns, final
+        PERIODIC, k, transient_length(pts, k, tolerance), pts[-k:].copy(), tail_pts, columns, final
     )
 
 
@@ -235,16 +219,13 @@ def periodic_attractor(system: Any, state: OscillatorState, period: int) -> dict
         orbit = refine_periodic_orbit(system, state, period)
     except OrbitNotFoundError as exc:
         jac, labels = system.jacobian(period * system.period, state, include_phase=False)
-        mult = np.linalg.eigvals(jac)
-        mult = mult[np.argsort(-np.abs(mult), kind="stable")]
-        with np.errstate(divide="ignore"):
-            exps = np.log(np.abs(mult)) / (period * system.period)
+        mult = floquet_multipliers(jac)[0]
         start = state
         extra = {
             "multipliers": mult,
             "tangent_space": tuple(labels),
-            "exponents": exps,
-            "stable": bool(np.all(np.abs(mult) < 1.0)),
+            "exponents": floquet_exponents(mult, period * system.period),
+            "stable": is_stable(mult),
             "refined": False,
             "refinement_error": str(exc).splitlines()[0],
         }

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from analysis.dynamics.lyapunov import lyapunov_spectrum
-from analysis.experiments.parameters import V0
+from analysis.dynamics.periods import smallest_period
 from hysteresis._progress import progress_bar
 from hysteresis._validation import (
     bounded_work,
@@ -26,7 +26,7 @@ from hysteresis._validation import (
     positive_integer,
     real_array,
 )
-from oscillators import DEFAULT_Q0
+from oscillators import DEFAULT_Q0, DEFAULT_V0
 
 #: most parameter values in one sweep
 MAX_VALUES = 1_000_000
@@ -86,27 +86,23 @@ def orbit_period(
 ) -> int:
     """Smallest P with ``|x_{i+P} − x_i| <= tolerance`` for every i (x = q or (q, v)); 0 if no
     P up to ``max_period`` (default: half the number of points) fits — chaos or a longer period.
+    :func:`~analysis.dynamics.periods.smallest_period` (absolute tolerance) of validated
+    section coordinates.
     """
     qa = _real(q, "q")
     pts = qa[:, None] if v is None else np.column_stack([qa, _real(v, "v", qa.size)])
-    n = pts.shape[0]
-    tolerance = float(tolerance)
-    if not (tolerance >= 0 and np.isfinite(tolerance)):
-        raise ValueError(f"tolerance must be finite and >= 0, got {tolerance}")
-    if max_period is None:
-        max_period = n // 2
-    for p in range(1, min(max_period, n - 1) + 1):
-        if np.all(np.abs(pts[p:] - pts[:-p]) <= tolerance):
-            return p
-    return 0
+    return smallest_period(pts, tolerance, max_period)
 
 
 def section_period(q: np.ndarray, v: np.ndarray, relative_tolerance: float = 1e-7) -> int:
     """:func:`orbit_period` of a Poincaré section (q, v) with a tolerance relative to its extent
-    (at least 1): the one period test used by ensembles, the paper figures and ``hyst dimension``.
+    (at least 1; :func:`~analysis.dynamics.periods.smallest_period` with
+    ``relative_to="extent"``): the period test of ensembles, the paper figures and
+    ``hyst dimension``.
     """
-    scale = max(float(np.ptp(q)), float(np.ptp(v)), 1.0)
-    return orbit_period(q, v, tolerance=relative_tolerance * scale)
+    qa = _real(q, "q")
+    pts = np.column_stack([qa, _real(v, "v", qa.size)])
+    return smallest_period(pts, relative_tolerance, relative_to="extent")
 
 
 @dataclass(frozen=True)
@@ -180,7 +176,7 @@ def bifurcation_diagram(
     lyapunov: bool = True,
     lyapunov_t_end: float = 1000.0,
     q0: float = DEFAULT_Q0,
-    v0: float = V0,
+    v0: float = DEFAULT_V0,
     operator_state: Any = None,
     parameter: str = "coupling",
     progress: bool = False,

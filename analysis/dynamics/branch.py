@@ -12,15 +12,15 @@ from typing import Any
 
 import numpy as np
 
-from analysis.dynamics.orbit_coordinates import StateCoordinates
-from analysis.dynamics.periodic_orbits import (
-    OrbitNotFoundError,
-    event_sequence,
+from analysis.dynamics.floquet import (
+    active_multipliers,
     floquet_multipliers,
     frozen_coordinates,
     max_abs_multiplier,
-    orbit_shooter,
 )
+from analysis.dynamics.newton import Border, Linearization, NewtonError, newton
+from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.periodic_orbits import OrbitNotFoundError, event_sequence, orbit_shooter
 from analysis.dynamics.staircase_orbits import StaircaseChangedError
 from oscillators import DivergenceError, GrazingError, OscillatorState
 
@@ -37,6 +37,10 @@ __all__ = [
 
 #: failures the engines raise for a state where no orbit with this sequence exists
 FAILURES = (OrbitNotFoundError, GrazingError, DivergenceError, ValueError, np.linalg.LinAlgError)
+#: the corrector's constraint row holds when ``|c·(z − z_pred)| <= 1e-12·(1 + |z|_∞)``: round-off
+#: of a dot product of a few unit-size terms (the step is linear in it, so Newton satisfies it
+#: exactly up to round-off after one step)
+BORDER_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -62,10 +66,7 @@ class BranchPoint:
     @property
     def active_multipliers(self) -> np.ndarray:
         """The multipliers not labelled frozen (those the bifurcation tests use)."""
-        if not self.multiplier_labels:
-            return self.multipliers
-        keep = np.array([not t.startswith("frozen") for t in self.multiplier_labels])
-        return self.multipliers[keep]
+        return active_multipliers(self.multipliers, self.multiplier_labels)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -208,41 +209,45 @@ class BranchProblem:
         template: OscillatorState,
         arclength: bool,
     ) -> tuple[np.ndarray, OscillatorState] | None:
-        """Newton on ``[F(x, λ); c·(z − z_pred)] = 0`` from ``z_pred``; None if it fails.
+        """Newton on ``[F(x, λ); c·(z − z_pred)] = 0`` from ``z_pred`` (the undamped, bordered
+        loop of :func:`~analysis.dynamics.newton.newton`); None if it fails, or if the
+        converged orbit's relay configuration does not close or it covers a shorter orbit.
         Frozen memory (identity rows of ``D P^k``) is held: the step solves for the other
         coordinates and λ."""
-        z = z_pred.copy()
         d = self.coords.dimension
-        for _ in range(self.iters + 1):
+
+        def evaluate(z: np.ndarray, previous: Linearization | None) -> Linearization:
             x, lam = z[:d], float(z[d])
-            try:
-                r, shot = self.residual(x, lam, template)
-            except FAILURES:
-                return None
-            g = float(c @ (z - z_pred))
-            if float(np.max(np.abs(r))) <= self.tol * self.coords.scale(x) and abs(g) <= 1e-12 * (
-                1.0 + float(np.max(np.abs(z)))
-            ):
-                state = self.coords.state(x, template)
-                if self.coords.same_memory(state, shot.states[-1]) and not self._covers(x, shot):
-                    return z, shot.states[-1]
-                return None
-            jac = np.zeros((d + 1, d + 1))
-            jac[:d, :d] = shot.jacobian - np.eye(d)
-            if arclength:
-                try:
-                    jac[:d, d] = self.d_lambda(x, lam, template)
-                except FAILURES:
-                    return None
-            jac[d] = c
-            keep = np.append(np.nonzero(~frozen_coordinates(shot.jacobian))[0], d)
-            dz = np.zeros(d + 1)
-            try:
-                dz[keep] = np.linalg.solve(jac[np.ix_(keep, keep)], -np.append(r, g)[keep])
-            except np.linalg.LinAlgError:
-                return None
-            z = z + dz
-            template = shot.states[-1]
+            tmpl = template if previous is None else previous.data[0].states[-1]
+            r, shot = self.residual(x, lam, tmpl)
+
+            def jacobian() -> np.ndarray:
+                jac = np.zeros((d, d + 1))
+                jac[:, :d] = shot.jacobian - np.eye(d)
+                if arclength:
+                    jac[:, d] = self.d_lambda(x, lam, tmpl)
+                return jac
+
+            free = np.nonzero(~frozen_coordinates(shot.jacobian))[0]
+            return Linearization(r, jacobian, free, (shot, tmpl))
+
+        try:
+            got = newton(
+                evaluate,
+                z_pred,
+                tolerance=self.tol,
+                max_iterations=self.iters,
+                scale=lambda z: self.coords.scale(z[:d]),
+                border=Border(c, z_pred, BORDER_TOLERANCE),
+            )
+        except (NewtonError, *FAILURES):
+            return None
+        shot, tmpl = got.evaluation.data
+        x = got.z[:d]
+        if self.coords.same_memory(self.coords.state(x, tmpl), shot.states[-1]) and not (
+            self._covers(x, shot)
+        ):
+            return got.z, shot.states[-1]
         return None
 
     def _covers(self, x: np.ndarray, shot: Any) -> bool:

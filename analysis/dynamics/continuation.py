@@ -86,6 +86,7 @@ from analysis.dynamics.branch import (
     same_sequence,
     smooth_events,
 )
+from analysis.dynamics.floquet import floquet_multipliers
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import (
     OrbitNotFoundError,
@@ -591,7 +592,7 @@ def period_doubled_orbit(
         offset = max(1e3 * abs(event.bracket[1] - event.bracket[0]), 1e-6 * max(1.0, abs(lam0)))
     offset = positive_scalar(offset, "offset")
     amplitude = positive_scalar(amplitude, "amplitude")
-    mu, vec = np.linalg.eig(bp.monodromy)
+    mu, vec, _ = floquet_multipliers(bp.monodromy)
     e = np.real(vec[:, int(np.argmin(np.abs(mu + 1.0)))])
     e = e / np.max(np.abs(e))
     k2 = 2 * bp.period

@@ -1,13 +1,27 @@
-"""Floquet multipliers of a monodromy matrix with frozen memory (the rule is described in
-:mod:`analysis.dynamics.periodic_orbits`): which coordinates are frozen, the multipliers of the
-reduced block plus exactly 1 per frozen direction with their labels, and ``max |μ|`` over the
-non-frozen ones."""
+"""Floquet multipliers of a monodromy matrix, the one home of the eigenvalue problem of
+``J = D P^k`` (periodic orbits, branch points, the basins' unrefined cycles, the eigenvector
+of a period doubling).
+
+With frozen memory (the rule is described in :mod:`analysis.dynamics.periodic_orbits`): which
+coordinates are frozen, the multipliers of the reduced block plus exactly 1 per frozen
+direction with their labels; without (the defaults), the eigenvalues and eigenvectors of ``J``
+by decreasing modulus. Beside them what is read off the multipliers: the exponents
+``log|μ|/(k·T)``, the multipliers that are not frozen (those the stability and the bifurcation
+tests judge), ``max |μ|`` over them and stability."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["RESET_ROUNDOFF", "floquet_multipliers", "frozen_coordinates", "max_abs_multiplier"]
+__all__ = [
+    "RESET_ROUNDOFF",
+    "active_multipliers",
+    "floquet_exponents",
+    "floquet_multipliers",
+    "frozen_coordinates",
+    "is_stable",
+    "max_abs_multiplier",
+]
 
 #: largest ``|μ|/max(1, max|μ|)`` of a structural zero multiplier that is set to exactly 0:
 #: a zero eigenvalue of multiplicity m computed in double precision moves by up to
@@ -30,9 +44,15 @@ def frozen_coordinates(jacobian: np.ndarray, head: int = 2) -> np.ndarray:
 
 
 def floquet_multipliers(
-    jacobian: np.ndarray, frozen: np.ndarray, n_zero: int, labels: tuple[str, ...]
+    jacobian: np.ndarray,
+    frozen: np.ndarray | None = None,
+    n_zero: int = 0,
+    labels: tuple[str, ...] = (),
 ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-    """Multipliers, eigenvectors and multiplier labels of ``jacobian`` with the ``frozen`` mask.
+    """Multipliers, eigenvectors and multiplier labels of ``jacobian`` with the ``frozen`` mask
+    (default: nothing frozen, no structural zero: ``numpy.linalg.eig`` of ``jacobian`` by
+    decreasing modulus, complex, every label ``""``; ``labels`` name the coordinates and are
+    needed only for frozen ones).
 
     The eigenvalues of the reduced block ``J_rr`` (its ``n_zero`` smallest set to exactly 0,
     the structurally reset directions, where they are round-off: ``|μ| <=``
@@ -44,6 +64,10 @@ def floquet_multipliers(
     singular)."""
     jac = np.asarray(jacobian, dtype=np.float64)
     d = jac.shape[0]
+    if frozen is None:
+        frozen = np.zeros(d, dtype=bool)
+    elif np.any(frozen) and len(labels) != d:
+        raise ValueError(f"labels must name the {d} coordinates when some are frozen")
     free = np.nonzero(~frozen)[0]
     fixed = np.nonzero(frozen)[0]
     mu_r, vec_r = np.linalg.eig(jac[np.ix_(free, free)])
@@ -70,8 +94,30 @@ def floquet_multipliers(
     return mu[order], vec[:, order], tuple(tags[i] for i in order)
 
 
+def active_multipliers(multipliers: np.ndarray, labels: tuple[str, ...] = ()) -> np.ndarray:
+    """The multipliers not labelled frozen (all without labels): a frozen direction is a
+    parameter of a family of orbits, exactly 1, and judges neither stability nor bifurcations.
+    """
+    mu = np.asarray(multipliers)
+    if not labels:
+        return mu
+    return mu[np.array([not t.startswith("frozen") for t in labels], dtype=bool)]
+
+
 def max_abs_multiplier(multipliers: np.ndarray, labels: tuple[str, ...] = ()) -> float:
     """``max |μ|`` over the multipliers not labelled frozen (1 if all are)."""
-    mu = np.asarray(multipliers)
-    keep = np.array([not t.startswith("frozen") for t in labels] or [True] * mu.size, dtype=bool)
-    return float(np.max(np.abs(mu[keep]))) if np.any(keep) else 1.0
+    mu = active_multipliers(multipliers, labels)
+    return float(np.max(np.abs(mu))) if mu.size else 1.0
+
+
+def is_stable(multipliers: np.ndarray, labels: tuple[str, ...] = ()) -> bool:
+    """Every multiplier not labelled frozen inside the unit circle, ``|μ| < 1`` (True if all
+    are frozen: nothing grows)."""
+    return bool(np.all(np.abs(active_multipliers(multipliers, labels)) < 1.0))
+
+
+def floquet_exponents(multipliers: np.ndarray, duration: float) -> np.ndarray:
+    """``log|μ| / duration`` (``duration = k·T``, the orbit's period in time units), in the
+    order of ``multipliers``; ``-inf`` for ``μ = 0`` (a reset direction)."""
+    with np.errstate(divide="ignore"):
+        return np.log(np.abs(np.asarray(multipliers))) / duration

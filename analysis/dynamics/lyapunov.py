@@ -42,10 +42,16 @@ import numpy as np
 from numba import njit
 
 from analysis.dynamics.dimensions import kaplan_yorke_dimension
-from analysis.experiments.parameters import V0
 from hysteresis._progress import progress_bar
 from hysteresis._validation import finite_scalar, positive_integer, time_window
-from oscillators import DEFAULT_Q0, MAX_PERIODS, DivergenceError, Engine, OscillatorState
+from oscillators import (
+    DEFAULT_Q0,
+    DEFAULT_V0,
+    MAX_PERIODS,
+    DivergenceError,
+    Engine,
+    OscillatorState,
+)
 
 __all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]
 
@@ -153,6 +159,11 @@ class TangentStepper:
         self._events_at_start = self._engine.n_events
 
     # -- step ------------------------------------------------------------------------------------
+    def step_to(self, t: float) -> None:
+        """Advance to the elapsed time ``t`` (the Benettin loop's targets):
+        ``step(t − elapsed)``."""
+        self.step(t - self.elapsed)
+
     def step(self, dt: float) -> None:
         """Advance by ``dt`` with the tangent flow on."""
         t = self._t + dt
@@ -389,7 +400,7 @@ def lyapunov_spectrum(
     t_end: float,
     transient: float = 0.0,
     q0: float = DEFAULT_Q0,
-    v0: float = V0,
+    v0: float = DEFAULT_V0,
     operator_state: Any = None,
     include_phase: bool = False,
     progress: bool = False,
@@ -400,6 +411,7 @@ def lyapunov_spectrum(
     state: OscillatorState | None = None,
     stepper: TangentStepper | None = None,
     observer: Callable[[TangentStepper], None] | None = None,
+    whole_intervals: bool = False,
 ) -> LyapunovResult:
     """Lyapunov spectrum of ``system`` (a :class:`~oscillators.system.ForcedOscillator`).
 
@@ -425,13 +437,20 @@ def lyapunov_spectrum(
         Passed to the engine.
     stepper:
         A :class:`TangentStepper` of this system to reuse (its ``include_phase`` and
-        ``engine_options`` then apply).
+        ``engine_options`` then apply), or a variant that redefines what the loop
+        orthonormalises (:meth:`~TangentStepper.deviations`, :meth:`~TangentStepper.set_deviations`,
+        :meth:`~TangentStepper.rank_bound` and :attr:`~TangentStepper.tangent_space`, e.g.
+        :class:`~analysis.dynamics.memory.MemoryProjectionStepper`).
     observer:
         Called as ``observer(stepper)`` once after the transient and after every
         re-orthonormalisation, so that other measurements ride on the same integration (e.g.
         with ``renormalize_dt`` = one forcing period and ``transient``, ``t_end`` on whole
         periods, ``stepper.sample`` is the Poincaré section; ``stepper.engine.output_integral()``
         gives exact time averages of ``M``). It must not move the stepper.
+    whole_intervals:
+        Cut ``[transient, t_end]`` into whole intervals of ``renormalize_dt`` and average over
+        them, leaving out a remainder (at least one interval); by default the last interval
+        ends at ``t_end`` (shorter if need be) and the average runs over the whole window.
     """
     t_end, transient = time_window(t_end, transient)
     period = float(system.period)
@@ -455,7 +474,17 @@ def lyapunov_spectrum(
     labels = stepper.tangent_space
     k = len(labels)
     span = t_end - transient
-    n_steps = max(1, int(math.ceil(span / dt - 1e-9)))
+    if whole_intervals:
+        n_steps = int(math.floor(span / dt + 1e-9))
+        if n_steps < 1:
+            raise ValueError(
+                f"t_end - transient = {span:g} is shorter than one renormalization interval "
+                f"({dt:g})"
+            )
+        window = n_steps * dt
+    else:
+        n_steps = max(1, int(math.ceil(span / dt - 1e-9)))
+        window = span
     marks = set(np.unique(np.linspace(0, n_steps - 1, min(history_points, n_steps)).round()))
     lsum = np.zeros(k)
     hist_t: list[float] = []
@@ -465,8 +494,8 @@ def lyapunov_spectrum(
     if progress:
         bar = progress_bar(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
     for i in range(n_steps):
-        target = transient + (span if i == n_steps - 1 else (i + 1) * dt)
-        stepper.step(target - stepper.elapsed)
+        target = transient + (window if i == n_steps - 1 else (i + 1) * dt)
+        stepper.step_to(target)
         y, collapsed = _qr_step(stepper.deviations(), k, stepper.rank_bound(), lsum)
         n_collapses += int(collapsed)
         stepper.set_deviations(y)
@@ -479,14 +508,14 @@ def lyapunov_spectrum(
             bar.update(1)
     if bar is not None:
         bar.close()
-    exponents = -np.sort(-lsum / span)
+    exponents = -np.sort(-lsum / window)
     return LyapunovResult(
         exponents=exponents,
         tangent_space=tuple(labels),
         history_t=np.asarray(hist_t),
         history=_running_estimates(hist, hist_t, transient, k),
         n_switches=int(stepper.n_events),
-        t_end=t_end,
+        t_end=transient + window if whole_intervals else t_end,
         transient=transient,
         kaplan_yorke=kaplan_yorke_dimension(exponents),
         final=stepper.state(),

@@ -14,7 +14,9 @@ Two tools separate them:
 * :func:`exponent_block_errors` — the finite-time error of each exponent from block averages of
   the running estimate (batch means), so that "neutral" means ``|λ| <= 2·error``
   (:func:`neutral_count`);
-* :func:`memory_frozen_exponents` — an independent Benettin loop over two deviation vectors in
+* :func:`memory_frozen_exponents` — the Benettin loop of
+  :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` over two deviation vectors
+  (:class:`MemoryProjectionStepper`: growth measured in the ``(q, v)`` rows) in
   which every memory direction that survived a whole projection interval (carried unchanged by
   the engine, not pushed again or reset) is set to zero at the interval's end: the two
   exponents of the motion in ``(q, v)`` together with its short-lived memory (the extrema of the
@@ -36,15 +38,16 @@ from typing import Any
 
 import numpy as np
 
-from analysis.dynamics.lyapunov import LyapunovResult, TangentStepper
+from analysis.dynamics.lyapunov import LyapunovResult, TangentStepper, lyapunov_spectrum
 from hysteresis._validation import positive_integer, time_window
-from oscillators import DEFAULT_Q0, DEFAULT_V0, MAX_PERIODS
+from oscillators import DEFAULT_Q0, DEFAULT_V0, MAX_PERIODS, OscillatorState
 
 __all__ = [
     "exponent_block_errors",
     "neutral_count",
     "memory_frozen_exponents",
     "MemoryFrozenResult",
+    "MemoryProjectionStepper",
 ]
 
 
@@ -111,6 +114,99 @@ class MemoryFrozenResult:
         self.transient = transient
 
 
+class MemoryProjectionStepper(TangentStepper):
+    """The stepper of :func:`memory_frozen_exponents` for the Benettin loop of
+    :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum`: two deviation vectors whose growth is
+    measured in the ``(q, v)`` rows, the memory rows riding along, the long-lived ones dropped.
+
+    To the loop it shows the tangent space ``("q", "v")``: :meth:`deviations` are the ``(q, v)``
+    rows ``Y_qv`` of the two vectors (2 × 2), whose QR ``Y_qv = Q R`` the loop takes
+    (``Σ += log|R_jj|``); :meth:`set_deviations` receives ``Q`` and carries every row along,
+    ``Y := Y R⁻¹`` (``R = Qᵀ Y_qv``). :meth:`step` puts ``[Y, p, 0]`` into the engine (the
+    probe ``p`` = 1 on every memory row), integrates, and zeroes the rows whose probe survived
+    (:func:`memory_frozen_exponents`). ``zeroed`` counts them. If the engine tracks only two
+    vectors (no memory row at the start), it is restarted from its state after the first
+    interval in which memory appeared; :attr:`elapsed` runs on across the restart.
+    """
+
+    def __init__(self, system: Any) -> None:
+        super().__init__(system)
+        self._y = np.eye(2)
+        self._origin = 0.0  # time of the engine's last (re)start, measured from the run's start
+        self._probe = False
+        self.zeroed = 0
+
+    def reinit(self, state: OscillatorState | None = None, transient: float = 0.0) -> None:
+        super().reinit(state, transient)
+        self._y = np.eye(len(self.engine.tangent_space), 2)
+        self._origin = 0.0
+        self.zeroed = 0
+
+    @property
+    def tangent_space(self) -> tuple[str, ...]:
+        """The rows the loop measures."""
+        return ("q", "v")
+
+    @property
+    def elapsed(self) -> float:
+        """Time since :meth:`reinit` (transient included), across restarts."""
+        return self._origin + self._t
+
+    def step_to(self, t: float) -> None:
+        """Advance to the elapsed time ``t``: ``(t − origin) − t_engine`` on the current
+        engine (the same rounding before and after a restart)."""
+        self.step(t - self._origin - self._t)
+
+    def step(self, dt: float) -> None:
+        """One projection interval: ``[Y, p, 0]`` in, ``Y`` out with the survived rows 0."""
+        eng = self.engine
+        k = eng.deviations().shape[1]
+        self._probe = k >= 3
+        start = np.zeros((len(eng.tangent_space), k))
+        start[: self._y.shape[0], :2] = self._y
+        if self._probe:
+            start[2:, 2] = 1.0  # the survival probe: exactly 1 on every memory row
+        eng.set_deviations(start)
+        super().step(dt)
+        dev = eng.deviations()
+        y = dev[:, :2].copy()
+        if self._probe:
+            survived = dev[2:, 2] == 1.0
+            y[2:][survived] = 0.0
+            self.zeroed += int(np.count_nonzero(survived))
+        self._y = y
+
+    def deviations(self) -> np.ndarray:
+        """The ``(q, v)`` rows of the two vectors."""
+        y = self._y[:2]
+        if not np.all(np.isfinite(y)):
+            raise RuntimeError("the two deviation vectors became degenerate or non-finite")
+        return y
+
+    def rank_bound(self) -> int:
+        """Two: the QR of the ``(q, v)`` rows has no structural zero (a zero is degenerate)."""
+        return 2
+
+    def set_deviations(self, y: np.ndarray) -> None:
+        """``Y := Y R⁻¹`` with ``R = Qᵀ Y_qv`` (``y`` = Q): the ``(q, v)`` block becomes
+        orthonormal, the young memory rows follow it."""
+        r = y.T @ self._y[:2]
+        if np.any(np.diag(r) == 0.0):
+            raise RuntimeError("the two deviation vectors became degenerate or non-finite")
+        self._y = np.linalg.solve(r.T, self._y.T).T
+        if not self._probe and self._y.shape[0] > 2:
+            # the start had no memory row, so the engine tracks two vectors and no probe:
+            # restart it here (every row present now was born in this interval, nothing was
+            # dropped)
+            self._origin += self._t
+            super().reinit(self.state(), 0.0)
+            if len(self.engine.tangent_space) != self._y.shape[0]:
+                raise RuntimeError(
+                    f"restarted tangent rows {self.engine.tangent_space} do not match the "
+                    f"{self._y.shape[0]} rows before the restart"
+                )
+
+
 def memory_frozen_exponents(
     system: Any,
     t_end: float,
@@ -132,7 +228,11 @@ def memory_frozen_exponents(
             rows whose probe is still exactly 1 (carried unchanged through the whole
             interval: an extremum never wiped out, a wagon that never hit a wall) := 0
             Q R = Y[q, v rows];  Σ += log|diag R|;  Y := Y R⁻¹
-        λ = Σ / (t_end − transient)
+        λ = Σ / (n·P·T)      (n whole intervals in [transient, t_end], a remainder left out)
+
+    The loop is :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum`'s (its QR, its time
+    targets, ``whole_intervals=True``); the interval's ``[Y, p, 0]``, the zeroed rows and
+    ``Y R⁻¹`` are :class:`MemoryProjectionStepper`'s.
 
     A row pushed again or reset inside the interval holds ``δq`` of the probe column there
     (its response to the memory, generically not 1 to the last bit). If the start has no
@@ -168,43 +268,19 @@ def memory_frozen_exponents(
         )
     if t_end / period > MAX_PERIODS:
         raise ValueError(f"t_end spans more than {MAX_PERIODS:.0e} forcing periods")
-    stepper = TangentStepper(system)
-    stepper.reinit(system.initial_state(q0, v0, operator_state), transient)
-    origin = 0.0  # time of the stepper's last (re)start, measured from the run's start
-    lsum = np.zeros(2)
-    zeroed = 0
-    y = np.eye(len(stepper.tangent_space), 2)
-    for i in range(n_steps):
-        k = stepper.deviations().shape[1]
-        probe = k >= 3
-        start = np.zeros((len(stepper.tangent_space), k))
-        start[: y.shape[0], :2] = y
-        if probe:
-            start[2:, 2] = 1.0  # the survival probe: exactly 1 on every memory row
-        stepper.set_deviations(start)
-        # absolute targets, as lyapunov_spectrum's loop: the same orbit to the last bit
-        stepper.step(transient + (i + 1) * dt - origin - stepper.elapsed)
-        dev = stepper.deviations()
-        y = dev[:, :2].copy()
-        survived = dev[2:, 2] == 1.0 if probe else np.zeros(y.shape[0] - 2, dtype=bool)
-        y[2:][survived] = 0.0
-        zeroed += int(np.count_nonzero(survived))
-        _, r = np.linalg.qr(y[:2])
-        diag = np.abs(np.diag(r))
-        if not np.all(np.isfinite(diag)) or np.any(diag == 0.0):
-            raise RuntimeError("the two deviation vectors became degenerate or non-finite")
-        lsum += np.log(diag)
-        # Y R⁻¹: the (q, v) block becomes orthonormal, the young memory rows follow it
-        y = np.linalg.solve(r.T, y.T).T
-        if not probe and y.shape[0] > 2:
-            # the start had no memory row, so the engine tracks two vectors and no probe: restart
-            # it here (every row present now was born in this interval, nothing was dropped)
-            origin += stepper.elapsed
-            stepper.reinit(stepper.state(), 0.0)
-            if len(stepper.tangent_space) != y.shape[0]:
-                raise RuntimeError(
-                    f"restarted tangent rows {stepper.tangent_space} do not match the "
-                    f"{y.shape[0]} rows before the restart"
-                )
-    exps = -np.sort(-lsum / (n_steps * dt))
-    return MemoryFrozenResult(exps, projection_periods, zeroed / n_steps, t_end, transient)
+    stepper = MemoryProjectionStepper(system)
+    res = lyapunov_spectrum(
+        system,
+        t_end,
+        transient,
+        q0,
+        v0,
+        operator_state,
+        renormalize_dt=dt,
+        history_points=1,
+        stepper=stepper,
+        whole_intervals=True,
+    )
+    return MemoryFrozenResult(
+        res.exponents, projection_periods, stepper.zeroed / n_steps, t_end, transient
+    )

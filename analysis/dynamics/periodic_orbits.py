@@ -5,9 +5,10 @@ stroboscopic map ``P`` (section ``φ = φ0``). :func:`find_periodic_orbit`:
 
 1. integrates a transient of whole forcing periods from the start;
 2. detects a candidate period ``k <= max_period`` from ``2·max_period`` stroboscopic points
-   (:func:`~analysis.dynamics.bifurcation.orbit_period` at relative tolerances 1e-8, 1e-6,
+   (:func:`~analysis.dynamics.periods.smallest_period` at relative tolerances 1e-8, 1e-6,
    1e-4, 1e-3 of the section's extent, the tightest first; then, for a transient still
-   decaying, the k whose points come back closest if within 5 % of the extent);
+   decaying, the k whose points come back closest if within 5 % of the extent:
+   :func:`~analysis.dynamics.periods.return_distances`);
 3. refines it by Newton on ``F(x) = P^k(x) − x`` in the state coordinates
    ``x = (q, v, *memory)`` (:class:`~analysis.dynamics.orbit_coordinates.StateCoordinates`)::
 
@@ -75,9 +76,16 @@ from typing import Any
 
 import numpy as np
 
-from analysis.dynamics.bifurcation import orbit_period
-from analysis.dynamics.floquet import floquet_multipliers, frozen_coordinates, max_abs_multiplier
+from analysis.dynamics.floquet import (
+    floquet_exponents,
+    floquet_multipliers,
+    frozen_coordinates,
+    is_stable,
+    max_abs_multiplier,
+)
+from analysis.dynamics.newton import Linearization, NewtonError, newton
 from analysis.dynamics.orbit_coordinates import StateCoordinates
+from analysis.dynamics.periods import return_distances, section_extent, smallest_period
 from analysis.dynamics.staircase_orbits import closed_loop_shot, settle_staircase
 from hysteresis._validation import (
     finite_scalar,
@@ -307,68 +315,66 @@ def _newton(
     max_iterations: int,
     engine_options: dict | None,
 ) -> tuple[OscillatorState, list[float]]:
-    """Newton on ``P^k(x) − x`` from ``start``; returns the converged state and residuals."""
-    template = start
-    x = coords.vector(start)
+    """Newton on ``P^k(x) − x`` from ``start`` (the damped loop of
+    :func:`~analysis.dynamics.newton.newton`); returns the converged state and residuals.
+
+    Each iterate is integrated from the relay configuration the previous one produced (the
+    start's for the first); converged also needs that configuration to close on itself.
+    Frozen memory (identity rows of ``D P^k``) is a parameter of the family: held, not solved
+    for."""
     run = orbit_shooter(system, coords, k, engine_options)
-    try:
-        shot = run(coords.state(x, template))
-    except ValueError as exc:  # the memory's structure is not that of the start
-        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
-    image = shot.states[-1]
-    try:
-        r = coords.vector(image) - x
-    except ValueError as exc:  # the memory's structure is not that of the start
-        raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
-    res = float(np.max(np.abs(r)))
-    residuals = [res]
-    for _ in range(max_iterations):
-        if res <= tolerance * coords.scale(x) and coords.same_memory(
-            coords.state(x, template), image
-        ):
-            return coords.state(x, template), residuals
-        # frozen memory (identity rows) is a parameter of the family: held, not solved for
-        free = np.nonzero(~frozen_coordinates(shot.jacobian))[0]
-        step = np.zeros(coords.dimension)
+
+    def evaluate(x: np.ndarray, previous: Linearization | None) -> Linearization:
+        template = start if previous is None else previous.data[0].states[-1]
         try:
-            step[free] = np.linalg.solve(
-                shot.jacobian[np.ix_(free, free)] - np.eye(free.size), -r[free]
-            )
-        except np.linalg.LinAlgError:
-            raise OrbitNotFoundError(
+            shot = run(coords.state(x, template))
+            r = coords.vector(shot.states[-1]) - x
+        except ValueError as exc:  # the memory's structure is not that of the start
+            if previous is not None:
+                raise
+            raise OrbitNotFoundError(f"P^{k} of the start: {exc}") from None
+        return Linearization(
+            residual=r,
+            jacobian=lambda: shot.jacobian - np.eye(coords.dimension),
+            free=np.nonzero(~frozen_coordinates(shot.jacobian))[0],
+            data=(shot, template),
+        )
+
+    def closed(x: np.ndarray, ev: Linearization) -> bool:
+        shot, template = ev.data
+        return coords.same_memory(coords.state(x, template), shot.states[-1])
+
+    try:
+        got = newton(
+            evaluate,
+            coords.vector(start),
+            tolerance=tolerance,
+            max_iterations=max_iterations,
+            scale=coords.scale,
+            max_halvings=MAX_HALVINGS,
+            converged=closed,
+            trial_failures=(ValueError, DivergenceError),
+        )
+    except NewtonError as exc:
+        residuals = exc.residuals
+        if exc.reason == "singular":
+            why = (
                 f"P^{k} − I is singular at the iterate (a multiplier is 1 in the coordinates "
-                "the orbit moves: a fold)",
-                tuple(residuals),
-            ) from None
-        template = image  # the relay configuration the orbit produced
-        lam = 1.0
-        for _halving in range(MAX_HALVINGS + 1):
-            trial = x + lam * step
-            try:
-                t_shot = run(coords.state(trial, template))
-                t_image = t_shot.states[-1]
-                t_r = coords.vector(t_image) - trial
-                t_res = float(np.max(np.abs(t_r)))
-            except (ValueError, DivergenceError):
-                t_res = math.inf
-            if t_res < res or t_res <= tolerance * coords.scale(trial):
-                break
-            lam *= 0.5
-        else:
-            raise OrbitNotFoundError(
-                f"Newton on P^{k}(x) − x stalled at residual {res:.3g} (no decrease along the "
-                f"step after {MAX_HALVINGS} halvings)",
-                tuple(residuals),
+                "the orbit moves: a fold)"
             )
-        x, shot, image, r, res = trial, t_shot, t_image, t_r, t_res
-        residuals.append(res)
-    if res <= tolerance * coords.scale(x) and coords.same_memory(coords.state(x, template), image):
-        return coords.state(x, template), residuals
-    raise OrbitNotFoundError(
-        f"Newton on P^{k}(x) − x did not reach |F| <= {tolerance:g}·max(1, |x|) in "
-        f"{max_iterations} iterations (residuals {', '.join(f'{e:.2e}' for e in residuals)})",
-        tuple(residuals),
-    )
+        elif exc.reason == "stalled":
+            why = (
+                f"Newton on P^{k}(x) − x stalled at residual {residuals[-1]:.3g} (no decrease "
+                f"along the step after {MAX_HALVINGS} halvings)"
+            )
+        else:
+            why = (
+                f"Newton on P^{k}(x) − x did not reach |F| <= {tolerance:g}·max(1, |x|) in "
+                f"{max_iterations} iterations (residuals "
+                f"{', '.join(f'{e:.2e}' for e in residuals)})"
+            )
+        raise OrbitNotFoundError(why, residuals) from None
+    return coords.state(got.z, got.evaluation.data[1]), got.residuals
 
 
 def refine_periodic_orbit(
@@ -455,9 +461,8 @@ def _orbit(
             RuntimeWarning,
             stacklevel=3,
         )
-    with np.errstate(divide="ignore"):
-        exps = np.log(np.abs(mu)) / (k * system.period)
-    stable = all(abs(m) < 1.0 for m, t in zip(mu, tags, strict=True) if not t.startswith("frozen"))
+    exps = floquet_exponents(mu, k * system.period)
+    stable = is_stable(mu, tags)
     return PeriodicOrbit(
         period=k,
         forcing_period=system.period,
@@ -476,15 +481,6 @@ def _orbit(
         frozen=tuple(lab for lab, f in zip(coords.labels, frozen, strict=True) if f),
         multiplier_labels=tags,
     )
-
-
-def _minimal_period(points: np.ndarray, k: int, tolerance: float) -> int:
-    """The smallest divisor ``d`` of ``k`` with ``x_{i+d} = x_i`` on the refined orbit."""
-    scale = max(1.0, float(np.max(np.abs(points))))
-    for d in range(1, k):
-        if k % d == 0 and np.all(np.abs(points[d:] - points[:-d]) <= 1e3 * tolerance * scale):
-            return d
-    return k
 
 
 def find_periodic_orbit(
@@ -575,16 +571,14 @@ def find_periodic_orbit(
     eng.advance(times, out)
     eng.check_finite(out[:, :2])
     pts = np.vstack([[start.q, start.v], out[:, :2]])
-    scale = max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1])), 1.0)
     tried: list[int] = []
     failures: list[str] = []
     candidates = [
-        orbit_period(pts[:, 0], pts[:, 1], rel * scale, max_period=max_period)
-        for rel in DETECTION_TOLERANCES
+        smallest_period(pts, rel, max_period, relative_to="extent") for rel in DETECTION_TOLERANCES
     ]
     # a transient still decaying: the period whose points come back closest (below
     # FALLBACK_MISMATCH of the extent) is a candidate too; Newton decides
-    mismatch = [float(np.max(np.abs(pts[m:] - pts[:-m]))) / scale for m in range(1, max_period + 1)]
+    mismatch = return_distances(pts, max_period) / section_extent(pts)
     best = int(np.argmin(mismatch))
     if mismatch[best] <= FALLBACK_MISMATCH:
         candidates.append(best + 1)
@@ -604,8 +598,10 @@ def find_periodic_orbit(
         except OrbitNotFoundError as exc:
             failures.append(f"k = {k}: {exc}")
             continue
-        d = _minimal_period(orbit.points, k, tolerance)
-        if d < k:
+        # the smallest divisor d of k with x_{i+d} = x_i on the refined orbit (to 1e3 times
+        # Newton's tolerance relative to its size): a multiple cover of a shorter orbit
+        d = smallest_period(orbit.points, 1e3 * tolerance, relative_to="magnitude", divisors_of=k)
+        if 0 < d < k:
             orbit = refine_periodic_orbit(
                 system,
                 orbit.start,

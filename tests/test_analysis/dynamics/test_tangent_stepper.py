@@ -72,3 +72,19 @@ def test_reinit_reuses_the_stepper():
     a = lyapunov_spectrum(system, 200.0, 20.0, stepper=stepper)
     b = lyapunov_spectrum(system, 200.0, 20.0, stepper=stepper)
     assert np.array_equal(a.exponents, b.exponents)
+
+
+def test_whole_intervals_leave_out_the_remainder():
+    # 10.6 periods in QR intervals of one period: whole_intervals averages over the first 10
+    # (the same run as t_end = 10 periods, to the last bit: the same targets and divisor);
+    # by default an 11th, shorter interval ends at t_end
+    system = _system()
+    period = system.period
+    whole = lyapunov_spectrum(system, 10.6 * period, whole_intervals=True)
+    ten = lyapunov_spectrum(system, 10 * period)
+    assert np.array_equal(whole.exponents, ten.exponents)
+    assert whole.t_end == ten.t_end == 10 * period
+    longer = lyapunov_spectrum(system, 10.6 * period)
+    assert longer.t_end == 10.6 * period and not np.array_equal(longer.exponents, ten.exponents)
+    with pytest.raises(ValueError, match="shorter than one renormalization interval"):
+        lyapunov_spectrum(system, 0.5 * period, whole_intervals=True)
