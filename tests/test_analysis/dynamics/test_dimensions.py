@@ -133,3 +133,18 @@ def test_box_counting_rejects_bad_input():
         box_counting_dimension(np.random.default_rng(0).uniform(size=(100, 2)), max_fill=0.0)
     with pytest.raises(ValueError):
         box_counts(np.random.default_rng(0).uniform(size=(100, 2)), [0.1, -1.0])
+
+
+def test_occupied_cells_count_as_numpy_unique():
+    """The box count's distinct-cell counter (sort and compare) against np.unique over rows,
+    on random cells with many repeats, in 1-3 dimensions and a grid too large to pack."""
+    from analysis.dynamics.dimensions import _occupied
+
+    rng = np.random.default_rng(11)
+    for d in (1, 2, 3):
+        for n in (1, 2, 50, 3000):
+            cells = rng.integers(0, 40, size=(n, d))
+            assert _occupied(cells) == np.unique(cells, axis=0).shape[0]
+    wide = rng.integers(0, 2**40, size=(200, 2))  # span**2 > 2**62: the unpacked path
+    wide[100:] = wide[:100]
+    assert _occupied(wide) == 100
