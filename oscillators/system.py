@@ -23,7 +23,13 @@ import numpy as np
 from hysteresis._progress import progress_bar
 from hysteresis._validation import nonnegative_integer, positive_integer
 from hysteresis.base import Hysteron, HysteronState
-from oscillators.engines import DivergenceError, Engine, TangentFlow, select_engine, wrap_phase
+from oscillators.engines import (
+    DivergenceError,
+    Engine,
+    require_tangent_flow,
+    select_engine,
+    wrap_phase,
+)
 from oscillators.engines.base import SWITCH_DTYPE
 from oscillators.parameters import (
     DEFAULT_DAMPING_RATIO,
@@ -306,11 +312,7 @@ class ForcedOscillator:
             raise ValueError(f"duration must be > 0, got {duration}")
         self._check_periods(duration, "duration")
         eng = self.engine(state, **(engine_options or {}))
-        if not isinstance(eng, TangentFlow):
-            raise TypeError(
-                f"the {eng.name} engine has no tangent flow (it does not derive from "
-                "oscillators.engines.TangentFlow), so the flow map has no Jacobian here"
-            )
+        require_tangent_flow(eng, "the flow map has no Jacobian here")
         eng.start_tangent(bool(include_phase))
         eng.advance(np.array([duration]))
         y = eng.deviations()

@@ -52,6 +52,7 @@ from oscillators import (
     Engine,
     OscillatorState,
 )
+from oscillators.engines import require_tangent_flow
 
 __all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]
 
@@ -151,7 +152,9 @@ class TangentStepper:
         transient = finite_scalar(transient, "transient")
         if transient < 0.0:
             raise ValueError(f"transient must be >= 0, got {transient}")
-        self._engine = self.system.engine(state, **self.engine_options)
+        self._engine = require_tangent_flow(
+            self.system.engine(state, **self.engine_options), "it has no Lyapunov exponents"
+        )
         self._out1 = np.full((1, len(self._engine.sample_columns)), np.nan)
         self._t = 0.0
         self._advance(transient)

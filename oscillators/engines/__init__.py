@@ -27,6 +27,7 @@ from oscillators.engines.base import (
     StepBudgetError,
     SwitchBudgetError,
     TangentFlow,
+    require_tangent_flow,
     split_times,
     wrap_phase,
 )
@@ -51,6 +52,7 @@ __all__ = [
     "StepBudgetError",
     "SwitchBudgetError",
     "TangentFlow",
+    "require_tangent_flow",
     "select_engine",
     "split_times",
     "wrap_phase",

@@ -98,6 +98,7 @@ __all__ = [
     "SWITCH_DTYPE",
     "TIME_TOLERANCE",
     "TangentFlow",
+    "require_tangent_flow",
     "TangentFlowOff",
     "split_times",
     "step_budget",
@@ -498,6 +499,17 @@ class TangentFlow(ABC):
     def _need_tangent(self) -> None:
         if self._ntan == 0:
             raise TangentFlowOff("the tangent flow is off: call start_tangent() first")
+
+
+def require_tangent_flow(engine: Engine, consequence: str) -> TangentFlow:
+    """``engine`` itself if it has a tangent flow, else a one-sentence ``TypeError`` ending in
+    ``consequence`` (what the caller cannot do without it)."""
+    if not isinstance(engine, TangentFlow):
+        raise TypeError(
+            f"the {engine.name} engine has no tangent flow (it does not derive from "
+            f"oscillators.engines.TangentFlow), so {consequence}"
+        )
+    return engine
 
 
 class TangentFlowOff(RuntimeError, ValueError):

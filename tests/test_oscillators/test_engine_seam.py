@@ -116,6 +116,10 @@ def test_a_motion_only_engine_runs_through_the_checked_advance_and_has_no_jacobi
         "the free oscillator engine has no tangent flow (it does not derive from "
         "oscillators.engines.TangentFlow), so the flow map has no Jacobian here"
     )
+    from analysis.dynamics.lyapunov import TangentStepper
+
+    with pytest.raises(TypeError, match="free oscillator engine has no tangent flow .* so it has"):
+        TangentStepper(system).reinit()
 
 
 def test_the_float_fast_path_gives_the_array_path_bits():
