@@ -17,6 +17,7 @@ Example (the erf-play limit at C = 2.92, the paper's "some initial conditions ar
 from __future__ import annotations
 
 import argparse
+import functools
 from typing import Any
 
 from analysis.cli._build import (
@@ -49,11 +50,18 @@ from analysis.cli._parsing import (
     library_errors,
     positive_float,
 )
-from analysis.dynamics.basins import EXPERIMENT, MAX_STARTS, BasinGrid, basins
+from analysis.dynamics.basins import (
+    EXPERIMENT,
+    MAX_STARTS,
+    METHODS,
+    BasinGrid,
+    RecurrenceSettings,
+    basins,
+)
+from analysis.experiments.execution import run_tasks
 from analysis.experiments.models import MODELS
-from analysis.experiments.parameters import V0
 from analysis.experiments.store import StoreError
-from oscillators import MAX_PERIODS
+from oscillators import DEFAULT_V0, MAX_PERIODS
 
 __all__ = ["register", "run"]
 
@@ -72,6 +80,7 @@ _OPTIONS = {
     "v0": "--v0",
     "size": "--grid",
     "chunk": "--chunk",
+    "cell_size": "--cell-size",
 }
 
 
@@ -121,10 +130,24 @@ def register(subparsers: Any) -> None:
     g.add_argument(
         "--v0",
         type=finite_float,
-        default=V0,
+        default=DEFAULT_V0,
         help="the velocity of every start of a --w0-range grid",
     )
     r = p.add_argument_group("classification")
+    r.add_argument(
+        "--method",
+        choices=METHODS,
+        default="sections",
+        help="sections: every start runs its section budget; recurrences: the recurrence "
+        "mapper (Datseris & Wagemakers 2022) stops a start once its section enters a known "
+        "attractor's or basin's cells (much faster; cells must separate the attractors)",
+    )
+    r.add_argument(
+        "--cell-size",
+        type=positive_float,
+        default=RecurrenceSettings.cell_size,
+        help="recurrences: edge of the cells over (q, v, w) (play) or (q, v, M)",
+    )
     add_transient_option(r, 100, integer=True)
     r.add_argument(
         "--periods",
@@ -161,7 +184,10 @@ def register(subparsers: Any) -> None:
         help="forcing periods of the lambda_max run on each aperiodic attractor",
     )
     r.add_argument(
-        "--chunk", type=int_at_least(1, 10**6), default=200, help="starts per stored task"
+        "--chunk",
+        type=int_at_least(1, 10**6),
+        default=None,
+        help="starts per stored task (default 200; recurrences: 2500, one cell grid per task)",
     )
     add_execution_options(r)
     add_output_options(p, writes="basins.png, basins.npz, basins.json, results.sqlite")
@@ -243,9 +269,25 @@ def run(args: argparse.Namespace) -> int:
     announce_compilation(args)
     try:
         with library_errors(_OPTIONS, "--grid"):
+            runner = functools.partial(
+                run_tasks,
+                EXPERIMENT,
+                store=store,
+                workers=args.workers,
+                scheduler=args.scheduler,
+                progress=progress_enabled(args),
+                allow_version_mismatch=args.allow_version_mismatch,
+            )
+            recurrence = None
+            if args.method == "recurrences":
+                recurrence = RecurrenceSettings(
+                    cell_size=args.cell_size,
+                    **({} if args.chunk is None else {"chunk": args.chunk}),
+                )
             result = basins(
                 system,
                 grid,
+                method=args.method,
                 transient=args.transient,
                 periods=args.periods,
                 max_periods=total,
@@ -253,13 +295,10 @@ def run(args: argparse.Namespace) -> int:
                 match_tolerance=args.match_tolerance,
                 max_period=args.max_period,
                 lyapunov_periods=args.lyapunov_periods,
-                chunk=args.chunk,
-                store=store,
+                chunk=200 if args.chunk is None else args.chunk,
+                recurrence=recurrence,
+                executor=runner,
                 system_key=to_json(identity),
-                workers=args.workers,
-                scheduler=args.scheduler,
-                progress=progress_enabled(args),
-                allow_version_mismatch=args.allow_version_mismatch,
             )
     except StoreError as exc:
         raise store_error(exc) from exc
