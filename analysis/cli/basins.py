@@ -4,7 +4,9 @@ N × N starts over ``--q0-range`` and ``--v0-range`` (memory: the operator risin
 saturation to q0), or ``--q0-range`` and ``--w0-range`` for play-type memory (the play's wagon
 position w0, every start with the velocity ``--v0``); each start is classified by its section
 (:func:`analysis.dynamics.basins.basins`): a periodic orbit (refined once per orbit), a chaotic
-attractor (λ_max and D_KY), divergent, or undecided. Chunks of starts run on local worker
+attractor (λ_max and D_KY), divergent, or undecided; ``--method recurrences`` stops each start
+once its section enters a known attractor's or basin's cells (the recurrence mapper,
+:mod:`analysis.dynamics.recurrence`; ``--cell-size``). Chunks of starts run on local worker
 processes or a Dask cluster (``--scheduler``) and are stored in an SQLite file as they finish; a
 rerun resumes. Writes DIR/basins.png (the map coloured by attractor), DIR/basins.npz (per-start
 labels, transient lengths, periods) and DIR/basins.json (the record that ``--json`` prints).
@@ -140,7 +142,9 @@ def register(subparsers: Any) -> None:
         default="sections",
         help="sections: every start runs its section budget; recurrences: the recurrence "
         "mapper (Datseris & Wagemakers 2022) stops a start once its section enters a known "
-        "attractor's or basin's cells (much faster; cells must separate the attractors)",
+        "attractor's or basin's cells (much faster; cells must separate the attractors, and "
+        "--max-periods must let a start find a new attractor: 100 recurrences in a row after "
+        "its transient, ~2000 periods for the erf play's chaotic attractors)",
     )
     r.add_argument(
         "--cell-size",

@@ -2,8 +2,7 @@
 
 Plain reading of :func:`basins`::
 
-    for every chunk of starts (one task of the ensemble machinery: workers, Dask, the
-    resumable store, progress):
+    for every chunk of starts (one task, run by the caller's executor):
         for every start: section_run (no tangent flow) -> periodic (k, cycle, transient),
                          aperiodic (tail points) or divergent
     periodic starts:   while one is unlabelled: refine the orbit of the first one once
@@ -23,6 +22,18 @@ Plain reading of :func:`basins`::
     the rest:          "undecided"; divergent starts: "divergent"
 
 So the orbit refinement and the Lyapunov run happen once per attractor, not once per start.
+
+``method="recurrences"`` replaces the per-start budget by the recurrence mapper of
+:mod:`analysis.dynamics.recurrence` (Datseris & Wagemakers 2022): a start stops as soon as its
+section enters the cells of a known attractor or of its basin, new attractors are found by
+recurrences on the cell grid; each attractor found is classified once as above (its finder's
+state: section run, refined orbit or λ_max and D_KY). ``transients`` are then not measured (−1);
+``steps`` holds the periods each start ran.
+
+Execution is the caller's: the chunks of starts are tasks ``func(**task)`` handed to an
+``executor`` (:func:`run_chunks`: serial, a ``concurrent.futures.Executor``, or a callable such
+as a store-backed :func:`analysis.experiments.execution.run_tasks`, which the command line and
+the report pass to keep their resumable store); this module imports no store.
 Fractions come with the 95 % Wilson score interval
 (:func:`~analysis.dynamics.statistics.wilson_interval`). A grid over (q0, w0) (play-type
 memory) has starts outside the play's band ``|q0 − w0| <= p/2``: they are no states, labelled
