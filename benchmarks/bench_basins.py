@@ -12,10 +12,10 @@ A ``--grid`` × ``--grid`` map (default 200 × 200) over (q0, v0) in [-3, 3]² a
 * ``--method sections``: every start integrated for ``--periods`` (default 100) and classified
   by its own section (the map the README's earlier numbers are for).
 
-The baseline, measured in the same run right before each setting (the load drifts), is the
-plain API loop ``system.poincare_section(periods, 0, q0, v0)`` (100 periods, serial) over
-``--baseline-starts`` starts of the same grid, the median of ``--repeats``. Each setting runs
-on 1 and/or 2 workers (``--workers``; a ``ProcessPoolExecutor`` passed as the executor).
+The baseline, measured in the same run right before and right after each setting (their mean;
+the load drifts), is the plain API loop ``system.poincare_section(periods, 0, q0, v0)`` (100
+periods, serial) over ``--baseline-starts`` starts of the same grid, the median of
+``--repeats``. Each setting runs on 1 and/or 2 workers (``--workers``; a ``ProcessPoolExecutor`` passed as the executor).
 Extrapolation to 1000 × 1000: the mapping time scales with the number of starts (per-start cost
 is set by the chunk, whose size does not change with the grid) plus the attractor phase (once
 per attractor, independent of the grid size). With ``--json`` the last line is one JSON object
@@ -122,6 +122,11 @@ def measure_basins(
             with ProcessPoolExecutor(w) as ex:
                 bm = basins(system, grid, lyapunov_periods=2000, executor=ex, **kw)
         wall = time.perf_counter() - t0
+        # and after it: the ratio uses the mean of the two (the load drifts during a setting)
+        after = measure_baseline()
+        if not quiet:
+            print(f"baseline after the setting: {after:.1f} starts/s")
+        before, baseline = baseline, 0.5 * (baseline + after)
         rate = starts.shape[0] / wall
         sections = bm.timings["sections_s"]
         per_million = 1e6 * sections / starts.shape[0] + bm.timings["attractors_s"]
@@ -132,6 +137,7 @@ def measure_basins(
             "attractors_s": round(bm.timings["attractors_s"], 1),
             "starts_per_s": round(rate, 1),
             "baseline_starts_per_s": round(baseline, 2),
+            "baseline_before_after": [round(before, 2), round(after, 2)],
             "ratio_to_baseline": round(rate / baseline, 2),
             # the section runs scale with the starts, the attractor phase does not
             "map_1000x1000_h": round(per_million / 3600, 3),
