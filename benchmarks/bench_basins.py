@@ -5,7 +5,7 @@ A ``--grid`` × ``--grid`` map (default 200 × 200) over (q0, v0) in [-3, 3]² a
 (default 2.92) by :func:`analysis.dynamics.basins.basins`:
 
 * ``--method recurrences`` (default): the recurrence mapper (cells of 0.05 over (q, v, w),
-  Attractors.jl's thresholds, chunks of 2500 starts per task), each start running at most
+  Attractors.jl's thresholds, chunks of 10 000 starts per task), each start running at most
   ``--max-periods`` (default 2000: long enough for a start to find the period-5 attractor
   through the chaotic transient, median ~400 periods, and locate it); most starts stop after
   12–15 periods on basin cells of earlier starts;
@@ -15,7 +15,8 @@ A ``--grid`` × ``--grid`` map (default 200 × 200) over (q0, v0) in [-3, 3]² a
 The baseline, measured in the same run right before and right after each setting (their mean;
 the load drifts), is the plain API loop ``system.poincare_section(periods, 0, q0, v0)`` (100
 periods, serial) over ``--baseline-starts`` starts of the same grid, the median of
-``--repeats``. Each setting runs on 1 and/or 2 workers (``--workers``; a ``ProcessPoolExecutor`` passed as the executor).
+``--repeats``. Each setting runs on 1 and/or 2 workers (``--workers``; a
+``ProcessPoolExecutor`` passed as the executor).
 Extrapolation to 1000 × 1000: the mapping time scales with the number of starts (per-start cost
 is set by the chunk, whose size does not change with the grid) plus the attractor phase (once
 per attractor, independent of the grid size). With ``--json`` the last line is one JSON object
@@ -180,7 +181,7 @@ def main() -> None:
         "--periods); with --check 50 a start that settled by then stops there",
     )
     ap.add_argument(
-        "--chunk", type=int, default=None, help="starts per task (sections 400, recurrences 2500)"
+        "--chunk", type=int, default=None, help="starts per task (sections 400, recurrences 10000)"
     )
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--baseline-starts", type=int, default=400)
@@ -188,7 +189,7 @@ def main() -> None:
     ap.add_argument("--json", action="store_true", help="last line: the summary JSON object")
     args = ap.parse_args()
 
-    chunk = args.chunk or (2500 if args.method == "recurrences" else 400)
+    chunk = args.chunk or (10_000 if args.method == "recurrences" else 400)
     out = measure_basins(
         args.grid,
         args.coupling,

@@ -191,7 +191,7 @@ def register(subparsers: Any) -> None:
         "--chunk",
         type=int_at_least(1, 10**6),
         default=None,
-        help="starts per stored task (default 200; recurrences: 2500, one cell grid per task)",
+        help="starts per stored task (default 200; recurrences: 10000, one cell grid per task)",
     )
     add_execution_options(r)
     add_output_options(p, writes="basins.png, basins.npz, basins.json, results.sqlite")

@@ -130,7 +130,9 @@ class RecurrenceSettings:
         Periods integrated per engine call while searching (a start stops at most
         ``batch − 1`` periods late; larger batches save call overhead).
     chunk:
-        Starts per task (one cell grid per task).
+        Starts per task (one cell grid per task): larger chunks reuse more basin cells (C =
+        2.92, 100 × 100 starts: 16.2 periods per start with chunks of 2500, 13.4 with 10 000)
+        but give fewer tasks to spread over workers and to resume from.
     """
 
     cell_size: float = 0.05
@@ -142,7 +144,7 @@ class RecurrenceSettings:
     box: tuple[tuple[float, float], ...] | None = None
     path_basins: bool = True
     batch: int = 4
-    chunk: int = 2500
+    chunk: int = 10_000
 
     def __post_init__(self) -> None:
         size = finite_scalar(self.cell_size, "cell_size")
