@@ -4,7 +4,9 @@ N × N starts over ``--q0-range`` and ``--v0-range`` (memory: the operator risin
 saturation to q0), or ``--q0-range`` and ``--w0-range`` for play-type memory (the play's wagon
 position w0, every start with the velocity ``--v0``); each start is classified by its section
 (:func:`analysis.dynamics.basins.basins`): a periodic orbit (refined once per orbit), a chaotic
-attractor (λ_max and D_KY), divergent, or undecided. Chunks of starts run on local worker
+attractor (λ_max and D_KY), divergent, or undecided; ``--method recurrences`` stops each start
+once its section enters a known attractor's or basin's cells (the recurrence mapper,
+:mod:`analysis.dynamics.recurrence`; ``--cell-size``). Chunks of starts run on local worker
 processes or a Dask cluster (``--scheduler``) and are stored in an SQLite file as they finish; a
 rerun resumes. Writes DIR/basins.png (the map coloured by attractor), DIR/basins.npz (per-start
 labels, transient lengths, periods) and DIR/basins.json (the record that ``--json`` prints).
@@ -17,6 +19,7 @@ Example (the erf-play limit at C = 2.92, the paper's "some initial conditions ar
 from __future__ import annotations
 
 import argparse
+import functools
 from typing import Any
 
 from analysis.cli._build import (
@@ -49,11 +52,18 @@ from analysis.cli._parsing import (
     library_errors,
     positive_float,
 )
-from analysis.dynamics.basins import EXPERIMENT, MAX_STARTS, BasinGrid, basins
+from analysis.dynamics.basins import (
+    EXPERIMENT,
+    MAX_STARTS,
+    METHODS,
+    BasinGrid,
+    RecurrenceSettings,
+    basins,
+)
+from analysis.experiments.execution import run_tasks
 from analysis.experiments.models import MODELS
-from analysis.experiments.parameters import V0
 from analysis.experiments.store import StoreError
-from oscillators import MAX_PERIODS
+from oscillators import DEFAULT_V0, MAX_PERIODS
 
 __all__ = ["register", "run"]
 
@@ -72,6 +82,7 @@ _OPTIONS = {
     "v0": "--v0",
     "size": "--grid",
     "chunk": "--chunk",
+    "cell_size": "--cell-size",
 }
 
 
@@ -121,10 +132,26 @@ def register(subparsers: Any) -> None:
     g.add_argument(
         "--v0",
         type=finite_float,
-        default=V0,
+        default=DEFAULT_V0,
         help="the velocity of every start of a --w0-range grid",
     )
     r = p.add_argument_group("classification")
+    r.add_argument(
+        "--method",
+        choices=METHODS,
+        default="sections",
+        help="sections: every start runs its section budget; recurrences: the recurrence "
+        "mapper (Datseris & Wagemakers 2022) stops a start once its section enters a known "
+        "attractor's or basin's cells (much faster; cells must separate the attractors, and "
+        "--max-periods must let a start find a new attractor: 100 recurrences in a row after "
+        "its transient, ~2000 periods for the erf play's chaotic attractors)",
+    )
+    r.add_argument(
+        "--cell-size",
+        type=positive_float,
+        default=RecurrenceSettings.cell_size,
+        help="recurrences: edge of the cells over (q, v, w) (play) or (q, v, M)",
+    )
     add_transient_option(r, 100, integer=True)
     r.add_argument(
         "--periods",
@@ -161,7 +188,10 @@ def register(subparsers: Any) -> None:
         help="forcing periods of the lambda_max run on each aperiodic attractor",
     )
     r.add_argument(
-        "--chunk", type=int_at_least(1, 10**6), default=200, help="starts per stored task"
+        "--chunk",
+        type=int_at_least(1, 10**6),
+        default=None,
+        help="starts per stored task (default 200; recurrences: 10000, one cell grid per task)",
     )
     add_execution_options(r)
     add_output_options(p, writes="basins.png, basins.npz, basins.json, results.sqlite")
@@ -243,9 +273,25 @@ def run(args: argparse.Namespace) -> int:
     announce_compilation(args)
     try:
         with library_errors(_OPTIONS, "--grid"):
+            runner = functools.partial(
+                run_tasks,
+                EXPERIMENT,
+                store=store,
+                workers=args.workers,
+                scheduler=args.scheduler,
+                progress=progress_enabled(args),
+                allow_version_mismatch=args.allow_version_mismatch,
+            )
+            recurrence = None
+            if args.method == "recurrences":
+                recurrence = RecurrenceSettings(
+                    cell_size=args.cell_size,
+                    **({} if args.chunk is None else {"chunk": args.chunk}),
+                )
             result = basins(
                 system,
                 grid,
+                method=args.method,
                 transient=args.transient,
                 periods=args.periods,
                 max_periods=total,
@@ -253,13 +299,10 @@ def run(args: argparse.Namespace) -> int:
                 match_tolerance=args.match_tolerance,
                 max_period=args.max_period,
                 lyapunov_periods=args.lyapunov_periods,
-                chunk=args.chunk,
-                store=store,
+                chunk=200 if args.chunk is None else args.chunk,
+                recurrence=recurrence,
+                executor=runner,
                 system_key=to_json(identity),
-                workers=args.workers,
-                scheduler=args.scheduler,
-                progress=progress_enabled(args),
-                allow_version_mismatch=args.allow_version_mismatch,
             )
     except StoreError as exc:
         raise store_error(exc) from exc

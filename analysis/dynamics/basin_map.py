@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis.experiments.parameters import V0
 from hysteresis._validation import MAX_MAGNITUDE, bounded_work, finite_scalar, positive_integer
+from oscillators import DEFAULT_V0
 
 __all__ = ["BasinGrid", "BasinMap", "MAX_STARTS"]
 
@@ -31,7 +31,7 @@ class BasinGrid:
     y_range: tuple[float, float]
     size: int
     axis: str = "v0"
-    v0: float = V0
+    v0: float = DEFAULT_V0
 
     def __post_init__(self) -> None:
         positive_integer(self.size, "size", minimum=2)
@@ -88,9 +88,13 @@ class BasinMap:
     attractors: list[dict]
     grid: BasinGrid | None = None
     settings: dict = field(default_factory=dict)
-    #: wall times: ``sections_s`` (the tasks: every start's section run) and ``attractors_s``
-    #: (labelling: the refinements and Lyapunov runs once per attractor)
+    #: wall times: ``sections_s`` (the tasks: every start's section run, or the recurrence
+    #: mapper) and ``attractors_s`` (labelling: the refinements and Lyapunov runs once per
+    #: attractor)
     timings: dict = field(default_factory=dict)
+    #: ``recurrences`` only: the forcing periods each start was integrated before its label
+    #: was known (after the transient)
+    steps: np.ndarray | None = None
 
     def label_grid(self) -> np.ndarray:
         """``labels`` as the ``size × size`` map (y along rows); grids only."""
@@ -120,11 +124,12 @@ class BasinMap:
         }
 
     def save(self, path: str | Path) -> Path:
-        """Per-start arrays to an ``.npz``: starts, labels, transients, periods (+ the grid)."""
+        """Per-start arrays to an ``.npz``: starts, labels, transients, periods (+ the grid, and
+        ``steps`` of the recurrence mapper)."""
         path = Path(path)
-        extra = {}
+        extra = {} if self.steps is None else {"steps": self.steps}
         if self.grid is not None:
-            extra = {"q0_values": self.grid.q0_values, "y_values": self.grid.y_values}
+            extra.update(q0_values=self.grid.q0_values, y_values=self.grid.y_values)
             extra["label_grid"] = self.label_grid()
         np.savez_compressed(
             path,
@@ -138,23 +143,28 @@ class BasinMap:
 
     def plot(self, path: str | Path, title: str | None = None) -> Path:
         """The basin map coloured by attractor (grids; a list: its starts as points) and, for a
-        grid with periodic starts, a second panel with each start's transient length."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        grid, a second panel with each start's transient length (``sections``) or the periods
+        the recurrence mapper integrated it (``recurrences``). Drawn on a
+        :class:`matplotlib.figure.Figure` (no pyplot, no backend change)."""
+        from matplotlib import colormaps
         from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
+        from matplotlib.figure import Figure
         from matplotlib.patches import Patch
 
         n = len(self.attractors)
-        base = plt.get_cmap("tab10" if n <= 10 else "tab20")
+        base = colormaps["tab10" if n <= 10 else "tab20"]
         colours = ["white"] + [base(i % base.N) for i in range(n)]
         cmap = ListedColormap(colours)
         norm = BoundaryNorm(np.arange(-1.5, n + 0.5), cmap.N)
-        with_transients = self.grid is not None and np.any(self.transients >= 0)
-        fig, axes = plt.subplots(
-            1, 2 if with_transients else 1, figsize=(12 if with_transients else 6.5, 5)
-        )
+        second, second_label = None, ""
+        if self.grid is not None and np.any(self.transients >= 0):
+            second = np.ma.masked_less(self.transients.astype(float), 0)
+            second_label = "periods until the section repeats within the tolerance"
+        elif self.grid is not None and self.steps is not None:
+            second = np.ma.masked_where(self.labels < 0, self.steps.astype(float))
+            second_label = "periods integrated until the label was known (recurrences)"
+        fig = Figure(figsize=(12 if second is not None else 6.5, 5))
+        axes = fig.subplots(1, 2 if second is not None else 1)
         axes = np.atleast_1d(axes)
         ax = axes[0]
         if self.grid is not None:
@@ -178,8 +188,8 @@ class BasinMap:
             ax.set_xlabel("$q_0$")
         handles = [Patch(color=colours[a["label"] + 1], label=_legend(a)) for a in self.attractors]
         ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.8)
-        if with_transients:
-            t = np.ma.masked_less(self.transients.reshape(g.size, g.size).astype(float), 0)
+        if second is not None:
+            t = second.reshape(g.size, g.size)
             im = axes[1].imshow(
                 t + 1.0,
                 origin="lower",
@@ -189,13 +199,12 @@ class BasinMap:
                 norm=LogNorm(vmin=1.0, vmax=max(2.0, float(t.max()) + 1.0)),
                 interpolation="nearest",
             )
-            fig.colorbar(im, ax=axes[1], label="transient + 1 (forcing periods)")
-            axes[1].set_title("periods until the section repeats within the tolerance", fontsize=8)
+            fig.colorbar(im, ax=axes[1], label="periods + 1")
+            axes[1].set_title(second_label, fontsize=8)
         if title:
             ax.set_title(title, fontsize=8)
         fig.tight_layout()
         fig.savefig(path, dpi=150)
-        plt.close(fig)
         return Path(path)
 
 

@@ -2,8 +2,7 @@
 
 Plain reading of :func:`basins`::
 
-    for every chunk of starts (one task of the ensemble machinery: workers, Dask, the
-    resumable store, progress):
+    for every chunk of starts (one task, run by the caller's executor):
         for every start: section_run (no tangent flow) -> periodic (k, cycle, transient),
                          aperiodic (tail points) or divergent
     periodic starts:   while one is unlabelled: refine the orbit of the first one once
@@ -23,6 +22,18 @@ Plain reading of :func:`basins`::
     the rest:          "undecided"; divergent starts: "divergent"
 
 So the orbit refinement and the Lyapunov run happen once per attractor, not once per start.
+
+``method="recurrences"`` replaces the per-start budget by the recurrence mapper of
+:mod:`analysis.dynamics.recurrence` (Datseris & Wagemakers 2022): a start stops as soon as its
+section enters the cells of a known attractor or of its basin, new attractors are found by
+recurrences on the cell grid; each attractor found is classified once as above (its finder's
+state: section run, refined orbit or λ_max and D_KY). ``transients`` are then not measured (−1);
+``steps`` holds the periods each start ran.
+
+Execution is the caller's: the chunks of starts are tasks ``func(**task)`` handed to an
+``executor`` (:func:`run_chunks`: serial, a ``concurrent.futures.Executor``, or a callable such
+as a store-backed :func:`analysis.experiments.execution.run_tasks`, which the command line and
+the report pass to keep their resumable store); this module imports no store.
 Fractions come with the 95 % Wilson score interval
 (:func:`~analysis.dynamics.statistics.wilson_interval`). A grid over (q0, w0) (play-type
 memory) has starts outside the play's band ``|q0 − w0| <= p/2``: they are no states, labelled
@@ -34,7 +45,7 @@ from __future__ import annotations
 import functools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -51,8 +62,15 @@ from analysis.dynamics.attractors import (
 )
 from analysis.dynamics.basin_map import MAX_STARTS, BasinGrid, BasinMap
 from analysis.dynamics.bifurcation import section_period
+from analysis.dynamics.recurrence import (
+    DIVERGED,
+    NO_STATE,
+    RecurrenceSettings,
+    merge_attractors,
+    recurrence_chunk,
+    representative_state,
+)
 from analysis.dynamics.statistics import wilson_interval
-from analysis.experiments.execution import run_tasks
 from hysteresis._validation import (
     MAX_MAGNITUDE,
     bounded_work,
@@ -61,10 +79,23 @@ from hysteresis._validation import (
     nonnegative_integer,
     positive_integer,
 )
+from oscillators import DivergenceError
 
-__all__ = ["EXPERIMENT", "BasinGrid", "BasinMap", "basin_chunk", "basins", "MAX_STARTS"]
+__all__ = [
+    "EXPERIMENT",
+    "BasinGrid",
+    "BasinMap",
+    "MAX_STARTS",
+    "METHODS",
+    "RecurrenceSettings",
+    "basin_chunk",
+    "basins",
+    "run_chunks",
+]
 
 EXPERIMENT = "basins"
+#: ``sections``: every start runs its section budget; ``recurrences``: the recurrence mapper
+METHODS = ("sections", "recurrences")
 #: label of a grid point that is no state (w0 outside the play's band)
 NOT_A_STATE = -1
 #: share of a start's tail points that must lie in an aperiodic attractor's cloud
@@ -145,10 +176,36 @@ def _as_starts(starts: Any) -> tuple[np.ndarray, BasinGrid | None]:
     return arr, None
 
 
+def run_chunks(executor: Any, tasks: list[dict], func: Callable[..., dict]) -> list[dict]:
+    """``func(**task)`` for every task, in task order, on ``executor``: ``None`` (serially
+    here), a :class:`concurrent.futures.Executor` (anything with ``submit`` and ``map``; ``func``
+    must then be picklable), or a callable ``runner(tasks, func) -> results`` — e.g.
+    ``functools.partial(analysis.experiments.execution.run_tasks, "basins", store=...)``, which
+    stores every task and resumes. Execution is the caller's choice, as in Attractors.jl."""
+    if executor is None:
+        return [func(**t) for t in tasks]
+    if hasattr(executor, "submit") and hasattr(executor, "map"):
+        return list(executor.map(functools.partial(_call, func), tasks))
+    if callable(executor):
+        results = list(executor(tasks, func))
+        if len(results) != len(tasks):
+            raise ValueError(f"executor returned {len(results)} results for {len(tasks)} tasks")
+        return results
+    raise TypeError(
+        "executor must be None, a concurrent.futures.Executor or a callable (tasks, func) -> "
+        f"results, got {type(executor).__name__}"
+    )
+
+
+def _call(func: Callable[..., dict], task: dict) -> dict:
+    return func(**task)
+
+
 def basins(
     system: Any,
     starts: BasinGrid | Sequence[Sequence[float]] | np.ndarray,
     *,
+    method: str = "sections",
     transient: int = 100,
     periods: int = 100,
     max_periods: int | None = None,
@@ -160,12 +217,9 @@ def basins(
     cloud_bins: int = 64,
     tail: int = 16,
     chunk: int = 200,
-    store: Any = None,
-    system_key: str | None = None,
-    workers: int | None = 1,
-    scheduler: str | None = None,
-    progress: bool = False,
-    allow_version_mismatch: bool = False,
+    recurrence: RecurrenceSettings | None = None,
+    executor: Any = None,
+    system_key: str = "",
 ) -> BasinMap:
     """Classify where every start ends (module docstring) and collect the basins.
 
@@ -176,11 +230,18 @@ def basins(
     starts:
         A :class:`BasinGrid`, or rows ``(q0, v0)`` (default memory) or ``(q0, v0, w0)``
         (play-type memory; nan: default).
+    method:
+        ``"sections"`` (every start runs its section budget and is classified by its own
+        section) or ``"recurrences"`` (the recurrence mapper of
+        :mod:`analysis.dynamics.recurrence`: a start stops once its section enters a known
+        attractor's or basin's cells; the attractors it finds are classified here as below).
     transient, periods, max_periods:
         Forcing periods integrated before the measured window, and in it (``periods >= 2``);
         a start without a period goes on ``periods`` at a time up to ``max_periods`` in all
         (default ``transient + periods``: no extension), so long transients get resolved while
-        a start that settles early stops early.
+        a start that settles early stops early. ``recurrences``: a start skips ``transient``
+        periods, then runs at most ``max_periods − transient`` (its ``max_steps``); ``periods``
+        and ``max_periods`` are also the section run that classifies each attractor found.
     tolerance:
         Absolute tolerance of the section period (every section coordinate).
     match_tolerance:
@@ -193,13 +254,19 @@ def basins(
         The aperiodic attractors: length of the Lyapunov run (10 segments), the most attractor
         candidates tried, the cells per axis of the section cloud, the tail points per start.
     chunk:
-        Starts per task.
-    store, workers, scheduler, progress, allow_version_mismatch:
-        As :func:`~analysis.experiments.execution.run_tasks` (experiment ``"basins"``). With a
-        store, ``system_key`` (a string naming the operator and its parameters, C, ζ, Ω: it
-        keys the stored tasks) is required.
+        Starts per task (``sections``; ``recurrences`` takes ``recurrence.chunk``).
+    recurrence:
+        The recurrence mapper's knobs (default :class:`RecurrenceSettings()`).
+    executor:
+        Where the tasks run (:func:`run_chunks`): ``None`` serially, an ``Executor``, or a
+        callable ``(tasks, func) -> results`` such as a store-backed ``run_tasks`` (resume).
+    system_key:
+        A string naming the system (operator and its parameters, C, ζ, Ω), put into every task:
+        a runner that stores tasks keys them by it.
     """
     pts, grid = _as_starts(starts)
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     transient = nonnegative_integer(transient, "transient")
     periods = positive_integer(periods, "periods", minimum=2)
     max_period = min(32, periods // 2) if max_period is None else max_period
@@ -218,13 +285,13 @@ def basins(
     cloud_bins = positive_integer(cloud_bins, "cloud_bins", minimum=4)
     tail = positive_integer(tail, "tail")
     chunk = positive_integer(chunk, "chunk")
-    if store is not None and not isinstance(system_key, str):
-        raise ValueError(
-            "system_key must name the system (operator and parameters, C, zeta, Omega) when a "
-            "store is given: it keys the stored tasks"
-        )
+    if not isinstance(system_key, str):
+        raise TypeError(f"system_key must be a string, got {type(system_key).__name__}")
     max_periods = transient + periods if max_periods is None else max_periods
     max_periods = positive_integer(max_periods, "max_periods", minimum=transient + periods)
+    recurrence = RecurrenceSettings() if recurrence is None else recurrence
+    if not isinstance(recurrence, RecurrenceSettings):
+        raise TypeError(f"recurrence must be a RecurrenceSettings, got {type(recurrence).__name__}")
     valid = _valid_starts(system, pts, grid)
     settings = dict(
         transient=transient,
@@ -234,23 +301,94 @@ def basins(
         max_period=max_period,
         tail=tail,
     )
-    tasks = [
-        dict(starts=pts[i : i + chunk].tolist(), system_key=system_key or "", **settings)
-        for i in range(0, pts.shape[0], chunk)
-    ]
-    clock = time.perf_counter()
-    results = run_tasks(
-        EXPERIMENT,
-        tasks,
-        functools.partial(basin_chunk, system=system),
-        store=store,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
-        allow_version_mismatch=allow_version_mismatch,
+    run = functools.partial(_rerun, system, pts, settings)
+    classify = dict(
+        match_tolerance=match_tolerance,
+        lyapunov_periods=lyapunov_periods,
+        max_aperiodic=max_aperiodic,
+        cloud_bins=cloud_bins,
     )
-    timings = {"sections_s": time.perf_counter() - clock}
     clock = time.perf_counter()
+    if method == "recurrences":
+        tasks = [
+            dict(
+                starts=pts[i : i + recurrence.chunk].tolist(),
+                transient=transient,
+                max_steps=max_periods - transient,
+                system_key=system_key,
+                **recurrence.task(),
+            )
+            for i in range(0, pts.shape[0], recurrence.chunk)
+        ]
+        results = run_chunks(executor, tasks, functools.partial(recurrence_chunk, system=system))
+        timings = {"sections_s": time.perf_counter() - clock}
+        clock = time.perf_counter()
+        labels, attractors, steps, extra = _label_recurrences(
+            system, pts, results, recurrence.chunk, settings, classify
+        )
+        settings.update(
+            method=method,
+            match_tolerance=match_tolerance,
+            lyapunov_periods=lyapunov_periods,
+            recurrence=recurrence.task(),
+            **extra,
+        )
+        trans = np.full(pts.shape[0], -1, dtype=np.int32)
+        period = np.array(
+            [attractors[x].get("period", 0) if x >= 0 else 0 for x in labels], dtype=np.int32
+        )
+    else:
+        tasks = [
+            dict(starts=pts[i : i + chunk].tolist(), system_key=system_key, **settings)
+            for i in range(0, pts.shape[0], chunk)
+        ]
+        results = run_chunks(executor, tasks, functools.partial(basin_chunk, system=system))
+        timings = {"sections_s": time.perf_counter() - clock}
+        clock = time.perf_counter()
+        labels, attractors, period, trans = _label_sections(
+            system, results, valid, run, settings, classify
+        )
+        settings.update(match_tolerance=match_tolerance, lyapunov_periods=lyapunov_periods)
+        steps = None
+    n_valid = int(np.count_nonzero(labels >= 0))
+    for a in attractors:
+        mine = labels == a["label"]
+        count = int(np.count_nonzero(mine))
+        lo, hi = wilson_interval(count, n_valid)
+        a.update(count=count, fraction=count / n_valid, interval=[lo, hi])
+        a["interval_method"] = "Wilson score, 95 %"
+        if a["kind"] == "periodic" and method == "sections":
+            t = trans[mine]
+            a.update(transient_median=float(np.median(t)), transient_max=int(t.max()))
+    timings["attractors_s"] = time.perf_counter() - clock
+    return BasinMap(
+        timings=timings,
+        starts=pts,
+        labels=labels,
+        transients=np.where(labels >= 0, trans, -1),
+        periods=period,
+        attractors=attractors,
+        grid=grid,
+        settings=settings,
+        steps=steps,
+    )
+
+
+def _rerun(system: Any, pts: np.ndarray, settings: dict, i: int) -> Any:
+    """Start ``i``'s section run again, keeping its final state."""
+    q0, v0, w0 = pts[i]
+    state = start_state(system, q0, v0, None if math.isnan(w0) else w0)
+    return section_run(system, state, keep_state=True, **settings)
+
+
+def _label_sections(
+    system: Any,
+    results: list[dict], valid: np.ndarray, rerun: Callable[[int], Any], settings: dict,
+    classify: dict,
+) -> tuple[np.ndarray, list[dict], np.ndarray, np.ndarray]:  # fmt: skip
+    """Labels of the ``sections`` method (module docstring): one refinement per periodic
+    orbit, one Lyapunov run per aperiodic attractor candidate."""
+    match_tolerance = classify["match_tolerance"]
     status = np.concatenate([np.asarray(r["status"]) for r in results])
     period = np.concatenate([np.asarray(r["period"]) for r in results])
     trans = np.concatenate([np.asarray(r["transient"]) for r in results])
@@ -261,23 +399,6 @@ def basins(
     status[~valid] = -2
     labels = np.full(status.size, NOT_A_STATE, dtype=np.int32)
     attractors: list[dict] = []
-    settings.update(match_tolerance=match_tolerance, lyapunov_periods=lyapunov_periods)
-
-    def rerun(i: int) -> Any:
-        q0, v0, w0 = pts[i]
-        state = start_state(system, q0, v0, None if math.isnan(w0) else w0)
-        return section_run(
-            system,
-            state,
-            transient,
-            periods,
-            max_periods=max_periods,
-            tolerance=tolerance,
-            max_period=max_period,
-            tail=tail,
-            keep_state=True,
-        )
-
     # -- periodic: one refinement per orbit ------------------------------------------------------
     per_idx = np.flatnonzero(status == PERIODIC)
     offsets = np.concatenate([[0], np.cumsum(period[status == PERIODIC])])
@@ -296,36 +417,26 @@ def basins(
                 undecided.append(int(members[first]))
                 open_[first] = False
                 continue
-            same = [
-                a["label"]
-                for a in attractors
-                if a["kind"] == "periodic"
-                and a["period"] == k
-                and match_cycles(a["points"][None], orbit["points"], match_tolerance)[0]
-            ]
-            label = same[0] if same else len(attractors)
-            if not same:
+            label = _same_orbit(attractors, int(k), orbit, match_tolerance)
+            if label is None:
+                label = len(attractors)
                 attractors.append({"label": label, "kind": "periodic", "period": int(k), **orbit})
             labels[members[hit]] = label
             open_ &= ~hit
     # -- aperiodic: one Lyapunov run per attractor candidate --------------------------------------
     ap_idx = np.flatnonzero(status == APERIODIC)
+    tail = settings["tail"]
     ap_tails = tails.reshape(ap_idx.size, -1, 2) if ap_idx.size else np.empty((0, tail, 2))
     open_ = np.ones(ap_idx.size, dtype=bool)
     tried = 0
-    while open_.any() and tried < max_aperiodic:
+    while open_.any() and tried < classify["max_aperiodic"]:
         tried += 1
         first = int(np.flatnonzero(open_)[0])
         state = rerun(int(ap_idx[first])).final
         # the cloud first (no tangent flow): a continuation that settles needs no λ_max
-        cloud, settled = _cloud(system, state, lyapunov_periods, cloud_bins, periods, max_period)
+        cloud, est = _chaos(system, state, settings, classify)
         hit = open_ & _in_cloud(cloud, ap_tails)
-        chaotic = False
-        if hit[first] and not settled:
-            est = lyapunov_estimate(system, state, lyapunov_periods)
-            del est["final"]
-            chaotic = est["max_exponent"] > 2.0 * est["max_exponent_error"]
-        if not chaotic:
+        if not (hit[first] and est is not None):
             # a chaotic transient (its continuation settles), or no significant λ_max > 0
             undecided.append(int(ap_idx[first]))
             open_[first] = False
@@ -335,31 +446,124 @@ def basins(
         labels[ap_idx[hit]] = label
         open_ &= ~hit
     undecided.extend(int(i) for i in ap_idx[open_])
-    for kind, idx in (("divergent", np.flatnonzero(status == DIVERGENT)), ("undecided", undecided)):
-        if len(idx):
-            labels[np.asarray(idx)] = len(attractors)
-            attractors.append({"label": len(attractors), "kind": kind})
-    n_valid = int(np.count_nonzero(labels >= 0))
+    _append_rest(labels, attractors, np.flatnonzero(status == DIVERGENT), undecided)
+    return labels, attractors, period, trans
+
+
+def _same_orbit(attractors: list[dict], k: int, orbit: dict, tol: float) -> int | None:
+    """The label of a known periodic attractor that is ``orbit`` (period k, cyclic shifts)."""
     for a in attractors:
-        mine = labels == a["label"]
-        count = int(np.count_nonzero(mine))
-        lo, hi = wilson_interval(count, n_valid)
-        a.update(count=count, fraction=count / n_valid, interval=[lo, hi])
-        a["interval_method"] = "Wilson score, 95 %"
-        if a["kind"] == "periodic":
-            t = trans[mine]
-            a.update(transient_median=float(np.median(t)), transient_max=int(t.max()))
-    timings["attractors_s"] = time.perf_counter() - clock
-    return BasinMap(
-        timings=timings,
-        starts=pts,
-        labels=labels,
-        transients=np.where(labels >= 0, trans, -1),
-        periods=period,
-        attractors=attractors,
-        grid=grid,
-        settings=settings,
+        if a["kind"] == "periodic" and a["period"] == k:
+            if match_cycles(a["points"][None], orbit["points"], tol)[0]:
+                return int(a["label"])
+    return None
+
+
+def _chaos(system: Any, state: Any, settings: dict, classify: dict) -> tuple[tuple, dict | None]:
+    """The section cloud of a continuation from ``state`` and, when it has not settled and
+    λ_max exceeds twice its error, the chaotic attractor's λ_max ± error and D_KY."""
+    cloud, settled = _cloud(
+        system,
+        state,
+        classify["lyapunov_periods"],
+        classify["cloud_bins"],
+        settings["periods"],
+        settings["max_period"],
     )
+    if settled:
+        return cloud, None
+    est = lyapunov_estimate(system, state, classify["lyapunov_periods"])
+    del est["final"]
+    return cloud, est if est["max_exponent"] > 2.0 * est["max_exponent_error"] else None
+
+
+def _append_rest(
+    labels: np.ndarray, attractors: list[dict], divergent: Sequence[int], undecided: Sequence[int]
+) -> None:
+    """The ``divergent`` and ``undecided`` pseudo-attractors, after the real ones."""
+    for kind, idx in (("divergent", divergent), ("undecided", undecided)):
+        if len(idx):
+            labels[np.asarray(idx, dtype=np.int64)] = len(attractors)
+            attractors.append({"label": len(attractors), "kind": kind})
+
+
+def _label_recurrences(
+    system: Any, pts: np.ndarray, results: list[dict], chunk: int, settings: dict,
+    classify: dict,
+) -> tuple[np.ndarray, list[dict], np.ndarray, dict]:  # fmt: skip
+    """Labels of the ``recurrences`` method: the chunks' attractors joined where they share a
+    cell (:func:`~analysis.dynamics.recurrence.merge_attractors`), each joined attractor
+    classified once from the state its finder reached (a periodic orbit refined, or a chaotic
+    attractor's λ_max and D_KY, as for ``sections``; else undecided)."""
+    group_of, members = merge_attractors(results)
+    outcome = np.concatenate([np.asarray(r["outcome"]) for r in results])
+    steps = np.concatenate([np.asarray(r["steps"]) for r in results])
+    stop = np.concatenate([np.asarray(r["stop"]) for r in results])
+    group = np.full(outcome.size, -1, dtype=np.int64)
+    for k, r in enumerate(results):
+        o = np.asarray(r["outcome"])
+        sel = o >= 0
+        group[k * chunk + np.flatnonzero(sel)] = group_of[k][o[sel]]
+    labels = np.full(outcome.size, NOT_A_STATE, dtype=np.int32)
+    attractors: list[dict] = []
+    clouds: list[tuple[int, tuple]] = []
+    undecided = list(np.flatnonzero((outcome < 0) & (outcome != DIVERGED) & (outcome != NO_STATE)))
+    for g, mem in enumerate(members):
+        mine = np.flatnonzero(group == g)
+        if not mine.size:
+            continue
+        k, local = next(((k, a) for k, a in mem if results[k]["found_by"][a] >= 0), mem[0])
+        start = k * chunk + int(results[k]["found_by"][local])
+        state = representative_state(system, pts[start], int(results[k]["found_steps"][local]))
+        label = _classify_state(system, state, attractors, clouds, settings, classify)
+        if label is None:
+            undecided.extend(int(i) for i in mine)
+        else:
+            labels[mine] = label
+    _append_rest(labels, attractors, np.flatnonzero(outcome == DIVERGED), undecided)
+    states = outcome != NO_STATE
+    reasons = ("new attractor", "attractor cells", "basin cells", "other")
+    extra = {
+        "merges": int(sum(int(r["merges"]) for r in results)),
+        "stops": {name: int(np.count_nonzero(stop[states] == c)) for c, name in enumerate(reasons)},
+        "steps_mean": float(steps[states].mean()) if states.any() else 0.0,
+    }
+    return labels, attractors, steps, extra
+
+
+def _classify_state(
+    system: Any, state: Any, attractors: list[dict], clouds: list[tuple[int, tuple]],
+    settings: dict, classify: dict,
+) -> int | None:  # fmt: skip
+    """The label of the attractor through ``state`` (appended to ``attractors`` if new), or
+    ``None`` (undecided): its section run, then a refined orbit or a chaos test."""
+    try:
+        run = section_run(system, state, keep_state=True, **{**settings, "transient": 0})
+    except DivergenceError:
+        return None
+    if run.status == PERIODIC:
+        k = run.period
+        orbit = periodic_attractor(system, run.final, k)
+        if not match_cycles(run.cycle[None], orbit["points"], classify["match_tolerance"])[0]:
+            return None
+        label = _same_orbit(attractors, k, orbit, classify["match_tolerance"])
+        if label is None:
+            label = len(attractors)
+            attractors.append({"label": label, "kind": "periodic", "period": int(k), **orbit})
+        return label
+    if run.status != APERIODIC:
+        return None
+    tail = run.tail[None, :, :2]
+    for label, cloud in clouds:
+        if _in_cloud(cloud, tail)[0]:
+            return label
+    cloud, est = _chaos(system, run.final, settings, classify)
+    if est is None or not _in_cloud(cloud, tail)[0]:
+        return None
+    label = len(attractors)
+    attractors.append({"label": label, "kind": "chaotic", **est})
+    clouds.append((label, cloud))
+    return label
 
 
 def _valid_starts(system: Any, pts: np.ndarray, grid: BasinGrid | None) -> np.ndarray:

@@ -29,6 +29,7 @@ Markdown lines that :func:`analysis.paper.runner.write_report` appends to the Di
 
 from __future__ import annotations
 
+import functools
 import time
 from collections import Counter
 from dataclasses import dataclass, fields
@@ -36,7 +37,8 @@ from typing import Any
 
 import numpy as np
 
-from analysis.dynamics.basins import BasinGrid, basins
+from analysis.dynamics.basins import EXPERIMENT, BasinGrid, basins
+from analysis.experiments.execution import run_tasks
 from analysis.experiments.models import build_operator
 from analysis.experiments.parameters import (
     DAMPING_RATIO,
@@ -185,12 +187,16 @@ def _basin_record(ctx: PaperContext, coupling: float, grid: BasinGrid, max_perio
         max_periods=max_periods,
         lyapunov_periods=size.lyapunov_periods,
         chunk=size.chunk,
-        store=ctx.store_path,
+        executor=functools.partial(
+            run_tasks,
+            EXPERIMENT,
+            store=ctx.store_path,
+            workers=ctx.task_workers,
+            scheduler=ctx.scheduler,
+            progress=ctx.progress,
+            allow_version_mismatch=ctx.allow_version_mismatch,
+        ),
         system_key=key,
-        workers=ctx.task_workers,
-        scheduler=ctx.scheduler,
-        progress=ctx.progress,
-        allow_version_mismatch=ctx.allow_version_mismatch,
     )
     valid = result.labels >= 0
     periodic = valid & (result.transients >= 0)

@@ -74,3 +74,22 @@ def test_w0_range_needs_play_type_memory(capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--w0-range" in err and "play-type" in err
+
+
+def test_recurrences_method_records_its_settings_and_resumes(capsys, tmp_path):
+    """``--method recurrences``: the record names the method, the mapper's knobs and why the
+    starts stopped; the npz carries the periods each start ran; a rerun reads the store."""
+    argv = [*SMALL, "--max-periods", "2000", "--method", "recurrences", "--json", "--out", "rec"]
+    assert main(argv) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["method"] == "recurrences"
+    assert record["recurrence"]["cell_size"] == 0.05
+    assert sum(record["stops"].values()) == record["starts"] == 9
+    assert {a["kind"] for a in record["attractors"]} <= {"periodic", "chaotic", "undecided"}
+    with np.load(tmp_path / "rec" / "basins.npz") as z:
+        steps, labels = z["steps"], z["labels"]
+    assert steps.shape == (9,) and np.all((steps >= 1) & (steps <= 2000))
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["attractors"] == record["attractors"]
+    with np.load(tmp_path / "rec" / "basins.npz") as z:
+        np.testing.assert_array_equal(z["labels"], labels)

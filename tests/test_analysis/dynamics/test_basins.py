@@ -8,7 +8,9 @@ period-3 orbit coexists with a chaotic attractor (λ_max ≈ 0.11 > 0); the pape
 
 from __future__ import annotations
 
+import functools
 import math
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pytest
@@ -24,6 +26,7 @@ from analysis.dynamics.attractors import (
 from analysis.dynamics.basins import BasinGrid, basins
 from analysis.dynamics.bifurcation import orbit_period
 from analysis.dynamics.statistics import wilson_interval
+from analysis.experiments.execution import run_tasks
 from analysis.experiments.models import build_operator
 from hysteresis import Relay
 from oscillators import ForcedOscillator
@@ -105,8 +108,10 @@ def test_interrupted_run_resumes_to_identical_labels(bistable, tmp_path, monkeyp
         return real_chunk(**task)
 
     monkeypatch.setattr(basins_module, "basin_chunk", interrupted)
+    # the store-backed runner the CLI and the paper pass: every finished task is stored
+    runner = functools.partial(run_tasks, "basins", store=store, workers=1, progress=False)
     with pytest.raises(KeyboardInterrupt):
-        basins(system, GRID, chunk=5, store=store, system_key="erf C=1.74", **RUN)
+        basins(system, GRID, chunk=5, executor=runner, system_key="erf C=1.74", **RUN)
     resumed = []
 
     def counting(**task):
@@ -114,7 +119,7 @@ def test_interrupted_run_resumes_to_identical_labels(bistable, tmp_path, monkeyp
         return real_chunk(**task)
 
     monkeypatch.setattr(basins_module, "basin_chunk", counting)
-    again = basins(system, GRID, chunk=5, store=store, system_key="erf C=1.74", **RUN)
+    again = basins(system, GRID, chunk=5, executor=runner, system_key="erf C=1.74", **RUN)
     assert len(resumed) == 5 - 2  # only the chunks that were not stored ran
     np.testing.assert_array_equal(again.labels, full.labels)
     np.testing.assert_array_equal(again.transients, full.transients)
@@ -190,7 +195,7 @@ def test_realization_attractor_dimers():
         (dict(max_period=60), "max_period"),
         (dict(max_periods=50), "max_periods"),
         (dict(tolerance=0.0), "tolerance"),
-        (dict(store="x.sqlite"), "system_key"),
+        (dict(method="fast"), "method"),
     ],
 )
 def test_bad_arguments_are_refused(kwargs, message, tmp_path, monkeypatch):
@@ -248,18 +253,22 @@ def test_transient_length_matches_the_linear_closed_form():
 
 def test_process_pool_and_dask_give_the_serial_labels(tmp_path):
     """The system travels to the workers with the task function (pickled); chunks of two starts
-    on a process pool and on a Dask cluster give the serial run's labels and transients."""
+    on a process pool (an Executor, and run_tasks' own pool) and on a Dask cluster give the
+    serial run's labels and transients."""
     distributed = pytest.importorskip("distributed")
     system = ForcedOscillator(build_operator("erf-play"), 1.80)  # period 3 from every start
     starts = [[-1.0, 0.1], [-0.5, 0.3], [0.5, -0.2], [1.5, 0.0]]
     kw = dict(transient=0, periods=60, max_periods=300, chunk=2)
-    serial = basins(system, starts, workers=1, **kw)
-    pool = basins(system, starts, workers=2, **kw)
+    serial = basins(system, starts, **kw)
+    with ProcessPoolExecutor(2) as ex:
+        executor = basins(system, starts, executor=ex, **kw)
+    pool = basins(system, starts, executor=functools.partial(run_tasks, "basins", workers=2), **kw)
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
     ) as cluster:
-        dask = basins(system, starts, scheduler=cluster.scheduler_address, **kw)
-    for other in (pool, dask):
+        runner = functools.partial(run_tasks, "basins", scheduler=cluster.scheduler_address)
+        dask = basins(system, starts, executor=runner, **kw)
+    for other in (executor, pool, dask):
         np.testing.assert_array_equal(other.labels, serial.labels)
         np.testing.assert_array_equal(other.transients, serial.transients)
     assert [a["kind"] for a in serial.attractors] == ["periodic"]
