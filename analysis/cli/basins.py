@@ -27,6 +27,7 @@ from analysis.cli._build import (
     check_model_options,
     check_store,
     model_record,
+    naming_divergence,
     store_error,
 )
 from analysis.cli._options import (
@@ -272,7 +273,7 @@ def run(args: argparse.Namespace) -> int:
     }
     announce_compilation(args)
     try:
-        with library_errors(_OPTIONS, "--grid"):
+        with library_errors(_OPTIONS, "--grid"), naming_divergence(lambda: system):
             runner = functools.partial(
                 run_tasks,
                 EXPERIMENT,
