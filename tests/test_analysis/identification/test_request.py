@@ -175,9 +175,9 @@ def test_reader_options_by_format():
     _one_line_about(exc, "columns")
     drift = IdentifyRequest(inputs=(FILE,), drift_correction="additive")
     assert drift.reader_options("lakeshore") == {"drift_correction": "additive"}
-    with pytest.raises(ValueError, match="calibration points") as exc:
-        drift.reader_options("csv")
-    _one_line_about(exc, "drift_correction")
+    # every format gets it: the reader warns where a file has no calibration points (a note,
+    # not an error) and refuses a format whose calibration points it cannot use
+    assert drift.reader_options("csv") == {"drift_correction": "additive"}
 
 
 def test_grid_step_against_the_data():
