@@ -1,0 +1,271 @@
+"""The attractor's Kaplan–Yorke dimension where neutral memory directions spoil the full-space one.
+
+The tangent space of a continuous operator holds its memory directions
+(``("q", "v", *memory)``, :mod:`oscillators.engines.continuous`). A memory direction that lives
+across QR intervals (a remembered extremum of a continuous Preisach staircase, a
+Prandtl–Ishlinskii wagon strictly inside its play) is frozen, ``δm' = 0``: it carries its
+perturbation unchanged, an exponent 0 while it lives. Such *neutral* directions outrank the
+contraction of the ``(q, v)`` motion, and when one is wiped out the loop marks the last slot
+``-inf`` — the contraction's. The full-space ``D_KY`` then counts neutral directions as
+dimensions: the Gaussian width-disorder Preisach model at C = 4 gives λ = (0.077, −0.004, −inf, …)
+or (0.077, −inf, …), D_KY = 2.0 or 1.0 per run, while the box-counting dimension of its section
+is 1.34–1.44 (``docs/width_disorder``). The exponents of the motion without long-lived memory
+(:func:`~analysis.dynamics.memory.memory_frozen_exponents`) give D_KY = 1.38–1.42 there, the
+attractor's dimension. :func:`attractor_dimension` reports that value where neutral memory
+exists and the full-space value everywhere else, with both named.
+
+**When neutral memory exists** (:func:`has_neutral_memory`) is measured, twice:
+
+(1) memory directions survived whole projection intervals in the memory-frozen run
+    (``zeroed_mean > 0``, read off the exact survival probe of
+    :class:`~analysis.dynamics.memory.MemoryProjectionStepper`): a direction frozen through an
+    interval has exponent 0 there; and
+(2) the full spectrum's leading exponents (as many as ``q, v[, phi]``) differ from the
+    memory-frozen ones (with the phase's 0) by more than ``sigmas`` combined finite-time
+    errors, or one of them is ``-inf`` (a wiped-out memory direction took a ``(q, v)`` slot: a
+    continuous engine never collapses ``(δq, δv)``), or the errors are unknown (a run shorter
+    than ``blocks`` intervals: then the memory-frozen value, the safe one, is reported).
+
+Why not a test on the full spectrum alone: its exponents are attached to no coordinate, and the
+damage neutral memory does is not always a zero. In the Preisach runs above every memory slot
+ends ``-inf`` (so "memory exponents finite rather than -inf" sees nothing), the slot next to
+``λ_max`` holds a mixture (−0.004 … −0.09, zero within its error or not, depending on the run
+length and on how many vectors were tracked: a start without memory tracks two), or the
+contraction is gone altogether. A zero within errors also flags the edge of chaos
+(``λ_max ≈ 0``), which is the attractor's own. The comparison asks the question directly: does
+dropping the long-lived memory change the spectrum? A play's ``w`` is reset at every wall hit
+(``δw := δq``); where it survives a whole period without a wall hit (11 % of the periods of the
+erf play at C = 4) (1) holds, but both spectra agree (they differ only in the norm, a bound
+``log(10)/t``), so the paper's systems (erf play; relays and dimers have no memory rows and
+skip the second run) keep the full-space value.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from analysis.dynamics.dimensions import kaplan_yorke_dimension
+from analysis.dynamics.lyapunov import LyapunovResult, TangentStepper, lyapunov_spectrum
+from analysis.dynamics.memory import (
+    MemoryFrozenResult,
+    exponent_block_errors,
+    kaplan_yorke_block_error,
+    memory_frozen_exponents,
+)
+from hysteresis._validation import finite_scalar, positive_integer, time_window
+from oscillators import DEFAULT_Q0, DEFAULT_V0
+
+__all__ = ["AttractorDimension", "attractor_dimension", "has_neutral_memory"]
+
+#: the two ways :attr:`AttractorDimension.kaplan_yorke` is obtained
+MEMORY_FROZEN, FULL_SPACE = "memory-frozen", "full space"
+
+_EXPLANATION = {
+    MEMORY_FROZEN: "D_KY of the memory-frozen exponents: the full tangent space holds neutral "
+    "memory directions (frozen extrema or wagons, exponent 0 while they live), which distort "
+    "the full-space D_KY (they outrank the contraction, and a wiped-out one takes its slot)",
+    FULL_SPACE: "D_KY of the full spectrum: no neutral memory direction",
+}
+
+
+@dataclass(frozen=True)
+class AttractorDimension:
+    """Outcome of :func:`attractor_dimension`.
+
+    Attributes
+    ----------
+    kaplan_yorke:
+        The attractor's ``D_KY``: of the memory-frozen exponents if :attr:`neutral_memory`,
+        else of the full spectrum (then equal to ``spectrum.kaplan_yorke``).
+    kaplan_yorke_error:
+        Its finite-time error (jackknife over ``blocks`` batches,
+        :func:`~analysis.dynamics.memory.kaplan_yorke_block_error`; nan if the run is too short).
+    kaplan_yorke_full_space:
+        ``D_KY`` of the full spectrum in ``(q, v[, phi], memory)`` (``spectrum.kaplan_yorke``).
+    source:
+        ``"memory-frozen"`` or ``"full space"``: which spectrum :attr:`kaplan_yorke` is from.
+    neutral_memory:
+        Whether the full spectrum holds neutral memory directions (:func:`has_neutral_memory`).
+    spectrum:
+        The full :class:`~analysis.dynamics.lyapunov.LyapunovResult`.
+    frozen:
+        The :class:`~analysis.dynamics.memory.MemoryFrozenResult` of the same start (None if the
+        tangent space never had memory rows: relays, dimers).
+    """
+
+    kaplan_yorke: float
+    kaplan_yorke_error: float
+    kaplan_yorke_full_space: float
+    source: str
+    neutral_memory: bool
+    spectrum: LyapunovResult
+    frozen: MemoryFrozenResult | None
+
+    @property
+    def exponents(self) -> np.ndarray:
+        """The exponents :attr:`kaplan_yorke` is computed from (with the phase's 0 if the
+        spectrum follows the phase)."""
+        if self.source == FULL_SPACE:
+            return np.asarray(self.spectrum.exponents)
+        return _with_phase(self.frozen.exponents, self.spectrum)
+
+    @property
+    def explanation(self) -> str:
+        """One line: which D_KY is reported and why."""
+        return _EXPLANATION[self.source]
+
+    def __repr__(self) -> str:
+        return (
+            f"AttractorDimension(kaplan_yorke={self.kaplan_yorke:.4f} +- "
+            f"{self.kaplan_yorke_error:.2g} ({self.source}), kaplan_yorke_full_space="
+            f"{self.kaplan_yorke_full_space:.4f}, exponents=["
+            + ", ".join(f"{x:.5g}" for x in self.exponents)
+            + "])"
+        )
+
+
+def _base(tangent_space: tuple[str, ...]) -> int:
+    """Number of non-memory directions: q, v and the phase if followed."""
+    return 3 if "phi" in tangent_space else 2
+
+
+def _with_phase(exponents: np.ndarray, spectrum: LyapunovResult) -> np.ndarray:
+    lam = np.asarray(exponents, dtype=float)
+    if "phi" in spectrum.tangent_space:
+        lam = -np.sort(-np.append(lam, 0.0))
+    return lam
+
+
+def _memory_rows(system: Any, spectrum: LyapunovResult) -> bool:
+    """Whether the tangent space holds memory rows at the start or at the end of the run (a
+    continuous Preisach start without extrema has none at first)."""
+    base = _base(spectrum.tangent_space)
+    if len(spectrum.tangent_space) > base:
+        return True
+    engine = system.engine(spectrum.final)
+    if not hasattr(engine, "start_tangent"):
+        return False
+    engine.start_tangent(base == 3)
+    return len(engine.tangent_space) > base
+
+
+def has_neutral_memory(
+    spectrum: LyapunovResult,
+    frozen: MemoryFrozenResult,
+    errors: np.ndarray,
+    sigmas: float = 2.0,
+) -> bool:
+    """Whether the full ``spectrum`` holds neutral memory directions: rules (1) and (2) of the
+    module docstring, with ``errors`` the full spectrum's finite-time errors
+    (:func:`~analysis.dynamics.memory.exponent_block_errors`, nan if unknown) and ``frozen``
+    the memory-frozen run from the same start."""
+    sigmas = finite_scalar(sigmas, "sigmas")
+    if not sigmas > 0.0:
+        raise ValueError(f"sigmas must be > 0, got {sigmas}")
+    if not frozen.zeroed_mean > 0.0:
+        return False  # (1): no memory direction lived through a whole interval
+    lam = np.asarray(spectrum.exponents, dtype=float)
+    err = np.asarray(errors, dtype=float)
+    if err.shape != lam.shape:
+        raise ValueError(f"errors must have shape {lam.shape}, got {err.shape}")
+    want = _with_phase(frozen.exponents, spectrum)
+    want_err = np.asarray(frozen.errors, dtype=float)
+    if want.size > want_err.size:  # the phase's exact 0
+        want_err = np.insert(want_err, int(np.argmin(np.abs(want))), 0.0)
+    n = want.size
+    if not np.all(np.isfinite(lam[:n])):
+        return True  # (2): a (q, v) slot lost to a wiped-out memory direction
+    combined = np.hypot(err[:n], want_err)
+    if not np.all(np.isfinite(combined)):
+        return True  # (2): errors unknown, report the memory-frozen value
+    return bool(np.any(np.abs(lam[:n] - want) > sigmas * combined))
+
+
+def _errors_or_nan(spectrum: LyapunovResult, blocks: int) -> np.ndarray:
+    """Block errors of the full spectrum, nan if its history is shorter than ``blocks``."""
+    if len(spectrum.history_t) < blocks:
+        return np.full(len(spectrum.exponents), np.nan)
+    return exponent_block_errors(spectrum, blocks)
+
+
+def attractor_dimension(
+    system: Any,
+    t_end: float,
+    transient: float = 0.0,
+    q0: float = DEFAULT_Q0,
+    v0: float = DEFAULT_V0,
+    operator_state: Any = None,
+    include_phase: bool = False,
+    progress: bool = False,
+    *,
+    spectrum: LyapunovResult | None = None,
+    projection_periods: int = 1,
+    blocks: int = 10,
+    sigmas: float = 2.0,
+    observer: Callable[[TangentStepper], None] | None = None,
+) -> AttractorDimension:
+    """The attractor's ``D_KY`` and the full-space one, from the same initial condition.
+
+    Runs :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` over ``[transient, t_end]``
+    (one QR step per forcing period, the running estimates of every step kept for the
+    block errors; ``observer`` rides on it, e.g. to record the Poincaré section) unless its
+    result is given as ``spectrum`` (then ``t_end``, ``transient`` and the phase must be its
+    own, and ``observer`` is refused). If the tangent space has memory rows (at the start or the
+    end), also :func:`~analysis.dynamics.memory.memory_frozen_exponents` from the same start
+    (``projection_periods``); if :func:`has_neutral_memory` (``blocks`` batches, ``sigmas``) it
+    reports ``D_KY`` of the two memory-frozen exponents (with the phase's 0 if the phase is
+    followed), else the full-space value.
+    """
+    t_end, transient = time_window(t_end, transient)
+    blocks = positive_integer(blocks, "blocks", minimum=2)
+    if spectrum is None:
+        n_qr = max(1, int(math.ceil((t_end - transient) / float(system.period) - 1e-9)))
+        spectrum = lyapunov_spectrum(
+            system,
+            t_end,
+            transient,
+            q0,
+            v0,
+            operator_state,
+            include_phase=include_phase,
+            progress=progress,
+            history_points=max(n_qr, blocks),
+            observer=observer,
+        )
+    else:
+        if observer is not None:
+            raise ValueError("observer needs the run: give either spectrum or observer")
+        if spectrum.t_end != t_end or spectrum.transient != transient:
+            raise ValueError(
+                f"spectrum averages over [{spectrum.transient:g}, {spectrum.t_end:g}], not "
+                f"[transient, t_end] = [{transient:g}, {t_end:g}]"
+            )
+        if ("phi" in spectrum.tangent_space) != bool(include_phase):
+            raise ValueError("include_phase must match the spectrum's tangent space")
+    errors = _errors_or_nan(spectrum, blocks)
+    full = float(spectrum.kaplan_yorke)
+    frozen = None
+    if _memory_rows(system, spectrum):
+        frozen = memory_frozen_exponents(
+            system,
+            t_end,
+            transient,
+            q0,
+            v0,
+            operator_state,
+            projection_periods=projection_periods,
+            blocks=blocks,
+        )
+    if frozen is None or not has_neutral_memory(spectrum, frozen, errors, sigmas):
+        enough = len(spectrum.history_t) >= blocks
+        ky_error = kaplan_yorke_block_error(spectrum, blocks) if enough else math.nan
+        return AttractorDimension(full, ky_error, full, FULL_SPACE, False, spectrum, frozen)
+    ky = kaplan_yorke_dimension(_with_phase(frozen.exponents, spectrum))
+    return AttractorDimension(
+        ky, frozen.kaplan_yorke_error, full, MEMORY_FROZEN, True, spectrum, frozen
+    )
