@@ -34,10 +34,12 @@ length and on how many vectors were tracked: a start without memory tracks two),
 contraction is gone altogether. A zero within errors also flags the edge of chaos
 (``λ_max ≈ 0``), which is the attractor's own. The comparison asks the question directly: does
 dropping the long-lived memory change the spectrum? A play's ``w`` is reset at every wall hit
-(``δw := δq``); where it survives a whole period without a wall hit (11 % of the periods of the
-erf play at C = 4) (1) holds, but both spectra agree (they differ only in the norm, a bound
-``log(10)/t``), so the paper's systems (erf play; relays and dimers have no memory rows and
-skip the second run) keep the full-space value.
+(``δw := δq``) and dragged (slaved) between: in the erf play at C = 2.9 and 4 no ``w`` is
+carried unchanged through a whole forcing period (``zeroed_mean = 0`` over 2000 periods), so
+(1) keeps the full-space value; where a wagon does rest inside its play for a period, (2) keeps
+it as long as the two spectra agree (they then differ only in the norm, a bound
+``log(10)/t``). The paper's systems (erf play; relays and dimers have no memory rows and skip
+the second run) keep the full-space value.
 """
 
 from __future__ import annotations
