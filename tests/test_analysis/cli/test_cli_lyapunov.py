@@ -229,3 +229,15 @@ def test_drawing_commands_keep_the_callers_matplotlib_backend(tmp_path):
     assert proc.stdout.strip().splitlines()[-1] == "[0, 0, 0, 0] svg"
     for name in ("trajectory", "poincare", "bifurcation", "dimension"):
         assert (tmp_path / f"{name}.png").stat().st_size > 1000
+
+
+def test_dimension_reports_the_attractor_value_like_lyapunov(tmp_path, capsys):
+    # hyst dimension applies the same rule: the memory-frozen D_KY where neutral memory exists
+    argv = ["dimension", "--model", "preisach-gauss", "--coupling", "4", "--t-end", "3000"]
+    assert main([*argv, "--transient", "20", "--out", str(tmp_path), "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    lam = [float(x) for x in rec["exponents"]]
+    assert rec["kaplan_yorke_source"] == "memory-frozen"
+    assert rec["kaplan_yorke"] == kaplan_yorke_dimension(rec["memory_frozen_exponents"])
+    assert rec["kaplan_yorke_full_space"] == kaplan_yorke_dimension(lam)
+    assert abs(rec["kaplan_yorke_full_space"] - rec["kaplan_yorke"]) > 5 * rec["kaplan_yorke_error"]
