@@ -46,7 +46,7 @@ from analysis.cli._parsing import (
     positive_float,
 )
 from analysis.dynamics.attractor_dimension import (
-    FULL_SPACE,
+    MEMORY_FROZEN,
     AttractorDimension,
     attractor_dimension,
 )
@@ -139,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
 def dimension_lines(dim: AttractorDimension) -> list[str]:
     """The D_KY lines of the text output (``hyst lyapunov``, ``hyst dimension``): the value
     used, and why."""
-    if dim.source == FULL_SPACE:
+    if dim.source != MEMORY_FROZEN:
         return [
             f"  D_KY = {dim.kaplan_yorke:.4f} +- {dim.kaplan_yorke_error:.2g} ({dim.explanation})"
         ]

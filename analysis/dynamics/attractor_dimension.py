@@ -14,32 +14,30 @@ is 1.34–1.44 (``docs/width_disorder``). The exponents of the motion without lo
 attractor's dimension. :func:`attractor_dimension` reports that value where neutral memory
 exists and the full-space value everywhere else, with both named.
 
-**When neutral memory exists** (:func:`has_neutral_memory`) is measured, twice:
+**When neutral memory exists** (:func:`has_neutral_memory`) is measured, structurally and
+exactly, on the same start: a memory direction was carried unchanged through a whole projection
+interval of the memory-frozen run (``zeroed_mean > 0``, read off the survival probe of
+:class:`~analysis.dynamics.memory.MemoryProjectionStepper`: a probe column exactly 1 on every
+memory row at the interval's start, still exactly 1 only on a row the engine never wrote). Such
+a direction is frozen, ``δm' = 0``, its exponent 0 through the interval: neutral by
+construction, not by a threshold. The full spectrum is computed first; the second run happens
+only if its tangent space has memory rows (at the start or at the end of the run).
 
-(1) memory directions survived whole projection intervals in the memory-frozen run
-    (``zeroed_mean > 0``, read off the exact survival probe of
-    :class:`~analysis.dynamics.memory.MemoryProjectionStepper`): a direction frozen through an
-    interval has exponent 0 there; and
-(2) the full spectrum's leading exponents (as many as ``q, v[, phi]``) differ from the
-    memory-frozen ones (with the phase's 0) by more than ``sigmas`` combined finite-time
-    errors, or one of them is ``-inf`` (a wiped-out memory direction took a ``(q, v)`` slot: a
-    continuous engine never collapses ``(δq, δv)``), or the errors are unknown (a run shorter
-    than ``blocks`` intervals: then the memory-frozen value, the safe one, is reported).
-
-Why not a test on the full spectrum alone: its exponents are attached to no coordinate, and the
-damage neutral memory does is not always a zero. In the Preisach runs above every memory slot
-ends ``-inf`` (so "memory exponents finite rather than -inf" sees nothing), the slot next to
-``λ_max`` holds a mixture (−0.004 … −0.09, zero within its error or not, depending on the run
-length and on how many vectors were tracked: a start without memory tracks two), or the
-contraction is gone altogether. A zero within errors also flags the edge of chaos
-(``λ_max ≈ 0``), which is the attractor's own. The comparison asks the question directly: does
-dropping the long-lived memory change the spectrum? A play's ``w`` is reset at every wall hit
-(``δw := δq``) and dragged (slaved) between: in the erf play at C = 2.9 and 4 no ``w`` is
-carried unchanged through a whole forcing period (``zeroed_mean = 0`` over 2000 periods), so
-(1) keeps the full-space value; where a wagon does rest inside its play for a period, (2) keeps
-it as long as the two spectra agree (they then differ only in the norm, a bound
-``log(10)/t``). The paper's systems (erf play; relays and dimers have no memory rows and skip
-the second run) keep the full-space value.
+Why not the full spectrum's exponents: they are attached to no coordinate, and neutral memory
+does not always leave a finite memory exponent or a zero. In the Preisach runs above every
+memory slot ends ``-inf`` (so "memory exponents finite rather than -inf" sees nothing) while the
+slot next to ``λ_max`` holds a mixture (−0.004 … −0.09 at C = 4; zero within its block error or
+not, depending on the run length and on how many vectors were tracked: a start without extrema
+tracks two), or the contraction is gone altogether (``(0.077, −inf, …)``). A zero within errors
+would also flag the edge of chaos (``λ_max ≈ 0``, the attractor's own), and a comparison of the
+full spectrum with the memory-frozen one within their errors misses the distortion at short runs
+(at t = 1500 with the phase followed: ``−0.11 ± 0.05`` against ``−0.19``). A play's ``w`` is
+reset at every wall hit (``δw := δq``) and dragged (slaved) between: in the erf play at C = 2.9
+and 4 no ``w`` is carried unchanged through a whole forcing period (``zeroed_mean = 0`` over
+2000 periods), so the paper's systems keep the full-space value (relays and dimers have no memory
+rows and skip the second run). Where a wagon does rest inside its play for a period, the
+memory-frozen value is reported; it then differs from the full-space one only by the dropped
+rests.
 """
 
 from __future__ import annotations
@@ -55,23 +53,25 @@ from analysis.dynamics.dimensions import kaplan_yorke_dimension
 from analysis.dynamics.lyapunov import LyapunovResult, TangentStepper, lyapunov_spectrum
 from analysis.dynamics.memory import (
     MemoryFrozenResult,
-    exponent_block_errors,
     kaplan_yorke_block_error,
     memory_frozen_exponents,
 )
-from hysteresis._validation import finite_scalar, positive_integer, time_window
+from hysteresis._validation import positive_integer, time_window
 from oscillators import DEFAULT_Q0, DEFAULT_V0
 
 __all__ = ["AttractorDimension", "attractor_dimension", "has_neutral_memory"]
 
-#: the two ways :attr:`AttractorDimension.kaplan_yorke` is obtained
-MEMORY_FROZEN, FULL_SPACE = "memory-frozen", "full space"
+#: the ways :attr:`AttractorDimension.kaplan_yorke` is obtained (the last: memory rows, but the
+#: window is shorter than one projection interval, so neutral memory cannot be tested)
+MEMORY_FROZEN, FULL_SPACE, UNTESTED = "memory-frozen", "full space", "full space, untested"
 
 _EXPLANATION = {
     MEMORY_FROZEN: "D_KY of the memory-frozen exponents: the full tangent space holds neutral "
     "memory directions (frozen extrema or wagons, exponent 0 while they live), which distort "
     "the full-space D_KY (they outrank the contraction, and a wiped-out one takes its slot)",
     FULL_SPACE: "D_KY of the full spectrum: no neutral memory direction",
+    UNTESTED: "D_KY of the full spectrum: the window is shorter than one projection interval, "
+    "too short to test for neutral memory directions",
 }
 
 
@@ -90,14 +90,17 @@ class AttractorDimension:
     kaplan_yorke_full_space:
         ``D_KY`` of the full spectrum in ``(q, v[, phi], memory)`` (``spectrum.kaplan_yorke``).
     source:
-        ``"memory-frozen"`` or ``"full space"``: which spectrum :attr:`kaplan_yorke` is from.
+        ``"memory-frozen"`` or ``"full space"``: which spectrum :attr:`kaplan_yorke` is from
+        (``"full space, untested"``: memory rows, but a window shorter than one projection
+        interval).
     neutral_memory:
         Whether the full spectrum holds neutral memory directions (:func:`has_neutral_memory`).
     spectrum:
         The full :class:`~analysis.dynamics.lyapunov.LyapunovResult`.
     frozen:
         The :class:`~analysis.dynamics.memory.MemoryFrozenResult` of the same start (None if the
-        tangent space never had memory rows: relays, dimers).
+        tangent space never had memory rows: relays, dimers). ``blocks`` batches give both
+        runs' finite-time errors.
     """
 
     kaplan_yorke: float
@@ -112,7 +115,7 @@ class AttractorDimension:
     def exponents(self) -> np.ndarray:
         """The exponents :attr:`kaplan_yorke` is computed from (with the phase's 0 if the
         spectrum follows the phase)."""
-        if self.source == FULL_SPACE:
+        if self.source != MEMORY_FROZEN:
             return np.asarray(self.spectrum.exponents)
         return _with_phase(self.frozen.exponents, self.spectrum)
 
@@ -156,43 +159,12 @@ def _memory_rows(system: Any, spectrum: LyapunovResult) -> bool:
     return len(engine.tangent_space) > base
 
 
-def has_neutral_memory(
-    spectrum: LyapunovResult,
-    frozen: MemoryFrozenResult,
-    errors: np.ndarray,
-    sigmas: float = 2.0,
-) -> bool:
-    """Whether the full ``spectrum`` holds neutral memory directions: rules (1) and (2) of the
-    module docstring, with ``errors`` the full spectrum's finite-time errors
-    (:func:`~analysis.dynamics.memory.exponent_block_errors`, nan if unknown) and ``frozen``
-    the memory-frozen run from the same start."""
-    sigmas = finite_scalar(sigmas, "sigmas")
-    if not sigmas > 0.0:
-        raise ValueError(f"sigmas must be > 0, got {sigmas}")
-    if not frozen.zeroed_mean > 0.0:
-        return False  # (1): no memory direction lived through a whole interval
-    lam = np.asarray(spectrum.exponents, dtype=float)
-    err = np.asarray(errors, dtype=float)
-    if err.shape != lam.shape:
-        raise ValueError(f"errors must have shape {lam.shape}, got {err.shape}")
-    want = _with_phase(frozen.exponents, spectrum)
-    want_err = np.asarray(frozen.errors, dtype=float)
-    if want.size > want_err.size:  # the phase's exact 0
-        want_err = np.insert(want_err, int(np.argmin(np.abs(want))), 0.0)
-    n = want.size
-    if not np.all(np.isfinite(lam[:n])):
-        return True  # (2): a (q, v) slot lost to a wiped-out memory direction
-    combined = np.hypot(err[:n], want_err)
-    if not np.all(np.isfinite(combined)):
-        return True  # (2): errors unknown, report the memory-frozen value
-    return bool(np.any(np.abs(lam[:n] - want) > sigmas * combined))
-
-
-def _errors_or_nan(spectrum: LyapunovResult, blocks: int) -> np.ndarray:
-    """Block errors of the full spectrum, nan if its history is shorter than ``blocks``."""
-    if len(spectrum.history_t) < blocks:
-        return np.full(len(spectrum.exponents), np.nan)
-    return exponent_block_errors(spectrum, blocks)
+def has_neutral_memory(frozen: MemoryFrozenResult) -> bool:
+    """Whether memory directions were carried unchanged through whole projection intervals of
+    the memory-frozen run ``frozen`` (module docstring): neutral memory exists."""
+    if not isinstance(frozen, MemoryFrozenResult):
+        raise TypeError(f"frozen must be a MemoryFrozenResult, got {type(frozen).__name__}")
+    return bool(frozen.zeroed_mean > 0.0)
 
 
 def attractor_dimension(
@@ -208,7 +180,6 @@ def attractor_dimension(
     spectrum: LyapunovResult | None = None,
     projection_periods: int = 1,
     blocks: int = 10,
-    sigmas: float = 2.0,
     observer: Callable[[TangentStepper], None] | None = None,
 ) -> AttractorDimension:
     """The attractor's ``D_KY`` and the full-space one, from the same initial condition.
@@ -219,12 +190,13 @@ def attractor_dimension(
     result is given as ``spectrum`` (then ``t_end``, ``transient`` and the phase must be its
     own, and ``observer`` is refused). If the tangent space has memory rows (at the start or the
     end), also :func:`~analysis.dynamics.memory.memory_frozen_exponents` from the same start
-    (``projection_periods``); if :func:`has_neutral_memory` (``blocks`` batches, ``sigmas``) it
-    reports ``D_KY`` of the two memory-frozen exponents (with the phase's 0 if the phase is
-    followed), else the full-space value.
+    (``projection_periods``); if :func:`has_neutral_memory` it reports ``D_KY`` of the two
+    memory-frozen exponents (with the phase's 0 if the phase is followed), else the full-space
+    value.
     """
     t_end, transient = time_window(t_end, transient)
     blocks = positive_integer(blocks, "blocks", minimum=2)
+    projection_periods = positive_integer(projection_periods, "projection_periods")
     if spectrum is None:
         n_qr = max(1, int(math.ceil((t_end - transient) / float(system.period) - 1e-9)))
         spectrum = lyapunov_spectrum(
@@ -249,10 +221,14 @@ def attractor_dimension(
             )
         if ("phi" in spectrum.tangent_space) != bool(include_phase):
             raise ValueError("include_phase must match the spectrum's tangent space")
-    errors = _errors_or_nan(spectrum, blocks)
     full = float(spectrum.kaplan_yorke)
     frozen = None
+    enough = len(spectrum.history_t) >= blocks
+    ky_error = kaplan_yorke_block_error(spectrum, blocks) if enough else math.nan
     if _memory_rows(system, spectrum):
+        interval = projection_periods * float(system.period)
+        if (t_end - transient) / interval + 1e-9 < 1.0:
+            return AttractorDimension(full, ky_error, full, UNTESTED, False, spectrum, None)
         frozen = memory_frozen_exponents(
             system,
             t_end,
@@ -263,9 +239,7 @@ def attractor_dimension(
             projection_periods=projection_periods,
             blocks=blocks,
         )
-    if frozen is None or not has_neutral_memory(spectrum, frozen, errors, sigmas):
-        enough = len(spectrum.history_t) >= blocks
-        ky_error = kaplan_yorke_block_error(spectrum, blocks) if enough else math.nan
+    if frozen is None or not has_neutral_memory(frozen):
         return AttractorDimension(full, ky_error, full, FULL_SPACE, False, spectrum, frozen)
     ky = kaplan_yorke_dimension(_with_phase(frozen.exponents, spectrum))
     return AttractorDimension(

@@ -13,7 +13,8 @@ Two tools separate them:
 
 * :func:`exponent_block_errors` — the finite-time error of each exponent from block averages of
   the running estimate (batch means), so that "neutral" means ``|λ| <= 2·error``
-  (:func:`neutral_count`);
+  (:func:`neutral_count`), and the error of ``D_KY`` by the jackknife over the same batches
+  (:func:`kaplan_yorke_block_error`);
 * :func:`memory_frozen_exponents` — the Benettin loop of
   :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` over two deviation vectors
   (:class:`MemoryProjectionStepper`: growth measured in the ``(q, v)`` rows) in

@@ -13,12 +13,17 @@ import pytest
 from analysis.dynamics.attractor_dimension import (
     FULL_SPACE,
     MEMORY_FROZEN,
+    UNTESTED,
     attractor_dimension,
     has_neutral_memory,
 )
 from analysis.dynamics.dimensions import box_counting_dimension, kaplan_yorke_dimension
 from analysis.dynamics.lyapunov import LyapunovResult, lyapunov_spectrum
-from analysis.dynamics.memory import MemoryFrozenResult, kaplan_yorke_block_error
+from analysis.dynamics.memory import (
+    MemoryFrozenResult,
+    exponent_block_errors,
+    kaplan_yorke_block_error,
+)
 from analysis.dynamics.periods import smallest_period
 from analysis.experiments.models import build_operator
 from hysteresis import PrandtlIshlinskii
@@ -63,7 +68,7 @@ def test_paper_systems_keep_the_full_space_value():
     ref = lyapunov_spectrum(play, t_end, transient)
     assert dim.source == FULL_SPACE and not dim.neutral_memory
     assert dim.frozen.zeroed_mean == 0.0
-    err = np.hypot(dim.frozen.errors, [0.0021, 0.0043])  # the full spectrum's, measured alike
+    err = np.hypot(dim.frozen.errors, exponent_block_errors(dim.spectrum)[:2])
     assert np.all(np.abs(dim.frozen.exponents - ref.exponents[:2]) <= 2 * err)
     assert dim.kaplan_yorke == dim.kaplan_yorke_full_space == ref.kaplan_yorke
     np.testing.assert_array_equal(dim.exponents, ref.exponents)
@@ -122,28 +127,31 @@ def _frozen(exponents, errors=(0.002, 0.004), zeroed=1.0) -> MemoryFrozenResult:
     )
 
 
-def test_neutral_memory_rule():
-    frozen = _frozen([0.077, -0.19])
-    inf = -np.inf
-    # a neutral exponent in a (q, v) slot (the contraction pushed out): differs from frozen
-    full = _spectrum([0.0768, -0.0039, inf, inf])
-    assert has_neutral_memory(full, frozen, np.array([0.002, 0.01, np.nan, np.nan]))
-    # the contraction lost to a wiped-out memory direction
-    assert has_neutral_memory(_spectrum([0.077, inf, inf, inf]), frozen, np.full(4, 0.002))
-    # nothing survived a whole interval: never, whatever the spectrum
-    assert not has_neutral_memory(full, _frozen([0.077, -0.19], zeroed=0.0), np.full(4, 0.01))
-    # the same exponents within 2 combined errors: the full-space value stands
-    agree = _spectrum([0.0765, -0.1885, inf], ("q", "v", "w"))
-    assert not has_neutral_memory(agree, frozen, np.array([0.002, 0.003, np.nan]))
-    # ... unless the errors are unknown (too short a run): the memory-frozen value is safe
-    assert has_neutral_memory(agree, frozen, np.full(3, np.nan))
-    # the phase's exponent 0 is matched by the 0 the frozen pair gets
-    phase = _spectrum([0.0765, 1e-6, -0.1885, inf], ("q", "v", "phi", "w"))
-    assert not has_neutral_memory(phase, frozen, np.array([0.002, 1e-5, 0.003, np.nan]))
-    with pytest.raises(ValueError, match="sigmas"):
-        has_neutral_memory(agree, frozen, np.full(3, 0.01), sigmas=0.0)
-    with pytest.raises(ValueError, match="errors must have shape"):
-        has_neutral_memory(agree, frozen, np.full(2, 0.01))
+def test_neutral_memory_is_memory_carried_through_whole_intervals():
+    assert has_neutral_memory(_frozen([0.077, -0.19], zeroed=0.25))
+    assert not has_neutral_memory(_frozen([0.077, -0.19], zeroed=0.0))
+    with pytest.raises(TypeError, match="frozen must be a MemoryFrozenResult"):
+        has_neutral_memory(_spectrum([0.077, -0.19]))
+
+
+def test_attractor_dimension_checks_a_given_spectrum():
+    system = ForcedOscillator(build_operator("erf-play"), 4.0)
+    spec = lyapunov_spectrum(system, 40 * TWO_PI, 10 * TWO_PI)
+    with pytest.raises(ValueError, match=r"spectrum averages over"):
+        attractor_dimension(system, 50 * TWO_PI, 10 * TWO_PI, spectrum=spec)
+    with pytest.raises(ValueError, match="include_phase"):
+        attractor_dimension(system, 40 * TWO_PI, 10 * TWO_PI, include_phase=True, spectrum=spec)
+    with pytest.raises(ValueError, match="observer"):
+        attractor_dimension(
+            system, 40 * TWO_PI, 10 * TWO_PI, spectrum=spec, observer=lambda s: None
+        )
+    # given or computed, the same answer (the frozen run starts from the same state)
+    given = attractor_dimension(system, 40 * TWO_PI, 10 * TWO_PI, spectrum=spec)
+    assert given.kaplan_yorke == spec.kaplan_yorke and given.source == FULL_SPACE
+    # a window shorter than one projection interval cannot be tested: said so
+    short = attractor_dimension(system, 10 * TWO_PI + 1.0, 10 * TWO_PI)
+    assert short.source == UNTESTED and short.frozen is None
+    assert "too short" in short.explanation
 
 
 def test_memory_frozen_result_is_a_frozen_result_object():
