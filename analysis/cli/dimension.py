@@ -1,6 +1,9 @@
 """``hyst dimension``: Kaplan–Yorke and box-counting dimension of one attractor.
 
-D_KY from the Lyapunov spectrum in the Poincaré section (phase neglected, as the paper), D_BC
+D_KY from the Lyapunov spectrum in the Poincaré section (phase neglected, as the paper): the
+attractor's, as ``hyst lyapunov`` reports it (memory-frozen where neutral memory directions
+exist, :func:`analysis.dynamics.attractor_dimension.attractor_dimension`, the full-space value
+alongside); D_BC
 from the section points (q, v) with the automatic scaling region. Writes DIR/dimension.png
 (section and log-log fit) and DIR/dimension.npz.
 """
@@ -43,6 +46,8 @@ from analysis.cli._parsing import (
     int_at_least,
     positive_float,
 )
+from analysis.cli.lyapunov import dimension_lines
+from analysis.dynamics.attractor_dimension import attractor_dimension
 from analysis.dynamics.bifurcation import section_period
 from analysis.dynamics.dimensions import box_counting_dimension
 from analysis.dynamics.lyapunov import lyapunov_spectrum
@@ -124,6 +129,9 @@ def run(args: argparse.Namespace) -> int:
     announce_compilation(args)
     with naming_divergence(lambda: system):
         ly, sec = _measure(args, system, transient, transient_periods, n, state)
+        dim = attractor_dimension(
+            system, ly.t_end, ly.transient, args.q0, args.v0, operator_state=state, spectrum=ly
+        )
     points = np.column_stack([sec.q, sec.v])
     period = section_period(sec.q, sec.v)
     bc, bc_error = None, ""
@@ -144,7 +152,12 @@ def run(args: argparse.Namespace) -> int:
         transient=transient,
         transient_periods=args.transient,
         exponents=list(ly.exponents),
-        kaplan_yorke=ly.kaplan_yorke,
+        kaplan_yorke=dim.kaplan_yorke,
+        kaplan_yorke_error=dim.kaplan_yorke_error,
+        kaplan_yorke_full_space=dim.kaplan_yorke_full_space,
+        kaplan_yorke_source=dim.source,
+        kaplan_yorke_note=dim.explanation,
+        memory_frozen_exponents=None if dim.frozen is None else list(dim.frozen.exponents),
         section_points=int(n),
         section_period=int(period),
         box_counting=(0.0 if period > 0 else None) if bc is None else float(bc.dimension),
@@ -163,8 +176,8 @@ def run(args: argparse.Namespace) -> int:
     _plot(sec, bc, figure_title(args, "dimension"), png)
     record.update(npz=npz, png=png)
     lines = [
-        f"D_KY = {ly.kaplan_yorke:.4f} from exponents "
-        + ", ".join(f"{x:.5f}" for x in ly.exponents),
+        "exponents " + ", ".join(f"{x:.5f}" for x in ly.exponents),
+        *(line.strip() for line in dimension_lines(dim)),
         f"D_BC: no scaling region ({bc_error})"
         if bc is None
         else f"D_BC = {bc.dimension:.4f} +- {bc.stderr:.4f} from {n} section points",

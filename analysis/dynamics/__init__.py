@@ -1,5 +1,8 @@
 """Dynamics of one forced oscillator with hysteresis: Lyapunov spectra
-(:mod:`~analysis.dynamics.lyapunov`), attractor dimensions (:mod:`~analysis.dynamics.dimensions`),
+(:mod:`~analysis.dynamics.lyapunov`) and their memory directions
+(:mod:`~analysis.dynamics.memory`), attractor dimensions (:mod:`~analysis.dynamics.dimensions`;
+the attractor's Kaplan–Yorke dimension where neutral memory distorts the full-space one:
+:mod:`~analysis.dynamics.attractor_dimension`),
 bifurcation diagrams (:mod:`~analysis.dynamics.bifurcation`), the statistics of their
 measurements (:mod:`~analysis.dynamics.statistics`), where one start ends
 (:mod:`~analysis.dynamics.attractors`) and basins of attraction (:mod:`~analysis.dynamics.basins`,

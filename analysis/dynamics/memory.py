@@ -13,7 +13,8 @@ Two tools separate them:
 
 * :func:`exponent_block_errors` — the finite-time error of each exponent from block averages of
   the running estimate (batch means), so that "neutral" means ``|λ| <= 2·error``
-  (:func:`neutral_count`);
+  (:func:`neutral_count`), and the error of ``D_KY`` by the jackknife over the same batches
+  (:func:`kaplan_yorke_block_error`);
 * :func:`memory_frozen_exponents` — the Benettin loop of
   :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` over two deviation vectors
   (:class:`MemoryProjectionStepper`: growth measured in the ``(q, v)`` rows) in
@@ -34,16 +35,19 @@ exponent -0.0338, depending on round-off of the start and of the Everett functio
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from analysis.dynamics.dimensions import kaplan_yorke_dimension
 from analysis.dynamics.lyapunov import LyapunovResult, TangentStepper, lyapunov_spectrum
 from hysteresis._validation import positive_integer, time_window
 from oscillators import DEFAULT_Q0, DEFAULT_V0, MAX_PERIODS, OscillatorState
 
 __all__ = [
     "exponent_block_errors",
+    "kaplan_yorke_block_error",
     "neutral_count",
     "memory_frozen_exponents",
     "MemoryFrozenResult",
@@ -51,18 +55,9 @@ __all__ = [
 ]
 
 
-def exponent_block_errors(result: LyapunovResult, blocks: int = 10) -> np.ndarray:
-    """Finite-time error of each exponent from ``blocks`` batch means of its running estimate.
-
-    Plain reading: with ``S_j(t) = λ_j(t)·(t − transient)`` the running log sum (from
-    ``result.history``, which must hold at least ``blocks`` rows; run
-    :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` with ``history_points`` >= the number
-    of QR steps for exact block edges), the block rates are
-    ``r_jb = (S_j(t_b) − S_j(t_{b−1})) / (t_b − t_{b−1})`` over ``blocks`` equal blocks of the
-    window, and the error of ``λ_j`` (the mean of the ``r_jb``) is
-    ``std_b(r_jb) / sqrt(blocks)``. Assumes blocks longer than the correlation time of the local
-    growth rates (a forcing period or a few here). A ``-inf`` exponent has error nan.
-    """
+def _block_rates(result: LyapunovResult, blocks: int) -> tuple[np.ndarray, np.ndarray]:
+    """Growth rates of the running log sums over ``blocks`` equal blocks of the window, and the
+    blocks' durations (rows: blocks; see :func:`exponent_block_errors`)."""
     blocks = positive_integer(blocks, "blocks", minimum=2)
     t = np.asarray(result.history_t, dtype=float)
     hist = np.asarray(result.history, dtype=float)
@@ -77,11 +72,53 @@ def exponent_block_errors(result: LyapunovResult, blocks: int = 10) -> np.ndarra
     edges = np.unique(np.round(np.linspace(-1, t.size - 1, blocks + 1)).astype(int))
     s = np.vstack([np.zeros((1, hist.shape[1])), sums[edges[1:]]])
     times = np.concatenate([[0.0], elapsed[edges[1:]]])
+    durations = np.diff(times)
     with np.errstate(invalid="ignore"):
-        rates = np.diff(s, axis=0) / np.diff(times)[:, None]
+        rates = np.diff(s, axis=0) / durations[:, None]
+    return rates, durations
+
+
+def exponent_block_errors(result: LyapunovResult, blocks: int = 10) -> np.ndarray:
+    """Finite-time error of each exponent from ``blocks`` batch means of its running estimate.
+
+    Plain reading: with ``S_j(t) = λ_j(t)·(t − transient)`` the running log sum (from
+    ``result.history``, which must hold at least ``blocks`` rows; run
+    :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` with ``history_points`` >= the number
+    of QR steps for exact block edges), the block rates are
+    ``r_jb = (S_j(t_b) − S_j(t_{b−1})) / (t_b − t_{b−1})`` over ``blocks`` equal blocks of the
+    window, and the error of ``λ_j`` (the mean of the ``r_jb``) is
+    ``std_b(r_jb) / sqrt(blocks)``. Assumes blocks longer than the correlation time of the local
+    growth rates (a forcing period or a few here). A ``-inf`` exponent has error nan.
+    """
+    rates, _ = _block_rates(result, blocks)
     err = np.std(rates, axis=0, ddof=1) / math.sqrt(rates.shape[0])
     err[~np.isfinite(np.asarray(result.exponents, dtype=float))] = np.nan
     return err
+
+
+def kaplan_yorke_block_error(result: LyapunovResult, blocks: int = 10) -> float:
+    """Finite-time error of ``D_KY`` of ``result``'s exponents: the jackknife over the
+    ``blocks`` batches of :func:`exponent_block_errors`.
+
+    Plain reading: ``D_b`` = ``kaplan_yorke_dimension`` of the exponents averaged over every
+    block but ``b`` (``-inf`` exponents stay ``-inf``); the error is
+    ``sqrt((B − 1)/B · Σ_b (D_b − mean_b D_b)²)``. The jackknife needs no derivative of the
+    piecewise formula and keeps the correlation of the exponents (their block rates move
+    together). 0 where ``D_KY`` is an integer in every batch (a regular attractor).
+    """
+    rates, durations = _block_rates(result, blocks)
+    lam = np.asarray(result.exponents, dtype=float)
+    finite = np.isfinite(lam)
+    total = np.sum(durations)
+    with np.errstate(invalid="ignore"):
+        sums = np.nansum(rates * durations[:, None], axis=0)
+    d = np.empty(rates.shape[0])
+    for b in range(rates.shape[0]):
+        loo = np.full(lam.size, -np.inf)
+        loo[finite] = (sums[finite] - rates[b, finite] * durations[b]) / (total - durations[b])
+        d[b] = kaplan_yorke_dimension(loo)
+    n = d.size
+    return float(math.sqrt((n - 1) / n * np.sum((d - d.mean()) ** 2)))
 
 
 def neutral_count(exponents: np.ndarray, errors: np.ndarray, sigmas: float = 2.0) -> int:
@@ -92,26 +129,59 @@ def neutral_count(exponents: np.ndarray, errors: np.ndarray, sigmas: float = 2.0
     return int(np.count_nonzero(np.abs(lam[ok]) <= sigmas * err[ok]))
 
 
+@dataclass(frozen=True)
 class MemoryFrozenResult:
-    """Outcome of :func:`memory_frozen_exponents`.
+    """Outcome of :func:`memory_frozen_exponents`: the two exponents of the motion without its
+    long-lived memory, and ``D_KY`` of them (the attractor's dimension where neutral memory
+    directions make the full-space one count them; :mod:`analysis.dynamics.attractor_dimension`).
 
-    Attributes: ``exponents`` (2, descending), ``projection_periods``, ``zeroed_mean`` (memory
-    directions set to zero per projection, on average), ``t_end``, ``transient``.
+    Attributes
+    ----------
+    exponents:
+        The two exponents, descending.
+    errors:
+        Their finite-time errors (:func:`exponent_block_errors` over ``blocks`` batches of the
+        projection intervals; nan if the run has fewer intervals than ``blocks``).
+    kaplan_yorke_error:
+        Finite-time error of :attr:`kaplan_yorke` (:func:`kaplan_yorke_block_error`; nan as
+        ``errors``).
+    projection_periods:
+        Forcing periods per projection interval.
+    zeroed_mean:
+        Memory directions set to zero per projection, on average (the directions that survived
+        a whole interval: frozen, neutral while they live).
+    t_end, transient:
+        The average runs over whole intervals in ``[transient, t_end]``.
     """
 
-    def __init__(
-        self,
-        exponents: np.ndarray,
-        projection_periods: int,
-        zeroed_mean: float,
-        t_end: float,
-        transient: float,
-    ) -> None:
-        self.exponents = exponents
-        self.projection_periods = projection_periods
-        self.zeroed_mean = zeroed_mean
-        self.t_end = t_end
-        self.transient = transient
+    exponents: np.ndarray
+    errors: np.ndarray
+    kaplan_yorke_error: float
+    projection_periods: int
+    zeroed_mean: float
+    t_end: float
+    transient: float
+
+    @property
+    def kaplan_yorke(self) -> float:
+        """``D_KY`` of the two exponents
+        (:func:`~analysis.dynamics.dimensions.kaplan_yorke_dimension`)."""
+        return kaplan_yorke_dimension(self.exponents)
+
+    @property
+    def max_exponent(self) -> float:
+        """λ_max = λ_1."""
+        return float(self.exponents[0])
+
+    def __repr__(self) -> str:
+        lam = ", ".join(f"{x:.5g}" for x in self.exponents)
+        err = ", ".join(f"{x:.2g}" for x in self.errors)
+        return (
+            f"MemoryFrozenResult(exponents=[{lam}] +- [{err}], kaplan_yorke="
+            f"{self.kaplan_yorke:.4f} +- {self.kaplan_yorke_error:.2g}, "
+            f"projection_periods={self.projection_periods}, zeroed_mean={self.zeroed_mean:.3g}, "
+            f"window=[{self.transient:g}, {self.t_end:g}])"
+        )
 
 
 class MemoryProjectionStepper(TangentStepper):
@@ -215,6 +285,7 @@ def memory_frozen_exponents(
     v0: float = DEFAULT_V0,
     operator_state: Any = None,
     projection_periods: int = 1,
+    blocks: int = 10,
 ) -> MemoryFrozenResult:
     """The two exponents of the motion without its long-lived memory directions.
 
@@ -255,9 +326,13 @@ def memory_frozen_exponents(
     exponents plus the boundary term ``B/t`` of the QR average (tested); the linearisation
     along the base trajectory itself holds only for perturbations below the distance to the
     border, which there is round-off: use the projection, not the full spectrum.
+
+    ``blocks``: batches for the finite-time errors of the result (``errors``,
+    ``kaplan_yorke_error``; nan if the window holds fewer projection intervals).
     """
     t_end, transient = time_window(t_end, transient)
     projection_periods = positive_integer(projection_periods, "projection_periods")
+    blocks = positive_integer(blocks, "blocks", minimum=2)
     period = float(system.period)
     dt = projection_periods * period
     span = t_end - transient
@@ -277,10 +352,21 @@ def memory_frozen_exponents(
         v0,
         operator_state,
         renormalize_dt=dt,
-        history_points=1,
+        history_points=n_steps,
         stepper=stepper,
         whole_intervals=True,
     )
+    if n_steps >= blocks:
+        errors = exponent_block_errors(res, blocks)
+        ky_error = kaplan_yorke_block_error(res, blocks)
+    else:
+        errors, ky_error = np.full(2, np.nan), math.nan
     return MemoryFrozenResult(
-        res.exponents, projection_periods, stepper.zeroed / n_steps, t_end, transient
+        exponents=res.exponents,
+        errors=errors,
+        kaplan_yorke_error=ky_error,
+        projection_periods=projection_periods,
+        zeroed_mean=stepper.zeroed / n_steps,
+        t_end=t_end,
+        transient=transient,
     )

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from analysis.cli import main
+from analysis.dynamics.dimensions import kaplan_yorke_dimension
 
 
 @pytest.fixture(autouse=True)
@@ -52,6 +53,10 @@ def test_lyapunov_dimers_json():
     assert rec["switches"] > 100 and rec["t_end"] == 200.0
     assert rec["spins"] == 200 and rec["seed"] == 0 and rec["damping_ratio"] == 0.05
     assert isinstance(rec["kaplan_yorke"], float)
+    # no memory rows: the full-space value, no second run
+    assert rec["kaplan_yorke_source"] == "full space"
+    assert rec["kaplan_yorke"] == rec["kaplan_yorke_full_space"]
+    assert rec["memory_frozen_exponents"] is None
 
 
 def test_lyapunov_include_phase_and_fields(capsys):
@@ -117,6 +122,36 @@ def test_lyapunov_play_limit_minus_inf(capsys):
     assert len(rec["exponents"]) == 3
     assert rec["exponents"][-1] == "-inf"
     assert rec["w0"] == -2.0
+    # the play's w is reset, never neutral: the full-space value is reported
+    assert rec["kaplan_yorke_source"] == "full space"
+    assert rec["kaplan_yorke"] == rec["kaplan_yorke_full_space"]
+    lam = [float(x) for x in rec["exponents"]]
+    assert rec["kaplan_yorke"] == kaplan_yorke_dimension(lam)
+
+
+def test_lyapunov_preisach_gauss_reports_the_attractor_value(capsys):
+    # continuous Preisach staircase at C = 4: neutral memory (long-lived extrema) distorts the
+    # full spectrum; the reported D_KY is the memory-frozen one, the full-space one alongside
+    argv = ["lyapunov", "--model", "preisach-gauss", "--coupling", "4", "--t-end", "3000"]
+    assert main([*argv, "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    lam = [float(x) for x in rec["exponents"]]
+    assert rec["kaplan_yorke_source"] == "memory-frozen"
+    assert rec["kaplan_yorke"] == kaplan_yorke_dimension(rec["memory_frozen_exponents"])
+    assert rec["kaplan_yorke_full_space"] == kaplan_yorke_dimension(lam)
+    assert "neutral memory" in rec["kaplan_yorke_note"]
+    # the two differ by far more than the reported value's finite-time error
+    assert 0 < rec["kaplan_yorke_error"] < 0.05
+    assert abs(rec["kaplan_yorke_full_space"] - rec["kaplan_yorke"]) > 5 * rec["kaplan_yorke_error"]
+    # the width-disorder study's range of the attractor's D_KY at C = 4 (1.38-1.41 at t = 2e4),
+    # widened by 3 errors of this shorter run
+    assert 1.38 - 3 * rec["kaplan_yorke_error"] <= rec["kaplan_yorke"]
+    assert rec["kaplan_yorke"] <= 1.41 + 3 * rec["kaplan_yorke_error"]
+    # the text says which value it used
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert f"D_KY = {rec['kaplan_yorke']:.4f}" in text and "memory-frozen" in text
+    assert f"D_KY full space = {rec['kaplan_yorke_full_space']:.4f}" in text
 
 
 def test_trajectory_and_poincare_files(tmp_path, capsys):
@@ -194,3 +229,15 @@ def test_drawing_commands_keep_the_callers_matplotlib_backend(tmp_path):
     assert proc.stdout.strip().splitlines()[-1] == "[0, 0, 0, 0] svg"
     for name in ("trajectory", "poincare", "bifurcation", "dimension"):
         assert (tmp_path / f"{name}.png").stat().st_size > 1000
+
+
+def test_dimension_reports_the_attractor_value_like_lyapunov(tmp_path, capsys):
+    # hyst dimension applies the same rule: the memory-frozen D_KY where neutral memory exists
+    argv = ["dimension", "--model", "preisach-gauss", "--coupling", "4", "--t-end", "3000"]
+    assert main([*argv, "--transient", "20", "--out", str(tmp_path), "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    lam = [float(x) for x in rec["exponents"]]
+    assert rec["kaplan_yorke_source"] == "memory-frozen"
+    assert rec["kaplan_yorke"] == kaplan_yorke_dimension(rec["memory_frozen_exponents"])
+    assert rec["kaplan_yorke_full_space"] == kaplan_yorke_dimension(lam)
+    assert abs(rec["kaplan_yorke_full_space"] - rec["kaplan_yorke"]) > 5 * rec["kaplan_yorke_error"]
