@@ -6,8 +6,10 @@ After ``--transient`` forcing periods from (q0, v0[, w0]) the period k (forcing 
 P^k(x) − x with the engine's exact Jacobian (:func:`analysis.dynamics.periodic_orbits.
 find_periodic_orbit`). Writes DIR/orbit.json (the record that ``--json`` prints): ``period``,
 ``multipliers`` as [re, im] pairs, ``exponents`` log|μ|/(k·T) (``"-inf"`` for a reset memory
-direction), ``tangent_space``, ``residual``, ``stable``, and ``frozen`` (labels of the memory
-the orbit never moves: a family parameter, multiplier exactly 1, not counted in ``stable``) with
+direction), ``tangent_space``, ``residual``, ``stable``, ``stability`` (``"stable"``,
+``"unstable"`` or ``"neutral"``: a multiplier on the unit circle within round-off), and
+``frozen`` (labels of the memory the orbit never moves: a family parameter, multiplier exactly
+1, not counted in ``stable``) with
 ``multiplier_labels`` (``"frozen: <label>"``, ``"reset"`` or ``""`` per multiplier).
 
 Example (the erf-play limit in the paper's periodic window)::
@@ -113,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
         record,
         [
             f"model {args.model}, C = {args.coupling}: period {orbit.period}, "
-            f"{'stable' if orbit.stable else 'unstable'}, |multipliers| = ({mults}) on "
+            f"{orbit.stability}, |multipliers| = ({mults}) on "
             f"({', '.join(orbit.tangent_space)}){frozen}, residual {orbit.residual:.2e}; "
             f"wrote {record['json']}"
         ],

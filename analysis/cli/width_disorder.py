@@ -152,7 +152,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         continuum_tasks(size)
     except ValueError as exc:
-        raise CliError(f"argument --t-end: {exc}") from exc
+        option = "--section-t-end" if str(exc).startswith("section_t_end") else "--t-end"
+        raise CliError(f"argument {option}: {exc}") from exc
     parts = ("continuum", "finite") if args.part == "both" else (args.part,)
     store = check_store(args, [EXPERIMENT_CONTINUUM])
     finite_args = argparse.Namespace(**{**vars(args), "store": args.finite_store or store})

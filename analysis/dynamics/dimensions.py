@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -305,27 +306,40 @@ def box_counting_dimension(
     if min_points < 2:
         raise ValueError(f"min_points must be >= 2, got {min_points}")
     rng = as_generator(seed)
-    extent = float(np.max(pts.max(axis=0) - pts.min(axis=0)))
+    low = pts.min(axis=0)
+    extent = float(np.max(pts.max(axis=0) - low))
     if not extent > 0.0:
         raise ValueError("points all coincide: the box-counting dimension is 0 and not fitted")
+    if not math.isfinite(extent):
+        raise ValueError("points span more than the largest float: scale them down")
+    # boxes in units of the extent: the dimension of a scaled set is the same, and a set
+    # scaled by 1e±200 (squared distances overflow or underflow) is counted like the original
+    unit = (pts - low) / extent
     if sizes is None:
         if n_sizes < min_points:
             raise ValueError(f"n_sizes must be >= min_points={min_points}, got {n_sizes}")
-        spacing = _typical_spacing(pts, rng)
-        smallest = max(spacing, extent * 1e-9)
-        if not smallest < extent / min_boxes:
-            raise ValueError("too few distinct points to resolve any scaling region")
-        eps = np.geomspace(extent, smallest, n_sizes)
+        spacing = _typical_spacing(unit, rng)
+        smallest = max(spacing, 1e-9)
+        if not smallest < 1.0 / min_boxes:
+            raise ValueError(
+                "too few distinct points to resolve any scaling region (median "
+                f"nearest-neighbour distance {spacing:.3g} of the extent, need < "
+                f"{1.0 / min_boxes:.3g})"
+            )
+        eps_unit = np.geomspace(1.0, smallest, n_sizes)
     else:
         eps = real_array(sizes, "sizes")
         if eps.ndim != 1 or eps.size < 2 or np.any(~(eps > 0)) or not np.all(np.isfinite(eps)):
             raise ValueError("sizes must be a 1-D sequence of at least 2 finite positive sizes")
         bounded_work(eps.size, "sizes", MAX_SIZES, "box sizes")
-        eps = np.sort(eps)[::-1]
-    counts = box_counts(pts, eps, offsets=offsets, seed=rng, reduce=reduce)
-    x = np.log(1.0 / eps)
+        eps_unit = np.sort(eps)[::-1] / extent
+        if not np.all(eps_unit > 0.0) or not np.all(np.isfinite(eps_unit)):
+            raise ValueError(f"sizes must be within float range of the extent {extent:.3g}")
+    counts = box_counts(unit, eps_unit, offsets=offsets, seed=rng, reduce=reduce)
+    eps = eps_unit * extent
+    x = np.log(1.0 / eps_unit) - math.log(extent)
     y = np.log(counts)
-    usable = (counts <= max_fill * n) & (eps <= extent / min_boxes)
+    usable = (counts <= max_fill * n) & (eps_unit <= 1.0 / min_boxes)
     if sizes is not None and np.count_nonzero(usable) < 2:
         usable = np.ones_like(usable)  # explicit sizes: trust the caller
     i, j = _scaling_region(x, y, usable, min_points)

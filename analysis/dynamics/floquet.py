@@ -7,11 +7,17 @@ coordinates are frozen, the multipliers of the reduced block plus exactly 1 per 
 direction with their labels; without (the defaults), the eigenvalues and eigenvectors of ``J``
 by decreasing modulus. Beside them what is read off the multipliers: the exponents
 ``log|μ|/(k·T)``, the multipliers that are not frozen (those the stability and the bifurcation
-tests judge), ``max |μ|`` over them and stability."""
+tests judge), ``max |μ|`` over them and stability.
+
+Stability is "stable" (every judged ``|μ| < 1``), "unstable" (one ``|μ| > 1``) or "neutral":
+a multiplier on the unit circle within the round-off of its computation
+(:func:`multiplier_roundoff`) can be told neither inside nor outside — e.g. an undamped
+resonance where ``P^k`` is the identity and the computed multipliers are ``1 − 4e-16``."""
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 
 __all__ = [
     "RESET_ROUNDOFF",
@@ -21,6 +27,8 @@ __all__ = [
     "frozen_coordinates",
     "is_stable",
     "max_abs_multiplier",
+    "multiplier_roundoff",
+    "stability",
 ]
 
 #: largest ``|μ|/max(1, max|μ|)`` of a structural zero multiplier that is set to exactly 0:
@@ -110,10 +118,72 @@ def max_abs_multiplier(multipliers: np.ndarray, labels: tuple[str, ...] = ()) ->
     return float(np.max(np.abs(mu))) if mu.size else 1.0
 
 
-def is_stable(multipliers: np.ndarray, labels: tuple[str, ...] = ()) -> bool:
-    """Every multiplier not labelled frozen inside the unit circle, ``|μ| < 1`` (True if all
-    are frozen: nothing grows)."""
-    return bool(np.all(np.abs(active_multipliers(multipliers, labels)) < 1.0))
+def multiplier_roundoff(
+    jacobian: np.ndarray,
+    multipliers: np.ndarray,
+    frozen: np.ndarray | None,
+    n_products: int,
+) -> np.ndarray:
+    """Round-off bound of each ``|μ|`` (in the order of ``multipliers``, those of
+    :func:`floquet_multipliers` for ``jacobian`` and ``frozen``; 0 for a frozen one).
+
+    ``jacobian`` is a product of ``n_products`` matrices computed in floating point: its
+    error is at most ``n·ε·|J|₂`` (the forward bound of a matrix product, ``γ_n``, with the
+    factors' norms taken as ``|J|``), and a simple eigenvalue moves by at most ``κ_i`` times
+    a perturbation of ``J``, ``κ_i = |x_i||y_i| / |y_i^H x_i|`` (right/left eigenvectors of the
+    reduced block; 1 for a normal matrix). The band is ``κ_i·n·ε·|J_rr|₂``: a multiplier
+    closer to the unit circle than this is neutral."""
+    jac = np.asarray(jacobian, dtype=np.float64)
+    mu = np.asarray(multipliers)
+    if frozen is None:
+        frozen = np.zeros(jac.shape[0], dtype=bool)
+    free = np.nonzero(~frozen)[0]
+    band = np.zeros(mu.size)
+    if free.size == 0:
+        return band
+    block = jac[np.ix_(free, free)]
+    w, left, right = scipy.linalg.eig(block, left=True, right=True)
+    overlap = np.abs(np.sum(left.conj() * right, axis=0))
+    norms = np.linalg.norm(left, axis=0) * np.linalg.norm(right, axis=0)
+    with np.errstate(divide="ignore"):
+        kappa = np.where(overlap > 0.0, norms / overlap, np.inf)
+    scale = int(n_products) * np.finfo(np.float64).eps * float(np.linalg.norm(block, 2))
+    for i, m in enumerate(mu):
+        # the eigenvalue of the block nearest to m: the same matrix, so m itself up to the
+        # order of a conjugate pair (whose κ agree); a zeroed reset direction keeps 0 (a
+        # frozen 1 gets a band too, unused: frozen directions judge nothing)
+        if m != 0.0:
+            band[i] = kappa[int(np.argmin(np.abs(w - m)))] * scale
+    return band
+
+
+def stability(
+    multipliers: np.ndarray, labels: tuple[str, ...] = (), roundoff: np.ndarray | None = None
+) -> str:
+    """``"unstable"`` if a judged multiplier (not frozen) has ``|μ| > 1 + band``,
+    ``"neutral"`` if none does but one has ``|μ| >= 1 − band``, else ``"stable"`` (also when
+    all are frozen); ``band`` is ``roundoff`` (per multiplier, :func:`multiplier_roundoff`;
+    default 0: ``|μ| = 1`` exactly is neutral)."""
+    mu = np.asarray(multipliers)
+    band = np.zeros(mu.size) if roundoff is None else np.asarray(roundoff, dtype=np.float64)
+    keep = np.ones(mu.size, dtype=bool)
+    if labels:
+        keep = np.array([not t.startswith("frozen") for t in labels], dtype=bool)
+    size, band = np.abs(mu[keep]), band[keep]
+    if np.any(size > 1.0 + band):
+        return "unstable"
+    if np.all(size < 1.0 - band):
+        return "stable"
+    return "neutral"
+
+
+def is_stable(
+    multipliers: np.ndarray, labels: tuple[str, ...] = (), roundoff: np.ndarray | None = None
+) -> bool:
+    """Every multiplier not labelled frozen inside the unit circle by more than its
+    ``roundoff`` band, ``|μ| < 1 − band`` (default band 0: ``|μ| < 1``; True if all are frozen:
+    nothing grows)."""
+    return stability(multipliers, labels, roundoff) == "stable"
 
 
 def floquet_exponents(multipliers: np.ndarray, duration: float) -> np.ndarray:

@@ -62,7 +62,8 @@ Results
 :class:`PeriodicOrbit`: ``period`` k, the orbit points (states and coordinates), multipliers
 (complex, sorted by decreasing modulus) with the tangent space that labels the basis,
 exponents ``log|μ|/(k·T)`` (``−inf`` for ``μ = 0``), ``stable`` (every non-frozen
-``|μ| < 1``), the frozen memory (labels), the
+``|μ| < 1`` beyond round-off) and ``stability`` (stable / unstable / neutral: a multiplier on
+the unit circle within the round-off of ``D P^k``), the frozen memory (labels), the
 event sequence along one orbit (relay switches or wall hits / reversals, from the engine's
 records), the Newton residuals, and :meth:`PeriodicOrbit.to_dict` for JSON.
 """
@@ -80,8 +81,9 @@ from analysis.dynamics.floquet import (
     floquet_exponents,
     floquet_multipliers,
     frozen_coordinates,
-    is_stable,
     max_abs_multiplier,
+    multiplier_roundoff,
+    stability,
 )
 from analysis.dynamics.newton import Linearization, NewtonError, newton
 from analysis.dynamics.orbit_coordinates import StateCoordinates
@@ -93,6 +95,7 @@ from hysteresis._validation import (
     positive_integer,
 )
 from oscillators import MAX_PERIODS, DivergenceError, OscillatorState
+from oscillators.engines.play import OUTSIDE_STEP
 
 __all__ = [
     "OrbitNotFoundError",
@@ -149,7 +152,8 @@ class PeriodicOrbit:
     exponents:
         ``log|μ| / (k·T)`` in the order of ``multipliers`` (``-inf`` for ``μ = 0``).
     stable:
-        Every ``|μ| < 1`` but the frozen directions' (exactly 1).
+        Every ``|μ| < 1`` but the frozen directions' (exactly 1), by more than the round-off
+        of its computation (``stability == "stable"``).
     events:
         The engine's records along one orbit (relay switches: time, q, v, jump; play engines:
         time, q, v, kind, ...), times measured from ``states[0]``.
@@ -168,6 +172,11 @@ class PeriodicOrbit:
     multiplier_labels:
         One per multiplier: ``"frozen: <label>"`` for a frozen direction, ``"reset"`` for a
         structural zero, ``""`` otherwise.
+    stability:
+        ``"stable"``, ``"unstable"`` (a non-frozen ``|μ| > 1`` beyond round-off) or
+        ``"neutral"`` (none beyond, one within round-off of the unit circle:
+        :func:`~analysis.dynamics.floquet.multiplier_roundoff`, e.g. an undamped resonance
+        where every state is periodic).
     """
 
     period: int
@@ -186,6 +195,7 @@ class PeriodicOrbit:
     eigenvectors: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 0)))
     frozen: tuple[str, ...] = ()
     multiplier_labels: tuple[str, ...] = ()
+    stability: str = ""
 
     @property
     def residual(self) -> float:
@@ -212,6 +222,7 @@ class PeriodicOrbit:
             "residual": float(self.residual),
             "residuals": [float(r) for r in self.residuals],
             "stable": bool(self.stable),
+            "stability": self.stability,
             "max_abs_multiplier": self.max_abs_multiplier,
             "points": self.points.tolist(),
             "n_events": int(self.events.size),
@@ -462,7 +473,11 @@ def _orbit(
             stacklevel=3,
         )
     exps = floquet_exponents(mu, k * system.period)
-    stable = is_stable(mu, tags)
+    # D P^k is a product of one propagator per integrator step (at most the stepping engines'
+    # OUTSIDE_STEP/max(1, Ω) long) and per event, and of the d coordinates' saltations
+    span = k * system.period * max(1.0, 2.0 * math.pi / system.period)
+    n_products = coords.dimension + shot.events.size + math.ceil(span / OUTSIDE_STEP)
+    verdict = stability(mu, tags, multiplier_roundoff(shot.jacobian, mu, frozen, n_products))
     return PeriodicOrbit(
         period=k,
         forcing_period=system.period,
@@ -472,7 +487,7 @@ def _orbit(
         monodromy=shot.jacobian,
         multipliers=mu,
         exponents=exps,
-        stable=stable,
+        stable=verdict == "stable",
         events=shot.events,
         sequence=event_sequence(shot.events),
         residuals=tuple(residuals),
@@ -480,6 +495,7 @@ def _orbit(
         eigenvectors=vec,
         frozen=tuple(lab for lab, f in zip(coords.labels, frozen, strict=True) if f),
         multiplier_labels=tags,
+        stability=verdict,
     )
 
 

@@ -205,6 +205,7 @@ class ResultStore:
             self._conn = self._connect(timeout)
         except sqlite3.Error as exc:
             raise StoreError(f"{self.path}: cannot be opened ({exc})") from exc
+        self._conn.text_factory = self._text
         try:
             with self._lock:
                 if existed:
@@ -224,9 +225,26 @@ class ResultStore:
             raise StoreError(
                 f"{self.path}: not a readable results store ({exc}); it was left untouched"
             ) from exc
+        except UnicodeDecodeError as exc:  # SQLite's own message quotes the damaged bytes
+            self._conn.close()
+            raise StoreError(
+                f"{self.path}: corrupted results store (bytes that are not UTF-8 text in its "
+                "schema); it was left untouched"
+            ) from exc
         except BaseException:
             self._conn.close()
             raise
+
+    def _text(self, raw: bytes) -> str:
+        """The connection's text factory: UTF-8, and bytes that are not (random bytes written
+        into a stored text pass SQLite's page checks) a one-line error naming the file."""
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError:
+            raise StoreError(
+                f"{self.path}: corrupted results store (a stored text is not UTF-8: "
+                f"{raw[:40]!r}); restore it from a copy"
+            ) from None
 
     def _connect(self, timeout: float) -> sqlite3.Connection:
         if not self.read_only:

@@ -252,6 +252,12 @@ def continuum_tasks(size: StudySize, seed: int = 0) -> list[dict]:
     t_end = math.floor(size.t_end / period + 1e-9) * period
     if not t_end > transient:
         raise ValueError(f"t_end={size.t_end} must exceed the transient ({transient:g})")
+    if size.section_t_end < size.t_end:
+        # the section runs on from the spectrum's end: a shorter one would be cut to t_end
+        raise ValueError(
+            f"section_t_end={size.section_t_end:g} must be >= t_end={size.t_end:g} (the "
+            "section continues the spectrum's run)"
+        )
     tasks = []
     # initial condition outermost: a run stopped early has every (C, σ_r) from fewer of them
     for q0, v0 in initial_conditions(size.initial_conditions, seed):

@@ -204,24 +204,18 @@ def identify_from_curves(
     """
     if grid not in GRIDS:
         raise ValueError(f"grid must be one of {GRIDS}, got {grid!r}")
-    chosen_grid = grid
-    if grid == "auto":
-        grid = auto_grid(curves)
     if window not in WINDOWS:
         raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
-    check_memory(estimate_memory(curves, smoothing=smoothing, grid=grid, step=step), max_memory)
-    smoothing = _variforc_or(smoothing)
-    lattice = isinstance(smoothing, (VariforcParameters, str)) or (
-        uncertainty and smoothing is not None
+    check_memory(
+        estimate_memory(curves, smoothing=smoothing, grid=grid, step=step, uncertainty=uncertainty),
+        max_memory,
     )
+    smoothing = _variforc_or(smoothing)
+    grid, lattice = _grid_and_fit(curves, smoothing, grid, uncertainty)
     if uncertainty and smoothing is None:
         raise ValueError("uncertainty needs smoothing (a factor or VARIFORC)")
     if lattice and window != "rs":
         raise ValueError("VARIFORC and uncertainty use the rs window; window must be 'rs'")
-    if lattice and chosen_grid == "auto" and grid == "native":
-        union = np.unique(np.concatenate(curves.fields))
-        if not _is_regular(*_native_axes(curves, union, np.sort(curves.reversal_field))):
-            grid = "protocol"  # the lattice regression needs a regular lattice
     if grid == "protocol":
         ext = False if extend is None else bool(extend)
         return _identify_protocol(
@@ -376,19 +370,41 @@ def _native_offsets(curves: ReversalCurves, alpha: np.ndarray, beta: np.ndarray)
     return off[None, :]
 
 
+def _grid_and_fit(
+    curves: ReversalCurves, smoothing: Any, grid: str, uncertainty: bool
+) -> tuple[str, bool]:
+    """The grid an identification runs on and whether it fits by the lattice regression
+    (VARIFORC, ``"auto"``, uncertainty; ``smoothing`` after :func:`_variforc_or`): ``"auto"``
+    is :func:`auto_grid`, except that a lattice fit on a native table that is not regular
+    goes to the protocol lattice (the lattice regression needs a regular lattice)."""
+    chosen = grid
+    if grid == "auto":
+        grid = auto_grid(curves)
+    lattice = isinstance(smoothing, (VariforcParameters, str)) or (
+        bool(uncertainty) and smoothing is not None
+    )
+    if lattice and chosen == "auto" and grid == "native":
+        union = np.unique(np.concatenate(curves.fields))
+        if not _is_regular(*_native_axes(curves, union, np.sort(curves.reversal_field))):
+            grid = "protocol"
+    return grid, lattice
+
+
 def estimate_memory(
     curves: ReversalCurves,
     *,
-    smoothing: float | tuple[float, float] | None = None,
+    smoothing: Any = None,
     grid: str = "auto",
     step: float | None = None,
+    uncertainty: bool = False,
 ) -> int:
-    """Estimated peak bytes of ``identify_from_curves(curves, smoothing=…, grid=…, step=…)``
-    from the sizes alone (:func:`~analysis.identification.memory.estimate_identification_bytes`;
-    the lattice's node count, nothing of its size is allocated)."""
-    if grid == "auto":
-        grid = auto_grid(curves)
+    """Estimated peak bytes of ``identify_from_curves(curves, smoothing=…, grid=…, step=…,
+    uncertainty=…)`` from the sizes alone
+    (:func:`~analysis.identification.memory.estimate_identification_bytes`; the lattice's node
+    count, nothing of its size is allocated), on the path that call takes: the protocol
+    lattice, the lattice regression on the native table, or its scattered windows."""
     smoothing = _variforc_or(smoothing)
+    grid, lattice = _grid_and_fit(curves, smoothing, grid, uncertainty)
     if isinstance(smoothing, str):  # "auto": the largest candidate
         smoothing = auto_candidates()[-1]
     if isinstance(smoothing, VariforcParameters):  # the lattice path: its far-field window
@@ -399,7 +415,11 @@ def estimate_memory(
         return estimate_identification_bytes(curves.n_points, n, smoothing=sm, grid=grid)
     n_union = np.unique(np.concatenate(curves.fields)).size
     return estimate_identification_bytes(
-        curves.n_points, curves.n_curves, n_union, smoothing=sm, grid="native"
+        curves.n_points,
+        curves.n_curves,
+        n_union,
+        smoothing=sm,
+        grid="lattice" if lattice and sm is not None else "native",
     )
 
 

@@ -10,6 +10,9 @@ interpolation across reversal fields, the masks, the cell masses). The smoothing
   eigen-decomposition and right-hand side, about 1 kB per node;
 * native grid (:func:`~analysis.identification.smoothing.local_quadratic_density`): the k-d tree's
   neighbour lists hold every sample of every window, ∝ the window's area in nodes.
+* native table fitted by the lattice regression (VARIFORC, ``"auto"``, uncertainty:
+  :func:`~analysis.identification.variforc.weighted_quadratic_density`, FFT normal equations):
+  a few lattice-sized arrays per moment, independent of the window.
 
 The estimate (:func:`estimate_identification_bytes`), in bytes, with ``N = n_α·n_β`` and ``P``
 the number of measured points::
@@ -17,13 +20,17 @@ the number of measured points::
     peak ≈ 16·P + 40·N                                 (no smoothing)
          + 520·N                                       (protocol lattice, smoothed)
          + 44·N·(2·SF_r + 1)·(2·SF_s + 1)              (native grid, smoothed)
+         + 360·N                                       (native table, lattice regression)
 
 Calibrated against ``tracemalloc`` peaks (``tests/test_analysis/identification/test_memory.py``):
 protocol lattice n = 101/201/401 measured 45/40/38 B·N unsmoothed and 440/484/508 B·N smoothed
 (SF 3); native grid of the erf play n = 221/369/551 unsmoothed 29/26/25 B·N, n = 111/185 smoothed
-960 B·N (SF 2) and 2930–2980 B·N (SF 4). The estimate is an upper bound: it lies between the
-measured peak and 1.75 times it (margin +0 % … +75 %; +65 % on the
-unsmoothed native grid, where the curves are half the lattice) on those cases.
+960 B·N (SF 2) and 2930–2980 B·N (SF 4); the lattice regression on the erf play's native table
+n = 101/201: 386/314 B·N (VARIFORC), 287/269 (``"auto"``), 281/249 (SF 3 with uncertainty) —
+until 2026-11 these were estimated with the scattered windows' term (of the far-field
+VARIFORC window or the largest ``"auto"`` candidate), 8 to 60 times the peak. The estimate
+is an upper bound: it lies between the measured peak and 1.75 times it (margin +0 % … +75 %;
++65 % on the unsmoothed native grid, where the curves are half the lattice) on those cases.
 
 The bound (:func:`default_max_memory`) is :data:`MAX_MEMORY_FRACTION` of the physical memory
 (``os.sysconf``), or :data:`FALLBACK_MAX_MEMORY` where that is unavailable; ``max_memory=``
@@ -59,6 +66,7 @@ _BYTES_PER_POINT = 16
 _BYTES_PER_NODE = 40
 _BYTES_PER_NODE_PROTOCOL_SMOOTHING = 520
 _BYTES_PER_NODE_WINDOW_NATIVE = 44
+_BYTES_PER_NODE_LATTICE_NATIVE = 360
 #: calibrated bytes per byte of a FORC file while it is read (its lines, fields and curves)
 _BYTES_PER_FILE_BYTE = 16
 
@@ -91,13 +99,16 @@ def estimate_identification_bytes(
 
     ``n_points``: measured points of all curves; ``n_alpha × n_beta``: the lattice (square when
     ``n_beta`` is omitted); ``smoothing``: ``(SF_r, SF_s)`` or ``None``; ``grid``:
-    ``"protocol"`` (FFT normal equations) or ``"native"`` (scattered local regression).
+    ``"protocol"`` (FFT normal equations), ``"native"`` (scattered local regression) or
+    ``"lattice"`` (the native table fitted by the lattice regression).
     """
     nodes = float(n_alpha) * float(n_alpha if n_beta is None else n_beta)
     total = _BYTES_PER_POINT * float(n_points) + _BYTES_PER_NODE * nodes
     if smoothing is not None:
         if grid == "protocol":
             total += _BYTES_PER_NODE_PROTOCOL_SMOOTHING * nodes
+        elif grid == "lattice":
+            total += _BYTES_PER_NODE_LATTICE_NATIVE * nodes
         else:
             area = (2.0 * smoothing[0] + 1.0) * (2.0 * smoothing[1] + 1.0)
             total += _BYTES_PER_NODE_WINDOW_NATIVE * nodes * area

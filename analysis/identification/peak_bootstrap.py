@@ -138,6 +138,8 @@ def peak_bootstrap(
         raise ValueError(f"level must lie in (0, 1), got {level}")
     if ident.step is None:
         raise ValueError("the peak bootstrap needs a regular lattice (ident.step)")
+    if ident.density_is_zero:
+        raise ValueError("the FORC density is zero everywhere (constant moment): no peak")
     rng = np.random.default_rng(seed)
     ok = np.isfinite(rho) & np.isfinite(se)
     if not ok.any():

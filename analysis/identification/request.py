@@ -162,6 +162,12 @@ class IdentifyRequest:
             )
         if self.max_memory is not None:
             _set(self, "max_memory", _positive(self.max_memory, "max_memory"))
+        if not self.uncertainty:
+            # the bootstrap is part of the uncertainty: given alone it would be ignored
+            defaults = {f.name: f.default for f in fields(self)}
+            for name in ("bootstrap", "bootstrap_seed"):
+                if getattr(self, name) != defaults[name]:
+                    raise ValueError(f"{name} is only with uncertainty (the peak's bootstrap)")
 
     # -- checks -------------------------------------------------------------------------------
 

@@ -116,20 +116,25 @@ class UncertaintySummary:
 def summarize_uncertainty(
     ident: PreisachIdentification, n_boot: int = 200, seed: int | np.random.Generator = 0
 ) -> UncertaintySummary:
-    """Peak with its bootstrap interval (``n_boot`` replicates, ``seed``) and standard error,
-    irreversible mass with its standard error, fraction of the evaluated nodes significant at
-    95 %, noise level."""
+    """Peak with its bootstrap interval (``n_boot`` replicates, ``seed``) and standard error
+    (NaN for a density exactly 0: no peak), irreversible mass with its standard error,
+    fraction of the evaluated nodes significant at 95 %, noise level."""
     rho, se = _require(ident)
     bc, bu, top = ident.density_peak()
-    k = np.nanargmax(np.where(np.isfinite(se), rho, np.nan))
     sig = significance(ident)
     evaluated = np.isfinite(sig)
-    bc_interval, bu_interval = peak_interval(ident, n_boot=n_boot, seed=seed)
+    if ident.density_is_zero:  # no peak (density_peak warned): no interval either
+        top_se = math.nan
+        bc_interval = bu_interval = (math.nan, math.nan)
+    else:
+        k = np.nanargmax(np.where(np.isfinite(se), rho, np.nan))
+        top_se = float(se.flat[k])
+        bc_interval, bu_interval = peak_interval(ident, n_boot=n_boot, seed=seed)
     return UncertaintySummary(
         peak_bc=bc,
         peak_bu=bu,
         peak_rho=top,
-        peak_rho_se=float(se.flat[k]),
+        peak_rho_se=top_se,
         peak_bc_interval=bc_interval,
         peak_bu_interval=bu_interval,
         irreversible_mass=ident.irreversible_mass,

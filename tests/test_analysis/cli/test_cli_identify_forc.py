@@ -88,6 +88,8 @@ def test_variforc_and_uncertainty_from_the_command_line(tmp_path):
         (["--mass", "1e-3"], "--mass"),
         (["--cmap", "no-such-map"], "--cmap"),
         (["--uncertainty", "--bootstrap", "5"], "--bootstrap"),
+        (["--bootstrap", "50"], "--bootstrap"),  # without --uncertainty: not ignored
+        (["--bootstrap-seed", "3"], "--bootstrap-seed"),
     ],
 )
 def test_bad_options_are_one_line_errors(argv, option, tmp_path, capsys):

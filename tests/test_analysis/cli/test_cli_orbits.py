@@ -78,3 +78,13 @@ def test_no_orbit_is_one_line(capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "OrbitNotFoundError" in err[0]
+
+
+def test_orbit_neutral_when_every_state_is_periodic(capsys):
+    # ζ = 0, C = 0, Ω = 0.7: P^7 is the identity, multipliers 1 within round-off: neutral
+    argv = ["orbit", "--model", "erf-play", "--coupling", "0", "--damping-ratio", "0"]
+    argv += ["--frequency", "0.7", "--max-period", "10"]
+    d = _json(capsys, *argv, "--json")
+    assert d["period"] == 7 and d["stability"] == "neutral" and d["stable"] is False
+    assert main(argv) == 0
+    assert "period 7, neutral," in capsys.readouterr().out

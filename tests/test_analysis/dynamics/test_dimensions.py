@@ -148,3 +148,22 @@ def test_occupied_cells_count_as_numpy_unique():
     wide = rng.integers(0, 2**40, size=(200, 2))  # span**2 > 2**62: the unpacked path
     wide[100:] = wide[:100]
     assert _occupied(wide) == 100
+
+
+@pytest.mark.parametrize("scale", [1e200, 1e-200, 2.0**-900])
+def test_box_counting_is_scale_invariant(scale):
+    # the dimension of a scaled set is the same: the boxes are laid in units of the extent, so
+    # a curve times 1e±200 (whose squared distances overflow / underflow) gets the same fit
+    t = np.linspace(0.0, 2.0 * np.pi, 20000)
+    curve = np.c_[np.cos(t) + 0.3 * np.cos(7.0 * t), np.sin(3.0 * t)]
+    ref = box_counting_dimension(curve, seed=0)
+    got = box_counting_dimension(curve * scale, seed=0)
+    assert np.array_equal(got.counts, ref.counts) and got.region == ref.region
+    # the same counts against log(1/ε) shifted by −log(scale), rounded to ~ε·|log scale|
+    # (5e-14 at 1e±200) over a region spanning ~1 in log(1/ε): the slope to 1e-12
+    assert got.dimension == pytest.approx(ref.dimension, rel=1e-12)
+    assert np.allclose(got.sizes / scale, ref.sizes, rtol=1e-12)
+    explicit_ref = box_counting_dimension(curve, sizes=ref.sizes, seed=0)
+    explicit = box_counting_dimension(curve * scale, sizes=ref.sizes * scale, seed=0)
+    assert np.array_equal(explicit.counts, explicit_ref.counts)
+    assert explicit.dimension == pytest.approx(explicit_ref.dimension, rel=1e-12)

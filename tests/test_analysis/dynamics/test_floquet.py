@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 from analysis.dynamics.attractors import periodic_attractor, section_run, start_state
 from analysis.dynamics.floquet import (
@@ -18,6 +19,8 @@ from analysis.dynamics.floquet import (
     frozen_coordinates,
     is_stable,
     max_abs_multiplier,
+    multiplier_roundoff,
+    stability,
 )
 from analysis.experiments.models import build_operator
 from oscillators import ForcedOscillator
@@ -122,3 +125,26 @@ def test_an_unrefined_cycle_gets_the_jacobians_multipliers():
     assert abs(np.prod(mu) - np.linalg.det(jac)) <= 1e-12 * max(1.0, np.max(np.abs(jac))) ** 3
     assert np.array_equal(got["exponents"], np.log(np.abs(mu)) / (3 * system.period))
     assert got["stable"] == bool(np.all(np.abs(mu) < 1.0))
+
+
+def test_neutral_band_from_the_eigenvalue_condition():
+    # J = V diag(μ) V⁻¹: the band of μ_i is κ_i·n·ε·|J|₂ with κ_i = |x_i||y_i|/|y_i^H x_i|
+    # (1 for a normal matrix); a multiplier within it of the unit circle is neutral
+    mu = np.array([1.0 - 1e-15, 0.5, 0.2])
+    jac = _with_eigenvalues(mu)
+    got, _, _ = floquet_multipliers(jac)
+    band = multiplier_roundoff(jac, got, None, 10)
+    w, vl, vr = scipy.linalg.eig(jac, left=True)
+    kappa = (
+        np.linalg.norm(vl, axis=0)
+        * np.linalg.norm(vr, axis=0)
+        / np.abs(np.sum(vl.conj() * vr, axis=0))
+    )
+    order = np.argsort(-np.abs(w), kind="stable")
+    want = kappa[order] * 10 * np.finfo(float).eps * np.linalg.norm(jac, 2)
+    assert np.allclose(band, want, rtol=1e-6)
+    assert stability(got, (), band) == "neutral" and not is_stable(got, (), band)
+    assert stability(got, ()) == "stable" and is_stable(got)  # no band: as before
+    assert stability(np.array([1.5, 1.0]), (), np.array([1e-12, 1e-12])) == "unstable"
+    assert stability(np.array([0.5, 1.0 + 1e-13]), (), np.array([1e-12, 1e-12])) == "neutral"
+    assert stability(np.array([1.0 + 0j]), ("frozen: w",)) == "stable"  # frozen judge nothing

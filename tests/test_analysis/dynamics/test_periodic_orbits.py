@@ -197,3 +197,25 @@ def test_state_and_q0_are_exclusive():
     system = _relay_system()
     with pytest.raises(ValueError, match="either state or q0"):
         find_periodic_orbit(system, system.initial_state(), q0=0.5)
+
+
+@pytest.mark.parametrize("operator", [GeneralizedPlay.erf(2.0, 1.0), Relay(1.0, -1.0)])
+def test_undamped_resonant_orbit_is_neutral_not_stable(operator):
+    # ζ = 0, C = 0, Ω = 0.7: seven forcing periods are ten free periods, P^7 is the identity on
+    # (q, v) and every state is a period-7 orbit: its multipliers are exactly 1 in exact
+    # arithmetic, and the computed ones (1 − 4e-16 for the play engine) are neither stable nor
+    # unstable. Genuinely stable/unstable orbits keep their verdict (the other tests).
+    system = ForcedOscillator(operator, 0.0, 0.0, 0.7)
+    orbit = find_periodic_orbit(system, max_period=10)
+    assert orbit.period == 7
+    free = np.abs(orbit.multipliers[:2])
+    assert np.all(np.abs(free - 1.0) < 1e-13)  # round-off of the closed form, a few ulp
+    assert orbit.stability == "neutral" and orbit.stable is False
+    d = json.loads(json.dumps(orbit.to_dict()))
+    assert d["stability"] == "neutral" and d["stable"] is False
+
+
+def test_stable_orbits_stay_stable():
+    assert find_periodic_orbit(_erf_system(3.85), max_period=16).stability == "stable"
+    system = ForcedOscillator(Relay(1.0, -1.0), 0.0, 0.05, 1.0)
+    assert find_periodic_orbit(system, max_period=4).stability == "stable"

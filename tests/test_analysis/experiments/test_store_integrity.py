@@ -261,3 +261,24 @@ def test_schema1_store_killed_with_tasks_in_its_write_ahead_log(tmp_path):
         assert set(store.keys("e")) == {*keys, task_key("e", {"i": 9})}
         assert store.get(task_key("e", {"i": 9})).results == {"y": 81}
     assert not (killed / "old.sqlite-wal").exists()
+
+
+@pytest.mark.parametrize("needle", [b"ZZZZZZZZ", b"exp_utf8", b"experiment"])
+def test_bytes_that_are_not_utf8_name_the_file(tmp_path, needle):
+    # random bytes inside a stored text (a task's params, or a name SQLite's integrity check
+    # reads) pass the page checks; reading them must name the file and the cause in one line,
+    # not SQLite's bare "Could not decode to UTF-8" or a UnicodeDecodeError
+    path = tmp_path / "r.sqlite"
+    with ResultStore(path) as store:
+        key = store.put("exp_utf8", {"coupling": 4.0, "marker": "ZZZZZZZZ"}, {"d_ky": 1.4})
+    raw = bytearray(path.read_bytes())
+    at = raw.find(needle)
+    assert at > 0
+    raw[at : at + 4] = b"\xff\xfe\xff\xfe"
+    path.write_bytes(bytes(raw))
+    with pytest.raises(StoreError) as exc:
+        with ResultStore(path) as store:
+            store.load("exp_utf8")
+            store.get(key)
+    text = str(exc.value)
+    assert text.startswith(f"{path}:") and "UTF-8" in text and "\n" not in text

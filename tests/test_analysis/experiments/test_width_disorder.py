@@ -3,6 +3,7 @@ numbers against direct calls, resume from the store, the hyst width-disorder com
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import math
@@ -114,6 +115,12 @@ def test_run_study_refuses_bad_arguments():
         wd.continuum_tasks(
             wd.SIZES["quick"].__class__(**{**wd.SIZES["quick"].__dict__, "t_end": 1.0})
         )
+    # a section shorter than the spectrum's run would silently be cut to t_end
+    quick = wd.SIZES["quick"]
+    with pytest.raises(ValueError, match=r"^section_t_end=.* must be >= t_end") as exc:
+        wd.continuum_tasks(dataclasses.replace(quick, section_t_end=quick.t_end - 1.0))
+    assert "\n" not in str(exc.value)
+    assert wd.continuum_tasks(dataclasses.replace(quick, section_t_end=quick.t_end))
 
 
 def test_cli_finite_part_writes_json_and_figure(tmp_path, capsys):
@@ -148,6 +155,7 @@ def test_cli_finite_part_writes_json_and_figure(tmp_path, capsys):
     [
         (["--spins", "101"], "argument --spins: must be even"),
         (["--t-end", "1"], "argument --t-end"),
+        (["--t-end", "200", "--section-t-end", "150"], "argument --section-t-end: section_t_end"),
         (["--width-spreads", "-0.1"], "argument --width-spreads"),
         (["--part", "all"], "argument --part"),
         (["--initial-conditions", "0"], "argument --initial-conditions"),

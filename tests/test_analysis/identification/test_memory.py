@@ -10,7 +10,11 @@ import pytest
 from analysis.cli import main
 from analysis.experiments.models import build_operator
 from analysis.identification import identify_from_curves, identify_preisach
-from analysis.identification.curves import ReversalCurves
+from analysis.identification.curves import (
+    ReversalCurves,
+    measure_reversal_curves,
+    regular_grid,
+)
 from analysis.identification.density import estimate_memory
 from analysis.identification.memory import (
     MemoryBoundError,
@@ -18,6 +22,7 @@ from analysis.identification.memory import (
     default_max_memory,
     estimate_identification_bytes,
 )
+from hysteresis._validation import MAX_GRID_NODES
 
 #: stated margin of the estimate: between the measured peak and 1.75 times it
 MARGIN = 1.75
@@ -117,3 +122,38 @@ def test_file_reading_estimate_and_refusal(tmp_path, capsys):
     code = main(["identify", "--input", str(path), "--max-memory", "1e-6"])
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and "bound 1e-06 GB" in lines[0], lines
+
+
+@pytest.mark.parametrize("step", [0.12, 0.06])
+@pytest.mark.parametrize(
+    ("smoothing", "uncertainty"), [("variforc", False), ("auto", False), (3.0, True)]
+)
+def test_estimate_of_the_lattice_regression_on_the_native_table(step, smoothing, uncertainty):
+    # VARIFORC, "auto" and uncertainty fit on the regular native table by the lattice
+    # regression (FFT normal equations), not the scattered k-d tree windows: the estimate
+    # was the windows' (8-60 times the tracemalloc peak, issue 32: 27.5 GB for a run of 1.86)
+    curves = measure_reversal_curves(
+        build_operator("erf-play", width=2.0, spread=1.0), regular_grid(step, 6.0)
+    )
+    estimate = estimate_memory(curves, smoothing=smoothing, uncertainty=uncertainty)
+    peak = _peak(
+        lambda: identify_from_curves(
+            curves, smoothing=smoothing, uncertainty=uncertainty, output_range=(-1.0, 1.0)
+        )
+    )
+    assert peak <= estimate <= MARGIN * peak, (estimate, peak)
+
+
+def test_a_fine_model_step_is_refused_up_front_naming_step():
+    # a grid beyond MAX_GRID_NODES is refused before the operator is driven (not a bare
+    # MemoryError from the nodes² Everett table)
+    class Untouchable:
+        output_range = (-1.0, 1.0)
+
+        def __getattr__(self, name):
+            raise AssertionError(f"the operator was used ({name})")
+
+    with pytest.raises(ValueError) as exc:
+        identify_preisach(Untouchable(), 1e-7, 6.0)
+    text = str(exc.value)
+    assert text.startswith("step=") and str(MAX_GRID_NODES) in text and "\n" not in text

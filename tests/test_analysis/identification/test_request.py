@@ -105,6 +105,8 @@ def test_exactly_one_source():
         (dict(bootstrap=5), "bootstrap", ">= 20"),
         (dict(bootstrap_seed=-1), "bootstrap_seed", ">= 0"),
         (dict(max_memory=0.0), "max_memory", "> 0"),
+        (dict(bootstrap=50), "bootstrap", "only with uncertainty"),
+        (dict(bootstrap_seed=3), "bootstrap_seed", "only with uncertainty"),
     ],
 )
 def test_each_cross_check_of_measured_data_is_one_line_naming_its_parameter(
