@@ -115,14 +115,14 @@ def add_uncertainty_options(g: Any) -> None:
     g.add_argument(
         "--bootstrap",
         type=int_at_least(20, 100000),
-        default=200,
+        default=None,
         metavar="N",
         help="--uncertainty: replicates of the peak's parametric bootstrap (>= 20; default 200)",
     )
     g.add_argument(
         "--bootstrap-seed",
         type=int_at_least(0),
-        default=0,
+        default=None,
         metavar="S",
         help="--uncertainty: seed of the bootstrap's noise (>= 0; default 0)",
     )

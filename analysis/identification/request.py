@@ -48,6 +48,8 @@ DEFAULT_MEASURED_SMOOTHING = 3.0
 #: the readers' drift corrections (from the calibration points) and two-column layouts
 DRIFT_CORRECTIONS = ("none", "multiplicative", "additive")
 COLUMN_LAYOUTS = ("field,moment", "moment,field")
+#: replicates of the peak's parametric bootstrap when none is given
+DEFAULT_BOOTSTRAP = 200
 VARIFORC_PARAMETERS = ("sc0", "sc1", "sb0", "sb1", "lam")
 #: the options of measured data, refused with a model when not at their defaults
 _MEASURED_ONLY = (
@@ -120,8 +122,8 @@ class IdentifyRequest:
     window: str = "rs"
     reversible_ridge: bool = False
     uncertainty: bool = False
-    bootstrap: int = 200
-    bootstrap_seed: int = 0
+    bootstrap: int | None = None
+    bootstrap_seed: int | None = None
     cmap: str | None = None
     max_memory: float | None = None
 
@@ -131,6 +133,12 @@ class IdentifyRequest:
         _set(self, "variforc", dict(self.variforc))
         if (self.model is None) == (not self.inputs):
             raise ValueError("model and inputs: give exactly one source (an operator or files)")
+        given = tuple(n for n in ("bootstrap", "bootstrap_seed") if getattr(self, n) is not None)
+        _set(self, "_bootstrap_given", given)
+        if self.bootstrap is None:
+            _set(self, "bootstrap", DEFAULT_BOOTSTRAP)
+        if self.bootstrap_seed is None:
+            _set(self, "bootstrap_seed", 0)
         self._check_choices()
         if self.measured:
             for name in ("step", "saturation"):
@@ -162,12 +170,11 @@ class IdentifyRequest:
             )
         if self.max_memory is not None:
             _set(self, "max_memory", _positive(self.max_memory, "max_memory"))
-        if not self.uncertainty:
-            # the bootstrap is part of the uncertainty: given alone it would be ignored
-            defaults = {f.name: f.default for f in fields(self)}
-            for name in ("bootstrap", "bootstrap_seed"):
-                if getattr(self, name) != defaults[name]:
-                    raise ValueError(f"{name} is only with uncertainty (the peak's bootstrap)")
+        if self._bootstrap_given and not self.uncertainty:  # part of the uncertainty: given
+            # alone it would be ignored
+            raise ValueError(
+                f"{self._bootstrap_given[0]} is only with uncertainty (the peak's bootstrap)"
+            )
 
     # -- checks -------------------------------------------------------------------------------
 
@@ -198,6 +205,8 @@ class IdentifyRequest:
             if (
                 isinstance(self.smoothing, str) and self.smoothing in ("variforc", "auto")
                 if name == "smoothing"
+                else name in self._bootstrap_given
+                if name in ("bootstrap", "bootstrap_seed")
                 else getattr(self, name) != defaults[name]
             )
         ]

@@ -102,10 +102,12 @@ def test_exactly_one_source():
         (dict(drift_correction="cubic"), "drift_correction", "one of"),
         (dict(columns="a,b"), "columns", "one of"),
         (dict(normalize="weight"), "normalize", "one of"),
-        (dict(bootstrap=5), "bootstrap", ">= 20"),
-        (dict(bootstrap_seed=-1), "bootstrap_seed", ">= 0"),
+        (dict(uncertainty=True, bootstrap=5), "bootstrap", ">= 20"),
+        (dict(uncertainty=True, bootstrap_seed=-1), "bootstrap_seed", ">= 0"),
         (dict(max_memory=0.0), "max_memory", "> 0"),
         (dict(bootstrap=50), "bootstrap", "only with uncertainty"),
+        (dict(bootstrap=200), "bootstrap", "only with uncertainty"),  # the default, given
+        (dict(bootstrap_seed=0), "bootstrap_seed", "only with uncertainty"),
         (dict(bootstrap_seed=3), "bootstrap_seed", "only with uncertainty"),
     ],
 )
@@ -213,3 +215,9 @@ def test_the_request_is_frozen():
     request = IdentifyRequest(model="play")
     with pytest.raises(AttributeError):
         request.step = 1.0  # type: ignore[misc]
+
+
+def test_bootstrap_defaults_are_filled_in_with_uncertainty():
+    request = IdentifyRequest(inputs=(FILE,), uncertainty=True)
+    assert (request.bootstrap, request.bootstrap_seed) == (200, 0)
+    assert IdentifyRequest(inputs=(FILE,)).bootstrap == 200  # not given: no error
