@@ -11,6 +11,12 @@ Alternating pairs keep the ratio meaningful on a shared machine whose speed drif
 * ``--what play``: the erf-play limit at C = 2.92 (the basin benchmark's system); starts per
   second of ``poincare_section`` over 100 periods from 40 seeded starts in [-3, 3]² (a basin
   map's unit of work), and time units per second of ``lyapunov_spectrum`` to t = 2·10⁴.
+* ``--what continuous``: the compiled continuous engine on the systems of
+  ``bench_oscillator.py --continuous-only`` (ζ = 0.05, Ω = 1): time units per second of
+  ``lyapunov_spectrum`` (tangent flow, QR every period) of the 10-play Prandtl–Ishlinskii
+  operator (C = 0.8) to t = 2000, of the grid-256 continuous Preisach model and of the Gaussian
+  width-disorder model (p = 2, R = 1, σ_r = 0.2; C = 4) to t = 200 each, and of the PI
+  operator's trajectory without tangent flow (``poincare_section``, 300 periods).
 
     git worktree add /tmp/old <commit>
     python benchmarks/bench_versions.py /tmp/old . [--pairs 5] [--what play]
@@ -31,6 +37,7 @@ from pathlib import Path
 KEYS = {
     "relay": ("trajectory", "kernel_tangent", "lyapunov_qr8", "lyapunov_qr1"),
     "play": ("sections", "lyapunov"),
+    "continuous": ("pi_section", "pi_lyapunov", "grid_lyapunov", "gaussian_lyapunov"),
 }
 
 
@@ -55,6 +62,42 @@ def measure_play() -> dict:
     t0 = time.perf_counter()
     lyapunov_spectrum(system, 20000.0)
     out["lyapunov"] = 20000.0 / (time.perf_counter() - t0)
+    return out
+
+
+def measure_continuous() -> dict:
+    """Time units per second of the compiled continuous engine (child's job)."""
+    import math
+    import time
+
+    import numpy as np
+
+    from analysis import lyapunov_spectrum
+    from hysteresis import ContinuousPreisachModel, PrandtlIshlinskii, PreisachModel
+    from oscillators import ForcedOscillator
+
+    def density(a, b):  # bench_oscillator.continuous_engine_figures's grid-256 model
+        r, s = 0.5 * (a - b), 0.5 * (a + b)
+        width = np.exp(-0.5 * ((r - 1.0) / 0.2) ** 2) / (0.2 * math.sqrt(2 * math.pi))
+        return 0.5 * width * np.exp(-0.5 * s**2) / math.sqrt(2 * math.pi)
+
+    pi = ForcedOscillator(PrandtlIshlinskii(np.linspace(0.4, 4.0, 10), np.full(10, 0.1)), 0.8)
+    grid = ForcedOscillator(PreisachModel.from_density(density, -7.0, 7.0, resolution=256), 4.0)
+    gauss = ForcedOscillator(ContinuousPreisachModel.gaussian(2.0, 1.0, 0.2), 4.0)
+    for system in (pi, grid, gauss):
+        lyapunov_spectrum(system, 10.0, progress=False)  # compile
+    out = {}
+    t0 = time.perf_counter()
+    pi.poincare_section(300, 0, 0.4, -1.1)
+    out["pi_section"] = 300 * 2.0 * math.pi / (time.perf_counter() - t0)
+    for key, system, t_run in (
+        ("pi_lyapunov", pi, 2000.0),
+        ("grid_lyapunov", grid, 200.0),
+        ("gaussian_lyapunov", gauss, 200.0),
+    ):
+        t0 = time.perf_counter()
+        lyapunov_spectrum(system, t_run, progress=False)
+        out[key] = t_run / (time.perf_counter() - t0)
     return out
 
 
@@ -128,6 +171,7 @@ def main() -> None:
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--child"]:
-        print(json.dumps(measure_play() if sys.argv[2:] == ["play"] else measure()))
+        child = {"play": measure_play, "continuous": measure_continuous, "relay": measure}
+        print(json.dumps(child[sys.argv[2] if sys.argv[2:] else "relay"]()))
     else:
         main()

@@ -1,17 +1,19 @@
-"""Dormand–Prince 8(5,3) coefficients: the 12 stages of the 8th-order solution.
+"""Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution and the one RK8 step.
 
 Source: E. Hairer, S. P. Nørsett and G. Wanner, *Solving Ordinary Differential Equations I:
 Nonstiff Problems*, 2nd ed., Springer (1993), Sec. II.10, and the authors' Fortran code
 ``dop853.f`` (coefficients of J. R. Dormand and P. J. Prince, "Practical Runge–Kutta processes",
 SIAM J. Sci. Stat. Comput. 10 (1989) 977–989). Carried here as plain numbers so that the
-play-limit kernel depends on no private module of another library; the values are the decimal
+compiled kernels depend on no private module of another library; the values are the decimal
 representations of the published rational/real coefficients rounded to float64.
-``tests/test_dop853.py`` checks the order conditions up to order 8.
+``tests/test_oscillators/test_dop853.py`` checks the order conditions up to order 8.
+:func:`rk8_step` is the fixed-step RK8 step of the play and continuous kernels.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 N_STAGES = 12
 
@@ -111,3 +113,33 @@ _NZ = [(i, j) for i in range(N_STAGES) for j in range(i) if A[i, j] != 0.0]
 NZ_START = np.searchsorted([i for i, _ in _NZ], np.arange(N_STAGES + 1)).astype(np.int64)
 NZ_COL = np.array([j for _, j in _NZ], dtype=np.int64)
 NZ_B = np.flatnonzero(B).astype(np.int64)
+
+
+@njit(cache=True, inline="always")
+def rk8_step(rhs, args, t, y, h, out, K, tmp, n, first):
+    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``: the
+    compiled kernels' one RK8 stepper (their right-hand sides differ, the step does not).
+
+    Plain reading: stage i evaluates ``K[i] = rhs(t + c_i h, y + h Σ_j a_ij K[j])`` and the
+    step is ``out = y + h Σ_i b_i K[i]``, over the first ``n`` entries of ``y``. The sums run
+    over the table's nonzero coefficients only (the same bits as the full table, see above).
+    ``rhs(t, y, dy, args)`` writes the derivative into ``dy``; ``first = 1`` skips stage 0
+    when the caller has already put ``K[0] = rhs(t, y)`` there (it does not depend on h).
+    """
+    if first == 0:
+        rhs(t, y, K[0], args)  # stage 0: c_0 = 0 and no a_0j, so its argument is (t, y)
+    for i in range(1, N_STAGES):  # constant bounds: the compiler unrolls the stages
+        s = NZ_START[i]
+        e = NZ_START[i + 1]
+        for r in range(n):
+            acc = 0.0
+            for jj in range(s, e):
+                j = NZ_COL[jj]
+                acc += A[i, j] * K[j, r]
+            tmp[r] = y[r] + h * acc
+        rhs(t + C[i] * h, tmp, K[i], args)
+    for r in range(n):
+        acc = 0.0
+        for i in NZ_B:
+            acc += B[i] * K[i, r]
+        out[r] = y[r] + h * acc
