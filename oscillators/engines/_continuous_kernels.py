@@ -167,7 +167,7 @@ def _rhs(par, ist, st, F, ep, et, t, y, dy, k):
             dy[3 + 2 * j] = -2.0 * zeta * dv + cs * dq + c * F[0, j] + cg * F[1, j] - sph * F[2, j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step_rhs(t, y, dy, args):
     """:func:`_rhs` in the signature of the RK8 stepper, ``args = (par, ist, st, F, ep, et, k)``."""
     par, ist, st, F, ep, et, k = args
@@ -350,7 +350,7 @@ def _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, 
         ist[I_NEV] = i + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _event_fn(tau, args):
     """Root function of an event after the state-only RK8 step over ``tau`` from (t, y):
     ``which`` 0 the reversal ``(−d·v, −d·a)``, 1 the breakpoint ``(d·(q − bp), d·v)``; both
@@ -364,7 +364,7 @@ def _event_fn(tau, args):
     return d * (z[0] - st[S_BP]), d * z[1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _dip_fn(tau, args):
     """Root function of a velocity dip's minimum: ``(d·a, 0)`` after the state-only RK8 step
     over ``tau`` (no derivative: the root finder bisects)."""

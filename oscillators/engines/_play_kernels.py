@@ -236,7 +236,7 @@ def _hermite_extrema(ql, vl, qr, vr, h):
     return hi, lo
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _inside_v(tau, args):
     """Root function of the extremum inside: ``(g, g') = sgn·(−v, −a)`` at ``tau``, oriented
     (``sgn`` = the sign of v at the bracket's left end) so that g < 0 there."""
@@ -245,7 +245,7 @@ def _inside_v(tau, args):
     return -sgn * v, -sgn * a
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _inside_q(tau, args):
     """Root function of a wall hit inside: ``(g, g') = sgn·(q − wall, v)`` at ``tau``, oriented
     (``sgn`` = −1 when q starts above the wall) so that g < 0 at the bracket's left end."""
@@ -723,7 +723,7 @@ def _rk8_qv(par, side, t, q, v, h, a0):
     return q_end, v_end
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _wall_v(tau, args):
     """Root function of the reversal on a wall: ``(g, g') = −side·(v, a)`` after the RK8 step
     over ``tau`` from the step start (``args = (par, side, t, q, v, a0)``); g < 0 at τ = 0."""
@@ -732,7 +732,7 @@ def _wall_v(tau, args):
     return -side * vt, -side * _accel(par, side, t + tau, qt, vt)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _wall_a(tau, args):
     """Root function of a velocity dip's minimum: ``(side·a, 0)`` after the RK8 step over
     ``tau`` (no derivative: the root finder bisects)."""

@@ -20,6 +20,12 @@ Plain reading::
     return x          # tol = ROOT_RTOL * max(1, scale)
 
 A derivative of 0 turns every step into a bisection (the velocity-dip search passes ``g' = 0``).
+:func:`find_root` and the kernels' root functions are inlined into their callers
+(``inline="always"``), for the reasons given at :func:`oscillators.engines._dop853_kernel.rk8_step`.
+
+Not here: the continuous kernel's ``_land`` (a step ending on a grid line of a tabulated Everett
+function) is Newton without a bracket from a predicted time, which must report failure (the
+input turns back first) rather than bisect; bracketing it would cost one more RK8 step per line.
 """
 
 from __future__ import annotations
