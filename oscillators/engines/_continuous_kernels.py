@@ -167,13 +167,6 @@ def _rhs(par, ist, st, F, ep, et, t, y, dy, k):
             dy[3 + 2 * j] = -2.0 * zeta * dv + cs * dq + c * F[0, j] + cg * F[1, j] - sph * F[2, j]
 
 
-@njit(cache=True, inline="always")
-def _step_rhs(t, y, dy, args):
-    """:func:`_rhs` in the signature of the RK8 stepper, ``args = (par, ist, st, F, ep, et, k)``."""
-    par, ist, st, F, ep, et, k = args
-    _rhs(par, ist, st, F, ep, et, t, y, dy, k)
-
-
 @njit(cache=True)
 def _rk8(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k):
     """One 8th-order Dormand–Prince step from (t, y) over h into ``out`` (2 + 2k entries)."""
@@ -182,10 +175,16 @@ def _rk8(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k):
 
 @njit(cache=True)
 def _stages(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k, first):
-    """The RK8 step (:func:`oscillators.engines._dop853_kernel.rk8_step`) with stages
-    ``first``.. evaluated (``first = 1``: ``K[0] = f(t, y)`` is already there)."""
-    args = (par, ist, st, F, ep, et, k)
-    _dop.rk8_step(_step_rhs, args, t, y, h, out, K, tmp, 2 + 2 * k, first)
+    """The RK8 step (:func:`oscillators.engines._dop853_kernel.rk8_step`, written around its
+    stage and end sums) with stages ``first``.. evaluated (``first = 1``: ``K[0] = f(t, y)`` is
+    already there)."""
+    n = 2 + 2 * k
+    if first == 0:
+        _rhs(par, ist, st, F, ep, et, t, y, K[0], k)
+    for i in range(1, _N_STAGES):
+        ti = _dop.rk8_stage(i, t, y, h, K, tmp, n)
+        _rhs(par, ist, st, F, ep, et, ti, tmp, K[i], k)
+    _dop.rk8_end(y, h, K, out, n)
 
 
 # --------------------------------------------------------------------------------------------

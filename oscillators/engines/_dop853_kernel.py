@@ -116,33 +116,52 @@ NZ_B = np.flatnonzero(B).astype(np.int64)
 
 
 @njit(cache=True, inline="always")
-def rk8_step(rhs, args, t, y, h, out, K, tmp, n, first):
-    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``: the
-    compiled kernels' one RK8 stepper (their right-hand sides differ, the step does not).
+def rk8_stage(i, t, y, h, K, tmp, n):
+    """The argument of stage i >= 1 of the RK8 step from (t, y) over h: its time
+    ``t + c_i h`` (returned) and state ``tmp = y + h Σ_{j<i} a_ij K[j]`` (first ``n`` entries)."""
+    for r in range(n):
+        acc = 0.0
+        for j in range(i):
+            acc += A[i, j] * K[j, r]
+        tmp[r] = y[r] + h * acc
+    return t + C[i] * h
 
-    Plain reading: stage i evaluates ``K[i] = rhs(t + c_i h, y + h Σ_j a_ij K[j])`` and the
-    step is ``out = y + h Σ_i b_i K[i]``, over the first ``n`` entries of ``y``. The sums run
-    over the full table: skipping its zeros through the index arrays ``NZ_*`` gives the same
-    bits but made the continuous engine's steps ~15 % slower (an indirect load per term);
-    stage 0 is ``rhs(t, y)`` itself (``c_0 = 0``, no ``a_0j``: the same bits too).
-    ``rhs(t, y, dy, args)`` writes the derivative into ``dy``; ``first = 1`` skips stage 0
-    when the caller has already put ``K[0] = rhs(t, y)`` there (it does not depend on h).
-    Inlined into each caller (``inline="always"``, as are the kernels' ``rhs`` wrappers):
-    a compiled function passed as a run-time argument would embed its address and so disable
-    numba's on-disk cache, and an ``args`` tuple of arrays built and unpacked across calls
-    costs reference counting per stage.
-    """
-    if first == 0:
-        rhs(t, y, K[0], args)  # stage 0: c_0 = 0 and no a_0j, so its argument is (t, y)
-    for i in range(1, N_STAGES):
-        for r in range(n):
-            acc = 0.0
-            for j in range(i):
-                acc += A[i, j] * K[j, r]
-            tmp[r] = y[r] + h * acc
-        rhs(t + C[i] * h, tmp, K[i], args)
+
+@njit(cache=True, inline="always")
+def rk8_end(y, h, K, out, n):
+    """The end of the RK8 step: ``out = y + h Σ_i b_i K[i]`` (first ``n`` entries)."""
     for r in range(n):
         acc = 0.0
         for i in range(N_STAGES):
             acc += B[i] * K[i, r]
         out[r] = y[r] + h * acc
+
+
+@njit(cache=True, inline="always")
+def rk8_step(rhs, args, t, y, h, out, K, tmp, n, first):
+    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``.
+
+    Plain reading: stage i evaluates ``K[i] = rhs(t + c_i h, y + h Σ_j a_ij K[j])`` and the
+    step is ``out = y + h Σ_i b_i K[i]``, over the first ``n`` entries of ``y``::
+
+        if first == 0: K[0] = rhs(t, y)          # c_0 = 0, no a_0j
+        for i in 1..11: K[i] = rhs(rk8_stage(i, t, y, h, K, tmp, n), tmp)
+        rk8_end(y, h, K, out, n)
+
+    The sums run over the full table (skipping its zeros through the index arrays ``NZ_*``
+    gives the same bits but made the continuous engine's steps ~15 % slower: an indirect load
+    per term). ``rhs(t, y, dy, args)`` writes the derivative into ``dy``; ``first = 1`` skips
+    stage 0 when the caller has already put ``K[0] = rhs(t, y)`` there (it does not depend on
+    h). A kernel whose right-hand side takes arrays writes this loop itself around
+    :func:`rk8_stage` and :func:`rk8_end` (the continuous kernel's ``_stages``): an ``args``
+    tuple of arrays, unpacked at every stage, costs reference counting that made its steps
+    ~20 % slower. All three are inlined into their callers (``inline="always"``): a compiled
+    function passed as a run-time argument would embed its address and so disable numba's
+    on-disk cache.
+    """
+    if first == 0:
+        rhs(t, y, K[0], args)
+    for i in range(1, N_STAGES):
+        ti = rk8_stage(i, t, y, h, K, tmp, n)
+        rhs(ti, tmp, K[i], args)
+    rk8_end(y, h, K, out, n)
