@@ -8,24 +8,24 @@ for a Prandtl–Ishlinskii operator (``OP_PI``) or a continuous Preisach model (
 While ``q`` moves one way the output is a smooth function of ``q`` (a *branch*); the branch
 ends at a reversal ``v = 0`` or at its breakpoint ``q = bp``.
 
-Everything lives in flat arrays so that numba compiles one specialisation:
+Everything lives in flat arrays so that numba compiles one specialisation; their layouts are
+the named index constants below (one definition each; the Python side builds ``par`` with
+:func:`make_parameters`):
 
-``par`` (float64)::
+``par`` (float64): ``P_ZETA`` ζ, ``P_OMEGA`` Ω, ``P_C`` C, ``P_PHI0`` φ0, ``P_H`` the RK8 step,
+``P_PERIOD`` T = 2π/Ω, ``P_BOUND`` the divergence bound, ``P_T0`` the start time.
 
-    0 ζ   1 Ω   2 C   3 φ0   4 h (RK8 step)   5 T = 2π/Ω   6 divergence bound   7 t0
+``ist`` (int64): ``I_DIR`` direction d (+1/-1), ``I_PERIOD`` period index n, ``I_PARTNER``
+partner p (Preisach), ``I_EVENTS`` events since start, ``I_FREE`` free memory count (Preisach),
+``I_SAMPLE`` next sample index, ``I_NEV`` events in ``ev``, ``I_RECORD`` record events,
+``I_K`` k (tangent columns, 0: off), ``I_OP`` operator (``OP_PI``, ``OP_PREISACH``),
+``I_EVERETT`` Everett kind, ``I_STUCK`` events at zero distance in a row, ``I_PUSHED`` the
+branch began with a push (Preisach), ``I_OUTSIDE`` the current step lies beyond the support of
+a tabulated Everett function (slope 0).
 
-``ist`` (int64)::
-
-    0 direction d (+1/-1)   1 period index n   2 partner p (Preisach)   3 events since start
-    4 free memory count (Preisach)   5 next sample index   6 events in ``ev``   7 record
-    8 k (tangent columns, 0: off)   9 operator (OP_PI, OP_PREISACH)   10 Everett kind
-    11 events at zero distance in a row   12 the branch began with a push (Preisach)
-    13 the current step lies beyond the support of a tabulated Everett function (slope 0)
-
-``st`` (float64)::
-
-    0 τ (time in the period)   1 q   2 v   3 bp   4 u0 (branch start)
-    5 y0 (PI: output at u0; Preisach: the base −1 + 2·prefix[p])   6 slope (PI)   7 m (Preisach)
+``st`` (float64): ``S_TAU`` τ (time in the period), ``S_Q`` q, ``S_V`` v, ``S_BP`` bp,
+``S_U0`` u0 (branch start), ``S_Y0`` y0 (PI: output at u0; Preisach: the base
+−1 + 2·prefix[p]), ``S_SLOPE`` slope (PI), ``S_M`` m (Preisach).
 
 Prandtl–Ishlinskii (``hw`` half-widths, ``wt`` weights, ``pos`` wagon positions, ``slv`` 1 for
 a wagon dragged on this branch, ``free`` 1 for a memory direction still free since the last
@@ -64,13 +64,14 @@ with ``s = ∂y/∂u`` + the dragged weights and ``g`` the partner's moving-term
 (saltations; the output is continuous so (δq, δv, δφ) pass unchanged): a wagon that becomes
 dragged and a pushed extremum get ``δm := δq``; wiped-out rows are dropped.
 
-Integration: fixed-step 8th-order Dormand–Prince (coefficients in
-:mod:`oscillators.engines._dop853_kernel`), the tangent columns with the same stages. A step
-whose end has ``d·v <= 0`` contains the reversal, one whose end has ``d·(q − bp) >= 0`` the
-breakpoint; a dip of ``v`` to zero and back inside a step is caught with the cubic Hermite
-interpolant of ``v`` (as in the play kernel). The event time is located by safeguarded Newton
-on the step's own RK8 map from the step start (each iterate one RK8 step over ``τ``), so the
-event state has full RK8 accuracy; then ``q := bp`` or ``v := 0`` exactly.
+Integration: fixed-step 8th-order Dormand–Prince (the one RK8 step,
+:func:`oscillators.engines._dop853_kernel.rk8_step`), the tangent columns with the same
+stages. A step whose end has ``d·v <= 0`` contains the reversal, one whose end has
+``d·(q − bp) >= 0`` the breakpoint; a dip of ``v`` to zero and back inside a step is caught
+with the cubic Hermite interpolant of ``v`` (as in the play kernel). The event time is located
+by the safeguarded Newton root finder (:func:`oscillators.engines._roots.find_root`) on the
+step's own RK8 map from the step start (each iterate one RK8 step over ``τ``), so the event
+state has full RK8 accuracy; then ``q := bp`` or ``v := 0`` exactly.
 
 Status codes of :func:`run`: ``DONE``; ``GROW`` (a Preisach push may need more room: the Python
 side enlarges ``stack``/``Y`` and calls again); ``EVENTS_FULL`` (``ev`` full: drained and called
@@ -88,11 +89,18 @@ from numba import njit
 from hysteresis.preisach._everett_kernels import everett_eval
 from oscillators.engines import _dop853_kernel as _dop
 from oscillators.engines._play_kernels import _hermite_extrema
+from oscillators.engines._roots import find_root, secant_start
 
 _N_STAGES = _dop.N_STAGES
-RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
-RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
-RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
+
+# ``par``, ``ist`` and ``st`` layouts (module docstring)
+P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
+N_PAR = 8
+I_DIR, I_PERIOD, I_PARTNER, I_EVENTS, I_FREE, I_SAMPLE, I_NEV, I_RECORD = range(8)
+I_K, I_OP, I_EVERETT, I_STUCK, I_PUSHED, I_OUTSIDE = range(8, 14)
+N_IST = 14
+S_TAU, S_Q, S_V, S_BP, S_U0, S_Y0, S_SLOPE, S_M = range(8)
+N_ST = 8
 
 OP_PI = 0
 OP_PREISACH = 1
@@ -121,30 +129,30 @@ _MAX_STUCK = 50
 @njit(cache=True)
 def _operator(ist, st, ep, et, q):
     """(y, s, g) at input q: output, ∂y/∂u + dragged weights, partner's derivative."""
-    if ist[9] == OP_PI:
-        return st[5] + st[6] * (q - st[4]), st[6], 0.0
-    m = st[7]
+    if ist[I_OP] == OP_PI:
+        return st[S_Y0] + st[S_SLOPE] * (q - st[S_U0]), st[S_SLOPE], 0.0
+    m = st[S_M]
     u = q
-    outside = ist[13] != 0
-    if ist[10] == KIND_TABLE:
+    outside = ist[I_OUTSIDE] != 0
+    if ist[I_EVERETT] == KIND_TABLE:
         # the step's side of the support bounds decides the slope (module docstring); E
         # itself is clipped there anyway
         u = min(max(q, ep[0]), ep[1])
-    if ist[0] > 0:
-        e, ea, eb = everett_eval(ist[10], ep, et, u, m)
-        return st[5] + 2.0 * e, 0.0 if outside else 2.0 * ea, 2.0 * eb
-    e, ea, eb = everett_eval(ist[10], ep, et, m, u)
-    return st[5] - 2.0 * e, 0.0 if outside else -2.0 * eb, -2.0 * ea
+    if ist[I_DIR] > 0:
+        e, ea, eb = everett_eval(ist[I_EVERETT], ep, et, u, m)
+        return st[S_Y0] + 2.0 * e, 0.0 if outside else 2.0 * ea, 2.0 * eb
+    e, ea, eb = everett_eval(ist[I_EVERETT], ep, et, m, u)
+    return st[S_Y0] - 2.0 * e, 0.0 if outside else -2.0 * eb, -2.0 * ea
 
 
 @njit(cache=True)
 def _rhs(par, ist, st, F, ep, et, t, y, dy, k):
     """Right-hand side of (q, v) and of k tangent columns (δq, δv) at time t (in the period)."""
-    zeta = par[0]
-    c = par[2]
+    zeta = par[P_ZETA]
+    c = par[P_C]
     q = y[0]
     v = y[1]
-    ph = par[3] + par[1] * t
+    ph = par[P_PHI0] + par[P_OMEGA] * t
     out, s, g = _operator(ist, st, ep, et, q)
     dy[0] = v
     dy[1] = -2.0 * zeta * v - q + math.cos(ph) + c * out
@@ -167,21 +175,16 @@ def _rk8(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k):
 
 @njit(cache=True)
 def _stages(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k, first):
-    """The RK8 step with stages ``first``.. evaluated (``first = 1``: ``K[0] = f(t, y)`` is
+    """The RK8 step (:func:`oscillators.engines._dop853_kernel.rk8_step`, written around its
+    stage and end sums) with stages ``first``.. evaluated (``first = 1``: ``K[0] = f(t, y)`` is
     already there)."""
     n = 2 + 2 * k
-    for i in range(first, _N_STAGES):
-        for r in range(n):
-            acc = 0.0
-            for j in range(i):
-                acc += RK_A[i, j] * K[j, r]
-            tmp[r] = y[r] + h * acc
-        _rhs(par, ist, st, F, ep, et, t + RK_C[i] * h, tmp, K[i], k)
-    for r in range(n):
-        acc = 0.0
-        for i in range(_N_STAGES):
-            acc += RK_B[i] * K[i, r]
-        out[r] = y[r] + h * acc
+    if first == 0:
+        _rhs(par, ist, st, F, ep, et, t, y, K[0], k)
+    for i in range(1, _N_STAGES):
+        ti = _dop.rk8_stage(i, t, y, h, K, tmp, n)
+        _rhs(par, ist, st, F, ep, et, ti, tmp, K[i], k)
+    _dop.rk8_end(y, h, K, out, n)
 
 
 # --------------------------------------------------------------------------------------------
@@ -193,8 +196,8 @@ def pi_branch(ist, st, hw, wt, pos, slv, Y, F):
     wall they push, within 8 ulps as ``hysteresis.play._touches_wall``), slope, output, the
     next wall ahead of a frozen wagon, the frozen force of each tangent column; dragged rows of
     ``Y`` := δq."""
-    d = ist[0]
-    u = st[1]
+    d = ist[I_DIR]
+    u = st[S_Q]
     slope = 0.0
     y0 = 0.0
     bp = d * np.inf
@@ -211,11 +214,11 @@ def pi_branch(ist, st, hw, wt, pos, slv, Y, F):
             if (d > 0 and ahead < bp) or (d < 0 and ahead > bp):
                 bp = ahead
         y0 += wt[i] * w
-    st[3] = bp
-    st[4] = u
-    st[5] = y0
-    st[6] = slope
-    k = ist[8]
+    st[S_BP] = bp
+    st[S_U0] = u
+    st[S_Y0] = y0
+    st[S_SLOPE] = slope
+    k = ist[I_K]
     for j in range(k):
         f = 0.0
         for i in range(hw.size):
@@ -231,22 +234,22 @@ def pi_branch(ist, st, hw, wt, pos, slv, Y, F):
 @njit(cache=True)
 def pi_sync(ist, st, hw, pos, slv):
     """Dragged wagons to the current input, ``w_i = q − d r_i``."""
-    d = ist[0]
+    d = ist[I_DIR]
     for i in range(hw.size):
         if slv[i]:
-            pos[i] = st[1] - d * hw[i]
+            pos[i] = st[S_Q] - d * hw[i]
 
 
 @njit(cache=True)
 def preisach_term(ist, ep, et, stack, prefix, dlo, dhi, i):
     """Fix the Everett term of stack entry i >= 2 (prefix sum and its two derivatives)."""
     if i % 2 == 0:
-        e, ea, eb = everett_eval(ist[10], ep, et, stack[i], stack[i - 1])
+        e, ea, eb = everett_eval(ist[I_EVERETT], ep, et, stack[i], stack[i - 1])
         prefix[i] = prefix[i - 1] + e
         dhi[i] = 2.0 * ea
         dlo[i] = 2.0 * eb
     else:
-        e, ea, eb = everett_eval(ist[10], ep, et, stack[i - 1], stack[i])
+        e, ea, eb = everett_eval(ist[I_EVERETT], ep, et, stack[i - 1], stack[i])
         prefix[i] = prefix[i - 1] - e
         dlo[i] = -2.0 * ea
         dhi[i] = -2.0 * eb
@@ -266,13 +269,13 @@ def preisach_init(ist, ep, et, stack, prefix, dlo, dhi, p):
 def preisach_branch(ist, st, stack, prefix, dlo, dhi, Y, F):
     """Branch of a continuous Preisach model from q with partner p (direction from p's
     parity): partner value, breakpoint, base, the frozen force of each tangent column."""
-    p = ist[2]
-    ist[0] = 1 if p % 2 == 1 else -1
-    st[3] = stack[p - 1]
-    st[5] = -1.0 + 2.0 * prefix[p]
-    st[6] = 0.0
-    st[7] = stack[p]
-    k = ist[8]
+    p = ist[I_PARTNER]
+    ist[I_DIR] = 1 if p % 2 == 1 else -1
+    st[S_BP] = stack[p - 1]
+    st[S_Y0] = -1.0 + 2.0 * prefix[p]
+    st[S_SLOPE] = 0.0
+    st[S_M] = stack[p]
+    k = ist[I_K]
     for j in range(k):
         f = 0.0
         for i in range(2, p + 1):
@@ -288,7 +291,7 @@ def preisach_branch(ist, st, stack, prefix, dlo, dhi, Y, F):
 @njit(cache=True)
 def output_now(ist, st, ep, et):
     """The operator output at the current q."""
-    return _operator(ist, st, ep, et, st[1])[0]
+    return _operator(ist, st, ep, et, st[S_Q])[0]
 
 
 # --------------------------------------------------------------------------------------------
@@ -297,9 +300,9 @@ def output_now(ist, st, ep, et):
 @njit(cache=True)
 def _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev):
     """Apply a breakpoint (kind +1) or reversal (kind −1) at the current (q, v)."""
-    k = ist[8]
-    q = st[1]
-    if ist[9] == OP_PI:
+    k = ist[I_K]
+    q = st[S_Q]
+    if ist[I_OP] == OP_PI:
         pi_sync(ist, st, hw, pos, slv)
         for i in range(hw.size):  # the operator's own update (apply): clamp to the finger
             lo = q - hw[i]
@@ -309,7 +312,7 @@ def _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, 
             elif pos[i] > hi:
                 pos[i] = hi
         if kind < 0:
-            ist[0] = -ist[0]
+            ist[I_DIR] = -ist[I_DIR]
         n = hw.size
         old = np.empty(n, dtype=np.int8)
         for i in range(n):
@@ -320,73 +323,78 @@ def _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, 
                 free[i] = 0  # V_out: δw := δq (done in pi_branch)
     else:
         if kind > 0:
-            ist[2] -= 2  # wipe-out of stack[p-1], stack[p]
-            ist[12] = 0
-            if ist[4] > ist[2] - 1:
-                ist[4] = ist[2] - 1
+            ist[I_PARTNER] -= 2  # wipe-out of stack[p-1], stack[p]
+            ist[I_PUSHED] = 0
+            if ist[I_FREE] > ist[I_PARTNER] - 1:
+                ist[I_FREE] = ist[I_PARTNER] - 1
         else:
-            p = ist[2] + 1
+            p = ist[I_PARTNER] + 1
             stack[p] = q
-            ist[2] = p
+            ist[I_PARTNER] = p
             preisach_term(ist, ep, et, stack, prefix, dlo, dhi, p)
             for j in range(k):
                 Y[p + 1, j] = Y[0, j]  # a pushed extremum: δm := δq
-            ist[12] = 1
-        st[4] = q  # the branch start (u0)
+            ist[I_PUSHED] = 1
+        st[S_U0] = q  # the branch start (u0)
         preisach_branch(ist, st, stack, prefix, dlo, dhi, Y, F)
-    ist[3] += 1
-    if ist[7]:
-        i = ist[6]
-        n, tau = ist[1], st[0]
-        ev[i, 0] = par[7] + n * par[5] + tau
+    ist[I_EVENTS] += 1
+    if ist[I_RECORD]:
+        i = ist[I_NEV]
+        n, tau = ist[I_PERIOD], st[S_TAU]
+        ev[i, 0] = par[P_T0] + n * par[P_PERIOD] + tau
         ev[i, 1] = q
-        ev[i, 2] = st[2]
+        ev[i, 2] = st[S_V]
         ev[i, 3] = kind
         ev[i, 4] = output_now(ist, st, ep, et)
-        ist[6] = i + 1
+        ist[I_NEV] = i + 1
+
+
+@njit(cache=True, inline="always")
+def _event_fn(tau, args):
+    """Root function of an event after the state-only RK8 step over ``tau`` from (t, y):
+    ``which`` 0 the reversal ``(−d·v, −d·a)``, 1 the breakpoint ``(d·(q − bp), d·v)``; both
+    are negative at τ = 0."""
+    par, ist, st, F, ep, et, t, y, z, dz, K, tmp, which = args
+    d = ist[I_DIR]
+    _rk8(par, ist, st, F, ep, et, t, y, tau, z, K, tmp, 0)
+    if which == 0:
+        _rhs(par, ist, st, F, ep, et, t + tau, z, dz, 0)
+        return -d * z[1], -d * dz[1]
+    return d * (z[0] - st[S_BP]), d * z[1]
+
+
+@njit(cache=True, inline="always")
+def _dip_fn(tau, args):
+    """Root function of a velocity dip's minimum: ``(d·a, 0)`` after the state-only RK8 step
+    over ``tau`` (no derivative: the root finder bisects)."""
+    par, ist, st, F, ep, et, t, y, z, dz, K, tmp, which = args
+    _rk8(par, ist, st, F, ep, et, t, y, tau, z, K, tmp, 0)
+    _rhs(par, ist, st, F, ep, et, t + tau, z, dz, 0)
+    return ist[I_DIR] * dz[1], 0.0
 
 
 @njit(cache=True)
-def _locate(par, ist, st, F, ep, et, t, y, lo, hi, which, work):
-    """Event time in (lo, hi] of the step from (t, y): which 0 the reversal (root of −d·v),
-    1 the breakpoint (root of d·(q − bp)); safeguarded Newton, each iterate one RK8 step over τ
-    from the step start (state only)."""
-    d = ist[0]
-    bp = st[3]
-    z = work[0, :2]
-    dz = work[1, :2]
-    tmp = work[2, :2]
-    K = work[4 : 4 + _N_STAGES, :2]
+def _locate_args(par, ist, st, F, ep, et, t, y, which, work):
+    """The arguments of :func:`_event_fn`/:func:`_dip_fn`: the step start (t, y[:2]) copied
+    into ``work`` with the state-only scratch."""
     y2 = work[3, :2]
     y2[0] = y[0]
     y2[1] = y[1]
-    g_lo = -d * y[1] if which == 0 else d * (y[0] - bp)
-    _rk8(par, ist, st, F, ep, et, t, y2, hi, z, K, tmp, 0)
-    g_hi = -d * z[1] if which == 0 else d * (z[0] - bp)
-    den = g_hi - g_lo
-    tau = lo + (hi - lo) * (-g_lo) / den if den > 0.0 else 0.5 * (lo + hi)
-    if not (lo < tau <= hi):
-        tau = 0.5 * (lo + hi)
-    for _ in range(80):
-        _rk8(par, ist, st, F, ep, et, t, y2, tau, z, K, tmp, 0)
-        if which == 0:
-            _rhs(par, ist, st, F, ep, et, t + tau, z, dz, 0)
-            g = -d * z[1]
-            dg = -d * dz[1]
-        else:
-            g = d * (z[0] - bp)
-            dg = d * z[1]
-        if g < 0.0:
-            lo = tau
-        else:
-            hi = tau
-        tn = tau - g / dg if dg != 0.0 else 0.5 * (lo + hi)
-        if not (lo <= tn <= hi):
-            tn = 0.5 * (lo + hi)
-        if abs(tn - tau) <= 4.0 * _EPS * max(hi, 1e-300) or hi - lo <= 4.0 * _EPS * hi:
-            return tn
-        tau = tn
-    return tau
+    K = work[4 : 4 + _N_STAGES, :2]
+    return (par, ist, st, F, ep, et, t, y2, work[0, :2], work[1, :2], K, work[2, :2], which)
+
+
+@njit(cache=True)
+def _locate(par, ist, st, F, ep, et, t, y, hi, which, work):
+    """Event time in (0, hi] of the step from (t, y): which 0 the reversal (root of −d·v),
+    1 the breakpoint (root of d·(q − bp)); safeguarded Newton from the secant, each iterate
+    one RK8 step over τ from the step start (state only)."""
+    args = _locate_args(par, ist, st, F, ep, et, t, y, which, work)
+    d = ist[I_DIR]
+    g_lo = -d * y[1] if which == 0 else d * (y[0] - st[S_BP])  # at τ = 0: the step start
+    g_hi = _event_fn(hi, args)[0]
+    tau = secant_start(0.0, hi, g_lo, g_hi)
+    return find_root(_event_fn, args, 0.0, hi, tau, t)
 
 
 @njit(cache=True)
@@ -428,7 +436,7 @@ def _land(par, ist, st, F, ep, et, t, y, tau, line, work):
     """Time at which the step from (t, y) reaches ``q = line``: Newton on the state-only RK8
     map from the guess ``tau`` (converges to rounding in 2–3 iterations from the predictor);
     −1 if it does not (the input turns back first)."""
-    d = ist[0]
+    d = ist[I_DIR]
     z = work[0, :2]
     tmp = work[2, :2]
     K = work[4 : 4 + _N_STAGES, :2]
@@ -453,22 +461,22 @@ def _land(par, ist, st, F, ep, et, t, y, tau, line, work):
 
 @njit(cache=True)
 def _add_time(par, ist, st, h):
-    st[0] += h
-    if st[0] >= par[5]:
-        st[0] -= par[5]
-        ist[1] += 1
-        if st[0] >= par[5] or st[0] < 0.0:  # rounding
-            extra = math.floor(st[0] / par[5])
-            ist[1] += int(extra)
-            st[0] -= extra * par[5]
-            if st[0] < 0.0:
-                st[0] = 0.0
+    st[S_TAU] += h
+    if st[S_TAU] >= par[P_PERIOD]:
+        st[S_TAU] -= par[P_PERIOD]
+        ist[I_PERIOD] += 1
+        if st[S_TAU] >= par[P_PERIOD] or st[S_TAU] < 0.0:  # rounding
+            extra = math.floor(st[S_TAU] / par[P_PERIOD])
+            ist[I_PERIOD] += int(extra)
+            st[S_TAU] -= extra * par[P_PERIOD]
+            if st[S_TAU] < 0.0:
+                st[S_TAU] = 0.0
 
 
 @njit(cache=True)
 def _load(st, Y, y, k):
-    y[0] = st[1]
-    y[1] = st[2]
+    y[0] = st[S_Q]
+    y[1] = st[S_V]
     for j in range(k):
         y[2 + 2 * j] = Y[0, j]
         y[3 + 2 * j] = Y[1, j]
@@ -476,8 +484,8 @@ def _load(st, Y, y, k):
 
 @njit(cache=True)
 def _store(st, Y, y, k):
-    st[1] = y[0]
-    st[2] = y[1]
+    st[S_Q] = y[0]
+    st[S_V] = y[1]
     for j in range(k):
         Y[0, j] = y[2 + 2 * j]
         Y[1, j] = y[3 + 2 * j]
@@ -486,11 +494,11 @@ def _store(st, Y, y, k):
 @njit(cache=True)
 def _sync(ist, st, hw, pos, slv, Y):
     """Dragged wagons and their rows follow q (PI)."""
-    if ist[9] == OP_PI:
+    if ist[I_OP] == OP_PI:
         pi_sync(ist, st, hw, pos, slv)
         for i in range(hw.size):
             if slv[i]:
-                for j in range(ist[8]):
+                for j in range(ist[I_K]):
                     Y[3 + i, j] = Y[0, j]
 
 
@@ -499,7 +507,7 @@ def _to_target(
     par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev, work
 ):
     """Integrate to (period nt, time taut), handling every event on the way."""
-    k = ist[8]
+    k = ist[I_K]
     n = 2 + 2 * k
     y = work[0, :n]
     y1 = work[1, :n]
@@ -507,30 +515,30 @@ def _to_target(
     tmp = work[3, :n]
     K = work[4 : 4 + _N_STAGES, :n]
     loc = work[4 + _N_STAGES :, :]
-    h_step = par[4]
-    bound = par[6]
+    h_step = par[P_H]
+    bound = par[P_BOUND]
     _load(st, Y, y, k)
     while True:
-        rem = (nt - ist[1]) * par[5] + (taut - st[0])
+        rem = (nt - ist[I_PERIOD]) * par[P_PERIOD] + (taut - st[S_TAU])
         if rem <= 0.0:
             break
-        if ist[9] == OP_PREISACH and ist[2] + 3 >= stack.size:
+        if ist[I_OP] == OP_PREISACH and ist[I_PARTNER] + 3 >= stack.size:
             _store(st, Y, y, k)
             return GROW
-        if ist[7] and ist[6] >= ev.shape[0]:
+        if ist[I_RECORD] and ist[I_NEV] >= ev.shape[0]:
             _store(st, Y, y, k)
             return EVENTS_FULL
         last = rem <= h_step
         h = rem if last else h_step
-        t = st[0]
-        d = ist[0]
+        t = st[S_TAU]
+        d = ist[I_DIR]
         land = np.inf
-        if ist[9] == OP_PREISACH and ist[10] == KIND_TABLE:
+        if ist[I_OP] == OP_PREISACH and ist[I_EVERETT] == KIND_TABLE:
             # a C¹ table: end the step exactly on the next grid line of the moving input. At
             # the support bounds the slope jumps: the step takes it on the side it moves into
             # (its start nudged forward), in every stage (stage states may overshoot its end)
             ahead = y[0] + d * 1e-12 * max(1.0, abs(y[0]))
-            ist[13] = 0 if ep[0] <= ahead <= ep[1] else 1
+            ist[I_OUTSIDE] = 0 if ep[0] <= ahead <= ep[1] else 1
             _rhs(par, ist, st, F, ep, et, t, y, K[0], k)
             tp, line = _to_grid_line(ep, et, d, y[0], y[1], K[0, 1])
             if tp < h:
@@ -549,8 +557,8 @@ def _to_target(
         else:
             _rk8(par, ist, st, F, ep, et, t, y, h, y1, K, tmp, k)
         if not (abs(y1[0]) <= bound and abs(y1[1]) <= bound):
-            st[1] = y1[0]
-            st[2] = y1[1]
+            st[S_Q] = y1[0]
+            st[S_V] = y1[1]
             return DIVERGED
         kind = 0
         tau = h
@@ -561,43 +569,34 @@ def _to_target(
             _rhs(par, ist, st, F, ep, et, t + h, y1, dy, 0)
             vmax, vmin = _hermite_extrema(d * y[1], d * K[0, 1], d * y1[1], d * dy[1], h)
             if vmin < 0.0:
-                # locate the minimum of the true velocity (sign of d·a) and test v there
-                lo_s = 0.0
-                hi_s = h
+                # locate the minimum of the true velocity (sign change of d·a: bisection, no
+                # derivative at hand) and test v there
+                args = _locate_args(par, ist, st, F, ep, et, t, y, 0, loc)
+                mid = find_root(_dip_fn, args, 0.0, h, 0.5 * h, t)
                 z = loc[0, :2]
-                dz = loc[1, :2]
-                for _ in range(60):
-                    mid = 0.5 * (lo_s + hi_s)
-                    _rk8(par, ist, st, F, ep, et, t, y[:2], mid, z, loc[4:16, :2], loc[2, :2], 0)
-                    _rhs(par, ist, st, F, ep, et, t + mid, z, dz, 0)
-                    if d * dz[1] < 0.0:
-                        lo_s = mid
-                    else:
-                        hi_s = mid
-                mid = 0.5 * (lo_s + hi_s)
                 _rk8(par, ist, st, F, ep, et, t, y[:2], mid, z, loc[4:16, :2], loc[2, :2], 0)
                 if d * z[1] <= 0.0:
                     kind = -1
                     tau = mid
         if kind == -1:
-            tau = _locate(par, ist, st, F, ep, et, t, y, 0.0, tau, 0, loc)
+            tau = _locate(par, ist, st, F, ep, et, t, y, tau, 0, loc)
             # the breakpoint may come first on the way to the reversal
             z = loc[0, :2]
             _rk8(par, ist, st, F, ep, et, t, y[:2], tau, z, loc[4:16, :2], loc[2, :2], 0)
-            if d * (z[0] - st[3]) >= 0.0:
+            if d * (z[0] - st[S_BP]) >= 0.0:
                 kind = 1
-                tau = _locate(par, ist, st, F, ep, et, t, y, 0.0, tau, 1, loc)
-        elif d * (y1[0] - st[3]) >= 0.0:
+                tau = _locate(par, ist, st, F, ep, et, t, y, tau, 1, loc)
+        elif d * (y1[0] - st[S_BP]) >= 0.0:
             kind = 1
-            tau = _locate(par, ist, st, F, ep, et, t, y, 0.0, h, 1, loc)
+            tau = _locate(par, ist, st, F, ep, et, t, y, h, 1, loc)
         if kind == 0:
             for r in range(n):
                 y[r] = y1[r]
             if land != np.inf:
                 y[0] = land  # on the grid line (Newton-located to rounding)
             if last:
-                ist[1] = nt
-                st[0] = taut
+                ist[I_PERIOD] = nt
+                st[S_TAU] = taut
             else:
                 _add_time(par, ist, st, h)
             continue
@@ -606,7 +605,7 @@ def _to_target(
             y[r] = y1[r]
         _add_time(par, ist, st, tau)
         if kind > 0:
-            y[0] = st[3]  # q := bp exactly
+            y[0] = st[S_BP]  # q := bp exactly
         else:
             y[1] = 0.0  # v := 0 exactly
         _store(st, Y, y, k)
@@ -614,8 +613,8 @@ def _to_target(
         _event(
             par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev
         )
-        ist[11] = ist[11] + 1 if tau == 0.0 else 0
-        if ist[11] > _MAX_STUCK:
+        ist[I_STUCK] = ist[I_STUCK] + 1 if tau == 0.0 else 0
+        if ist[I_STUCK] > _MAX_STUCK:
             return STUCK
         _load(st, Y, y, k)
     _store(st, Y, y, k)
@@ -628,9 +627,9 @@ def run(
     par, ist, st, nts, tauts, out, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F,
     ev, work,
 ):  # fmt: skip
-    """Advance through the targets ``(nts[i], tauts[i])`` from sample ``ist[5]`` on, writing
+    """Advance through the targets ``(nts[i], tauts[i])`` from sample ``ist[I_SAMPLE]`` on, writing
     ``(q, v, M)`` into ``out[i]``; returns a status code (module docstring)."""
-    i = ist[5]
+    i = ist[I_SAMPLE]
     while i < nts.size:
         status = _to_target(
             par, ist, st, nts[i], tauts[i], hw, wt, pos, slv, free, stack, prefix, dlo, dhi,
@@ -638,11 +637,11 @@ def run(
         )  # fmt: skip
         if status != DONE:
             return status
-        out[i, 0] = st[1]
-        out[i, 1] = st[2]
+        out[i, 0] = st[S_Q]
+        out[i, 1] = st[S_V]
         out[i, 2] = output_now(ist, st, ep, et)
         i += 1
-        ist[5] = i
+        ist[I_SAMPLE] = i
     return DONE
 
 

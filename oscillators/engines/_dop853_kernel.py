@@ -1,17 +1,19 @@
-"""Dormand–Prince 8(5,3) coefficients: the 12 stages of the 8th-order solution.
+"""Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution and the one RK8 step.
 
 Source: E. Hairer, S. P. Nørsett and G. Wanner, *Solving Ordinary Differential Equations I:
 Nonstiff Problems*, 2nd ed., Springer (1993), Sec. II.10, and the authors' Fortran code
 ``dop853.f`` (coefficients of J. R. Dormand and P. J. Prince, "Practical Runge–Kutta processes",
 SIAM J. Sci. Stat. Comput. 10 (1989) 977–989). Carried here as plain numbers so that the
-play-limit kernel depends on no private module of another library; the values are the decimal
+compiled kernels depend on no private module of another library; the values are the decimal
 representations of the published rational/real coefficients rounded to float64.
-``tests/test_dop853.py`` checks the order conditions up to order 8.
+``tests/test_oscillators/test_dop853.py`` checks the order conditions up to order 8.
+:func:`rk8_step` is the fixed-step RK8 step of the play and continuous kernels.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 N_STAGES = 12
 
@@ -104,10 +106,62 @@ A[11, 8] = np.float64(-8.87285693353063)
 A[11, 9] = np.float64(12.360567175794303)
 A[11, 10] = np.float64(0.6433927460157636)
 
-# The nonzero pattern (the kernels' sums run over it: adding 0·K changes no bit of a finite sum,
-# so they give the full table's results exactly): stage i uses the columns
+# The nonzero pattern (the play kernel's specialised steps sum over it: adding 0·K changes no bit
+# of a finite sum, so they give the full table's results exactly): stage i uses the columns
 # NZ_COL[NZ_START[i]:NZ_START[i + 1]] of A, the step the weights B[NZ_B].
 _NZ = [(i, j) for i in range(N_STAGES) for j in range(i) if A[i, j] != 0.0]
 NZ_START = np.searchsorted([i for i, _ in _NZ], np.arange(N_STAGES + 1)).astype(np.int64)
 NZ_COL = np.array([j for _, j in _NZ], dtype=np.int64)
 NZ_B = np.flatnonzero(B).astype(np.int64)
+
+
+@njit(cache=True, inline="always")
+def rk8_stage(i, t, y, h, K, tmp, n):
+    """The argument of stage i >= 1 of the RK8 step from (t, y) over h: its time
+    ``t + c_i h`` (returned) and state ``tmp = y + h Σ_{j<i} a_ij K[j]`` (first ``n`` entries)."""
+    for r in range(n):
+        acc = 0.0
+        for j in range(i):
+            acc += A[i, j] * K[j, r]
+        tmp[r] = y[r] + h * acc
+    return t + C[i] * h
+
+
+@njit(cache=True, inline="always")
+def rk8_end(y, h, K, out, n):
+    """The end of the RK8 step: ``out = y + h Σ_i b_i K[i]`` (first ``n`` entries)."""
+    for r in range(n):
+        acc = 0.0
+        for i in range(N_STAGES):
+            acc += B[i] * K[i, r]
+        out[r] = y[r] + h * acc
+
+
+@njit(cache=True, inline="always")
+def rk8_step(rhs, args, t, y, h, out, K, tmp, n, first):
+    """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``.
+
+    Plain reading: stage i evaluates ``K[i] = rhs(t + c_i h, y + h Σ_j a_ij K[j])`` and the
+    step is ``out = y + h Σ_i b_i K[i]``, over the first ``n`` entries of ``y``::
+
+        if first == 0: K[0] = rhs(t, y)          # c_0 = 0, no a_0j
+        for i in 1..11: K[i] = rhs(rk8_stage(i, t, y, h, K, tmp, n), tmp)
+        rk8_end(y, h, K, out, n)
+
+    The sums run over the full table (skipping its zeros through the index arrays ``NZ_*``
+    gives the same bits but made the continuous engine's steps ~15 % slower: an indirect load
+    per term). ``rhs(t, y, dy, args)`` writes the derivative into ``dy``; ``first = 1`` skips
+    stage 0 when the caller has already put ``K[0] = rhs(t, y)`` there (it does not depend on
+    h). A kernel whose right-hand side takes arrays writes this loop itself around
+    :func:`rk8_stage` and :func:`rk8_end` (the continuous kernel's ``_stages``): an ``args``
+    tuple of arrays, unpacked at every stage, costs reference counting that made its steps
+    ~20 % slower. All three are inlined into their callers (``inline="always"``): a compiled
+    function passed as a run-time argument would embed its address and so disable numba's
+    on-disk cache.
+    """
+    if first == 0:
+        rhs(t, y, K[0], args)
+    for i in range(1, N_STAGES):
+        ti = rk8_stage(i, t, y, h, K, tmp, n)
+        rhs(ti, tmp, K[i], args)
+    rk8_end(y, h, K, out, n)

@@ -4,30 +4,38 @@ System (paper eqs. eom_smooth_4, limit_W_0, limit_W_1, salt_matrix_limit)::
 
     q'' + 2ζ q' + q = cos(φ0 + Ω t) + C f(w),     w = play output of q (width p = 2 hp)
 
-Everything lives in flat float64 arrays so that numba compiles one specialisation:
+Everything lives in flat arrays so that numba compiles one specialisation; their layouts are
+the named index constants below (one definition each;
+:func:`oscillators.engines.play.make_parameters` fills ``par`` by these names):
 
-``par`` (see :func:`make_parameters` in play_flow)::
+``par`` (float64): ``P_ZETA`` ζ, ``P_OMEGA`` Ω, ``P_C`` C, ``P_HP`` hp = p/2, ``P_SHAPE`` the
+shape kind (``SHAPE_IDENTITY``, ``SHAPE_ERF``, ``SHAPE_TABLE``), ``P_SPREAD`` R, ``P_PHI0`` φ0,
+``P_H_OUT`` the RK8 step on a wall, ``P_H_IN`` the scan step inside, ``P_AMP_A``/``P_AMP_B``
+A, B of the periodic particular solution q_p = A cos φ + B sin φ, ``P_OMEGA_D`` ω_d = √(1 − ζ²),
+``P_AMP`` √(A² + B²), ``P_ERF_SCALE`` 1/(√2 R), ``P_ERF_SLOPE`` √(2/π)/R; a table shape
+appends from ``P_TABLE`` on: lower knot w_0, step h, knots m, f(w_k) (m values), f'(w_k)
+(m values) (a :class:`hysteresis.shape_table.ShapeTable`: the piecewise cubic Hermite
+interpolant; in knot interval k with s = (w − w_k)/h,
+f = A₀(s) f_k + h B₀(s) f'_k + A₁(s) f_{k+1} + h B₁(s) f'_{k+1}, and beyond the knots the
+end value with slope 0).
 
-    0 ζ   1 Ω   2 C   3 hp = p/2   4 shape kind (0 identity, 1 erf, 2 table)   5 R (spread)
-    6 φ0  7 h_out (RK8 step outside)  8 h_in (scan step inside)
-    9 A  10 B  (periodic particular solution q_p = A cos φ + B sin φ)
-    11 ω_d = sqrt(1 - ζ²)   12 P = sqrt(A² + B²)   13 1/(√2 R)   14 sqrt(2/π)/R
-    kind 2 only: 15 lower knot w_0   16 step h   17 knots m   18 .. 18+m-1 f(w_k)
-    18+m .. 18+2m-1 f'(w_k)   (a :class:`hysteresis.shape_table.ShapeTable`: the piecewise
-    cubic Hermite interpolant; in knot interval k with s = (w − w_k)/h,
-    f = A₀(s) f_k + h B₀(s) f'_k + A₁(s) f_{k+1} + h B₁(s) f'_{k+1}, and beyond the knots the
-    end value with slope 0)
-
-``st`` = [t, q, v, w, mode] with mode 0 inside the play (|q - w| < hp, w frozen), +1 on the
-right wall moving right (w = q - hp, v > 0), -1 on the left wall moving left (w = q + hp, v < 0).
+``st`` (float64) = [``S_T`` t, ``S_Q`` q, ``S_V`` v, ``S_W`` w, ``S_MODE`` mode] with mode 0
+inside the play (|q - w| < hp, w frozen), +1 on the right wall moving right (w = q - hp, v > 0),
+-1 on the left wall moving left (w = q + hp, v < 0).
 
 ``T`` (4, k): tangent vectors as columns, rows (δq, δv, δφ, δw); k = 0 switches the tangent
-flow off. ``diag``: [exits, entries, -, -] counted while accumulating.
-``flags`` = [accumulate, qr_mode]: qr_mode 0 applies V_out as a plain matrix (the tangent flow
-between the Lyapunov loop's re-orthonormalisations); qr_mode 2 omits V_out (a diagnostic
-showing that the saltation is needed). The QR itself lives once, in analysis/dynamics/lyapunov.py.
+flow off. ``diag``: [``D_EXITS``, ``D_ENTRIES``, -, -] counted while accumulating.
+``flags`` (int64) = [``F_ACCUMULATE``, ``F_QR_MODE``]: qr_mode 0 applies V_out as a plain
+matrix (the tangent flow between the Lyapunov loop's re-orthonormalisations); qr_mode 2 omits
+V_out (a diagnostic showing that the saltation is needed). The QR itself lives once, in
+analysis/dynamics/lyapunov.py.
 ``ev`` (cap, 5): events [t, q, v, kind, w] (kind +1 leaving the play, -1 entering), ``cnt[0]``
 counts all events (also those beyond ``cap``).
+
+Numerical building blocks with one home elsewhere: the Dormand–Prince table and the RK8 step
+(:mod:`oscillators.engines._dop853_kernel`; :func:`_rk8_qv` is its (q, v)-only specialisation,
+written out stage by stage), the safeguarded Newton root finder
+(:mod:`oscillators.engines._roots`).
 """
 
 from __future__ import annotations
@@ -38,19 +46,27 @@ import numpy as np
 from numba import njit
 
 from oscillators.engines import _dop853_kernel as _dop
+from oscillators.engines._roots import find_root, secant_start
 
 # Dormand–Prince 8(5,3): the 12 stages of the 8th-order solution, used here with a fixed step
-# (coefficients carried in oscillators/engines/_dop853_kernel.py with their citation).
+# (coefficients carried in oscillators/engines/_dop853_kernel.py with their citation); short
+# names for the written-out step _rk8_qv
 _N_STAGES = _dop.N_STAGES
-RK_A = np.ascontiguousarray(_dop.A, dtype=np.float64)
-RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
-RK_C = np.ascontiguousarray(_dop.C, dtype=np.float64)
-NZ_START = _dop.NZ_START
-NZ_COL = _dop.NZ_COL
-NZ_B = _dop.NZ_B
+RK_A = _dop.A
+RK_B = _dop.B
+RK_C = _dop.C
 
-#: index in ``par`` where a kind-2 shape table starts
-_TABLE = 15
+# ``par`` layout (module docstring)
+P_ZETA, P_OMEGA, P_C, P_HP, P_SHAPE, P_SPREAD, P_PHI0, P_H_OUT, P_H_IN = range(9)
+P_AMP_A, P_AMP_B, P_OMEGA_D, P_AMP, P_ERF_SCALE, P_ERF_SLOPE = range(9, 15)
+#: where a table shape starts in ``par`` (also the length of ``par`` without a table)
+P_TABLE = 15
+#: values of ``par[P_SHAPE]``
+SHAPE_IDENTITY, SHAPE_ERF, SHAPE_TABLE = 0.0, 1.0, 2.0
+# ``st``, ``diag`` and ``flags`` layouts
+S_T, S_Q, S_V, S_W, S_MODE = range(5)
+D_EXITS, D_ENTRIES = range(2)
+F_ACCUMULATE, F_QR_MODE = range(2)
 
 # Width of the interval on which a possible wall hit inside the play is resolved exactly
 # (there the input velocity has at most one zero and the Hermite error bound is ~1e-14).
@@ -64,10 +80,10 @@ _RESOLVE = 1e-3
 def _table_eval(par, w):
     """Kind 2: (f, f') of the cubic Hermite table ``par[15:]`` (layout in the module
     docstring); beyond the last knot on either side that knot's value and slope 0."""
-    lower = par[_TABLE]
-    step = par[_TABLE + 1]
-    m = int(par[_TABLE + 2])
-    base = _TABLE + 3
+    lower = par[P_TABLE]
+    step = par[P_TABLE + 1]
+    m = int(par[P_TABLE + 2])
+    base = P_TABLE + 3
     x = (w - lower) / step
     if not x > 0.0:  # also NaN: the kernel's divergence checks see q, not w
         return par[base], 0.0
@@ -100,9 +116,9 @@ def _table_eval(par, w):
 @njit(cache=True)
 def shape(par, w):
     """f(w): identity (play), erf(w / (√2 R)) (paper eq. prob_mag) or the table (kind 2)."""
-    if par[4] == 1.0:
-        return math.erf(w * par[13])
-    if par[4] == 2.0:
+    if par[P_SHAPE] == SHAPE_ERF:
+        return math.erf(w * par[P_ERF_SCALE])
+    if par[P_SHAPE] == SHAPE_TABLE:
         return _table_eval(par, w)[0]
     return w
 
@@ -110,10 +126,10 @@ def shape(par, w):
 @njit(cache=True)
 def shape_slope(par, w):
     """f'(w)."""
-    if par[4] == 1.0:
-        z = w / par[5]
-        return par[14] * math.exp(-0.5 * z * z)
-    if par[4] == 2.0:
+    if par[P_SHAPE] == SHAPE_ERF:
+        z = w / par[P_SPREAD]
+        return par[P_ERF_SLOPE] * math.exp(-0.5 * z * z)
+    if par[P_SHAPE] == SHAPE_TABLE:
         return _table_eval(par, w)[1]
     return 1.0
 
@@ -165,11 +181,11 @@ def leave_play(T, qr_mode):
 @njit(cache=True)
 def _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tau):
     """q, v, a at elapsed time tau of the analytic inside solution."""
-    zeta = par[0]
-    om = par[1]
-    wd = par[11]
-    A = par[9]
-    B = par[10]
+    zeta = par[P_ZETA]
+    om = par[P_OMEGA]
+    wd = par[P_OMEGA_D]
+    A = par[P_AMP_A]
+    B = par[P_AMP_B]
     ph = phi_s + om * tau
     cp = math.cos(ph)
     sp = math.sin(ph)
@@ -220,84 +236,67 @@ def _hermite_extrema(ql, vl, qr, vr, h):
     return hi, lo
 
 
-@njit(cache=True)
-def _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, ta, tb, va):
-    """Zero of v on [ta, tb] (sign change assumed), safeguarded Newton with v' = a."""
-    lo = ta
-    hi = tb
-    t = 0.5 * (ta + tb)
-    for _ in range(100):
-        q, v, a = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, t)
-        if (v > 0.0) == (va > 0.0):
-            lo = t
-        else:
-            hi = t
-        tn = t - v / a if a != 0.0 else 0.5 * (lo + hi)
-        if not (lo < tn < hi):
-            tn = 0.5 * (lo + hi)
-        if abs(tn - t) <= 1e-16 * max(1.0, abs(t)) or hi - lo <= 1e-16 * max(1.0, abs(t)):
-            t = tn
-            break
-        t = tn
-    return t
+@njit(cache=True, inline="always")
+def _inside_v(tau, args):
+    """Root function of the extremum inside: ``(g, g') = sgn·(−v, −a)`` at ``tau``, oriented
+    (``sgn`` = the sign of v at the bracket's left end) so that g < 0 there."""
+    par, phi_s, F, c1, c2, u0d, d2, sgn = args
+    _, v, a = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tau)
+    return -sgn * v, -sgn * a
+
+
+@njit(cache=True, inline="always")
+def _inside_q(tau, args):
+    """Root function of a wall hit inside: ``(g, g') = sgn·(q − wall, v)`` at ``tau``, oriented
+    (``sgn`` = −1 when q starts above the wall) so that g < 0 at the bracket's left end."""
+    par, phi_s, F, c1, c2, u0d, d2, wall, sgn = args
+    q, v, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tau)
+    return sgn * (q - wall), sgn * v
 
 
 @njit(cache=True)
-def _wall_root(par, phi_s, F, c1, c2, u0d, d2, ta, tb, wall):
-    """Root of q(t) = wall on [ta, tb] with q - wall changing sign, safeguarded Newton."""
+def _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, ta, tb, va, clock):
+    """Zero of v on [ta, tb] (sign change assumed; ``va`` = v(ta)) from the midpoint; the
+    event clock is ``clock`` (the root finder's scale)."""
+    sgn = 1.0 if va > 0.0 else -1.0
+    args = (par, phi_s, F, c1, c2, u0d, d2, sgn)
+    return find_root(_inside_v, args, ta, tb, 0.5 * (ta + tb), clock)
+
+
+@njit(cache=True)
+def _wall_root(par, phi_s, F, c1, c2, u0d, d2, ta, tb, wall, clock):
+    """Root of q(t) = wall on [ta, tb] with q - wall changing sign, from the secant."""
     qa, _, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, ta)
-    ga = qa - wall
-    lo = ta
-    hi = tb
-    t = tb
-    qb, vb, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tb)
-    # secant start
-    gb = qb - wall
-    if gb != ga:
-        t = ta - ga * (tb - ta) / (gb - ga)
-    if not (lo <= t <= hi):
-        t = 0.5 * (lo + hi)
-    for _ in range(100):
-        q, v, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, t)
-        g = q - wall
-        if g == 0.0:
-            break
-        if (g > 0.0) == (ga > 0.0):
-            lo = t
-        else:
-            hi = t
-        tn = t - g / v if v != 0.0 else 0.5 * (lo + hi)
-        if not (lo <= tn <= hi):
-            tn = 0.5 * (lo + hi)
-        if abs(tn - t) <= 4e-16 * max(1.0, abs(t)):
-            t = tn
-            break
-        t = tn
-    return t
+    qb, _, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tb)
+    sgn = -1.0 if qa - wall > 0.0 else 1.0
+    args = (par, phi_s, F, c1, c2, u0d, d2, wall, sgn)
+    x = secant_start(ta, tb, sgn * (qa - wall), sgn * (qb - wall))
+    return find_root(_inside_q, args, ta, tb, x, clock)
 
 
 @njit(cache=True)
-def _resolve(par, phi_s, F, c1, c2, u0d, d2, lo, qlo, vlo, hi, qhi, vhi, up, dn):
+def _resolve(par, phi_s, F, c1, c2, u0d, d2, lo, qlo, vlo, hi, qhi, vhi, up, dn, clock):
     """Exact decision on a short interval [lo, hi] (length <= _RESOLVE) whose left end lies
     inside the play: time of the first wall hit in (lo, hi] and its wall (+1 right, -1 left),
     or (-1.0, 0) if the input stays inside. On such an interval v has at most one zero, so q
-    is monotone or has a single extremum, found by Newton on v."""
+    is monotone or has a single extremum, found by Newton on v. ``clock``: the time the
+    roots are added to (the root finder's scale)."""
     t_up = -1.0
     t_dn = -1.0
     if qhi >= up:
-        t_up = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, hi, up)
+        t_up = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, hi, up, clock)
     elif vlo > 0.0 and vhi < 0.0:
-        tm = _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, lo, hi, vlo)
+        tm = _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, lo, hi, vlo, clock)
         qm, _, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tm)
         if qm > up:
-            t_up = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, tm, up)
+            t_up = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, tm, up, clock)
     if qhi <= dn:
-        t_dn = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, hi, dn)
+        t_dn = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, hi, dn, clock)
     elif vlo < 0.0 and vhi > 0.0:
-        tm = _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, lo, hi, vlo)
+        tm = _velocity_zero(par, phi_s, F, c1, c2, u0d, d2, lo, hi, vlo, clock)
         qm, _, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tm)
         if qm < dn:
-            t_dn = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, tm, dn)
+            t_dn = _wall_root(par, phi_s, F, c1, c2, u0d, d2, lo, tm, dn, clock)
     if t_up >= 0.0 and (t_dn < 0.0 or t_up <= t_dn):
         return t_up, 1
     if t_dn >= 0.0:
@@ -323,11 +322,11 @@ def _inside_tangent(par, T, w, phi_s, tau):
     δx(τ) = Φ(τ) δx0 + (I - Φ(τ)) e1 · C f'(w) δw + (x_p'(φ(τ)) - Φ(τ) x_p'(φ_s)) δφ,
     δφ, δw frozen, with Φ the propagator of the damped oscillator and x_p' = ∂x_p/∂φ.
     """
-    zeta = par[0]
-    om = par[1]
-    wd = par[11]
-    A = par[9]
-    B = par[10]
+    zeta = par[P_ZETA]
+    om = par[P_OMEGA]
+    wd = par[P_OMEGA_D]
+    A = par[P_AMP_A]
+    B = par[P_AMP_B]
     e = math.exp(-zeta * tau)
     cw = math.cos(wd * tau)
     sw = math.sin(wd * tau)
@@ -345,7 +344,7 @@ def _inside_tangent(par, T, w, phi_s, tau):
     dv1 = om * (-A * c1 - B * s1)
     gq = dq1 - (p11 * dq0 + p12 * dv0)
     gv = dv1 - (p21 * dq0 + p22 * dv0)
-    kappa = par[2] * shape_slope(par, w)
+    kappa = par[P_C] * shape_slope(par, w)
     for j in range(T.shape[1]):
         dq = T[0, j]
         dv = T[1, j]
@@ -365,18 +364,18 @@ def _inside(par, st, t_target, T, diag, ev, cnt, flags):
     first hit is found exactly (Newton on q - wall, extremum by Newton on v). Nothing is missed
     except tangential touches of depth below ~1e-14.
     """
-    zeta = par[0]
-    om = par[1]
-    hp = par[3]
-    t0 = st[0]
-    q0 = st[1]
-    v0 = st[2]
-    w = st[3]
-    F = par[2] * shape(par, w)
-    phi_s = par[6] + om * t0
-    A = par[9]
-    B = par[10]
-    wd = par[11]
+    zeta = par[P_ZETA]
+    om = par[P_OMEGA]
+    hp = par[P_HP]
+    t0 = st[S_T]
+    q0 = st[S_Q]
+    v0 = st[S_V]
+    w = st[S_W]
+    F = par[P_C] * shape(par, w)
+    phi_s = par[P_PHI0] + om * t0
+    A = par[P_AMP_A]
+    B = par[P_AMP_B]
+    wd = par[P_OMEGA_D]
     cp = math.cos(phi_s)
     sp = math.sin(phi_s)
     u0 = q0 - F - (A * cp + B * sp)
@@ -385,11 +384,11 @@ def _inside(par, st, t_target, T, diag, ev, cnt, flags):
     c2 = (u0d + zeta * u0) / wd
     d2 = (u0 + zeta * u0d) / wd
     # every derivative of the free motion is bounded by its amplitude (|eigenvalue| = 1)
-    M4 = math.sqrt(c1 * c1 + c2 * c2) + par[12] * om * om * om * om
+    M4 = math.sqrt(c1 * c1 + c2 * c2) + par[P_AMP] * om * om * om * om
     up = w + hp
     dn = w - hp
     tau_end = t_target - t0
-    h_in = par[8]
+    h_in = par[P_H_IN]
     ta = 0.0
     qa = q0
     va = v0
@@ -405,7 +404,7 @@ def _inside(par, st, t_target, T, diag, ev, cnt, flags):
                 cleared = True
             elif hi - lo <= _RESOLVE:
                 tr, side = _resolve(
-                    par, phi_s, F, c1, c2, u0d, d2, lo, qlo, vlo, hi, qhi, vhi, up, dn
+                    par, phi_s, F, c1, c2, u0d, d2, lo, qlo, vlo, hi, qhi, vhi, up, dn, t0 + hi
                 )
                 if side != 0:
                     _, vr, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tr)
@@ -434,22 +433,22 @@ def _inside(par, st, t_target, T, diag, ev, cnt, flags):
         _, v_hit, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, hit_t)
         if T.shape[1] > 0:
             _inside_tangent(par, T, w, phi_s, hit_t)
-        st[0] = t0 + hit_t if hit_t < tau_end else t_target
-        st[1] = w + hit_side * hp  # exactly on the wall
-        st[2] = v_hit
-        st[4] = float(hit_side)
-        accumulate = flags[0] != 0
+        st[S_T] = t0 + hit_t if hit_t < tau_end else t_target
+        st[S_Q] = w + hit_side * hp  # exactly on the wall
+        st[S_V] = v_hit
+        st[S_MODE] = float(hit_side)
+        accumulate = flags[F_ACCUMULATE] != 0
         if accumulate:
-            diag[0] += 1.0
-        _record(ev, cnt, st[0], st[1], st[2], 1.0, w)
-        leave_play(T, flags[1])
+            diag[D_EXITS] += 1.0
+        _record(ev, cnt, st[S_T], st[S_Q], st[S_V], 1.0, w)
+        leave_play(T, flags[F_QR_MODE])
         return
     qe, ve, _ = _inside_eval(par, phi_s, F, c1, c2, u0d, d2, tau_end)
     if T.shape[1] > 0:
         _inside_tangent(par, T, w, phi_s, tau_end)
-    st[0] = t_target
-    st[1] = qe
-    st[2] = ve
+    st[S_T] = t_target
+    st[S_Q] = qe
+    st[S_V] = ve
 
 
 # --------------------------------------------------------------------------------------------
@@ -458,9 +457,9 @@ def _inside(par, st, t_target, T, diag, ev, cnt, flags):
 @njit(cache=True)
 def _accel(par, side, t, q, v):
     """q'' on wall ``side`` (w = q − side·p/2): −2ζv − q + cos(φ0 + Ωt) + C f(w)."""
-    ph = par[6] + par[1] * t
-    w = q - side * par[3]
-    return -2.0 * par[0] * v - q + math.cos(ph) + par[2] * shape(par, w)
+    ph = par[P_PHI0] + par[P_OMEGA] * t
+    w = q - side * par[P_HP]
+    return -2.0 * par[P_ZETA] * v - q + math.cos(ph) + par[P_C] * shape(par, w)
 
 
 @njit(cache=True)
@@ -469,10 +468,10 @@ def _rhs(par, side, t, y, dy, k):
     dy[0] = y[1]
     dy[1] = _accel(par, side, t, y[0], y[1])
     if k > 0:
-        w = y[0] - side * par[3]
-        kappa = par[2] * shape_slope(par, w)
-        zeta = par[0]
-        sph = math.sin(par[6] + par[1] * t)
+        w = y[0] - side * par[P_HP]
+        kappa = par[P_C] * shape_slope(par, w)
+        zeta = par[P_ZETA]
+        sph = math.sin(par[P_PHI0] + par[P_OMEGA] * t)
         for j in range(k):
             b = 2 + 4 * j
             dq = y[b]
@@ -488,26 +487,30 @@ def _rhs(par, side, t, y, dy, k):
 @njit(cache=True)
 def _rk8(par, side, t, y, h, out, K, tmp, k):
     """One step of the 8th-order Dormand–Prince scheme from (t, y) over h into ``out``, with
-    the k tangent columns (:func:`_rk8_qv` is the same step of (q, v) alone).
+    the k tangent columns: :func:`oscillators.engines._dop853_kernel.rk8_step` specialised to
+    the columns' structure (:func:`_rk8_qv` is the same step of (q, v) alone).
 
     Plain reading: stage i evaluates ``K[i] = rhs(t + c_i h, y + h Σ_j a_ij K[j])`` and the step
     is ``y + h Σ_i b_i K[i]``; the sums run over the table's nonzero coefficients only, and a
-    column's δφ (zero rate) and δw (the rate of δq) reuse what they equal instead of summing.
+    column's δφ (zero rate) and δw (the rate of δq) reuse what they equal instead of summing:
+    the same bits as the generic step with half the sums per column (the generic step made the
+    Lyapunov run of the erf play 1.4–1.6× slower, measured with ``benchmarks/bench_versions.py``
+    conditions).
     """
     for i in range(_N_STAGES):
-        s = NZ_START[i]
-        e = NZ_START[i + 1]
+        s = _dop.NZ_START[i]
+        e = _dop.NZ_START[i + 1]
         for r in range(2):
             acc = 0.0
             for jj in range(s, e):
-                acc += RK_A[i, NZ_COL[jj]] * K[NZ_COL[jj], r]
+                acc += RK_A[i, _dop.NZ_COL[jj]] * K[_dop.NZ_COL[jj], r]
             tmp[r] = y[r] + h * acc
         for c in range(k):
             b = 2 + 4 * c
             acc_q = 0.0
             acc_v = 0.0
             for jj in range(s, e):
-                j = NZ_COL[jj]
+                j = _dop.NZ_COL[jj]
                 acc_q += RK_A[i, j] * K[j, b]
                 acc_v += RK_A[i, j] * K[j, b + 1]
             tmp[b] = y[b] + h * acc_q
@@ -517,14 +520,14 @@ def _rk8(par, side, t, y, h, out, K, tmp, k):
         _rhs(par, side, t + RK_C[i] * h, tmp, K[i], k)
     for r in range(2):
         acc = 0.0
-        for i in NZ_B:
+        for i in _dop.NZ_B:
             acc += RK_B[i] * K[i, r]
         out[r] = y[r] + h * acc
     for c in range(k):
         b = 2 + 4 * c
         acc_q = 0.0
         acc_v = 0.0
-        for i in NZ_B:
+        for i in _dop.NZ_B:
             acc_q += RK_B[i] * K[i, b]
             acc_v += RK_B[i] * K[i, b + 1]
         out[b] = y[b] + h * acc_q
@@ -720,6 +723,24 @@ def _rk8_qv(par, side, t, q, v, h, a0):
     return q_end, v_end
 
 
+@njit(cache=True, inline="always")
+def _wall_v(tau, args):
+    """Root function of the reversal on a wall: ``(g, g') = −side·(v, a)`` after the RK8 step
+    over ``tau`` from the step start (``args = (par, side, t, q, v, a0)``); g < 0 at τ = 0."""
+    par, side, t, q, v, a0 = args
+    qt, vt = _rk8_qv(par, side, t, q, v, tau, a0)
+    return -side * vt, -side * _accel(par, side, t + tau, qt, vt)
+
+
+@njit(cache=True, inline="always")
+def _wall_a(tau, args):
+    """Root function of a velocity dip's minimum: ``(side·a, 0)`` after the RK8 step over
+    ``tau`` (no derivative: the root finder bisects)."""
+    par, side, t, q, v, a0 = args
+    qt, vt = _rk8_qv(par, side, t, q, v, tau, a0)
+    return side * _accel(par, side, t + tau, qt, vt), 0.0
+
+
 @njit(cache=True)
 def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
     """Advance on a wall until t_target or the reversal v = 0 where the input re-enters.
@@ -732,8 +753,8 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
     carries them (its (q, v) are the same bits). The first stage of a step is the previous
     step's end acceleration, computed once.
     """
-    side = st[4]
-    hp = par[3]
+    side = st[S_MODE]
+    hp = par[P_HP]
     k = T.shape[1]
     n = 2 + 4 * k
     # scratch of the step with tangent columns: state, step end, stage argument, stages
@@ -741,9 +762,9 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
     y1 = work[1, :n]
     tmp = work[2, :n]
     K = work[3 : 3 + _N_STAGES, :n]
-    t = st[0]
-    q = st[1]
-    v = st[2]
+    t = st[S_T]
+    q = st[S_Q]
+    v = st[S_V]
     if k > 0:
         y[0] = q
         y[1] = v
@@ -751,7 +772,7 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
             for r in range(4):
                 y[2 + 4 * j + r] = T[r, j]
     a = _accel(par, side, t, q, v)
-    h_out = par[7]
+    h_out = par[P_H_OUT]
     reversal = False
     while t < t_target:
         last = t_target - t <= h_out
@@ -772,17 +793,9 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
             a1 = _accel(par, side, t + h, q1, v1)
             vmax, vmin = _hermite_extrema(side * v, side * a, side * v1, side * a1, h)
             if vmin < 0.0:
-                # locate the minimum of the true velocity (sign of a) and test v there
-                lo_s = 0.0
-                hi_s = h
-                for _ in range(60):
-                    m = 0.5 * (lo_s + hi_s)
-                    qm, vm = _rk8_qv(par, side, t, q, v, m, a)
-                    if side * _accel(par, side, t + m, qm, vm) < 0.0:
-                        lo_s = m
-                    else:
-                        hi_s = m
-                m = 0.5 * (lo_s + hi_s)
+                # locate the minimum of the true velocity (sign change of a: bisection, no
+                # derivative at hand) and test v there
+                m = find_root(_wall_a, (par, side, t, q, v, a), 0.0, h, 0.5 * h, t)
                 qm, vm = _rk8_qv(par, side, t, q, v, m, a)
                 if side * vm < 0.0:
                     reversal = True
@@ -791,24 +804,8 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
                     v1 = vm
         if reversal:
             # Newton on v(tau) inside the bracket, each iterate one RK8 step from the step start
-            den = side * v - side * v1
-            tau = lo + (hi - lo) * (side * v) / den if den > 0.0 else 0.5 * (lo + hi)
-            if not (lo < tau <= hi):
-                tau = 0.5 * (lo + hi)
-            for _ in range(60):
-                qt, vt = _rk8_qv(par, side, t, q, v, tau, a)
-                at = _accel(par, side, t + tau, qt, vt)
-                if side * vt > 0.0:
-                    lo = tau
-                else:
-                    hi = tau
-                tn = tau - vt / at if at != 0.0 else 0.5 * (lo + hi)
-                if not (lo <= tn <= hi):
-                    tn = 0.5 * (lo + hi)
-                if abs(tn - tau) <= 1e-16 * max(1.0, t) or hi - lo <= 1e-16 * max(1.0, t):
-                    tau = tn
-                    break
-                tau = tn
+            tau = secant_start(lo, hi, -side * v, -side * v1)
+            tau = find_root(_wall_v, (par, side, t, q, v, a), lo, hi, tau, t)
             if k > 0:
                 _rk8(par, side, t, y, tau, y1, K, tmp, k)
                 for r in range(n):
@@ -826,29 +823,29 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
         v = v1
         a = a1
         t = t_target if last else t + h
-    st[1] = q
-    st[3] = q - side * hp
+    st[S_Q] = q
+    st[S_W] = q - side * hp
     for j in range(k):
         for r in range(4):
             T[r, j] = y[2 + 4 * j + r]
     if reversal:
-        st[0] = t
-        st[2] = 0.0  # the reversal: v = 0 exactly
-        st[4] = 0.0
-        accumulate = flags[0] != 0
+        st[S_T] = t
+        st[S_V] = 0.0  # the reversal: v = 0 exactly
+        st[S_MODE] = 0.0
+        accumulate = flags[F_ACCUMULATE] != 0
         if accumulate:
-            diag[1] += 1.0
-        _record(ev, cnt, t, q, 0.0, -1.0, st[3])
+            diag[D_ENTRIES] += 1.0
+        _record(ev, cnt, t, q, 0.0, -1.0, st[S_W])
         # V_in = I. A play of zero width is left at once through the opposite wall.
         if hp == 0.0:
-            st[4] = 1.0 if _accel(par, side, t, q, v) > 0.0 else -1.0
+            st[S_MODE] = 1.0 if _accel(par, side, t, q, v) > 0.0 else -1.0
             if accumulate:
-                diag[0] += 1.0
-            _record(ev, cnt, t, q, 0.0, 1.0, st[3])
-            leave_play(T, flags[1])
+                diag[D_EXITS] += 1.0
+            _record(ev, cnt, t, q, 0.0, 1.0, st[S_W])
+            leave_play(T, flags[F_QR_MODE])
     else:
-        st[0] = t_target
-        st[2] = v
+        st[S_T] = t_target
+        st[S_V] = v
 
 
 # --------------------------------------------------------------------------------------------
@@ -858,8 +855,8 @@ def _outside(par, st, t_target, T, diag, ev, cnt, flags, work):
 def advance(par, st, t_target, T, diag, ev, cnt, flags, work):
     """Advance the full state (and tangent columns) to exactly ``t_target``."""
     guard = 0
-    while st[0] < t_target:
-        if st[4] == 0.0:
+    while st[S_T] < t_target:
+        if st[S_MODE] == 0.0:
             _inside(par, st, t_target, T, diag, ev, cnt, flags)
         else:
             _outside(par, st, t_target, T, diag, ev, cnt, flags, work)
@@ -878,6 +875,6 @@ def sample_kernel(par, st, times, out, T, diag, ev, cnt, flags, work):
     """Advance through ``times`` (increasing), storing q, v, w at each into ``out`` rows."""
     for i in range(times.shape[0]):
         advance(par, st, times[i], T, diag, ev, cnt, flags, work)
-        out[i, 0] = st[1]
-        out[i, 1] = st[2]
-        out[i, 2] = st[3]
+        out[i, 0] = st[S_Q]
+        out[i, 1] = st[S_V]
+        out[i, 2] = st[S_W]

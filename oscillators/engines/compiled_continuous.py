@@ -148,26 +148,23 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         # the RK8 step's local error scales as (ρh)^9: ρ = the largest rate of the linearised
         # motion (forcing, damping, the stiffness C·slope of the steepest branch)
         rho = max(1.0, self._omega, 2.0 * zeta, math.sqrt(abs(coupling) * _slope_bound(spec)))
-        self._par = np.array(
-            [
-                zeta,
-                self._omega,
-                coupling,
-                self._phi0,
-                step / rho,
-                self._period,
-                float(system.divergence_bound),
-                t0,
-            ]
-        )
+        self._par = np.zeros(_k.N_PAR)
+        self._par[_k.P_ZETA] = zeta
+        self._par[_k.P_OMEGA] = self._omega
+        self._par[_k.P_C] = coupling
+        self._par[_k.P_PHI0] = self._phi0
+        self._par[_k.P_H] = step / rho
+        self._par[_k.P_PERIOD] = self._period
+        self._par[_k.P_BOUND] = float(system.divergence_bound)
+        self._par[_k.P_T0] = t0
         op_state = state.operator_state
         if op_state is None:
             op_state = op.initial_state(q)
         u = getattr(op_state, "input", None)
         if u is not None and abs(float(u) - q) > 1e-12 * max(1.0, abs(q)):
             raise ValueError(f"state.operator_state.input ({float(u)}) must equal state.q ({q})")
-        self._ist = np.zeros(14, dtype=np.int64)
-        self._st = np.zeros(8)
+        self._ist = np.zeros(_k.N_IST, dtype=np.int64)
+        self._st = np.zeros(_k.N_ST)
         self._st[1] = q
         self._st[2] = v
         self._include_phase = False

@@ -100,11 +100,11 @@ def _shape_code(operator: Any) -> tuple[float, float, np.ndarray | None]:
             "generic continuous engine integrates it"
         )
     if spec.shape == "identity":
-        return 0.0, 1.0, None
+        return _k.SHAPE_IDENTITY, 1.0, None
     if spec.shape == "erf":
-        return 1.0, float(spec.spread), None
+        return _k.SHAPE_ERF, float(spec.spread), None
     if spec.shape == "table" and spec.table is not None:
-        return 2.0, 1.0, spec.table.kernel_array()
+        return _k.SHAPE_TABLE, 1.0, spec.table.kernel_array()
     raise ValueError(
         f"compiled play shape must be 'identity', 'erf' or 'table' (with a table), got "
         f"{spec.shape!r}"
@@ -132,32 +132,30 @@ def make_parameters(
         raise ValueError(f"frequency must be > 0, got {omega}")
     if width < 0.0:
         raise ValueError(f"width must be >= 0, got {width}")
-    if kind == 1.0 and not spread > 0.0:
+    if kind == _k.SHAPE_ERF and not spread > 0.0:
         raise ValueError(f"spread must be > 0, got {spread}")
     check_closed_form(zeta, omega)
     amp_a, amp_b = particular_amplitudes(zeta, omega)
-    par = np.zeros(15 if table is None else 15 + table.size)
+    par = np.zeros(_k.P_TABLE if table is None else _k.P_TABLE + table.size)
     if table is not None:
-        par[15:] = table
-    par[:15] = [
-        zeta,
-        omega,
-        coupling,
-        0.5 * width,
-        kind,
-        spread,
-        phi0,
-        # the RK8 step's local error scales as (ρh)^9 with ρ = max(1, Ω) (ζ < 1): the step
-        # shrinks with the forcing frequency; unchanged for Ω <= 1
-        outside_step / max(1.0, omega),
-        inside_step,
-        amp_a,
-        amp_b,
-        math.sqrt(1.0 - zeta**2),
-        math.hypot(amp_a, amp_b),
-        1.0 / (math.sqrt(2.0) * spread),
-        math.sqrt(2.0 / math.pi) / spread,
-    ]
+        par[_k.P_TABLE :] = table
+    par[_k.P_ZETA] = zeta
+    par[_k.P_OMEGA] = omega
+    par[_k.P_C] = coupling
+    par[_k.P_HP] = 0.5 * width
+    par[_k.P_SHAPE] = kind
+    par[_k.P_SPREAD] = spread
+    par[_k.P_PHI0] = phi0
+    # the RK8 step's local error scales as (ρh)^9 with ρ = max(1, Ω) (ζ < 1): the step
+    # shrinks with the forcing frequency; unchanged for Ω <= 1
+    par[_k.P_H_OUT] = outside_step / max(1.0, omega)
+    par[_k.P_H_IN] = inside_step
+    par[_k.P_AMP_A] = amp_a
+    par[_k.P_AMP_B] = amp_b
+    par[_k.P_OMEGA_D] = math.sqrt(1.0 - zeta**2)
+    par[_k.P_AMP] = math.hypot(amp_a, amp_b)
+    par[_k.P_ERF_SCALE] = 1.0 / (math.sqrt(2.0) * spread)
+    par[_k.P_ERF_SLOPE] = math.sqrt(2.0 / math.pi) / spread
     return par
 
 
@@ -173,7 +171,7 @@ def _initial_state(
     """State array [t, q, v, w, mode] and whether the start is on a wall moving outward."""
     q0 = finite_scalar(q0, "q0")
     v0 = finite_scalar(v0, "v0")
-    hp = par[3]
+    hp = par[_k.P_HP]
     if operator_state is not None:
         if w0 is not None:
             raise ValueError("give either w0 or operator_state, not both")
@@ -188,7 +186,8 @@ def _initial_state(
 
     def accel(side: float) -> float:
         w = q0 - side * hp
-        return -2.0 * par[0] * v0 - q0 + math.cos(par[6]) + par[2] * float(_shape_value(par, w))
+        zeta, phi0, coupling = par[_k.P_ZETA], par[_k.P_PHI0], par[_k.P_C]
+        return -2.0 * zeta * v0 - q0 + math.cos(phi0) + coupling * float(_shape_value(par, w))
 
     mode = 0.0
     if gap >= hp - tol:  # right wall: w = q - p/2

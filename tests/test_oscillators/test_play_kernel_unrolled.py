@@ -71,7 +71,8 @@ def test_wall_steps_equal_the_full_table_loop_bit_for_bit(operator):
         q, v = y[0], y[1]
         # step lengths of the wall loop (h_out), of the last partial step and of the reversal
         # search (down to tiny trial lengths)
-        h = float(rng.choice([par[7], rng.uniform(0.0, par[7]), 10.0 ** rng.uniform(-14, -2)]))
+        h_out = par[k_.P_H_OUT]
+        h = float(rng.choice([h_out, rng.uniform(0.0, h_out), 10.0 ** rng.uniform(-14, -2)]))
         truth = _table_step(par, side, t, y, h, columns)
         k_._rk8(par, side, t, y, h, out, K, tmp, columns)
         assert np.array_equal(out, truth)
