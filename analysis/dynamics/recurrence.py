@@ -14,7 +14,11 @@ for a fixed budget:
   recorded as that attractor's;
 * a start outside the cell box (``box``) for ``mx_chk_lost`` steps in a row is lost,
   one that diverges (the engine's divergence test) divergent, and one still searching after
-  ``max_steps`` periods undecided.
+  ``max_steps`` periods undecided — unless an attractor was found after it in the same chunk:
+  then it runs once more at the chunk's end, with the cells known now (a departure from
+  Attractors.jl, which leaves it unlabelled: the first starts of a chunk would otherwise pay
+  for finding a chaotic attractor, which at cells of 0.05 takes about the budget; its
+  ``steps`` add up both runs).
 
 Plain reading of :func:`recurrence_chunk` (one task: a list of starts sharing one cell grid)::
 
@@ -230,7 +234,17 @@ def recurrence_chunk(
     stop = np.full(n, 3, dtype=np.int8)
     merges = 0
     T = system.period
-    for i, (q0, v0, w0) in enumerate(pts):
+    # a start still searching at max_steps is run once more at the end of the chunk if an
+    # attractor was found after it: the first starts of a chunk otherwise pay for finding the
+    # attractors (a chaotic one needs ~mx_chk_fnd_att recurrences on fine cells)
+    order, known_at_end, pos = list(range(n)), np.zeros(n, dtype=np.int64), 0
+    while pos < len(order):
+        i = order[pos]
+        pos += 1
+        retry = pos > n
+        if retry and len(att_cells) == known_at_end[i]:
+            continue  # nothing found since: it stays undecided
+        q0, v0, w0 = pts[i]
         try:
             state = start_state(system, q0, v0, None if math.isnan(w0) else w0)
         except ValueError:
@@ -347,7 +361,11 @@ def recurrence_chunk(
         if new >= 0 and found_by[new] < 0:
             # stopped (max_steps) while locating: the state now is on the attractor
             found_by[new], found_steps[new] = i, transient + done
-        outcome[i], steps[i], stop[i] = label, done, kind
+        outcome[i], stop[i] = label, kind
+        steps[i] = steps[i] + done if retry else done
+        if label == UNDECIDED and not retry:
+            known_at_end[i] = len(att_cells)
+            order.append(i)
         if label >= 0 and path_basins:
             basin = 2 * label + 1
             for c in visited:
