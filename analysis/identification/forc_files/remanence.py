@@ -144,17 +144,7 @@ def reconstruct_remanence(
                     "after it"
                 )
             pending = (initial, p)
-    notes = []
-    complete = True
-    if pending is not None:
-        complete = False
-        notes.append(
-            f"the last field point (line {pending[1][2]}) has no zero-field point (the run "
-            "stopped): dropped"
-        )
-    for curve in curves:
-        fields = [q[0] for q, _ in curve]
-        check_curve(fields[0], fields, [q[2] for q, _ in curve], "pike")
+    notes, complete = _finish(curves, pending)
     return curves, cal_h, cal_m, cal_lines, notes, skipped, complete
 
 
@@ -252,10 +242,15 @@ def reconstruct_ramps(
             last_commanded = None
         else:
             skipped += len(points)  # at zero field before any field point
+    notes, complete = _finish(curves, pending)
+    return curves, cal_h, cal_m, cal_lines, notes, skipped, complete
+
+
+def _finish(curves: list, pending: tuple | None) -> tuple[list[str], bool]:
+    """The end of both reconstructions: a field point still waiting for its zero-field point
+    means the run stopped (a note, ``complete`` false); every curve is checked."""
     notes = []
-    complete = True
     if pending is not None:
-        complete = False
         notes.append(
             f"the last field point (line {pending[1][2]}) has no zero-field point (the run "
             "stopped): dropped"
@@ -263,7 +258,7 @@ def reconstruct_ramps(
     for curve in curves:
         fields = [q[0] for q, _ in curve]
         check_curve(fields[0], fields, [q[2] for q, _ in curve], "pike")
-    return curves, cal_h, cal_m, cal_lines, notes, skipped, complete
+    return notes, pending is None
 
 
 def remanence_curves(
