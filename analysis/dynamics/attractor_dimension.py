@@ -124,6 +124,20 @@ class AttractorDimension:
         """One line: which D_KY is reported and why."""
         return _EXPLANATION[self.source]
 
+    def to_record(self) -> dict[str, Any]:
+        """The dimension's JSON keys (``kaplan_yorke`` and its error, the full-space value,
+        ``kaplan_yorke_source`` and ``_note``, the memory-frozen exponents or None)."""
+        return {
+            "kaplan_yorke": self.kaplan_yorke,
+            "kaplan_yorke_error": self.kaplan_yorke_error,
+            "kaplan_yorke_full_space": self.kaplan_yorke_full_space,
+            "kaplan_yorke_source": self.source,
+            "kaplan_yorke_note": self.explanation,
+            "memory_frozen_exponents": (
+                None if self.frozen is None else list(self.frozen.exponents)
+            ),
+        }
+
     def __repr__(self) -> str:
         return (
             f"AttractorDimension(kaplan_yorke={self.kaplan_yorke:.4f} +- "
