@@ -48,7 +48,15 @@ Events
   map are dropped.
 
 The output is continuous at both, so the oscillator's (q, v) perturbations need no correction
-there. A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
+there. A composite with piecewise-constant parts (``0.5 * play + 0.5 * relays``,
+:mod:`hysteresis.algebra`) has a third kind:
+
+* a **jump** (``breakpoint_jump != 0``): relays switch and the output changes by
+  ``breakpoint_jump`` there. The breakpoint is the first input at which the new output holds:
+  a rising input switches a relay at ``u = α`` (``u >= α``), a falling one at the largest float
+  below ``β`` (``u < β``), so the branch reports ``nextafter(β, -inf)`` and an integrator that
+  stops exactly at the breakpoint and applies the operator there sees the switch. The
+  oscillator's saltation there is ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
 Prandtl–Ishlinskii push nothing (``V_in = I``); a continuous Preisach model remembers ``u*`` as a
 new extremum (``reversal_pushes``), a new memory variable with ``δm := δu``. A branch that starts
 with such a reversal relative to its state (the state's last motion went the other way) flags
@@ -57,6 +65,7 @@ the variable it created at ``u0`` in ``pushed``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -95,6 +104,9 @@ class BranchFlow:
         Labels whose perturbation is reset ``δm := δu`` at the breakpoint (wall hit, ``V_out``).
     breakpoint_removes:
         Labels removed at the breakpoint (wiped-out extrema).
+    breakpoint_jump:
+        Change of the output when the input reaches the breakpoint (0: the output is
+        continuous there; a composite's relays that switch there: their weighted jumps).
     reversal_pushes:
         True if a reversal of the input at the end of this branch creates a new memory variable
         (the reversal input, ``δm := δu``): continuous Preisach. False: ``V_in = I``.
@@ -115,6 +127,7 @@ class BranchFlow:
     breakpoint: float
     breakpoint_resets: tuple[str, ...] = ()
     breakpoint_removes: tuple[str, ...] = ()
+    breakpoint_jump: float = 0.0
     reversal_pushes: bool = False
     pushed: np.ndarray | None = None
     constant_partials: bool = False
@@ -137,6 +150,13 @@ class BranchFlow:
             raise ValueError(
                 f"breakpoint {bp} lies behind the input {self.input} in direction {self.direction}"
             )
+        jump = float(self.breakpoint_jump)
+        if not math.isfinite(jump) or (jump != 0.0 and not math.isfinite(bp)):
+            raise ValueError(
+                f"breakpoint_jump must be finite and needs a finite breakpoint, got {jump} at "
+                f"breakpoint {bp}"
+            )
+        object.__setattr__(self, "breakpoint_jump", jump)
         for name in ("breakpoint_resets", "breakpoint_removes"):
             unknown = set(getattr(self, name)) - set(self.labels)
             if unknown:

@@ -35,8 +35,12 @@ deviation vectors, ``k`` = the dimension at :meth:`ContinuousEngine.start_tangen
 * frozen memory: ``δm_j' = 0``; slaved memory (a dragged wagon): ``δm_j = δq`` (so its term
   joins the ``δq`` coefficient, which is the branch slope ``dy/du``).
 
-At events (saltation; the output is continuous at every event, so ``(δq, δv, δφ)`` pass
-unchanged — the vector fields of ``(q, v)`` agree on both sides):
+At events (saltation): where the output is continuous, ``(δq, δv, δφ)`` pass unchanged (the
+vector fields of ``(q, v)`` agree on both sides); at a breakpoint where the output jumps by
+``Δy`` (:attr:`BranchFlow.breakpoint_jump <hysteresis.flow.BranchFlow>`: the relays of a
+composite such as ``play + relays``) the acceleration jumps by ``C·Δy`` and
+``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``; at ``v* = 0`` it is infinite:
+:class:`~oscillators.engines.base.GrazingError`). Memory rows:
 
 * a memory variable that becomes slaved (wall hit, paper ``V_out``) or is created (a reversal of
   a continuous Preisach input pushes an extremum) gets ``δm := δq``;
@@ -64,6 +68,7 @@ from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
     Engine,
+    GrazingError,
     StepBudgetError,
     TangentFlow,
     split_times,
@@ -168,7 +173,8 @@ class ContinuousEngine(TangentFlow, Engine):
             return 1
         if self._v < 0.0:
             return -1
-        # at rest: the sign of the acceleration (the output is continuous, the same either way)
+        # at rest: the sign of the acceleration (a jump at this very input was applied by the
+        # operator state already, so the output of the state is the one that holds here)
         acc = (
             -self._q
             + math.cos(self._phi0)
@@ -445,8 +451,20 @@ class ContinuousEngine(TangentFlow, Engine):
                 )
             )
         if self._ntan:
+            if kind == "breakpoint" and old.breakpoint_jump != 0.0:
+                self._saltation(old.breakpoint_jump)
             self._reconcile(old, new)
         self._flow = new
+
+    def _saltation(self, jump: float) -> None:
+        """``δv += C·Δy/v*·δq`` at a jump of the output (the event surface ``q = bp``)."""
+        if self._v == 0.0:
+            raise GrazingError(
+                f"continuous engine: the output jumps at a turning point (q = {self._q}, "
+                f"t = {self.start.t + self.elapsed:.6g}): the saltation C·Δy/v* is infinite, so "
+                "the flow map is not differentiable on this orbit"
+            )
+        self._dqv[1] = self._dqv[1] + (self._coupling * jump / self._v) * self._dqv[0]
 
     def _reconcile(self, old: Any, new: Any) -> None:
         """Saltation at an event: carry, reset (δm := δq) or drop memory rows by label."""
