@@ -56,7 +56,9 @@ there. A composite with piecewise-constant parts (``0.5 * play + 0.5 * relays``,
   a rising input switches a relay at ``u = α`` (``u >= α``), a falling one at the largest float
   below ``β`` (``u < β``), so the branch reports ``nextafter(β, -inf)`` and an integrator that
   stops exactly at the breakpoint and applies the operator there sees the switch. The
-  oscillator's saltation there is ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
+  oscillator's saltation there is ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``).
+
+A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
 Prandtl–Ishlinskii push nothing (``V_in = I``); a continuous Preisach model remembers ``u*`` as a
 new extremum (``reversal_pushes``), a new memory variable with ``δm := δu``. A branch that starts
 with such a reversal relative to its state (the state's last motion went the other way) flags
