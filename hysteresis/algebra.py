@@ -41,7 +41,7 @@ import numpy as np
 
 from hysteresis._validation import as_input_sequence, direction_sign
 from hysteresis.base import ContinuousHysteron, Hysteron, PiecewiseConstantHysteron, Switching
-from hysteresis.flow import BranchFlow
+from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.relay_table import RelayTable
 from hysteresis.seam import check_state, checked_relay_outputs, checked_relay_table
 
@@ -383,14 +383,93 @@ class BranchSum(WeightedSum, ContinuousHysteron):
         part by its place in the sum)."""
         return [i for i, p in enumerate(self._parts) if not p.piecewise_constant][k]
 
+    # -- the compiled fast path: a sum of plays is one set of (shaped) plays ----------------------
+    def _play_parts(self) -> list[tuple[int, Any]] | None:
+        """Per part, its plays as the compiled engine takes them, or ``None`` if a part is not
+        a play (identity or erf shape) or a Prandtl–Ishlinskii operator."""
+        found = []
+        for k, p in enumerate(self._parts):
+            if p.piecewise_constant:
+                return None
+            cp = p.compiled_play()
+            if cp is not None and cp.shape in ("identity", "erf"):
+                found.append((k, cp))
+                continue
+            cf = p.compiled_flow()
+            if cf is not None and cf.kind == "prandtl_ishlinskii" and cf.positions is None:
+                found.append((k, cf))
+                continue
+            return None
+        return found
+
+    def compiled_flow(self) -> CompiledFlow | None:
+        """A sum of plays (identity or erf shape) and Prandtl–Ishlinskii operators is one set
+        of plays ``y = Σ a_i f_i(w_i)`` with the part's weight folded into each ``a_i``: the
+        oscillator's compiled continuous engine integrates it. Its states are read and built
+        through the parts' own fast-path constructors (``state(position, input)``,
+        ``state(positions, input)``); memory labels ``"k:w"``, ``"k:w{j}"`` as in
+        :meth:`branch_flow`. ``None`` for any other sum."""
+        found = self._play_parts()
+        if found is None:
+            return None
+        half, weights, spreads, labels, sizes = [], [], [], [], []
+        for k, spec in found:
+            w = float(self._weights[k])
+            if isinstance(spec, CompiledFlow):
+                n = spec.half_widths.size
+                half.extend(spec.half_widths)
+                weights.extend(w * spec.weights)
+                spreads.extend(spec.spreads)
+                labels.extend(f"{k}:{spec.label(j)}" for j in range(n))
+            else:
+                n = 1
+                half.append(0.5 * spec.width)
+                weights.append(w)
+                spreads.append(spec.spread if spec.shape == "erf" else 0.0)
+                labels.append(f"{k}:w")
+            sizes.append(n)
+        bounds = np.cumsum([0, *sizes])
+        kinds = [isinstance(spec, CompiledFlow) for _, spec in found]
+        parts = self._parts
+
+        def positions(state: SumState) -> np.ndarray:
+            state = self._check_state(state)
+            return np.concatenate(
+                [
+                    np.asarray(state[k].positions if pi else [state[k].position], dtype=float)
+                    for (k, _), pi in zip(found, kinds, strict=True)
+                ]
+            )
+
+        def make_state(pos: np.ndarray, input: float) -> SumState:
+            out = []
+            for i, ((k, _), pi) in enumerate(zip(found, kinds, strict=True)):
+                chunk = pos[bounds[i] : bounds[i + 1]]
+                out.append(parts[k].state(chunk if pi else float(chunk[0]), input))
+            return SumState(out)
+
+        return CompiledFlow(
+            kind="prandtl_ishlinskii",
+            label=labels.__getitem__,
+            half_widths=np.array(half),
+            weights=np.array(weights),
+            spreads=np.array(spreads),
+            positions=positions,
+            make_state=make_state,
+        )
+
     @property
-    def uncompiled_reason(self) -> str:
-        """Why the oscillator integrates this sum with the generic (Python) engine: the
-        compiled engines take one play, one Prandtl–Ishlinskii operator or one Preisach model."""
+    def uncompiled_reason(self) -> str | None:
+        """Why the oscillator integrates this sum with the generic (Python) engine, or ``None``
+        when it has a compiled description (a sum of plays, erf plays and Prandtl–Ishlinskii
+        operators)."""
+        if self._play_parts() is not None:
+            return None
         names = ", ".join(type(p).__name__ for p in self._parts)
         return (
             f"the sum of {names} has no compiled description (the compiled engines take one "
-            "play, one Prandtl–Ishlinskii operator or one Preisach model)"
+            "Preisach model, one set of relays, or plays, erf plays and Prandtl–Ishlinskii "
+            "operators summed)"
         )
 
 

@@ -60,7 +60,7 @@ def select_engine(operator: Any) -> type[Engine]:
                 operator, "state_from_extrema", "compiled_flow()", "state_from_extrema(extrema)",
                 "the staircase of remembered extrema",
             )  # fmt: skip
-        else:
+        elif spec.make_state is None:  # a composite hands over its own state constructor
             _require(operator, "state", "compiled_flow()", "state(positions, input)", "the wagons")
         return CompiledContinuousEngine
     reason = python_path_reason(operator)

@@ -30,7 +30,12 @@ from hysteresis import (
     weighted_sum,
 )
 from oscillators import ForcedOscillator, OscillatorState
-from oscillators.engines import ContinuousEngine, GenericEngineWarning, RelayEngine
+from oscillators.engines import (
+    CompiledContinuousEngine,
+    ContinuousEngine,
+    GenericEngineWarning,
+    RelayEngine,
+)
 
 
 def _walk(seed: int, n: int = 400, scale: float = 3.0) -> np.ndarray:
@@ -186,7 +191,9 @@ def test_pickle_round_trip():
 def test_ranges_and_slopes_follow_the_parts():
     s = 0.5 * PARTS["erf"] - 2.0 * PARTS["relay"]
     assert s.output_range == (-2.5, 2.5)
-    assert s.max_slope is None  # the generalized play does not state its steepest branch
+    assert s.max_slope == 0.5 / (0.7 * math.sqrt(2.0 * math.pi))  # erf' at 0; relays flat
+    custom = GeneralizedPlay(1.0, np.tanh, lambda w: 1.0 / np.cosh(w) ** 2)
+    assert (custom + PARTS["relay"]).max_slope is None  # a user's shape: not known
     p = 2.0 * PlayOperator(1.0) - 0.5 * PrandtlIshlinskii([0.0, 1.0], [1.0, 1.0])
     assert p.max_slope == 2.0 + 0.5 * 2.0
     assert p.output_range == (-math.inf, math.inf)
@@ -271,3 +278,31 @@ def test_mixed_sum_jacobian_matches_finite_differences_of_the_map():
     # q column of the map is J[:, q] + J[:, w]
     np.testing.assert_allclose(jac[:2, 0] + jac[:2, 2], fd_q, rtol=0, atol=1e-5)
     np.testing.assert_allclose(jac[:2, 1], fd_v, rtol=0, atol=1e-5)
+
+
+def test_sum_of_plays_runs_on_the_compiled_engine_as_on_the_generic_one():
+    """PI + erf play + play is one set of shaped plays for the compiled continuous engine:
+    trajectory and Jacobian against the generic engine over the assembled branch flow
+    (DOP853 rtol 1e-11 there, RK8 h = 0.05/ρ here: both ~1e-10 over 15 periods of a stable
+    response)."""
+    s = 0.7 * PARTS["pi"] + 0.3 * PARTS["erf"] - 0.1 * PlayOperator(0.4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", GenericEngineWarning)  # no Python path: no warning
+        system = ForcedOscillator(s, coupling=1.0, damping_ratio=0.1, frequency=1.1)
+    assert system.engine_class is CompiledContinuousEngine
+    fast = system.trajectory(80.0)
+    ref = system.trajectory(80.0, engine_options={"method": "generic"})
+    np.testing.assert_allclose(fast.q, ref.q, rtol=0, atol=5e-9)
+    np.testing.assert_allclose(fast.M, ref.M, rtol=0, atol=5e-9)
+    start = OscillatorState(q=0.3, v=0.5, phi=0.0, operator_state=None)
+    jac, labels = system.jacobian(3 * system.period, start)
+    jac_ref, labels_ref = system.jacobian(
+        3 * system.period, start, engine_options={"method": "generic"}
+    )
+    assert labels == labels_ref == ("q", "v", "phi", "0:w0", "0:w1", "0:w2", "1:w", "2:w")
+    np.testing.assert_allclose(jac, jac_ref, rtol=0, atol=1e-8)
+    # the final states are SumStates the parts accept
+    end = system.stroboscopic_map(start)
+    assert isinstance(end.operator_state, SumState)
+    end_ref = system.stroboscopic_map(start, engine_options={"method": "generic"})
+    assert s.output(end.operator_state) == pytest.approx(s.output(end_ref.operator_state), abs=1e-9)
