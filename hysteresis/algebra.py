@@ -385,12 +385,14 @@ class BranchSum(WeightedSum, ContinuousHysteron):
 
     # -- the compiled fast path: a sum of plays is one set of (shaped) plays ----------------------
     def _play_parts(self) -> list[tuple[int, Any]] | None:
-        """Per part, its plays as the compiled engine takes them, or ``None`` if a part is not
-        a play (identity or erf shape) or a Prandtl–Ishlinskii operator."""
-        found = []
+        """Per part, its plays as the compiled engine takes them (a relay-type part: ``None``),
+        or ``None`` if a part is neither relays, a play (identity or erf shape) nor a
+        Prandtl–Ishlinskii operator."""
+        found: list[tuple[int, Any]] = []
         for k, p in enumerate(self._parts):
             if p.piecewise_constant:
-                return None
+                found.append((k, None))
+                continue
             cp = p.compiled_play()
             if cp is not None and cp.shape in ("identity", "erf"):
                 found.append((k, cp))
@@ -403,15 +405,19 @@ class BranchSum(WeightedSum, ContinuousHysteron):
         return found
 
     def compiled_flow(self) -> CompiledFlow | None:
-        """A sum of plays (identity or erf shape) and Prandtl–Ishlinskii operators is one set
-        of plays ``y = Σ a_i f_i(w_i)`` with the part's weight folded into each ``a_i``: the
-        oscillator's compiled continuous engine integrates it. Its states are read and built
-        through the parts' own fast-path constructors (``state(position, input)``,
-        ``state(positions, input)``); memory labels ``"k:w"``, ``"k:w{j}"`` as in
+        """A sum of plays (identity or erf shape), Prandtl–Ishlinskii operators and relay-type
+        operators is one set of plays ``y = Σ a_i f_i(w_i)`` plus relays ``Σ c_j y_j``, with the
+        part's weight folded into each ``a_i`` and ``c_j``: the oscillator's compiled
+        continuous engine integrates it (relays switch at their thresholds with the saltation
+        of the jump). Its states are read and built through the parts' own constructors
+        (``state(position, input)``, ``state(positions, input)``,
+        ``state_from_relay_outputs``); memory labels ``"k:w"``, ``"k:w{j}"`` as in
         :meth:`branch_flow`. ``None`` for any other sum."""
         found = self._play_parts()
         if found is None:
             return None
+        relays = [(k, checked_relay_table(self._parts[k])) for k, spec in found if spec is None]
+        found = [(k, spec) for k, spec in found if spec is not None]
         half, weights, spreads, labels, sizes = [], [], [], [], []
         for k, spec in found:
             w = float(self._weights[k])
@@ -441,13 +447,34 @@ class BranchSum(WeightedSum, ContinuousHysteron):
                 ]
             )
 
-        def make_state(pos: np.ndarray, input: float) -> SumState:
-            out = []
+        r_sizes = [t.n_relays for _, t in relays]
+        r_bounds = np.cumsum([0, *r_sizes])
+
+        def relay_outputs(state: SumState) -> np.ndarray:
+            state = self._check_state(state)
+            return np.concatenate(
+                [checked_relay_outputs(parts[k], t, state[k]) for k, t in relays] or [[]]
+            )
+
+        def make_state(pos: np.ndarray, input: float, y: np.ndarray | None = None) -> SumState:
+            out: list[Any] = [None] * len(parts)
             for i, ((k, _), pi) in enumerate(zip(found, kinds, strict=True)):
                 chunk = pos[bounds[i] : bounds[i + 1]]
-                out.append(parts[k].state(chunk if pi else float(chunk[0]), input))
+                out[k] = parts[k].state(chunk if pi else float(chunk[0]), input)
+            for i, (k, _) in enumerate(relays):
+                out[k] = parts[k].state_from_relay_outputs(y[r_bounds[i] : r_bounds[i + 1]], input)
             return SumState(out)
 
+        relay_fields: dict[str, Any] = {}
+        if relays:
+            relay_fields = {
+                "relay_alpha": np.concatenate([t.alpha for _, t in relays]),
+                "relay_beta": np.concatenate([t.beta for _, t in relays]),
+                "relay_weights": np.concatenate(
+                    [float(self._weights[k]) * t.weights for k, t in relays]
+                ),
+                "relay_outputs": relay_outputs,
+            }
         return CompiledFlow(
             kind="prandtl_ishlinskii",
             label=labels.__getitem__,
@@ -456,6 +483,7 @@ class BranchSum(WeightedSum, ContinuousHysteron):
             spreads=np.array(spreads),
             positions=positions,
             make_state=make_state,
+            **relay_fields,
         )
 
     @property

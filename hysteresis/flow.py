@@ -192,9 +192,12 @@ class CompiledFlow:
     plays (the states have ``positions`` and ``input``; the operator rebuilds a state with
     ``state(positions, input)``), optionally ``spreads`` ``R_i`` (``0``: the play's output is
     its wagon ``w_i``; ``R_i > 0``: ``erf(w_i/(√2 R_i))``, an erf play), so that
-    ``y = Σ a_i f_i(w_i)``. A composite whose states are not of that form hands over
-    ``positions(state)`` (the wagon positions of a state) and ``make_state(positions, input)``
-    (the state from them) instead. ``kind`` ``"preisach"``: ``everett``, the model's Everett
+    ``y = Σ a_i f_i(w_i)``, and relays (``relay_alpha``, ``relay_beta``, ``relay_weights`` of
+    any sign: ``y += Σ c_j·y_j``, the relays of a composite ``play + relays``). A composite
+    whose states are not of that form hands over ``positions(state)`` (the wagon positions of
+    a state), with relays ``relay_outputs(state)`` (their ±1 in the order of the thresholds),
+    and ``make_state(positions, input[, relay_outputs])`` (the state from them) instead.
+    ``kind`` ``"preisach"``: ``everett``, the model's Everett
     function as a :class:`~hysteresis.preisach.everett_table.CompiledEverett` (the states have
     ``extrema``; the operator rebuilds a state with ``state_from_extrema(extrema)``).
     ``label(i)`` names memory variable ``i`` as :meth:`BranchFlow.labels` does (``"w3"``,
@@ -209,12 +212,16 @@ class CompiledFlow:
     spreads: np.ndarray | None = None
     positions: Callable | None = None
     make_state: Callable | None = None
+    relay_alpha: np.ndarray | None = None
+    relay_beta: np.ndarray | None = None
+    relay_weights: np.ndarray | None = None
+    relay_outputs: Callable | None = None
 
     def __post_init__(self) -> None:
         if self.kind == "prandtl_ishlinskii":
             hw = readonly_array(self.half_widths)
             wt = readonly_array(self.weights)
-            if hw.ndim != 1 or hw.shape != wt.shape or hw.size == 0:
+            if hw.ndim != 1 or hw.shape != wt.shape or (hw.size == 0 and self.relay_alpha is None):
                 raise ValueError("half_widths and weights must be 1-D of one (non-zero) length")
             object.__setattr__(self, "half_widths", hw)
             object.__setattr__(self, "weights", wt)
@@ -225,6 +232,17 @@ class CompiledFlow:
             object.__setattr__(self, "spreads", sp)
             if (self.positions is None) != (self.make_state is None):
                 raise ValueError("positions and make_state come together (a composite's states)")
+            if self.relay_alpha is not None:
+                a = readonly_array(self.relay_alpha)
+                b = readonly_array(self.relay_beta)
+                c = readonly_array(self.relay_weights)
+                if not (a.ndim == 1 and a.shape == b.shape == c.shape and np.all(a >= b)):
+                    raise ValueError("relay thresholds need alpha >= beta and one weight each")
+                if self.relay_outputs is None or self.make_state is None:
+                    raise ValueError("relays come with relay_outputs and make_state")
+                object.__setattr__(self, "relay_alpha", a)
+                object.__setattr__(self, "relay_beta", b)
+                object.__setattr__(self, "relay_weights", c)
         elif self.kind == "preisach":
             if self.everett is None:
                 raise ValueError("a 'preisach' CompiledFlow needs its compiled Everett function")

@@ -100,10 +100,12 @@ _N_STAGES = _dop.N_STAGES
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
 N_PAR = 8
 I_DIR, I_PERIOD, I_PARTNER, I_EVENTS, I_FREE, I_SAMPLE, I_NEV, I_RECORD = range(8)
-I_K, I_OP, I_EVERETT, I_STUCK, I_PUSHED, I_OUTSIDE = range(8, 14)
-N_IST = 14
-S_TAU, S_Q, S_V, S_BP, S_U0, S_Y0, S_SLOPE, S_M = range(8)
-N_ST = 8
+I_K, I_OP, I_EVERETT, I_STUCK, I_PUSHED, I_OUTSIDE, I_RPTR = range(8, 15)
+N_IST = 15
+S_TAU, S_Q, S_V, S_BP, S_U0, S_Y0, S_SLOPE, S_M, S_RELAY, S_CBP, S_RBP = range(11)
+N_ST = 11
+#: columns of ``rel`` (one row per relay of a composite: thresholds, weight, output ±1)
+R_ALPHA, R_BETA, R_WEIGHT, R_OUT = range(4)
 
 OP_PI = 0
 OP_PREISACH = 1
@@ -115,6 +117,7 @@ GROW = 1
 EVENTS_FULL = 2
 DIVERGED = 3
 STUCK = 4
+GRAZING = 5
 
 _EPS = 2.220446049250313e-16
 #: d/dz erf(z) = (2/√π) exp(−z²)
@@ -143,7 +146,7 @@ def _operator(ist, st, ep, et, q):
             z = (q - ep[2 + 3 * j]) * ep[3 + 3 * j]
             y += a * math.erf(z)
             s += a * ep[3 + 3 * j] * _TWO_OVER_SQRT_PI * math.exp(-z * z)
-        return y, s, 0.0
+        return y + st[S_RELAY], s, 0.0
     m = st[S_M]
     u = q
     outside = ist[I_OUTSIDE] != 0
@@ -153,9 +156,9 @@ def _operator(ist, st, ep, et, q):
         u = min(max(q, ep[0]), ep[1])
     if ist[I_DIR] > 0:
         e, ea, eb = everett_eval(ist[I_EVERETT], ep, et, u, m)
-        return st[S_Y0] + 2.0 * e, 0.0 if outside else 2.0 * ea, 2.0 * eb
+        return st[S_Y0] + 2.0 * e + st[S_RELAY], 0.0 if outside else 2.0 * ea, 2.0 * eb
     e, ea, eb = everett_eval(ist[I_EVERETT], ep, et, m, u)
-    return st[S_Y0] - 2.0 * e, 0.0 if outside else -2.0 * eb, -2.0 * ea
+    return st[S_Y0] - 2.0 * e + st[S_RELAY], 0.0 if outside else -2.0 * eb, -2.0 * ea
 
 
 @njit(cache=True)
@@ -326,13 +329,150 @@ def output_now(ist, st, ep, et):
 
 
 # --------------------------------------------------------------------------------------------
+# the relays of a composite (play + relays): constant output between their thresholds
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def relay_seek(ist, st, rel, rord):
+    """The relays' next threshold ahead of q (``S_RBP``; ``±inf`` if none) and the scan
+    pointer ``I_RPTR`` at it. Rising: the least α of the down relays (every relay with
+    α <= q is up); falling: the greatest β of the up relays (every relay with β > q is down).
+    In plain Python, rising::
+
+        order = argsort(alpha);  i = first index with alpha[order[i]] >= q
+        while i < n and out[order[i]] == +1:  i += 1      # skip the relays already up
+        bp = alpha[order[i]] if i < n else inf
+
+    The scan starts where the last one stopped while the direction is unchanged (the input
+    only moved on), so a branch costs O(N) in all, a binary search per reversal."""
+    n = rel.shape[0]
+    if n == 0:
+        st[S_RBP] = ist[I_DIR] * np.inf
+        return
+    d = ist[I_DIR]
+    q = st[S_Q]
+    i = ist[I_RPTR]
+    if d > 0:
+        order = rord[0]
+        if i < 0:  # a new direction: binary search
+            lo, hi = 0, n
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if rel[order[mid], R_ALPHA] < q:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            i = lo
+        while i < n and rel[order[i], R_OUT] > 0.0:
+            i += 1
+        ist[I_RPTR] = i
+        st[S_RBP] = rel[order[i], R_ALPHA] if i < n else np.inf
+    else:
+        order = rord[1]
+        if i < 0:
+            lo, hi = 0, n
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if rel[order[mid], R_BETA] <= q:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            i = n - 1 - (lo - 1)  # counted from the top: the greatest β <= q first
+        while i < n and rel[order[n - 1 - i], R_OUT] < 0.0:
+            i += 1
+        ist[I_RPTR] = i
+        st[S_RBP] = rel[order[n - 1 - i], R_BETA] if i < n else -np.inf
+
+
+@njit(cache=True)
+def merge_breakpoints(ist, st, rel, rord):
+    """After the continuous branch set ``S_BP``: keep it as ``S_CBP``, seek the relays' next
+    threshold and make ``S_BP`` the nearer of the two."""
+    st[S_CBP] = st[S_BP]
+    nearest_breakpoint(ist, st, rel, rord)
+
+
+@njit(cache=True)
+def nearest_breakpoint(ist, st, rel, rord):
+    """``S_BP`` := the nearer of the continuous branch's ``S_CBP`` and the relays' next
+    threshold (sought afresh from the scan pointer)."""
+    relay_seek(ist, st, rel, rord)
+    if ist[I_DIR] > 0:
+        st[S_BP] = min(st[S_CBP], st[S_RBP])
+    else:
+        st[S_BP] = max(st[S_CBP], st[S_RBP])
+
+
+@njit(cache=True)
+def relay_output(rel):
+    """``Σ w_i y_i`` of the relays (in table order)."""
+    total = 0.0
+    for i in range(rel.shape[0]):
+        total += rel[i, R_WEIGHT] * rel[i, R_OUT]
+    return total
+
+
+@njit(cache=True)
+def _relay_switch(par, ist, st, rel, rord, Y):
+    """Switch every relay at the threshold reached (``q = S_RBP``): rising, the down relays
+    with α = q go up; falling, the up relays with β = q go down (the relay rule ``u < β``
+    holds just past it). The output jumps by ``Δy = Σ 2 w_i·(±1)`` and each tangent column
+    gets the saltation ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). Returns False at a
+    turning point with the tangent flow on (infinite saltation: the caller raises)."""
+    n = rel.shape[0]
+    d = ist[I_DIR]
+    q = st[S_RBP]
+    i = ist[I_RPTR]
+    jump = 0.0
+    if d > 0:
+        order = rord[0]
+        while i < n and rel[order[i], R_ALPHA] == q:
+            j = order[i]
+            if rel[j, R_OUT] < 0.0:
+                rel[j, R_OUT] = 1.0
+                jump += 2.0 * rel[j, R_WEIGHT]
+            i += 1
+    else:
+        order = rord[1]
+        while i < n and rel[order[n - 1 - i], R_BETA] == q:
+            j = order[n - 1 - i]
+            if rel[j, R_OUT] > 0.0:
+                rel[j, R_OUT] = -1.0
+                jump -= 2.0 * rel[j, R_WEIGHT]
+            i += 1
+    ist[I_RPTR] = i
+    st[S_RELAY] = relay_output(rel)  # summed afresh: no drift of a running sum
+    k = ist[I_K]
+    if k > 0 and jump != 0.0:
+        v = st[S_V]
+        if v == 0.0:
+            return False
+        f = par[P_C] * jump / v
+        for j in range(k):
+            Y[1, j] += f * Y[0, j]
+    return True
+
+
+# --------------------------------------------------------------------------------------------
 # events
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev):
-    """Apply a breakpoint (kind +1) or reversal (kind −1) at the current (q, v)."""
+def _event(
+    par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev, rel,
+    rord,
+):  # fmt: skip
+    """Apply a breakpoint (kind +1: a wall, a wipe-out, relays switching, or several at one
+    input) or a reversal (kind −1) at the current (q, v); False at a grazing relay switch."""
     k = ist[I_K]
     q = st[S_Q]
+    if kind > 0 and rel.shape[0] > 0 and st[S_BP] == st[S_RBP]:
+        if not _relay_switch(par, ist, st, rel, rord, Y):
+            return False
+        if st[S_BP] != st[S_CBP]:  # the continuous branch goes on
+            nearest_breakpoint(ist, st, rel, rord)
+            _record_event(par, ist, st, kind, ep, et, ev)
+            return True
+    if kind < 0:
+        ist[I_RPTR] = -1  # a new direction: the relays' scan starts afresh
     if ist[I_OP] == OP_PI:
         pi_sync(ist, st, hw, pos, slv)
         for i in range(hw.size):  # the operator's own update (apply): clamp to the finger
@@ -368,6 +508,15 @@ def _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, 
             ist[I_PUSHED] = 1
         st[S_U0] = q  # the branch start (u0)
         preisach_branch(ist, st, stack, prefix, dlo, dhi, Y, F)
+    merge_breakpoints(ist, st, rel, rord)
+    _record_event(par, ist, st, kind, ep, et, ev)
+    return True
+
+
+@njit(cache=True)
+def _record_event(par, ist, st, kind, ep, et, ev):
+    """Count the event and, when recording, write (t, q, v, kind, M after it)."""
+    q = st[S_Q]
     ist[I_EVENTS] += 1
     if ist[I_RECORD]:
         i = ist[I_NEV]
@@ -535,8 +684,9 @@ def _sync(ist, st, hw, pos, slv, Y):
 
 @njit(cache=True)
 def _to_target(
-    par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev, work
-):
+    par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev, work,
+    rel, rord,
+):  # fmt: skip
     """Integrate to (period nt, time taut), handling every event on the way."""
     k = ist[I_K]
     n = 2 + 2 * k
@@ -641,9 +791,12 @@ def _to_target(
             y[1] = 0.0  # v := 0 exactly
         _store(st, Y, y, k)
         _sync(ist, st, hw, pos, slv, Y)
-        _event(
-            par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev
-        )
+        if not _event(
+            par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev,
+            rel, rord,
+        ):  # fmt: skip
+            _store(st, Y, y, k)
+            return GRAZING
         ist[I_STUCK] = ist[I_STUCK] + 1 if tau == 0.0 else 0
         if ist[I_STUCK] > _MAX_STUCK:
             return STUCK
@@ -656,7 +809,7 @@ def _to_target(
 @njit(cache=True)
 def run(
     par, ist, st, nts, tauts, out, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F,
-    ev, work,
+    ev, work, rel, rord,
 ):  # fmt: skip
     """Advance through the targets ``(nts[i], tauts[i])`` from sample ``ist[I_SAMPLE]`` on, writing
     ``(q, v, M)`` into ``out[i]``; returns a status code (module docstring)."""
@@ -664,7 +817,7 @@ def run(
     while i < nts.size:
         status = _to_target(
             par, ist, st, nts[i], tauts[i], hw, wt, pos, slv, free, stack, prefix, dlo, dhi,
-            ep, et, Y, F, ev, work,
+            ep, et, Y, F, ev, work, rel, rord,
         )  # fmt: skip
         if status != DONE:
             return status

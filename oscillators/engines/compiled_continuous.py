@@ -58,6 +58,7 @@ from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
     Engine,
+    GrazingError,
     StepBudgetError,
     TangentFlow,
     split_times,
@@ -203,6 +204,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             self._et = scale.reshape(1, 1, -1)
             self._ep = np.zeros(1 + 3 * self._hw.size)
             self._Y = np.zeros((3 + self._hw.size, 0))
+            self._relays(spec, op_state)
             self._branch()
         else:
             everett = spec.everett
@@ -227,11 +229,32 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             self._st[4] = q
             self._ist[12] = 1 if reversing else 0
             self._Y = np.zeros((3 + cap, 0))
+            self._relays(spec, op_state)
             _k.preisach_init(self._ist, self._ep, self._et, self._stack, self._prefix, self._dlo,
                              self._dhi, p)  # fmt: skip
             self._branch()
 
     # -- helpers -------------------------------------------------------------------------------
+    def _relays(self, spec: Any, op_state: Any) -> None:
+        """The relays of a composite (``rel``: α, β, weight, output per relay; ``rord``: the
+        orders of α and of β), none otherwise."""
+        self._ist[_k.I_RPTR] = -1
+        if getattr(spec, "relay_alpha", None) is None:
+            self._rel = np.zeros((0, 4))
+            self._rord = np.zeros((2, 0), dtype=np.int64)
+            return
+        self._rel = np.column_stack(
+            [spec.relay_alpha, spec.relay_beta, spec.relay_weights,
+             np.asarray(spec.relay_outputs(op_state), dtype=np.float64)]
+        )  # fmt: skip
+        self._rord = np.vstack(
+            [
+                np.argsort(spec.relay_alpha, kind="stable"),
+                np.argsort(spec.relay_beta, kind="stable"),
+            ]
+        ).astype(np.int64)
+        self._st[_k.S_RELAY] = _k.relay_output(self._rel)
+
     def _branch(self) -> None:
         """Rebuild the current branch (and the tangent force) from the kernel's state."""
         if self._ist[9] == _k.OP_PI:
@@ -240,6 +263,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         else:
             _k.preisach_branch(self._ist, self._st, self._stack, self._prefix, self._dlo,
                                self._dhi, self._Y, self._F)  # fmt: skip
+        _k.merge_breakpoints(self._ist, self._st, self._rel, self._rord)
 
     def _grow(self) -> None:
         """Double the staircase capacity (Preisach), keeping its contents."""
@@ -283,7 +307,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             status = _k.run(
                 self._par, ist, self._st, n_t, tau_t, buf, self._hw, self._wt, self._pos,
                 self._slv, self._free, self._stack, self._prefix, self._dlo, self._dhi, self._ep,
-                self._et, self._Y, self._F, self._ev, self._work,
+                self._et, self._Y, self._F, self._ev, self._work, self._rel, self._rord,
             )  # fmt: skip
             if record and ist[6] > 0:
                 self._events.append(self._ev[: ist[6]].copy())
@@ -295,6 +319,12 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             elif status == _k.DIVERGED:
                 self.check_finite(np.array([self._st[1], self._st[2]]))
                 raise DivergenceError("compiled continuous engine: diverged")  # not reached
+            elif status == _k.GRAZING:
+                raise GrazingError(
+                    f"compiled continuous engine: relays switch at a turning point (q = "
+                    f"{self._st[1]}, t = {self.start.t + self.elapsed:.6g}): the saltation "
+                    "C·Δy/v* is infinite, so the flow map is not differentiable on this orbit"
+                )
             elif status == _k.STUCK:
                 raise RuntimeError(
                     f"compiled continuous engine: no progress at q={self._st[1]} "
@@ -323,7 +353,10 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         self.check_finite(np.array([q, v]))
         if self._ist[9] == _k.OP_PI:
             make = self._spec.make_state
-            op_state = (self._op.state if make is None else make)(self._pos.copy(), q)
+            if self._rel.shape[0]:
+                op_state = make(self._pos.copy(), q, self._rel[:, _k.R_OUT].copy())
+            else:
+                op_state = (self._op.state if make is None else make)(self._pos.copy(), q)
         else:
             extrema = self._memory()
             if extrema.size == 0 or extrema[-1] != q:
