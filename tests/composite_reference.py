@@ -119,8 +119,10 @@ class Reference:
         if self.v != 0.0:
             self.d = 1 if self.v > 0.0 else -1
         else:
-            acc = -self.q + math.cos(self.phi0 + self.omega * self.t) + self.coupling * (
-                self.model.output(self.w, self.y)
+            acc = (
+                -self.q
+                + math.cos(self.phi0 + self.omega * self.t)
+                + self.coupling * (self.model.output(self.w, self.y))
             )
             self.d = 1 if acc >= 0.0 else -1
 
@@ -179,7 +181,10 @@ class Reference:
             bp = self._breakpoint(slaved)
 
             def rhs(t, x, force=force):
-                return [x[1], -2.0 * zeta * x[1] - x[0] + math.cos(phi0 + omega * t) + c * force(x[0])]
+                return [
+                    x[1],
+                    -2.0 * zeta * x[1] - x[0] + math.cos(phi0 + omega * t) + c * force(x[0]),
+                ]
 
             def reversal(t, x):
                 return x[1]
@@ -210,7 +215,11 @@ class Reference:
                 if math.isfinite(bp) and d * (x_stop[0] - bp) >= 0.0:
                     # passed bp and turned back within one step: q is monotone on [t, t_stop]
                     t_stop = brentq(
-                        lambda s: sol.sol(s)[0] - bp, self.t, t_stop, xtol=1e-15, rtol=4e-16
+                        lambda s, sol=sol, bp=bp: sol.sol(s)[0] - bp,
+                        self.t,
+                        t_stop,
+                        xtol=1e-15,
+                        rtol=4 * np.finfo(float).eps,
                     )
                     x_stop, kind = sol.sol(t_stop), "breakpoint"
             else:
@@ -247,7 +256,13 @@ class Reference:
         else:
             self.d = -d
         self.events.append(
-            (t, 1 if kind == "breakpoint" else -1, self.q, self.v, m.output(self.w, self.y) - before)
+            (
+                t,
+                1 if kind == "breakpoint" else -1,
+                self.q,
+                self.v,
+                m.output(self.w, self.y) - before,
+            )
         )
 
 
