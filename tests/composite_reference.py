@@ -98,8 +98,9 @@ class Model:
 class Reference:
     """The reference's state (mutable; one orbit) and its event log.
 
-    ``events`` rows: ``(t, kind, q, v, ΔM)``, kind +1 a breakpoint, −1 a reversal; ``switches``
-    the times at which relays switched (``M`` jumps there)."""
+    ``events`` rows: ``(t, kind, q, v, ΔM, rate)``, kind +1 a breakpoint, −1 a reversal, rate
+    the speed of the event function there (``v*``, or the acceleration at a reversal);
+    ``switches`` the times at which relays switched (``M`` jumps there)."""
 
     model: Model
     coupling: float
@@ -255,14 +256,14 @@ class Reference:
                 self.y[(self.y > 0) & (m.beta == bp)] = -1.0
         else:
             self.d = -d
+        after = m.output(self.w, self.y)
+        # how fast the event function crosses zero: v* at a breakpoint, the acceleration at a
+        # reversal (M is continuous there); an error δ in the state moves the event by δ/rate
+        rate = self.v
+        if kind == "reversal":
+            rate = -self.q + math.cos(self.phi0 + self.omega * t) + self.coupling * after
         self.events.append(
-            (
-                t,
-                1 if kind == "breakpoint" else -1,
-                self.q,
-                self.v,
-                m.output(self.w, self.y) - before,
-            )
+            (t, 1 if kind == "breakpoint" else -1, self.q, self.v, after - before, rate)
         )
 
 

@@ -116,7 +116,7 @@ def tolerance(ref, coupling: float, engine_rtol: float = ENGINE_RTOL) -> float:
     ``10·(rtol_ref + rtol_engine)·(1 + n_events)·max(1, max |C·ΔM/v*|)``. (Measured: 4e-12 to
     5e-12 for the single operators on the compiled engines, 4e-11 to 2e-10 for the sums on the
     generic engine, with 80–240 events; the bound is 9e-9 to 8e-8.)"""
-    gains = [abs(coupling * jump / v) for _, _, _, v, jump in ref.events if jump != 0.0]
+    gains = [abs(coupling * jump / v) for _, _, _, v, jump, _ in ref.events if jump != 0.0]
     gain = max([1.0, *gains])
     return 10.0 * (RTOL + engine_rtol) * (1 + len(ref.events)) * gain
 
@@ -136,10 +136,16 @@ def assert_matches_reference(op, model: Model, coupling: float) -> ForcedOscilla
     tol = tolerance(ref, coupling)
     np.testing.assert_allclose(traj.q, out[:, 0], rtol=0, atol=tol)
     np.testing.assert_allclose(traj.v, out[:, 1], rtol=0, atol=tol)
-    # M jumps at a switch: a sample within the switch-time uncertainty may fall on either side
+    # an event's time is uncertain by the state's error over the event function's speed
+    window = 10.0 * tol / min(abs(e[5]) for e in ref.events)
+    events = np.array([e[:2] for e in ref.events])
+    if traj.events is not None:  # the continuous engines: every wall hit, switch, reversal
+        np.testing.assert_array_equal(traj.events["kind"], events[:, 1])
+        np.testing.assert_allclose(traj.events["time"], events[:, 0], rtol=0, atol=window)
     switches = ref.switches
-    speeds = [abs(v) for _, _, _, v, jump in ref.events if jump != 0.0]
-    window = 10.0 * tol / min(speeds) if speeds else 0.0
+    if traj.switches.size:  # the relay engine: every switch
+        np.testing.assert_allclose(traj.switches["time"], switches, rtol=0, atol=window)
+    # M jumps at a switch: a sample within the switch-time uncertainty may fall on either side
     away = ~near_switch(traj.t, switches, window)
     np.testing.assert_allclose(traj.M[away], out[away, 2], rtol=0, atol=tol)
     # the operator state handed back holds the reference's memory at the end
