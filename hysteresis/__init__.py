@@ -6,6 +6,7 @@ from hysteresis._version import __version__
 # fail early, naming the culprit, if an unrelated distribution also installs "hysteresis"
 _check_import_name("hysteresis")
 
+from hysteresis.algebra import BranchSum, RelaySum, SumState, WeightedSum, weighted_sum
 from hysteresis.base import (
     Branch,
     ContinuousHysteron,
@@ -29,6 +30,11 @@ from hysteresis.relay_table import NestedPlan, RelayTable
 from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
 
 __all__ = [
+    "BranchSum",
+    "RelaySum",
+    "SumState",
+    "WeightedSum",
+    "weighted_sum",
     "BranchFlow",
     "__version__",
     "Branch",

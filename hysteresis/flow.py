@@ -56,7 +56,9 @@ there. A composite with piecewise-constant parts (``0.5 * play + 0.5 * relays``,
   a rising input switches a relay at ``u = α`` (``u >= α``), a falling one at the largest float
   below ``β`` (``u < β``), so the branch reports ``nextafter(β, -inf)`` and an integrator that
   stops exactly at the breakpoint and applies the operator there sees the switch. The
-  oscillator's saltation there is ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
+  oscillator's saltation there is ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``).
+
+A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
 Prandtl–Ishlinskii push nothing (``V_in = I``); a continuous Preisach model remembers ``u*`` as a
 new extremum (``reversal_pushes``), a new memory variable with ``δm := δu``. A branch that starts
 with such a reversal relative to its state (the state's last motion went the other way) flags
@@ -188,7 +190,11 @@ class CompiledFlow:
 
     ``kind`` ``"prandtl_ishlinskii"``: ``half_widths`` ``r_i`` and ``weights`` ``a_i`` of the
     plays (the states have ``positions`` and ``input``; the operator rebuilds a state with
-    ``state(positions, input)``). ``kind`` ``"preisach"``: ``everett``, the model's Everett
+    ``state(positions, input)``), optionally ``spreads`` ``R_i`` (``0``: the play's output is
+    its wagon ``w_i``; ``R_i > 0``: ``erf(w_i/(√2 R_i))``, an erf play), so that
+    ``y = Σ a_i f_i(w_i)``. A composite whose states are not of that form hands over
+    ``positions(state)`` (the wagon positions of a state) and ``make_state(positions, input)``
+    (the state from them) instead. ``kind`` ``"preisach"``: ``everett``, the model's Everett
     function as a :class:`~hysteresis.preisach.everett_table.CompiledEverett` (the states have
     ``extrema``; the operator rebuilds a state with ``state_from_extrema(extrema)``).
     ``label(i)`` names memory variable ``i`` as :meth:`BranchFlow.labels` does (``"w3"``,
@@ -200,6 +206,9 @@ class CompiledFlow:
     half_widths: np.ndarray | None = None
     weights: np.ndarray | None = None
     everett: object | None = None
+    spreads: np.ndarray | None = None
+    positions: Callable | None = None
+    make_state: Callable | None = None
 
     def __post_init__(self) -> None:
         if self.kind == "prandtl_ishlinskii":
@@ -209,6 +218,13 @@ class CompiledFlow:
                 raise ValueError("half_widths and weights must be 1-D of one (non-zero) length")
             object.__setattr__(self, "half_widths", hw)
             object.__setattr__(self, "weights", wt)
+            spreads = np.zeros(hw.size) if self.spreads is None else self.spreads
+            sp = readonly_array(spreads)
+            if sp.shape != hw.shape or not np.all(sp >= 0.0):
+                raise ValueError("spreads must be >= 0, one per play (0: the identity shape)")
+            object.__setattr__(self, "spreads", sp)
+            if (self.positions is None) != (self.make_state is None):
+                raise ValueError("positions and make_state come together (a composite's states)")
         elif self.kind == "preisach":
             if self.everett is None:
                 raise ValueError("a 'preisach' CompiledFlow needs its compiled Everett function")

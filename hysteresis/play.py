@@ -522,6 +522,14 @@ class GeneralizedPlay(_PlayBase):
             hi = float(self._shape(np.array(np.inf)))
         return (lo if not math.isnan(lo) else -np.inf, hi if not math.isnan(hi) else np.inf)
 
+    @property
+    def max_slope(self) -> float | None:
+        """The steepest branch slope: ``max f'`` of the erf shape, ``1/(R√(2π))`` at ``w = 0``
+        (on a wall the branch is ``f(u ∓ p/2)``); ``None`` for a user's shape (not known)."""
+        if self.shape_kind == "erf":
+            return 1.0 / (float(self._spread) * math.sqrt(2.0 * math.pi))
+        return None
+
     #: the shape table (built on the first compiled_play() call) is rebuilt, not pickled
     _transient_attributes = ("_shape_table",)
 

@@ -26,6 +26,7 @@ from hysteresis.base import Hysteron, HysteronState
 from oscillators.engines import (
     DivergenceError,
     Engine,
+    python_path_reason,
     require_tangent_flow,
     select_engine,
     wrap_phase,
@@ -142,6 +143,13 @@ class ForcedOscillator:
     def engine_class(self) -> type[Engine]:
         """The engine chosen for the operator (from its contract)."""
         return self._engine_cls
+
+    @property
+    def engine_description(self) -> str:
+        """The engine's name, and why a composite runs on the generic engine where it does."""
+        reason = python_path_reason(self._operator)
+        name = getattr(self._engine_cls, "name", self._engine_cls.__name__)
+        return name if reason is None else f"{name} (Python path: {reason})"
 
     def __repr__(self) -> str:
         return (

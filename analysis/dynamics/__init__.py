@@ -7,7 +7,8 @@ bifurcation diagrams (:mod:`~analysis.dynamics.bifurcation`), the statistics of 
 measurements (:mod:`~analysis.dynamics.statistics`), where one start ends
 (:mod:`~analysis.dynamics.attractors`) and basins of attraction (:mod:`~analysis.dynamics.basins`,
 :mod:`~analysis.dynamics.basin_map`), periodic orbits (:mod:`~analysis.dynamics.periodic_orbits`)
-and their continuation (:mod:`~analysis.dynamics.continuation`). Shared by them, once each: the
+and their continuation (:mod:`~analysis.dynamics.continuation`; the stable stretch of a branch:
+:mod:`~analysis.dynamics.stable_range`). Shared by them, once each: the
 period of a section (:mod:`~analysis.dynamics.periods`), Floquet multipliers
 (:mod:`~analysis.dynamics.floquet`), Newton's method (:mod:`~analysis.dynamics.newton`).
 

@@ -1,4 +1,6 @@
-"""Ensemble statistics over disorder realizations: self-averaging, variance, PDFs, power laws."""
+"""Ensemble statistics over disorder realizations: self-averaging, variance, PDFs, power laws,
+and the sampling errors of these estimates (standard error of a mean, of a ratio of two standard
+deviations, of a two-point power-law slope; the Kolmogorov–Smirnov and Wilson scales)."""
 
 from __future__ import annotations
 
@@ -19,6 +21,11 @@ __all__ = [
     "PowerLawFit",
     "Z95",
     "wilson_interval",
+    "standard_error_of_mean",
+    "std_ratio_relative_error",
+    "ks_sampling_scale",
+    "local_exponent",
+    "variance_slope_stderr",
 ]
 
 #: two-sided 95 % normal quantile
@@ -174,3 +181,73 @@ def power_law_fit(
     else:
         stderr = float("nan")
     return PowerLawFit(exponent=slope, stderr=stderr, prefactor=float(np.exp(intercept)), n=n)
+
+
+def standard_error_of_mean(values: Sequence[float] | np.ndarray) -> float:
+    """Standard error of the mean of the finite entries of ``values``: ``std/sqrt(n)`` with the
+    population standard deviation (divided by ``n``, as the paper's overlines), over the ``n``
+    finite entries only (a realization whose statistic is ``nan`` or ``inf`` is left out).
+
+    ``nan`` for fewer than two finite entries (one value has no spread to estimate from)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(np.std(v) / math.sqrt(v.size)) if v.size > 1 else float("nan")
+
+
+def std_ratio_relative_error(realizations: int) -> float:
+    """Relative standard error of a ratio of two sample standard deviations, each from
+    ``realizations`` = k independent Gaussian samples.
+
+    A sample standard deviation of k Gaussian values has relative standard error
+    ``1/sqrt(2(k−1))``; the two are independent, so their ratio has
+    ``sqrt(2 · 1/(2(k−1))) = 1/sqrt(k−1)`` (to first order). ``inf`` for k <= 1."""
+    return 1.0 / math.sqrt(realizations - 1) if realizations > 1 else float("inf")
+
+
+def ks_sampling_scale(n1: int, n2: int) -> float:
+    """The two-sample Kolmogorov–Smirnov 95 % critical distance ``1.36 sqrt((n1+n2)/(n1 n2))``
+    (the asymptotic Kolmogorov quantile ``c(0.05) = 1.36``): the scale of the KS statistic's
+    sampling noise between two samples of one distribution with ``n1`` and ``n2`` independent
+    points. Successive points of a trajectory are correlated (fewer independent points), so for
+    them it is a lower bound. ``inf`` if a sample is empty."""
+    if n1 < 1 or n2 < 1:
+        return float("inf")
+    return 1.36 * math.sqrt((n1 + n2) / (n1 * n2))
+
+
+def _one_d(ns: Sequence[float] | np.ndarray, name: str = "ns") -> np.ndarray:
+    n = np.asarray(ns)
+    if n.ndim != 1:
+        raise ValueError(f"{name} must be a 1-D sequence, got shape {n.shape}")
+    return n
+
+
+def local_exponent(ns: Sequence[float] | np.ndarray, var: Sequence[float] | np.ndarray) -> float:
+    """Local (two-point) power-law exponent of ``var`` in ``ns`` at the two largest sizes: the
+    log-log slope ``ln(var[-1]/var[-2]) / ln(ns[-1]/ns[-2])`` (``ns`` ascending; paper fig:mag:
+    ``VAR[M] ∝ N^slope``, −1 for independent dimers, 0 for a non-self-averaging magnetization).
+
+    Its standard error from the sampling of the two variances is
+    :func:`variance_slope_stderr`. ``nan`` for fewer than two sizes or a variance <= 0 (no
+    logarithm)."""
+    n = _one_d(ns)
+    v = np.asarray(var, dtype=float)
+    if v.shape != n.shape:
+        raise ValueError(f"var must have the shape of ns {n.shape}, got {v.shape}")
+    if n.size < 2 or v[-1] <= 0 or v[-2] <= 0:
+        return float("nan")
+    return float(np.log(v[-1] / v[-2]) / np.log(n[-1] / n[-2]))
+
+
+def variance_slope_stderr(ns: Sequence[float] | np.ndarray, realizations: int) -> float:
+    """Standard error of :func:`local_exponent` when each variance is a sample variance over
+    ``realizations`` = K independent realizations.
+
+    A sample variance of K Gaussian values has relative standard error ``sqrt(2/(K−1))``, so its
+    logarithm has that standard error; the two variances are independent, so the difference of
+    their logarithms has ``sqrt(2 · 2/(K−1))``, and the slope ``sqrt(4/(K−1)) / ln(N2/N1)``.
+    ``nan`` for fewer than two sizes, K < 2 or sizes not increasing."""
+    n = _one_d(ns)
+    if n.size < 2 or realizations < 2 or n[-1] <= n[-2]:
+        return float("nan")
+    return math.sqrt(4.0 / (realizations - 1)) / math.log(n[-1] / n[-2])

@@ -10,7 +10,8 @@ Modules, by job:
 - :mod:`~analysis.identification.density` — the identification itself
   (:func:`identify_preisach`, :func:`identify_from_curves`);
 - :mod:`~analysis.identification.smoothing` — the smoothed density (local quadratic regression);
-- :mod:`~analysis.identification.metrics` — comparison with the paper's ridge density;
+- :mod:`~analysis.identification.metrics` — comparison with the paper's ridge density
+  (:func:`compare_with_ridge`, and cell by cell along the ridge: :func:`compare_ridge_bins`);
 - :mod:`~analysis.identification.forc_io` — instrument FORC files (CSV, MicroMag, Lake Shore;
   the readers live in :mod:`analysis.identification.forc_files`);
 - :mod:`~analysis.identification.fitting` — Preisach / Prandtl–Ishlinskii models fitted to
@@ -32,7 +33,9 @@ from analysis.identification.curves import (
 )
 from analysis.identification.density import auto_grid, identify_from_curves, identify_preisach
 from analysis.identification.metrics import (
+    RidgeBins,
     RidgeComparison,
+    compare_ridge_bins,
     compare_with_ridge,
     empirical_cdf,
     s_cdf_distance,
@@ -44,6 +47,7 @@ __all__ = [
     "ReversalCurves",
     "PreisachIdentification",
     "RidgeComparison",
+    "RidgeBins",
     "measure_reversal_curves",
     "identify_preisach",
     "identify_from_curves",
@@ -53,6 +57,7 @@ __all__ = [
     "s_cdf_distance",
     "empirical_cdf",
     "compare_with_ridge",
+    "compare_ridge_bins",
     "regular_grid",
     "protocol_lattice",
     "grid_quadratic_density",

@@ -5,30 +5,27 @@ uncertainty (a standard error, a number of realizations, a grid step) and return
 :data:`~analysis.paper.context.VERDICTS`. The criterion is always the paper's (or the one the
 claim states); a result is *inconclusive* only where the run's own uncertainty straddles that
 criterion, never because a threshold was moved. The functions are pure so that they can be
-tested on synthetic numbers without a simulation.
+tested on synthetic numbers without a simulation. The statistics and their uncertainties are
+measured in :mod:`analysis.dynamics.statistics`.
 """
 
 from __future__ import annotations
 
 import math
 
-from analysis.dynamics.statistics import Z95, wilson_interval
+from analysis.dynamics.statistics import Z95, ks_sampling_scale, wilson_interval
 from analysis.paper.context import AGREE, DISAGREE, INCONCLUSIVE
 
 __all__ = [
-    "Z95",
     "below",
     "combine",
     "every_in_window",
     "majority_in_window",
     "needs_size",
-    "ks_sampling_scale",
     "ks_below",
     "mean_within",
     "onset_within",
     "power_law_exponent",
-    "std_ratio_relative_error",
-    "wilson",
     "fraction_matches",
 ]
 
@@ -82,18 +79,12 @@ def onset_within(onset: float, target: float, tol: float, step: float) -> str:
     return INCONCLUSIVE
 
 
-def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """95 % Wilson score interval of a binomial fraction ``k/n`` (``nan`` for ``n = 0``):
-    :func:`analysis.dynamics.statistics.wilson_interval`."""
-    return wilson_interval(k, n, z)
-
-
 def fraction_matches(k: int, n: int, target: float) -> str:
     """Claim "the fraction is ≈ ``target``" from ``k`` of ``n``: disagree if ``target`` is outside
     the 95 % Wilson interval; inconclusive if it is inside but the interval is wider than
     ``target`` itself (it could not tell ``target`` from half or twice as much, or from none);
     agree otherwise."""
-    lo, hi = wilson(k, n)
+    lo, hi = wilson_interval(k, n)
     if not _finite(lo, hi):
         return INCONCLUSIVE
     if not lo <= target <= hi:
@@ -114,23 +105,9 @@ def power_law_exponent(exponent: float, stderr: float, target: float, floor: flo
     return INCONCLUSIVE if abs(exponent) <= 3.0 * stderr else AGREE
 
 
-def std_ratio_relative_error(realizations: int) -> float:
-    """Relative standard error of a ratio of two sample standard deviations, each from
-    ``realizations`` independent Gaussian samples: ``sqrt(2 · 1/(2(k−1))) = 1/sqrt(k−1)``."""
-    return 1.0 / math.sqrt(realizations - 1) if realizations > 1 else float("inf")
-
-
-def ks_sampling_scale(n1: int, n2: int) -> float:
-    """The two-sample Kolmogorov–Smirnov 95 % critical distance ``1.36 sqrt((n1+n2)/(n1 n2))``:
-    the scale of the statistic's sampling noise (a lower bound for correlated samples)."""
-    if n1 < 1 or n2 < 1:
-        return float("inf")
-    return 1.36 * math.sqrt((n1 + n2) / (n1 * n2))
-
-
 def ks_below(distance: float, n1: int, n2: int, threshold: float) -> str:
     """Claim "KS distance < ``threshold``": decided only if the distance is farther from the
-    threshold than its sampling scale :func:`ks_sampling_scale`."""
+    threshold than its sampling scale :func:`~analysis.dynamics.statistics.ks_sampling_scale`."""
     return below(distance, ks_sampling_scale(n1, n2), threshold)
 
 

@@ -55,7 +55,6 @@ __all__ = [
     "ensemble_data",
     "ensemble_run_text",
     "series_of",
-    "std_error",
 ]
 
 
@@ -215,9 +214,3 @@ def ensemble_run_text(ctx: PaperContext) -> str:
 def series_of(data: dict, c: float, attr: str) -> tuple[np.ndarray, np.ndarray]:
     pts = sorted((p for (n, cc), p in data["points"].items() if cc == c), key=lambda p: p.spins)
     return np.array([p.spins for p in pts]), np.array([getattr(p, attr) for p in pts], dtype=float)
-
-
-def std_error(values: np.ndarray) -> float:
-    v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
-    return float(np.std(v) / math.sqrt(v.size)) if v.size > 1 else float("nan")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from analysis.dynamics.lyapunov import lyapunov_spectrum
+from analysis.dynamics.statistics import ks_sampling_scale
 from analysis.experiments.models import build_operator
 from analysis.experiments.parameters import (
     DAMPING_RATIO,
@@ -209,7 +210,7 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
             run=f"{periods} periods after {transient}, N={n_spins}, seed {ctx.seed}",
             verdict=outcome,
             evidence=f"{n1} and {n2} section points: the KS sampling scale 1.36·sqrt((n1+n2)/"
-            f"(n1·n2)) = {dec.ks_sampling_scale(n1, n2):.3f} (a lower bound: successive section "
+            f"(n1·n2)) = {ks_sampling_scale(n1, n2):.3f} (a lower bound: successive section "
             f"points are correlated) against |KS − 0.15| = {abs(ks - 0.15):.3f}; N = {n_spins} "
             f"(paper: {PAPER_LARGEST_N}), one disorder realization",
             explanation=reading(

@@ -7,7 +7,15 @@ import math
 
 import numpy as np
 
-from analysis.dynamics.statistics import empirical_pdf, power_law_fit
+from analysis.dynamics.statistics import (
+    Z95,
+    empirical_pdf,
+    local_exponent,
+    power_law_fit,
+    standard_error_of_mean,
+    variance_slope_stderr,
+    wilson_interval,
+)
 from analysis.experiments.parameters import (
     PAPER_LARGEST_N,
     PAPER_REGULAR_FRACTION,
@@ -24,7 +32,6 @@ from analysis.paper.ensemble_tasks import (
     ensemble_data,
     ensemble_run_text,
     series_of,
-    std_error,
 )
 from analysis.paper.prose import (
     DIM_BC_DISAGREE,
@@ -36,11 +43,9 @@ from analysis.paper.prose import (
     fmt_value,
 )
 from analysis.paper.verdicts import (
-    local_exponent,
     sap_falls,
     std_ratio_evidence,
     std_ratio_verdict,
-    variance_slope_stderr,
 )
 
 __all__ = ["FIGURES", "fig_dim", "fig_sap", "fig_mag", "fig_mag_his"]
@@ -61,7 +66,7 @@ def fig_dim(ctx: PaperContext) -> list[Claim]:
             ("mean_kaplan_yorke", "kaplan_yorke", "o", "tab:red", "$\\overline{D}_{KY}$"),
         ):
             means = np.array([getattr(p, attr) for p in pts])
-            errs = np.array([std_error(getattr(p, arr)) for p in pts])
+            errs = np.array([standard_error_of_mean(getattr(p, arr)) for p in pts])
             ax.errorbar(ns, means, yerr=errs, fmt=marker + "-", ms=4, color=color, label=label)
             out[f"{arr}_mean_C{c:g}"] = means
             out[f"{arr}_sem_C{c:g}"] = errs
@@ -87,7 +92,7 @@ def fig_dim(ctx: PaperContext) -> list[Claim]:
         ("D_BC", "mean_box_counting", "box_counting", "box_counting"),
     ):
         mean, limit_value = getattr(p4, attr), lim4[key]
-        sem = std_error(getattr(p4, arr))
+        sem = standard_error_of_mean(getattr(p4, arr))
         outcome = dec.needs_size(
             dec.mean_within(mean, sem, limit_value, 0.1), p4.spins, PAPER_LARGEST_N
         )
@@ -102,7 +107,7 @@ def fig_dim(ctx: PaperContext) -> list[Claim]:
                 "the limit value (verdict: within 0.1)",
                 paper=f"{name} nearly converges to {name}^∞",
                 measured=f"N={p4.spins}: mean {name} = {fmt_value(mean)} ± "
-                f"{fmt_value(std_error(getattr(p4, arr)))}"
+                f"{fmt_value(standard_error_of_mean(getattr(p4, arr)))}"
                 f" vs {name}^∞ = {fmt_value(limit_value)}{extra}; all N: "
                 + ", ".join(
                     f"{n}:{fmt_value(x)}" for n, x in zip(*series_of(data, 4.0, attr), strict=True)
@@ -110,7 +115,7 @@ def fig_dim(ctx: PaperContext) -> list[Claim]:
                 run=run,
                 verdict=outcome,
                 evidence=f"difference {fmt_value(mean - limit_value)} ± "
-                f"{fmt_value(dec.Z95 * sem)} (95 % "
+                f"{fmt_value(Z95 * sem)} (95 % "
                 f"interval of the mean over {p4.realizations} realizations) against the "
                 f"criterion 0.1; largest N {p4.spins} (paper: {PAPER_LARGEST_N}); convergence "
                 "with N: "
@@ -130,9 +135,9 @@ def fig_dim(ctx: PaperContext) -> list[Claim]:
     lim29 = data["limits"][2.9]
     # one threshold: D̄_KY < 1 and D_KY^∞ − D̄_KY > 0.2 <=> D̄_KY < min(1, D_KY^∞ − 0.2)
     threshold = min(1.0, lim29["kaplan_yorke"] - 0.2)
-    sem29 = std_error(p29.kaplan_yorke)
+    sem29 = standard_error_of_mean(p29.kaplan_yorke)
     outcome = dec.needs_size(
-        dec.below(p29.mean_kaplan_yorke, dec.Z95 * sem29, threshold), p29.spins, PAPER_LARGEST_N
+        dec.below(p29.mean_kaplan_yorke, Z95 * sem29, threshold), p29.spins, PAPER_LARGEST_N
     )
     claims.append(
         Claim(
@@ -140,13 +145,13 @@ def fig_dim(ctx: PaperContext) -> list[Claim]:
             "different (by > 0.2) from the limit",
             paper="D̄_KY < 1 at N = 20 000, D_KY^∞ ≈ 1.37–1.45",
             measured=f"N={p29.spins}: D̄_KY={fmt_value(p29.mean_kaplan_yorke)} ± "
-            f"{fmt_value(std_error(p29.kaplan_yorke))}, "
+            f"{fmt_value(standard_error_of_mean(p29.kaplan_yorke))}, "
             f"D_KY^∞={fmt_value(lim29['kaplan_yorke'])}; D̄_BC="
             f"{fmt_value(p29.mean_box_counting)}, D_BC^∞={fmt_value(lim29['box_counting'])}",
             run=run,
             verdict=outcome,
             evidence=f"D̄_KY = {fmt_value(p29.mean_kaplan_yorke)} ± "
-            f"{fmt_value(dec.Z95 * sem29)} (95 % "
+            f"{fmt_value(Z95 * sem29)} (95 % "
             f"interval over {p29.realizations} realizations) against min(1, D_KY^∞ − 0.2) = "
             f"{fmt_value(threshold)}; largest N {p29.spins} (paper: {PAPER_LARGEST_N}); with N: "
             + ", ".join(
@@ -263,7 +268,7 @@ def fig_sap(ctx: PaperContext) -> list[Claim]:
             ),
         ),
     ]
-    lo, hi = dec.wilson(int(reg29[-1]), k)
+    lo, hi = wilson_interval(int(reg29[-1]), k)
     claims.append(
         Claim(
             claim="C=2.9, large N: a constant fraction ≈ 20% of the realizations is regular "
@@ -366,7 +371,7 @@ def fig_mag(ctx: PaperContext) -> list[Claim]:
         slope = local_exponent(ns, var)
         slope_err = variance_slope_stderr(ns, k)
         outcome = dec.needs_size(
-            dec.below(-slope, dec.Z95 * slope_err, 0.5),  # slope > -0.5 beyond its 95 % scale
+            dec.below(-slope, Z95 * slope_err, 0.5),  # slope > -0.5 beyond its 95 % scale
             int(ns[-1]) if ns.size else 0,
             PAPER_LARGEST_N,
         )
@@ -388,7 +393,7 @@ def fig_mag(ctx: PaperContext) -> list[Claim]:
                 run=ensemble_run_text(ctx),
                 verdict=outcome,
                 evidence=f"slope {fmt_value(slope, 2)} ± "
-                f"{fmt_value(dec.Z95 * slope_err, 2)} (95 %: each "
+                f"{fmt_value(Z95 * slope_err, 2)} (95 %: each "
                 f"VAR[M] from K = {k} realizations has relative error sqrt(2/(K−1)) = "
                 f"{math.sqrt(2 / max(k - 1, 1)):.2f}) against −0.5; largest N "
                 f"{int(ns[-1]) if ns.size else 0} (paper: {PAPER_LARGEST_N}); t_end="

@@ -14,20 +14,12 @@ import numpy as np
 
 from analysis.experiments.models import build_operator
 from analysis.experiments.parameters import SPIN_COUPLING, SPREAD, WIDTH
-from analysis.identification import compare_with_ridge, identify_preisach
+from analysis.identification import compare_ridge_bins, compare_with_ridge, identify_preisach
+from analysis.identification.metrics import RIDGE_DIAGONAL_TOLERANCE
 from analysis.identification.plots import plot_density_rs, plot_s_marginal
 from analysis.paper.context import Claim, FigureSpec, PaperContext, reading, verdict
 
 __all__ = ["FIGURES"]
-
-
-def _ridge_bin_probabilities(alpha: np.ndarray, width: float, spread: float) -> np.ndarray:
-    """Gaussian probability of each α-cell of the ridge ``β = α − p``: the cell
-    ``α ∈ (α_{i−1}, α_i]`` holds the loops with ``s ∈ (α_{i−1} − p/2, α_i − p/2]``."""
-    from scipy.stats import norm
-
-    edges = (alpha - 0.5 * width) / spread
-    return np.diff(norm.cdf(edges))
 
 
 def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
@@ -166,17 +158,13 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
     # (4) the erf play's s-marginal, bin by bin, vs the exact Gaussian probabilities of the
     # same s-intervals (p/Δ integer: the ridge fills one diagonal, one cell per α interval).
     ratio = WIDTH / step
-    if abs(ratio - round(ratio)) > 1e-9:
+    if abs(ratio - round(ratio)) > RIDGE_DIAGONAL_TOLERANCE:
         err, ok_bins, how = float("nan"), False, f"p/Δ = {ratio:g} not an integer"
     else:
-        d = int(round(ratio))
-        n = limit.cell_mass.shape[0]
-        ridge = np.array([limit.cell_mass[i, i - d] for i in range(d, n)])
-        expected = _ridge_bin_probabilities(limit.alpha[d:], WIDTH, SPREAD)
-        off_ridge = float(np.abs(limit.cell_mass).sum() - np.abs(ridge).sum())
-        err = float(np.max(np.abs(ridge - expected)))
+        bins = compare_ridge_bins(limit, WIDTH, SPREAD)
+        err, off_ridge = bins.max_error, bins.off_ridge_mass
         ok_bins = err <= 1e-9 and off_ridge <= 1e-9
-        how = f"max |bin − Φ-probability| = {err:.1e} over {ridge.size} bins; off-ridge mass "
+        how = f"max |bin − Φ-probability| = {err:.1e} over {bins.bins} bins; off-ridge mass "
         how += f"{off_ridge:.1e}"
     claims.append(
         Claim(

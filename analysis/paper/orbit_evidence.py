@@ -15,45 +15,20 @@ Markdown lines that :func:`analysis.paper.runner.write_report` appends to the Di
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-import numpy as np
-
-from analysis.dynamics.continuation import Continuation, continue_orbit
+from analysis.dynamics.continuation import continue_orbit
 from analysis.dynamics.periodic_orbits import OrbitNotFoundError, find_periodic_orbit
+from analysis.dynamics.stable_range import stable_range
 from analysis.experiments.models import build_operator
 from analysis.experiments.parameters import DAMPING_RATIO
 from oscillators import ForcedOscillator
 
-__all__ = ["orbit_evidence", "orbit_lines", "stable_range"]
+__all__ = ["orbit_evidence", "orbit_lines"]
 
 #: the N = 2 dimer's lower threshold and the closed-form onset 1/(2ζ) + β
 _BETA = -1.0
 CASCADE_CLOSED_FORM = 1.0 / (2.0 * DAMPING_RATIO) + _BETA
-
-
-def stable_range(branch: Continuation, direction: float) -> dict[str, Any]:
-    """From the branch's first point, the stretch of stable points (every ``|μ| < 1``) in order:
-    its farthest parameter in the continuation ``direction`` (+1 upward, −1 downward; a branch
-    that turns back past its start at a fold keeps the side it was continued to), the event
-    that ends it (the last event before the first unstable point, if the branch turns
-    unstable) and every event."""
-    pts = branch.points
-    end = next((i for i, p in enumerate(pts) if p.max_abs_multiplier >= 1.0), len(pts))
-    stretch = [p.parameter for p in pts[: max(end, 1)]]
-    sign = math.copysign(1.0, direction)
-    extreme = max(stretch) if sign > 0 else min(stretch)
-    ending = [e for e in branch.events if e.index <= end] if end < len(pts) else []
-    event = ending[-1] if ending else None
-    return {
-        "extreme_stable_parameter": float(extreme),
-        "ended_by": event.kind if event else None,
-        "event_parameter": float(event.parameter) if event else None,
-        "event_max_abs_multiplier": float(np.max(np.abs(event.multipliers))) if event else None,
-        "stop_reason": branch.stop_reason,
-        "events": [(e.kind, float(e.parameter)) for e in branch.events],
-    }
 
 
 def _orbit_record(orbit: Any) -> dict[str, Any]:
@@ -76,7 +51,7 @@ def _window(system: ForcedOscillator, c0: float, lo: float, hi: float) -> dict[s
         # the erf play is odd: every orbit has a partner −x(t + T/2), whose branch a fold can
         # lead onto (the window's lower fold at C = 3.7575 does)
         branch = continue_orbit(system, orbit, c0, stop, step=0.005, max_points=150, symmetric=True)
-        rec[key] = stable_range(branch, stop - c0)
+        rec[key] = stable_range(branch, stop - c0).to_record()
     return rec
 
 

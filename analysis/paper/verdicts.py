@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from analysis.dynamics.period_adding import PeriodAdding
+from analysis.dynamics.statistics import Z95, std_ratio_relative_error
 from analysis.experiments.parameters import (
     PAPER_LARGEST_N,
 )
@@ -30,8 +31,6 @@ __all__ = [
     "is_period_adding",
     "cascade_verdict",
     "sap_falls",
-    "local_exponent",
-    "variance_slope_stderr",
     "std_ratio_verdict",
     "std_ratio_evidence",
 ]
@@ -94,23 +93,7 @@ def sap_falls(sap: np.ndarray, realizations: int) -> str:
     if sap[0] <= 0 or sap[-1] <= 0:  # a zero SAP (all realizations alike) has no log
         return verdict(bool(sap[-1] < sap[0])) if sap[0] != sap[-1] else INCONCLUSIVE
     rel = 2.0 / math.sqrt(realizations - 1)
-    return dec.below(math.log(sap[-1] / sap[0]), dec.Z95 * rel, 0.0)
-
-
-def local_exponent(ns: np.ndarray, var: np.ndarray) -> float:
-    """log-log slope of VAR[M] between the two largest N."""
-    if ns.size < 2 or var[-1] <= 0 or var[-2] <= 0:
-        return float("nan")
-    return float(np.log(var[-1] / var[-2]) / np.log(ns[-1] / ns[-2]))
-
-
-def variance_slope_stderr(ns: np.ndarray, realizations: int) -> float:
-    """Standard error of the log-log slope of VAR[M] between the two largest N: each variance
-    from K independent realizations has relative error sqrt(2/(K−1)) (Gaussian), so the slope
-    has ``sqrt(2 · 2/(K−1)) / ln(N2/N1)``."""
-    if len(ns) < 2 or realizations < 2 or ns[-1] <= ns[-2]:
-        return float("nan")
-    return math.sqrt(4.0 / (realizations - 1)) / math.log(ns[-1] / ns[-2])
+    return dec.below(math.log(sap[-1] / sap[0]), Z95 * rel, 0.0)
 
 
 def std_ratio_verdict(ratio: float, clt: float, realizations: int, narrows: bool) -> str:
@@ -120,16 +103,16 @@ def std_ratio_verdict(ratio: float, clt: float, realizations: int, narrows: bool
     if not (np.isfinite(ratio) and np.isfinite(clt)):
         return INCONCLUSIVE
     mid = 0.5 * (1.0 + clt)
-    half = dec.Z95 * ratio * dec.std_ratio_relative_error(realizations)
+    half = Z95 * ratio * std_ratio_relative_error(realizations)
     return dec.below(ratio, half, mid) if narrows else dec.below(-ratio, half, -mid)
 
 
 def std_ratio_evidence(ratio: float, clt: float, realizations: int, largest: int | None) -> str:
     mid = 0.5 * (1.0 + clt) if np.isfinite(clt) else float("nan")
-    rel = dec.std_ratio_relative_error(realizations)
+    rel = std_ratio_relative_error(realizations)
     size = f"; largest N {largest} (paper: {PAPER_LARGEST_N})" if largest is not None else ""
     return (
-        f"std ratio {fmt_value(ratio, 2)} ± {fmt_value(dec.Z95 * ratio * rel, 2)} (95 %, K = "
+        f"std ratio {fmt_value(ratio, 2)} ± {fmt_value(Z95 * ratio * rel, 2)} (95 %, K = "
         f"{realizations} realizations per N) against the midpoint {fmt_value(mid, 2)} between the "
         f"CLT ratio {fmt_value(clt, 2)} and 1{size}"
     )

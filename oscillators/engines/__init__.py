@@ -35,7 +35,7 @@ from oscillators.engines.compiled_continuous import CompiledContinuousEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayReferenceEngine
-from oscillators.engines.select import select_engine
+from oscillators.engines.select import GenericEngineWarning, python_path_reason, select_engine
 
 __all__ = [
     "TIME_TOLERANCE",
@@ -54,6 +54,8 @@ __all__ = [
     "TangentFlow",
     "require_tangent_flow",
     "select_engine",
+    "GenericEngineWarning",
+    "python_path_reason",
     "split_times",
     "wrap_phase",
 ]

@@ -4,7 +4,9 @@ System (paper eq. eom_2)::
 
     q'' + 2ζ q' + q = cos(φ0 + Ω t) + C·y,   y = M[q](t)
 
-for a Prandtl–Ishlinskii operator (``OP_PI``) or a continuous Preisach model (``OP_PREISACH``).
+for a Prandtl–Ishlinskii operator (``OP_PI``; its plays may carry the erf shape, so that a sum
+of plays, Prandtl–Ishlinskii operators and erf plays is one ``OP_PI``) or a continuous Preisach
+model (``OP_PREISACH``).
 While ``q`` moves one way the output is a smooth function of ``q`` (a *branch*); the branch
 ends at a reversal ``v = 0`` or at its breakpoint ``q = bp``.
 
@@ -33,6 +35,7 @@ start/set of the tangent flow). On a branch in direction ``d`` the dragged wagon
 ``w_i = q − d r_i``, the others are frozen; in plain Python::
 
     y(q) = y0 + slope·(q − u0),   slope = Σ_dragged a_i
+    (+ Σ_dragged erf plays a_i·erf((q − d r_i)/(√2 R_i)), their slopes added to s)
     bp = nearest  w_i + d r_i  over the frozen wagons        (the next wall reached)
 
 Continuous Preisach (``stack`` = ``[+inf, −inf, M1, m1, ...]`` up to the partner index ``p``,
@@ -114,6 +117,8 @@ DIVERGED = 3
 STUCK = 4
 
 _EPS = 2.220446049250313e-16
+#: d/dz erf(z) = (2/√π) exp(−z²)
+_TWO_OVER_SQRT_PI = 2.0 / math.sqrt(math.pi)
 #: a grid line of a tabulated Everett function closer than this (in cells) ahead counts as
 #: passed: a step that crosses an interior (C¹) line at a distance τ from its start errs by
 #: O(h·J·τ²) with J the jump of the second derivative there (negligible for 1e-3 cell); the
@@ -130,7 +135,15 @@ _MAX_STUCK = 50
 def _operator(ist, st, ep, et, q):
     """(y, s, g) at input q: output, ∂y/∂u + dragged weights, partner's derivative."""
     if ist[I_OP] == OP_PI:
-        return st[S_Y0] + st[S_SLOPE] * (q - st[S_U0]), st[S_SLOPE], 0.0
+        y = st[S_Y0] + st[S_SLOPE] * (q - st[S_U0])
+        s = st[S_SLOPE]
+        # the dragged erf-shaped plays (pi_branch lists them in ep: weight, d·r, R)
+        for j in range(int(ep[0])):
+            a = ep[1 + 3 * j]
+            z = (q - ep[2 + 3 * j]) * ep[3 + 3 * j]
+            y += a * math.erf(z)
+            s += a * ep[3 + 3 * j] * _TWO_OVER_SQRT_PI * math.exp(-z * z)
+        return y, s, 0.0
     m = st[S_M]
     u = q
     outside = ist[I_OUTSIDE] != 0
@@ -191,29 +204,42 @@ def _stages(par, ist, st, F, ep, et, t, y, h, out, K, tmp, k, first):
 # branches
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
-def pi_branch(ist, st, hw, wt, pos, slv, Y, F):
+def pi_branch(ist, st, hw, wt, pos, slv, Y, F, ep, et):
     """Branch of a Prandtl–Ishlinskii operator in direction d from q: dragged wagons (on the
     wall they push, within 8 ulps as ``hysteresis.play._touches_wall``), slope, output, the
     next wall ahead of a frozen wagon, the frozen force of each tangent column; dragged rows of
-    ``Y`` := δq."""
+    ``Y`` := δq. Shaped plays (``et[0, 0, i] = 1/(√2 R_i) > 0``: output ``erf(w_i/(√2 R_i))``,
+    a sum of plays and erf plays): a frozen one adds its constant output and ``a f'(w) δw`` to
+    the frozen force; the dragged ones are listed in ``ep`` (count, then weight, ``d·r`` and
+    ``1/(√2 R)`` each) for :func:`_operator`, which evaluates them at q."""
     d = ist[I_DIR]
     u = st[S_Q]
     slope = 0.0
     y0 = 0.0
     bp = d * np.inf
+    n_shaped = 0
     for i in range(hw.size):
         r = hw[i]
         w = pos[i]
+        scale = et[0, 0, i]
         tol = 8.0 * _EPS * max(abs(w), abs(u), r, 1.0)
         if d * (u - w) >= r - tol:
             slv[i] = 1
-            slope += wt[i]
+            if scale == 0.0:
+                slope += wt[i]
+                y0 += wt[i] * w
+            else:
+                ep[1 + 3 * n_shaped] = wt[i]
+                ep[2 + 3 * n_shaped] = d * r
+                ep[3 + 3 * n_shaped] = scale
+                n_shaped += 1
         else:
             slv[i] = 0
             ahead = w + d * r
             if (d > 0 and ahead < bp) or (d < 0 and ahead > bp):
                 bp = ahead
-        y0 += wt[i] * w
+            y0 += wt[i] * (w if scale == 0.0 else math.erf(w * scale))
+    ep[0] = n_shaped
     st[S_BP] = bp
     st[S_U0] = u
     st[S_Y0] = y0
@@ -225,7 +251,12 @@ def pi_branch(ist, st, hw, wt, pos, slv, Y, F):
             if slv[i]:
                 Y[3 + i, j] = Y[0, j]
             else:
-                f += wt[i] * Y[3 + i, j]
+                scale = et[0, 0, i]
+                if scale == 0.0:
+                    f += wt[i] * Y[3 + i, j]
+                else:
+                    z = pos[i] * scale
+                    f += wt[i] * scale * _TWO_OVER_SQRT_PI * math.exp(-z * z) * Y[3 + i, j]
         F[0, j] = f
         F[1, j] = 0.0
         F[2, j] = Y[2, j]
@@ -317,7 +348,7 @@ def _event(par, ist, st, kind, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, 
         old = np.empty(n, dtype=np.int8)
         for i in range(n):
             old[i] = slv[i]
-        pi_branch(ist, st, hw, wt, pos, slv, Y, F)
+        pi_branch(ist, st, hw, wt, pos, slv, Y, F, ep, et)
         for i in range(n):
             if slv[i] and not old[i]:
                 free[i] = 0  # V_out: δw := δq (done in pi_branch)

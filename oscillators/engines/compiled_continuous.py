@@ -85,7 +85,11 @@ def _slope_bound(spec: Any) -> float:
     Everett function; 0 (not used) for the Gaussian width-disorder model (quadrature or
     separable table), whose slopes are O(1/R)."""
     if spec.kind == "prandtl_ishlinskii":
-        return float(np.sum(np.abs(spec.weights)))
+        # an erf play's steepest slope is 1/(R√(2π)), at w = 0
+        spreads = np.asarray(spec.spreads)
+        safe = np.where(spreads > 0.0, spreads, 1.0)
+        gain = np.where(spreads > 0.0, 1.0 / (safe * math.sqrt(2.0 * math.pi)), 1.0)
+        return float(np.sum(np.abs(spec.weights) * gain))
     table = np.asarray(spec.everett.table)
     if spec.everett.kind == _k.KIND_TABLE and table.size:
         return 2.0 * float(np.max(np.abs(table[..., 1:3])))
@@ -184,17 +188,22 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             self._ist[9] = _k.OP_PI
             self._hw = np.array(spec.half_widths, dtype=np.float64)
             self._wt = np.array(spec.weights, dtype=np.float64)
-            self._pos = np.array(op_state.positions, dtype=np.float64)
+            positions = op_state.positions if spec.positions is None else spec.positions(op_state)
+            self._pos = np.array(positions, dtype=np.float64)
             if self._pos.shape != self._hw.shape:
                 raise ValueError("operator_state.positions do not match the operator's plays")
             self._slv = np.zeros(self._hw.size, dtype=np.int8)
             self._free = np.zeros(self._hw.size, dtype=np.int8)
             self._stack = self._prefix = self._dlo = self._dhi = empty
-            self._ep = np.zeros(2)
-            self._et = np.zeros((0, 0, 0))
+            # the kernel's view of the shapes: 1/(√2 R) per play (0: identity), and room for
+            # the list of dragged erf plays (count, then weight, d·r, 1/(√2 R) each)
+            spreads = np.asarray(spec.spreads, dtype=np.float64)
+            scale = np.zeros(spreads.size)
+            np.divide(1.0, math.sqrt(2.0) * spreads, out=scale, where=spreads > 0.0)
+            self._et = scale.reshape(1, 1, -1)
+            self._ep = np.zeros(1 + 3 * self._hw.size)
             self._Y = np.zeros((3 + self._hw.size, 0))
-            _k.pi_branch(self._ist, self._st, self._hw, self._wt, self._pos, self._slv, self._Y,
-                         self._F)  # fmt: skip
+            self._branch()
         else:
             everett = spec.everett
             self._ist[9] = _k.OP_PREISACH
@@ -227,7 +236,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         """Rebuild the current branch (and the tangent force) from the kernel's state."""
         if self._ist[9] == _k.OP_PI:
             _k.pi_branch(self._ist, self._st, self._hw, self._wt, self._pos, self._slv, self._Y,
-                         self._F)  # fmt: skip
+                         self._F, self._ep, self._et)  # fmt: skip
         else:
             _k.preisach_branch(self._ist, self._st, self._stack, self._prefix, self._dlo,
                                self._dhi, self._Y, self._F)  # fmt: skip
@@ -313,7 +322,8 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         q, v = float(self._st[1]), float(self._st[2])
         self.check_finite(np.array([q, v]))
         if self._ist[9] == _k.OP_PI:
-            op_state = self._op.state(self._pos.copy(), q)
+            make = self._spec.make_state
+            op_state = (self._op.state if make is None else make)(self._pos.copy(), q)
         else:
             extrema = self._memory()
             if extrema.size == 0 or extrema[-1] != q:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 from hysteresis.base import ContinuousHysteron
@@ -11,7 +12,19 @@ from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine
 
-__all__ = ["select_engine"]
+__all__ = ["select_engine", "GenericEngineWarning", "python_path_reason"]
+
+
+class GenericEngineWarning(UserWarning):
+    """A composite operator runs on the generic (Python, ``solve_ivp``) continuous engine
+    because a part has no compiled description; the message names the parts."""
+
+
+def python_path_reason(operator: Any) -> str | None:
+    """Why the generic engine integrates ``operator`` although it is built from parts
+    (the optional contract member ``uncompiled_reason``), or ``None``."""
+    reason = getattr(operator, "uncompiled_reason", None)
+    return str(reason) if reason else None
 
 
 def select_engine(operator: Any) -> type[Engine]:
@@ -21,7 +34,10 @@ def select_engine(operator: Any) -> type[Engine]:
     reference path for ``method="generic"``); ``operator.compiled_play()`` not ``None`` ->
     :class:`PlayEngine`; else ``operator.compiled_flow()`` not ``None`` ->
     :class:`CompiledContinuousEngine` (``method="generic"``: the generic engine); any other
-    (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow``. A fast path
+    (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow`` — with a
+    one-line :class:`GenericEngineWarning` when the operator says why it has no compiled
+    description (``uncompiled_reason``: a composite whose parts the compiled engines cannot
+    take together). A fast path
     comes with the state constructor its engine needs (``state(position, input)`` for a compiled
     play, ``state(positions, input)`` for Prandtl–Ishlinskii plays, ``state_from_extrema``
     for a Preisach model's Everett function): checked here, so that a missing one is refused
@@ -44,9 +60,18 @@ def select_engine(operator: Any) -> type[Engine]:
                 operator, "state_from_extrema", "compiled_flow()", "state_from_extrema(extrema)",
                 "the staircase of remembered extrema",
             )  # fmt: skip
-        else:
+        elif spec.make_state is None:  # a composite hands over its own state constructor
             _require(operator, "state", "compiled_flow()", "state(positions, input)", "the wagons")
         return CompiledContinuousEngine
+    reason = python_path_reason(operator)
+    if reason is not None:
+        # never a silent fallback: a composite of compiled parts would be expected to run at
+        # kernel speed
+        warnings.warn(
+            f"{reason}: the generic continuous engine integrates it in Python (solve_ivp)",
+            GenericEngineWarning,
+            stacklevel=3,
+        )
     return ContinuousEngine
 
 

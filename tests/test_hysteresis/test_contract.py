@@ -21,6 +21,7 @@ from hysteresis import (
     RelayTable,
     SpinDimerEnsemble,
     Switching,
+    WeightedSum,
 )
 from hysteresis.base import Branch, Linearization
 from hysteresis.flow import BranchFlow
@@ -97,6 +98,7 @@ def _piecewise_constant_operators():
         Relay(1.0, -0.5),
         PreisachModel.from_relays([1.0, 0.5, 0.2, 0.0], [-1.0, 0.0, -0.3, 0.0]),
         SpinDimerEnsemble.random(40, width=2.0, spread=1.0, spin_coupling=2.0, seed=0),
+        0.5 * Relay(1.0, -0.5) + 0.5 * Relay(0.2, -0.1),  # a RelaySum
     ]
 
 
@@ -106,6 +108,7 @@ def _continuous_operators():
         GeneralizedPlay.erf(2.0, 1.0),
         PrandtlIshlinskii([0.0, 0.5, 1.5], [0.2, 0.5, 0.3]),
         PreisachModel.from_everett(lambda a, b: ((a - b) / 2.0) ** 2, -1.0, 1.0),
+        0.7 * PlayOperator(1.0) + 0.3 * Relay(0.5, -0.5),  # a BranchSum
     ]
 
 
@@ -114,7 +117,7 @@ def test_every_library_operator_belongs_to_one_family_and_is_complete():
     abstract (it implements every required method)."""
     exported = [getattr(hysteresis, name) for name in hysteresis.__all__]
     classes = [c for c in exported if inspect.isclass(c) and issubclass(c, Hysteron)]
-    families = (Hysteron, PiecewiseConstantHysteron, ContinuousHysteron, PreisachModel)
+    families = (Hysteron, PiecewiseConstantHysteron, ContinuousHysteron, PreisachModel, WeightedSum)
     concrete = [c for c in classes if c not in families]
     for cls in concrete:
         pc = issubclass(cls, PiecewiseConstantHysteron)

@@ -18,7 +18,6 @@ from analysis.paper.verdicts import (
     is_period_adding,
     sap_falls,
     std_ratio_verdict,
-    variance_slope_stderr,
 )
 
 INC = "inconclusive at this run size"
@@ -157,13 +156,6 @@ def test_below_decides_only_outside_the_interval():
     assert dec.below(1.05, 0.1, 1.0) == INC
 
 
-def test_wilson_interval_matches_the_textbook_value():
-    lo, hi = dec.wilson(20, 100)  # textbook 95 % Wilson interval for 20/100: [0.1333, 0.2888]
-    assert lo == pytest.approx(0.1333, abs=5e-4) and hi == pytest.approx(0.2888, abs=5e-4)
-    lo, hi = dec.wilson(0, 100)  # upper bound z²/(n + z²) = 3.8416/103.8416
-    assert lo == pytest.approx(0.0, abs=1e-12) and hi == pytest.approx(0.0370, abs=5e-4)
-
-
 def test_fraction_claim_is_inconclusive_when_the_interval_is_wider_than_the_fraction():
     assert dec.fraction_matches(20, 100, 0.2) == "agree"  # [0.13, 0.29], width 0.16
     assert dec.fraction_matches(96, 500, 0.2) == "agree"  # the paper-scale result
@@ -296,8 +288,7 @@ def test_cascade_claim_text_is_unchanged(name):
 
 
 def test_ks_claim_within_its_sampling_scale_is_inconclusive():
-    # 1.36·sqrt(60/900) = 0.351 for 30 points each
-    assert dec.ks_sampling_scale(30, 30) == pytest.approx(0.3512, abs=1e-3)
+    # the sampling scale 1.36·sqrt(60/900) = 0.351 for 30 points each straddles 0.15
     assert dec.ks_below(0.20, 30, 30, 0.15) == INC
     assert dec.ks_below(0.02, 1000, 1000, 0.15) == "agree"  # scale 0.061
     assert dec.ks_below(0.50, 1000, 1000, 0.15) == "disagree"
@@ -328,12 +319,6 @@ def test_sap_falls():
     assert sap_falls(np.array([0.01, 0.5]), 100) == "disagree"
     assert sap_falls(np.array([0.1, 0.05]), 3) == INC  # three realizations
     assert sap_falls(np.array([0.3, 0.0]), 100) == "agree"  # all alike at the largest N
-
-
-def test_variance_slope_stderr():
-    # sqrt(4/99)/ln(4) = 0.2010/1.3863
-    assert variance_slope_stderr(np.array([5000, 20000]), 100) == pytest.approx(0.1450, abs=1e-3)
-    assert math.isnan(variance_slope_stderr(np.array([20000]), 100))
 
 
 def test_large_n_claims_need_the_papers_largest_n():

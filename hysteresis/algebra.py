@@ -1,0 +1,527 @@
+"""Operator algebra: weighted sums of operators, ``a * op``, ``op1 + op2``, ``-op``, ``op1 - op2``.
+
+A sum ``y = Σ_k a_k · H_k[u]`` of rate-independent operators driven by one input is again
+rate independent, and it is an operator of the contract (:mod:`hysteresis.base`) whatever its
+parts are, so it couples to the forced oscillator like any operator:
+
+* every part piecewise constant and every weight ``>= 0`` (relays, discrete Preisach models,
+  spin dimers): a :class:`RelaySum`, a piecewise-constant operator whose relay table is the
+  parts' tables concatenated with their weights scaled; the oscillator's compiled relay engine
+  integrates it as it integrates one Preisach model;
+* anything else (a continuous part, or a relay-type part with a negative weight, which no relay
+  table with weights ``>= 0`` holds): a :class:`BranchSum`, whose branch flow
+  (:class:`~hysteresis.flow.BranchFlow`) is assembled from the parts': the output and its
+  partials are the weighted sums, the memory variables are the continuous parts' (labels
+  ``"k:label"``, ``k`` the part's index), the breakpoint is the nearest of the parts' — a
+  continuous part's wall or wipe-out, or a relay-type part's next switch, where the output
+  jumps by the part's weighted jump (``breakpoint_jump``). The generic continuous engine of
+  the oscillator integrates it, with the saltation ``δv += C·Δy/v*·δq`` at every jump: a play
+  plus relays is a hybrid system with exactly located events and a tangent flow.
+
+The state of a sum is a :class:`SumState`, the tuple of its parts' states (in the order of
+:attr:`WeightedSum.parts`). ``apply`` drives every part with the same inputs and returns
+``Σ_k a_k · y_k`` accumulated in the order of the parts (``a_0·y_0 + a_1·y_1 + ...``), so a
+sum's outputs are the weighted sum of its parts' outputs exactly, and continuing from a returned
+state equals one long call because it does for every part.
+
+Nested sums flatten: ``(a*H1 + b*H2) + c*(d*H3)`` has the parts ``H1, H2, H3`` with weights
+``a, b, c·d``. The algebra is attached to :class:`~hysteresis.base.Hysteron` here (at the end of
+this module) rather than written in ``base.py``, because the sum classes derive from the
+contract's classes: a method in ``base.py`` building them would make the two modules import each
+other.
+"""
+
+from __future__ import annotations
+
+import math
+from numbers import Real
+from typing import Any
+
+import numpy as np
+
+from hysteresis._validation import as_input_sequence, direction_sign
+from hysteresis.base import ContinuousHysteron, Hysteron, PiecewiseConstantHysteron, Switching
+from hysteresis.flow import BranchFlow, CompiledFlow
+from hysteresis.relay_table import RelayTable
+from hysteresis.seam import check_state, checked_relay_outputs, checked_relay_table
+
+__all__ = ["SumState", "WeightedSum", "RelaySum", "BranchSum", "weighted_sum"]
+
+
+class SumState(tuple):
+    """The state of a sum: the tuple of its parts' states (immutable, like the parts' states).
+
+    ``input`` is the input the sum last saw (every part saw the same one).
+    """
+
+    __slots__ = ()
+
+    def __new__(cls, parts: Any) -> SumState:
+        return super().__new__(cls, tuple(parts))
+
+    def __reduce__(self) -> tuple:
+        return (SumState, (tuple(self),))
+
+    @property
+    def input(self) -> float:
+        """The input the sum last saw (its first part's)."""
+        return self[0].input
+
+    def __repr__(self) -> str:
+        return f"SumState({', '.join(repr(s) for s in self)})"
+
+
+def _check_weight(weight: Any, name: str = "weight") -> float:
+    """A real, finite weight (booleans, complex numbers, strings refused)."""
+    if isinstance(weight, bool) or not isinstance(weight, Real):
+        raise TypeError(f"{name} must be a real number, got {type(weight).__name__} {weight!r}")
+    w = float(weight)
+    if not math.isfinite(w):
+        raise ValueError(f"{name} must be finite, got {w}")
+    return w
+
+
+def weighted_sum(parts: Any, weights: Any) -> WeightedSum:
+    """The operator ``Σ_k weights[k] · parts[k]`` (see the module docstring).
+
+    Parts that are sums themselves are flattened (their weights multiplied). The result is a
+    :class:`RelaySum` when every part is piecewise constant with a weight ``>= 0``, else a
+    :class:`BranchSum`.
+    """
+    parts = list(parts)
+    weights = list(weights)
+    if len(parts) != len(weights):
+        raise ValueError(f"weights must have one entry per part ({len(parts)}), got {len(weights)}")
+    if not parts:
+        raise ValueError("a sum needs at least one part")
+    flat_parts: list[Hysteron] = []
+    flat_weights: list[float] = []
+    for i, (part, weight) in enumerate(zip(parts, weights, strict=True)):
+        w = _check_weight(weight, f"weights[{i}]")
+        if not isinstance(part, Hysteron):
+            raise TypeError(
+                f"parts[{i}] must be a hysteresis operator (a hysteresis.base.Hysteron), got "
+                f"{type(part).__name__}"
+            )
+        if isinstance(part, WeightedSum):
+            flat_parts.extend(part.parts)
+            flat_weights.extend(w * float(a) for a in part.weights)
+        else:
+            flat_parts.append(part)
+            flat_weights.append(w)
+    relay_type = all(p.piecewise_constant for p in flat_parts) and min(flat_weights) >= 0.0
+    cls = RelaySum if relay_type else BranchSum
+    return cls(flat_parts, flat_weights)
+
+
+class WeightedSum(Hysteron[SumState]):
+    """``y = Σ_k weights[k] · parts[k][u]``: what every sum shares (parts, weights, ``apply``,
+    the state's checks, ranges). Build sums with the operators (``0.6 * play + 0.4 * relays``)
+    or :func:`weighted_sum`."""
+
+    def __init__(self, parts: list[Hysteron], weights: list[float]) -> None:
+        self._parts = tuple(parts)
+        self._weights = np.array(weights, dtype=np.float64)
+        self._weights.setflags(write=False)
+
+    @property
+    def parts(self) -> tuple[Hysteron, ...]:
+        """The operators summed (flattened: no part is a sum)."""
+        return self._parts
+
+    @property
+    def weights(self) -> np.ndarray:
+        """The weight of each part (read-only)."""
+        return self._weights
+
+    def __repr__(self) -> str:
+        terms = " + ".join(
+            f"{float(w)!r} * {p!r}" for w, p in zip(self._weights, self._parts, strict=True)
+        )
+        return f"{type(self).__name__}({terms})"
+
+    # -- state -----------------------------------------------------------------------------------
+    def _check_state(self, state: Any) -> SumState:
+        if not isinstance(state, SumState):
+            raise TypeError(
+                f"state must be a SumState of this sum (from initial_state, apply or state()), "
+                f"got {type(state).__name__}"
+            )
+        if len(state) != len(self._parts):
+            raise ValueError(
+                f"state must hold one state per part ({len(self._parts)}), got {len(state)}"
+            )
+        u = check_state(state[0], "given as part 0 of the sum's state")
+        for k in range(1, len(state)):
+            if check_state(state[k], f"given as part {k} of the sum's state") != u:
+                raise ValueError(
+                    f"the parts of a sum's state must have seen one input: part 0 saw {u}, "
+                    f"part {k} saw {state[k].input}"
+                )
+        return state
+
+    def state(self, *part_states: Any) -> SumState:
+        """The sum's state from one state per part (in the order of :attr:`parts`), all at one
+        input; each part checks its own state when it is used."""
+        return self._check_state(SumState(part_states))
+
+    def initial_state(self, u0: float) -> SumState:
+        """Every part rising from negative saturation to ``u0``."""
+        return SumState(p.initial_state(u0) for p in self._parts)
+
+    def output(self, state: SumState) -> float:
+        """``Σ_k weights[k] · parts[k].output(state[k])`` (in the order of the parts)."""
+        state = self._check_state(state)
+        total = 0.0
+        for w, p, s in zip(self._weights, self._parts, state, strict=True):
+            total = total + float(w) * float(p.output(s))
+        return total
+
+    def apply(self, inputs: Any, state: SumState | None = None) -> tuple[np.ndarray, SumState]:
+        """Drive every part with ``inputs``; the outputs are ``Σ_k weights[k]·y_k``, summed in
+        the order of the parts."""
+        u = as_input_sequence(inputs)
+        state = self.initial_state(float(u[0])) if state is None else self._check_state(state)
+        total = np.zeros(u.size)
+        finals = []
+        for w, p, s in zip(self._weights, self._parts, state, strict=True):
+            y, s_next = p.apply(u, s)
+            total = total + float(w) * np.asarray(y, dtype=np.float64)
+            finals.append(s_next)
+        return total, SumState(finals)
+
+    # -- what follows from the parts -------------------------------------------------------------
+    @property
+    def output_range(self) -> tuple[float, float]:
+        """``Σ_k`` of each part's range scaled by its weight (a negative weight swaps the ends)."""
+        low = high = 0.0
+        for w, p in zip(self._weights, self._parts, strict=True):
+            a, b = (float(w) * x for x in p.output_range)
+            low, high = low + min(a, b), high + max(a, b)
+        return (low, high)
+
+    @property
+    def max_slope(self) -> float | None:
+        """``Σ_k |weights[k]| · max_slope_k`` (a bound: the parts' steepest branches need not
+        meet); relay-type parts are flat between their jumps. ``None`` if a continuous part
+        does not know its own."""
+        total = 0.0
+        for w, p in zip(self._weights, self._parts, strict=True):
+            if p.piecewise_constant:
+                continue
+            s = p.max_slope
+            if s is None:
+                return None
+            total += abs(float(w)) * float(s)
+        return total
+
+
+class RelaySum(WeightedSum, PiecewiseConstantHysteron):
+    """A sum of piecewise-constant operators with weights ``>= 0``: its relay table is the
+    parts' tables concatenated (weights scaled), in the order of the parts."""
+
+    def __init__(self, parts: list[Hysteron], weights: list[float]) -> None:
+        super().__init__(parts, weights)
+        self._table: RelayTable | None = None
+
+    _transient_attributes = ("_table",)
+
+    def __setstate__(self, state: Any) -> None:
+        super().__setstate__(state)
+        self._table = None
+
+    def _sizes(self) -> list[int]:
+        return [checked_relay_table(p).n_relays for p in self._parts]
+
+    def relay_table(self) -> RelayTable:
+        """The parts' relays, table after table, weights multiplied by the part's weight."""
+        if self._table is None:
+            tables = [checked_relay_table(p) for p in self._parts]
+            self._table = RelayTable(
+                np.concatenate([t.alpha for t in tables]),
+                np.concatenate([t.beta for t in tables]),
+                np.concatenate(
+                    [float(w) * t.weights for w, t in zip(self._weights, tables, strict=True)]
+                ),
+            )
+        return self._table
+
+    def relay_outputs(self, state: SumState) -> np.ndarray:
+        """The parts' relay outputs, concatenated in table order."""
+        state = self._check_state(state)
+        return np.concatenate(
+            [
+                checked_relay_outputs(p, checked_relay_table(p), s)
+                for p, s in zip(self._parts, state, strict=True)
+            ]
+        )
+
+    def state_from_relay_outputs(self, outputs: Any, input: float) -> SumState:
+        """Split ``outputs`` by part (table order) and build each part's state."""
+        y = np.asarray(outputs, dtype=np.float64)
+        sizes = self._sizes()
+        if y.shape != (sum(sizes),):
+            raise ValueError(f"outputs must have one entry per relay ({sum(sizes)}), got {y.shape}")
+        bounds = np.cumsum([0, *sizes])
+        return SumState(
+            p.state_from_relay_outputs(y[bounds[k] : bounds[k + 1]], input)
+            for k, p in enumerate(self._parts)
+        )
+
+    def switching(self, state: SumState) -> Switching:
+        """The nearest switch of any part; parts switching at the same input add their jumps."""
+        state = self._check_state(state)
+        upper, lower, jump_up, jump_down = math.inf, -math.inf, 0.0, 0.0
+        for w, p, s in zip(self._weights, self._parts, state, strict=True):
+            if w == 0.0:
+                continue
+            sw = p.switching(s)
+            if sw.upper < upper:
+                upper, jump_up = sw.upper, float(w) * sw.jump_up
+            elif sw.upper == upper and math.isfinite(upper):
+                jump_up += float(w) * sw.jump_up
+            if sw.lower > lower:
+                lower, jump_down = sw.lower, float(w) * sw.jump_down
+            elif sw.lower == lower and math.isfinite(lower):
+                jump_down += float(w) * sw.jump_down
+        return Switching(lower=lower, upper=upper, jump_down=jump_down, jump_up=jump_up)
+
+
+class BranchSum(WeightedSum, ContinuousHysteron):
+    """A sum with a continuous part (or a relay-type part of negative weight): integrated
+    through its assembled branch flow (see the module docstring), relays as jumps."""
+
+    def branch_flow(self, state: SumState, direction: int) -> BranchFlow:
+        """The parts' branches in ``direction`` assembled: output and partials weighted and
+        summed, memory labels ``"k:label"``, the nearest breakpoint (a continuous part's, or a
+        relay-type part's next switch with its weighted jump; a falling switch at the largest
+        float below the threshold, where the relay convention ``u < β`` holds)."""
+        direction = direction_sign(direction)
+        state = self._check_state(state)
+        u0 = float(state.input)
+        flows: list[tuple[float, BranchFlow]] = []  # (weight, flow) of the continuous parts
+        constant = 0.0
+        # (breakpoint, jump, index of the continuous flow or -1 for a relay-type part)
+        ends: list[tuple[float, float, int]] = []
+        for w, p, s in zip(self._weights, self._parts, state, strict=True):
+            w = float(w)
+            if p.piecewise_constant:
+                constant += w * float(p.output(s))
+                if w == 0.0:
+                    continue
+                sw = p.switching(s)
+                if direction > 0 and math.isfinite(sw.upper):
+                    ends.append((sw.upper, w * sw.jump_up, -1))
+                elif direction < 0 and math.isfinite(sw.lower):
+                    ends.append((math.nextafter(sw.lower, -math.inf), w * sw.jump_down, -1))
+            else:
+                flow = p.branch_flow(s, direction)
+                if math.isfinite(flow.breakpoint):
+                    ends.append((float(flow.breakpoint), 0.0, len(flows)))
+                flows.append((w, flow))
+        breakpoint = direction * math.inf
+        jump = 0.0
+        resets: list[str] = []
+        removes: list[str] = []
+        if ends:
+            breakpoint = min(e[0] for e in ends) if direction > 0 else max(e[0] for e in ends)
+        labels: list[str] = []
+        sizes: list[int] = []
+        for k, (_, flow) in enumerate(flows):
+            index = self._continuous_index(k)
+            labels.extend(f"{index}:{lab}" for lab in flow.labels)
+            sizes.append(flow.n_memory)
+        for bp, dy, k in ends:
+            if bp != breakpoint:
+                continue
+            if k < 0:
+                jump += dy
+            else:
+                flow = flows[k][1]
+                index = self._continuous_index(k)
+                resets.extend(f"{index}:{lab}" for lab in flow.breakpoint_resets)
+                removes.extend(f"{index}:{lab}" for lab in flow.breakpoint_removes)
+        weights = np.array([w for w, _ in flows])
+        parts = [f for _, f in flows]
+        bounds = np.cumsum([0, *sizes])
+
+        def output(u):
+            total = constant
+            for a, f in zip(weights, parts, strict=True):
+                total = total + a * f.output(u)
+            return total
+
+        def partials(u):
+            u = np.asarray(u, dtype=np.float64)
+            d_u = np.zeros(u.shape)
+            d_m = np.zeros(u.shape + (int(bounds[-1]),))
+            for k, (a, f) in enumerate(zip(weights, parts, strict=True)):
+                du_k, dm_k = f.partials(u)
+                d_u = d_u + a * np.asarray(du_k, dtype=np.float64)
+                d_m[..., bounds[k] : bounds[k + 1]] = a * np.asarray(dm_k, dtype=np.float64)
+            return d_u[()], d_m
+
+        return BranchFlow(
+            direction=direction,
+            input=u0,
+            labels=tuple(labels),
+            memory=np.concatenate([f.memory for f in parts]) if parts else np.zeros(0),
+            slaved=np.concatenate([f.slaved for f in parts]) if parts else np.zeros(0, bool),
+            output=output,
+            partials=partials,
+            breakpoint=breakpoint,
+            breakpoint_resets=tuple(resets),
+            breakpoint_removes=tuple(removes),
+            breakpoint_jump=jump,
+            reversal_pushes=any(f.reversal_pushes for f in parts),
+            pushed=np.concatenate([f.pushed for f in parts]) if parts else None,
+            constant_partials=all(f.constant_partials for f in parts),
+        )
+
+    def _continuous_index(self, k: int) -> int:
+        """The index in :attr:`parts` of the ``k``-th continuous part (memory labels name the
+        part by its place in the sum)."""
+        return [i for i, p in enumerate(self._parts) if not p.piecewise_constant][k]
+
+    # -- the compiled fast path: a sum of plays is one set of (shaped) plays ----------------------
+    def _play_parts(self) -> list[tuple[int, Any]] | None:
+        """Per part, its plays as the compiled engine takes them, or ``None`` if a part is not
+        a play (identity or erf shape) or a Prandtl–Ishlinskii operator."""
+        found = []
+        for k, p in enumerate(self._parts):
+            if p.piecewise_constant:
+                return None
+            cp = p.compiled_play()
+            if cp is not None and cp.shape in ("identity", "erf"):
+                found.append((k, cp))
+                continue
+            cf = p.compiled_flow()
+            if cf is not None and cf.kind == "prandtl_ishlinskii" and cf.positions is None:
+                found.append((k, cf))
+                continue
+            return None
+        return found
+
+    def compiled_flow(self) -> CompiledFlow | None:
+        """A sum of plays (identity or erf shape) and Prandtl–Ishlinskii operators is one set
+        of plays ``y = Σ a_i f_i(w_i)`` with the part's weight folded into each ``a_i``: the
+        oscillator's compiled continuous engine integrates it. Its states are read and built
+        through the parts' own fast-path constructors (``state(position, input)``,
+        ``state(positions, input)``); memory labels ``"k:w"``, ``"k:w{j}"`` as in
+        :meth:`branch_flow`. ``None`` for any other sum."""
+        found = self._play_parts()
+        if found is None:
+            return None
+        half, weights, spreads, labels, sizes = [], [], [], [], []
+        for k, spec in found:
+            w = float(self._weights[k])
+            if isinstance(spec, CompiledFlow):
+                n = spec.half_widths.size
+                half.extend(spec.half_widths)
+                weights.extend(w * spec.weights)
+                spreads.extend(spec.spreads)
+                labels.extend(f"{k}:{spec.label(j)}" for j in range(n))
+            else:
+                n = 1
+                half.append(0.5 * spec.width)
+                weights.append(w)
+                spreads.append(spec.spread if spec.shape == "erf" else 0.0)
+                labels.append(f"{k}:w")
+            sizes.append(n)
+        bounds = np.cumsum([0, *sizes])
+        kinds = [isinstance(spec, CompiledFlow) for _, spec in found]
+        parts = self._parts
+
+        def positions(state: SumState) -> np.ndarray:
+            state = self._check_state(state)
+            return np.concatenate(
+                [
+                    np.asarray(state[k].positions if pi else [state[k].position], dtype=float)
+                    for (k, _), pi in zip(found, kinds, strict=True)
+                ]
+            )
+
+        def make_state(pos: np.ndarray, input: float) -> SumState:
+            out = []
+            for i, ((k, _), pi) in enumerate(zip(found, kinds, strict=True)):
+                chunk = pos[bounds[i] : bounds[i + 1]]
+                out.append(parts[k].state(chunk if pi else float(chunk[0]), input))
+            return SumState(out)
+
+        return CompiledFlow(
+            kind="prandtl_ishlinskii",
+            label=labels.__getitem__,
+            half_widths=np.array(half),
+            weights=np.array(weights),
+            spreads=np.array(spreads),
+            positions=positions,
+            make_state=make_state,
+        )
+
+    @property
+    def uncompiled_reason(self) -> str | None:
+        """Why the oscillator integrates this sum with the generic (Python) engine, or ``None``
+        when it has a compiled description (a sum of plays, erf plays and Prandtl–Ishlinskii
+        operators)."""
+        if self._play_parts() is not None:
+            return None
+        names = ", ".join(type(p).__name__ for p in self._parts)
+        return (
+            f"the sum of {names} has no compiled description (the compiled engines take one "
+            "Preisach model, one set of relays, or plays, erf plays and Prandtl–Ishlinskii "
+            "operators summed)"
+        )
+
+
+# -- the algebra on every operator ---------------------------------------------------------------
+def _is_number(x: Any) -> bool:
+    return isinstance(x, (Real, complex, np.number)) and not isinstance(x, bool)
+
+
+def _scaled(op: Hysteron, a: Any) -> Any:
+    if isinstance(a, Hysteron):
+        raise TypeError(
+            "the product of two operators is not an operator of the algebra: use "
+            "hysteresis.Cascade(inner, outer) for outer driven by inner's output"
+        )
+    if not _is_number(a):
+        return NotImplemented
+    return weighted_sum([op], [_check_weight(a)])
+
+
+def _add(op: Hysteron, other: Any) -> Any:
+    if isinstance(other, Hysteron):
+        return weighted_sum([op, other], [1.0, 1.0])
+    if _is_number(other):
+        if other == 0 and not isinstance(other, complex):
+            return op  # sum([op1, op2]) starts from 0
+        raise TypeError(
+            "an operator plus a number is not an operator of the algebra: a constant offset "
+            "is hysteresis.StaticMap composed with the operator"
+        )
+    return NotImplemented
+
+
+def _neg(op: Hysteron) -> WeightedSum:
+    return weighted_sum([op], [-1.0])
+
+
+def _sub(op: Hysteron, other: Any) -> Any:
+    if isinstance(other, Hysteron):
+        return weighted_sum([op, other], [1.0, -1.0])
+    return _add(op, other)
+
+
+def _rsub(op: Hysteron, other: Any) -> Any:
+    if _is_number(other) and other == 0:
+        return _neg(op)
+    return _add(op, other)
+
+
+Hysteron.__mul__ = _scaled  # type: ignore[method-assign]
+Hysteron.__rmul__ = _scaled  # type: ignore[method-assign]
+Hysteron.__add__ = _add  # type: ignore[method-assign]
+Hysteron.__radd__ = _add  # type: ignore[method-assign]
+Hysteron.__neg__ = _neg  # type: ignore[method-assign]
+Hysteron.__sub__ = _sub  # type: ignore[method-assign]
+Hysteron.__rsub__ = _rsub  # type: ignore[method-assign]
