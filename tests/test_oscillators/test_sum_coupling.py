@@ -7,16 +7,16 @@
   nothing of the library used. The reference is first checked against the library's *single*
   operators (a play, an erf play, relays, a Prandtl–Ishlinskii operator), which proves it.
   Cases: a mixed sum (play + relays: jumps at the thresholds), a continuous sum (PI + erf
-  play), relay sums (all weights >= 0: the relay engine on the concatenated table; a negative
-  weight: jumps on the generic engine).
+  play, on the compiled and the generic engine), relay sums (all weights >= 0: the relay
+  engine on the concatenated table; a negative weight: jumps on the generic engine).
 * Tangent flow: ``system.jacobian`` against central differences of ``system.stroboscopic_map``.
 * Invariants: ``apply`` is the weighted sum of the parts' (bitwise where the products are
   exact), continuing from a returned state equals one long call, Σλ = −2ζ for relay-only sums
   (every saltation matrix has determinant 1), a pickled sum gives the same outputs and orbit.
 
-Parameters: ζ = 0.2, Ω = 1.2 (|1 − Ω² + 2iζΩ| = 0.65, amplitude ≈ 1.5–3.5): the responses
-below are stable period-1 orbits (checked: their stroboscopic points repeat), so integration
-errors are not amplified along the run.
+Parameters: ζ = 0.2, Ω = 1.2 (|1 − Ω² + 2iζΩ| = 0.65): the responses below settle on stable
+orbits of period 1 or 2 (checked: their stroboscopic points repeat), so integration errors are
+not amplified along the run.
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ from hysteresis import (
 )
 from hysteresis.play import PlayState
 from hysteresis.prandtl_ishlinskii import PIState
+from oscillators.engines import CompiledContinuousEngine
 from oscillators.results import OscillatorState
 from oscillators.system import ForcedOscillator
 
@@ -121,10 +122,12 @@ def tolerance(ref, coupling: float, engine_rtol: float = ENGINE_RTOL) -> float:
     return 10.0 * (RTOL + engine_rtol) * (1 + len(ref.events)) * gain
 
 
-def assert_matches_reference(op, model: Model, coupling: float) -> ForcedOscillator:
+def assert_matches_reference(
+    op, model: Model, coupling: float, engine_options: dict | None = None
+) -> ForcedOscillator:
     """The library's trajectory of ``op`` against the reference integration of ``model``."""
     system = ForcedOscillator(op, coupling, ZETA, OMEGA)
-    traj = system.trajectory(T_END, Q0, V0, sample_dt=SAMPLE_DT)
+    traj = system.trajectory(T_END, Q0, V0, sample_dt=SAMPLE_DT, engine_options=engine_options)
     ref = reference(model, coupling, ZETA, OMEGA, Q0, V0)
     # the samples and, merged in, the stroboscopic points of the last periods
     strobe = np.arange(14, 21) * PERIOD
@@ -195,10 +198,15 @@ def test_mixed_sum_plain_play_plus_relays():
     assert_matches_reference(op, model, 1.0)
 
 
+@pytest.mark.parametrize("method", ["auto", "generic"])
 @pytest.mark.parametrize("coupling", [0.4, 0.8])
-def test_continuous_sum_pi_plus_erf_play(coupling):
+def test_continuous_sum_pi_plus_erf_play(coupling, method):
+    """``0.7·PI + 0.3·erf play``: the compiled continuous engine (a PI kernel with shaped
+    plays) and the generic engine over the assembled branch flow."""
     op = 0.7 * pi() + 0.3 * erf_play()
-    assert_matches_reference(op, Model(pi_terms(0.7) + (erf_term(0.3),)), coupling)
+    model = Model(pi_terms(0.7) + (erf_term(0.3),))
+    system = assert_matches_reference(op, model, coupling, {"method": method})
+    assert system.engine_class is CompiledContinuousEngine
 
 
 def test_relay_sum_runs_on_the_concatenated_table():
@@ -245,12 +253,13 @@ def test_sum_with_a_negative_weight(make, model, coupling):
 # -- the tangent: Jacobian of the stroboscopic map against central differences ----------------
 #: step of the central differences. Error estimate: truncation |F'''|·h²/6 (measured: about
 #: 1.4·h² for the mixed orbit, 0.25·h² for the continuous one) plus the map's evaluation error
-#: over 2h; the generic engine integrates at rtol 1e-11, and if its error were uncorrelated
-#: between the ±h runs (adaptive steps) that is ε/h ≈ 1e-7 at h = 1e-4, plus the tangent flow's
-#: own error (same rtol, ~1e-10). The optimum of h² + ε/h is h ≈ (ε)^(1/3) ≈ 2e-4.
+#: over 2h: the generic engine integrates at rtol 1e-11, and if its error were uncorrelated
+#: between the ±h runs (adaptive steps) that is ε/h ≈ 1e-7 at h = 1e-4 (the compiled engine's
+#: fixed steps make the map smooth: round-off only), plus the tangent flow's own error (same
+#: rtol, ~1e-10). The optimum of h² + ε/h is h ≈ ε^(1/3) ≈ 2e-4.
 FD_STEP = 1e-4
-#: the bound of that estimate (1.4e-8 + 1e-7 + 1e-10) with a factor 8 (measured: 1.4e-8 and
-#: 2.5e-9 at this step)
+#: the bound of that estimate (1.4e-8 + 1e-7 + 1e-10) with a factor 8 (measured: 1.4e-8 for
+#: the mixed sum, 2.5e-9 for the continuous one on either engine)
 FD_TOL = 1e-6
 
 
@@ -294,25 +303,26 @@ def slaved_at(op, state, direction: int) -> dict[str, bool]:
     return out
 
 
-def start_after_reversal(system: ForcedOscillator) -> OscillatorState:
+def start_after_reversal(system: ForcedOscillator, options: dict) -> OscillatorState:
     """A state on the settled orbit 0.3 after its first reversal past 10 periods: every wagon
     of positive width frozen inside (a reversal frees them all, and 0.3 later the input has
     moved ~0.05, less than any wall distance 2r >= 0.6)."""
-    traj = system.trajectory(12.0 * PERIOD, Q0, V0, sample_dt=0.1)
+    traj = system.trajectory(12.0 * PERIOD, Q0, V0, sample_dt=0.1, engine_options=options)
     events = traj.events
     t_rev = events["time"][(events["kind"] == -1) & (events["time"] > 10.0 * PERIOD)][0]
-    return system.trajectory(t_rev + 0.3, Q0, V0, sample_dt=0.1).final
+    return system.trajectory(t_rev + 0.3, Q0, V0, sample_dt=0.1, engine_options=options).final
 
 
 @pytest.mark.parametrize(
-    ("make", "coupling"),
+    ("make", "coupling", "method"),
     [
-        (lambda: 0.5 * erf_play() + 0.5 * preisach(), 0.6),
-        (lambda: 0.7 * pi() + 0.3 * erf_play(), 0.4),
+        (lambda: 0.5 * erf_play() + 0.5 * preisach(), 0.6, "auto"),
+        (lambda: 0.7 * pi() + 0.3 * erf_play(), 0.4, "auto"),
+        (lambda: 0.7 * pi() + 0.3 * erf_play(), 0.4, "generic"),
     ],
-    ids=["mixed", "continuous"],
+    ids=["mixed", "continuous-compiled", "continuous-generic"],
 )
-def test_jacobian_matches_central_differences_of_the_stroboscopic_map(make, coupling):
+def test_jacobian_matches_central_differences_of_the_stroboscopic_map(make, coupling, method):
     """``system.jacobian(T)`` (the engine's tangent flow: memory rows frozen / slaved / reset
     at walls, the saltation ``δv += C·Δy/v*·δq`` at relay jumps) against central differences
     of ``system.stroboscopic_map`` in ``(q, v, φ, wagons)``. A wagon dragged at the start is
@@ -320,8 +330,9 @@ def test_jacobian_matches_central_differences_of_the_stroboscopic_map(make, coup
     ``q`` in the ``q`` column."""
     op = make()
     system = ForcedOscillator(op, coupling, ZETA, OMEGA)
-    base = start_after_reversal(system)
-    jac, labels = system.jacobian(PERIOD, base, include_phase=True)
+    options = {"method": method}
+    base = start_after_reversal(system, options)
+    jac, labels = system.jacobian(PERIOD, base, include_phase=True, engine_options=options)
     memory = labelled_memory(op, base.operator_state)
     assert labels == ("q", "v", "phi", *memory)
     slaved = slaved_at(op, base.operator_state, 1 if base.v > 0 else -1)
@@ -331,7 +342,7 @@ def test_jacobian_matches_central_differences_of_the_stroboscopic_map(make, coup
     def strobe(x):
         memory_x = dict(zip(labels[3:], x[3:], strict=True))
         state = OscillatorState(x[0], x[1], x[2], rebuilt(op, base.operator_state, x[0], memory_x))
-        end = system.stroboscopic_map(state)
+        end = system.stroboscopic_map(state, engine_options=options)
         return np.array([end.q, end.v, end.phi, *labelled_memory(op, end.operator_state).values()])
 
     fd = np.zeros_like(jac)
@@ -349,7 +360,9 @@ def test_jacobian_matches_central_differences_of_the_stroboscopic_map(make, coup
     np.testing.assert_allclose(jac, fd, rtol=0, atol=FD_TOL * max(1.0, np.max(np.abs(jac))))
     # the period crosses what the tangent must get right: relay jumps (the mixed sum) and wall
     # hits, none of them at a turning point (no grazing: the map is smooth at x0)
-    traj = system.trajectory(PERIOD, base.q, base.v, base.operator_state, 0.01, base.phi)
+    traj = system.trajectory(
+        PERIOD, base.q, base.v, base.operator_state, 0.01, base.phi, engine_options=options
+    )
     events = traj.events
     assert np.count_nonzero(events["kind"] == 1) >= 2
     turning = events["q"][events["kind"] == -1]
