@@ -445,6 +445,7 @@ class BranchSum(WeightedSum, ContinuousHysteron):
                     np.asarray(state[k].positions if pi else [state[k].position], dtype=float)
                     for (k, _), pi in zip(found, kinds, strict=True)
                 ]
+                or [np.zeros(0)]  # relays only (a negative weight kept them out of a RelaySum)
             )
 
         r_sizes = [t.n_relays for _, t in relays]

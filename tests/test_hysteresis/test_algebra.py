@@ -230,8 +230,13 @@ def test_bad_operands_and_states_are_refused():
 def test_coupling_picks_the_engine_from_the_family_and_says_so():
     relays = PARTS["relays"] + PARTS["relay"]
     assert ForcedOscillator(relays, coupling=1.0).engine_class is RelayEngine
-    with pytest.warns(GenericEngineWarning, match="GeneralizedPlay, DiscretePreisachModel"):
-        system = ForcedOscillator(0.5 * PARTS["erf"] + 0.5 * PARTS["relays"], coupling=1.0)
+    mixed = ForcedOscillator(0.5 * PARTS["erf"] + 0.5 * PARTS["relays"], coupling=1.0)
+    assert mixed.engine_class is CompiledContinuousEngine
+    assert mixed.engine_description == "compiled continuous engine"
+    # a continuous Preisach model has its own compiled engine, not one shared with plays
+    preisach = PreisachModel.from_everett(lambda a, b: ((a - b) / 4.0) ** 2, -2.0, 2.0)
+    with pytest.warns(GenericEngineWarning, match="GeneralizedPlay, ContinuousPreisachModel"):
+        system = ForcedOscillator(0.5 * PARTS["erf"] + 0.5 * preisach, coupling=1.0)
     assert system.engine_class is ContinuousEngine
     assert "Python path" in system.engine_description
 

@@ -20,6 +20,7 @@ from hysteresis import (
     PreisachModel,
     Relay,
     SpinDimerEnsemble,
+    WeightedSum,
 )
 from hysteresis._validation import finite_array, finite_scalar, real_array
 from hysteresis.base import Hysteron
@@ -55,10 +56,14 @@ def _operators() -> dict[str, Hysteron]:
         "everett": PreisachModel.from_everett(_quadratic_everett, -1.0, 1.0),
         "gaussian": ContinuousPreisachModel.gaussian(2.0, 1.0, 0.2),
         "dimers": SpinDimerEnsemble.random(20, 2.0, 1.0, 2.0, seed=0),
+        "relay-sum": 0.5 * Relay(1.0, -0.5) + 0.5 * PreisachModel.from_relays([1.0], [0.0]),
+        "mixed-sum": 0.6 * GeneralizedPlay.erf(2.0, 1.0) - 0.4 * Relay(1.0, -0.5),
     }
 
 
 def _same_state(a, b) -> bool:
+    if isinstance(a, tuple):  # a sum's state: its parts' states
+        return type(a) is type(b) and len(a) == len(b) and all(map(_same_state, a, b))
     if hasattr(a, "__dataclass_fields__"):
         return all(
             np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True)
@@ -86,8 +91,9 @@ def _check_round_trip(op: Hysteron) -> None:
         state = pickle.loads(pickle.dumps(final, protocol=protocol))
         assert _same_state(final, state)
         assert np.array_equal(op.apply(more, final)[0], copy.apply(more, state)[0])
-        for value in vars(state).values():
-            assert not (isinstance(value, np.ndarray) and value.flags.writeable)
+        for part in state if isinstance(state, tuple) else (state,):  # a sum: its parts
+            for value in vars(part).values():
+                assert not (isinstance(value, np.ndarray) and value.flags.writeable)
         # read-only parameter arrays stay read-only (protocol 4 drops the flag)
         for name, value in vars(op).items():
             if isinstance(value, np.ndarray) and not value.flags.writeable:
@@ -111,7 +117,7 @@ def test_the_cases_cover_every_exported_operator_class():
         if inspect.isclass(c) and issubclass(c, Hysteron) and not inspect.isabstract(c)
     }
     covered = {type(op) for op in _operators().values()}
-    assert exported <= covered | {PreisachModel}, exported - covered
+    assert exported <= covered | {PreisachModel, WeightedSum}, exported - covered
 
 
 def test_relay_table_and_erf_shape_pickle():
