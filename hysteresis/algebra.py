@@ -119,6 +119,14 @@ class WeightedSum(Hysteron[SumState]):
     the state's checks, ranges). Build sums with the operators (``0.6 * play + 0.4 * relays``)
     or :func:`weighted_sum`."""
 
+    def __new__(cls, *args: Any, **kwargs: Any) -> Any:
+        if cls is WeightedSum:  # the family is decided by the parts (weighted_sum)
+            raise TypeError(
+                "WeightedSum is the common base of RelaySum and BranchSum: build a sum with "
+                "the operators (0.6 * play + 0.4 * relays) or weighted_sum(parts, weights)"
+            )
+        return super().__new__(cls)
+
     def __init__(self, parts: list[Hysteron], weights: list[float]) -> None:
         self._parts = tuple(parts)
         self._weights = np.array(weights, dtype=np.float64)

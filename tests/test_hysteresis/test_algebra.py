@@ -27,6 +27,7 @@ from hysteresis import (
     RelaySum,
     SpinDimerEnsemble,
     SumState,
+    WeightedSum,
     weighted_sum,
 )
 from oscillators import ForcedOscillator, OscillatorState
@@ -225,6 +226,8 @@ def test_bad_operands_and_states_are_refused():
     with pytest.raises(ValueError, match="one input"):
         s.state(play.initial_state(0.0), PARTS["relay"].initial_state(1.0))
     assert 0 + play is play
+    with pytest.raises(TypeError, match="weighted_sum"):
+        WeightedSum([play], [1.0])
 
 
 def test_coupling_picks_the_engine_from_the_family_and_says_so():
