@@ -99,6 +99,8 @@ def run(args: argparse.Namespace) -> int:
             only=args.only,
             progress=progress_enabled(args),
             allow_version_mismatch=args.allow_version_mismatch,
+            # one line per stage also in a log (stderr not a terminal), where bars are noise
+            stage_lines=not getattr(args, "quiet", False),
         )
     except StoreError as exc:
         raise store_error(exc) from exc

@@ -106,15 +106,18 @@ def run_paper(
     only: Sequence[str] | None = None,
     progress: bool = False,
     allow_version_mismatch: bool = False,
+    stage_lines: bool | None = None,
 ) -> dict:
     """Build every figure (or those whose label is in ``only``) and write the report.
 
     Returns the report dictionary ``{"claims": [...], "figures": [...], "size": ...}``. A figure
     whose builder raises is recorded with its traceback in ``errors`` and the others still run.
     Every argument is checked before any figure is built (an unknown label in ``only`` or
-    ``workers < 1`` raises ``ValueError``); ``progress`` prints a line per figure (its number
-    of the total, its time and the time so far) and a progress bar per task sweep (counts, rate,
-    ETA); off by default. A results store that cannot be used (damaged, foreign, or holding
+    ``workers < 1`` raises ``ValueError``); ``stage_lines`` prints a line per figure (its number
+    of the total, its time and the time so far) and per evidence stage on stderr, ``progress``
+    a progress bar per task sweep (counts, rate, ETA) — for a terminal: in a log its carriage
+    returns are noise, so the command line asks for the lines alone there; ``stage_lines``
+    defaults to ``progress``; both off by default. A results store that cannot be used (damaged, foreign, or holding
     results of other code versions without ``allow_version_mismatch``) raises
     :class:`~analysis.experiments.store.StoreError` for the whole run instead of failing figure
     by figure.
@@ -135,6 +138,7 @@ def run_paper(
         progress=progress,
         allow_version_mismatch=allow_version_mismatch,
     )
+    lines = progress if stage_lines is None else bool(stage_lines)
     claims: list[Claim] = []
     figures: list[dict] = []
     errors: list[dict] = []
@@ -142,7 +146,7 @@ def run_paper(
     run_start = time.perf_counter()
     for k, spec in enumerate(selected, 1):
         start = time.perf_counter()
-        if progress:
+        if lines:
             # every task sweep inside a figure shows its own bar (counts, rate, ETA)
             print(
                 f"[hyst paper] [{k}/{len(selected)}] {spec.label}: {spec.title} ...",
@@ -157,14 +161,14 @@ def run_paper(
             errors.append(
                 {"figure": spec.label, "error": repr(exc), "traceback": traceback.format_exc()}
             )
-            if progress:
+            if lines:
                 print(f"[hyst paper] {spec.label} FAILED: {exc!r}", file=sys.stderr, flush=True)
             continue
         for c in new:
             claims.append(c if c.figure else Claim(**{**asdict(c), "figure": spec.label}))
         seconds = time.perf_counter() - start
         figures.append({"label": spec.label, "title": spec.title, "seconds": round(seconds, 2)})
-        if progress:
+        if lines:
             total = time.perf_counter() - run_start
             print(
                 f"[hyst paper] [{k}/{len(selected)}] {spec.label} done in {seconds:.1f} s "
@@ -182,8 +186,8 @@ def run_paper(
         # the periodic orbits behind the disputed windows, and the basins of the coexisting
         # attractors and the realizations' attractors (issue 19; the basins' tasks in the
         # run's store: written as they complete, resumed after a kill), for the Discussion
-        _evidence(report, errors, "orbits", "periodic-orbit", orbit_evidence, progress)
-        _evidence(report, errors, "basins", "basin", lambda: basin_evidence(ctx), progress)
+        _evidence(report, errors, "orbits", "periodic-orbit", orbit_evidence, lines)
+        _evidence(report, errors, "basins", "basin", lambda: basin_evidence(ctx), lines)
     write_report(ctx, report)
     return report
 

@@ -155,3 +155,20 @@ def test_compilation_is_announced_only_without_a_cache(tmp_path, monkeypatch, ca
     monkeypatch.setattr(common.Path, "rglob", lambda self, pattern: iter([self / "x.nbi"]))
     common.announce_compilation(ns)
     assert capsys.readouterr().err == ""
+
+
+def test_paper_prints_one_line_per_stage_to_a_log_without_carriage_returns(tmp_path, capsys):
+    """stderr not a terminal (a log, CI): the stages are announced line by line, and no
+    progress bar writes carriage returns into the log."""
+    from analysis.cli import main
+
+    out = tmp_path / "paper"
+    code = main(["paper", "--smoke", "--only", "fig:N=2_schema", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 0
+    assert "[hyst paper] [1/1] fig:N=2_schema" in err
+    assert "done in" in err
+    assert "\r" not in err
+    capsys.readouterr()
+    assert main(["paper", "--smoke", "--only", "fig:N=2_schema", "--quiet", "--out", str(out)]) == 0
+    assert "[hyst paper]" not in capsys.readouterr().err
