@@ -43,6 +43,7 @@ from analysis.cli._parsing import (
 )
 from analysis.experiments.execution import TaskError
 from oscillators.engines import DivergenceError
+from oscillators.engines._compilation import CompilationNotice
 
 __all__ = ["COMMANDS", "main", "build_parser"]
 
@@ -138,6 +139,8 @@ def one_line_warnings(prog: str) -> Iterator[None]:
 
     with warnings.catch_warnings():
         warnings.simplefilter("default")
+        # the command announces the first compilation itself (announce_compilation)
+        warnings.simplefilter("ignore", CompilationNotice)
         warnings.showwarning = show
         yield
 

@@ -81,6 +81,7 @@ from typing import Any
 import numpy as np
 
 from hysteresis._validation import real_array
+from oscillators.engines._compilation import first_use_notice
 from oscillators.results import OscillatorState
 
 __all__ = [
@@ -268,8 +269,12 @@ class Engine(ABC):
 
     #: Short name reported in results (``"relay kernel"``, ``"play kernel"``, ...).
     name: str = "engine"
+    #: The module of the engine's compiled kernels (its first use warns while numba compiles
+    #: them, :mod:`oscillators.engines._compilation`); ``None`` for a Python engine.
+    kernel_module: str | None = None
 
     def __init__(self, system: Any, state: OscillatorState) -> None:
+        first_use_notice(type(self).kernel_module, type(self).name)
         self.system = system
         self.start = state
         self._omega = float(system.frequency)

@@ -118,6 +118,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
     """
 
     name = "compiled continuous engine"
+    kernel_module = "oscillators.engines._continuous_kernels"
 
     def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **options: Any):
         if method not in METHODS:

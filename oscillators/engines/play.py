@@ -229,6 +229,7 @@ class PlayEngine(TangentFlow, Engine):
     """
 
     name = "play kernel"
+    kernel_module = "oscillators.engines._play_kernels"
 
     @classmethod
     def check_system(cls, system: Any) -> None:

@@ -212,6 +212,9 @@ class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
 class RelayKernelEngine(RelayEngine):
     """The compiled relay engine: ``method`` ``"auto"``, ``"nested"`` or ``"heap"``."""
 
+    name = "relay kernel"
+    kernel_module = "oscillators.engines._relay_kernels"
+
     def __init__(
         self, system: Any, state: OscillatorState, method: str = "auto", taylor: bool = True
     ) -> None:
