@@ -6,7 +6,7 @@ import warnings
 
 import pytest
 
-from hysteresis import PlayOperator, Relay
+from hysteresis import PrandtlIshlinskii, Relay
 from oscillators import ForcedOscillator, OscillatorState
 from oscillators.engines import _compilation
 
@@ -22,7 +22,8 @@ def test_first_engine_without_a_cache_warns_once(monkeypatch):
         warnings.simplefilter("error", _compilation.CompilationNotice)
         system.engine(start)  # the same kernels: said once per process
         # a Python engine compiles nothing
-        ForcedOscillator(PlayOperator(1.0), coupling=0.5).engine(start, method="generic")
+        pi = PrandtlIshlinskii([0.0, 1.0], [0.2, 0.2])
+        ForcedOscillator(pi, coupling=0.5).engine(start, method="generic")
 
 
 def test_a_cached_kernel_module_is_found(monkeypatch):
