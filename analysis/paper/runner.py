@@ -117,10 +117,10 @@ def run_paper(
     of the total, its time and the time so far) and per evidence stage on stderr, ``progress``
     a progress bar per task sweep (counts, rate, ETA) — for a terminal: in a log its carriage
     returns are noise, so the command line asks for the lines alone there; ``stage_lines``
-    defaults to ``progress``; both off by default. A results store that cannot be used (damaged, foreign, or holding
-    results of other code versions without ``allow_version_mismatch``) raises
-    :class:`~analysis.experiments.store.StoreError` for the whole run instead of failing figure
-    by figure.
+    defaults to ``progress``; both off by default. A results store that cannot be used
+    (damaged, foreign, or holding results of other code versions without
+    ``allow_version_mismatch``) raises :class:`~analysis.experiments.store.StoreError` for the
+    whole run instead of failing figure by figure.
     """
     if size not in SIZES:
         raise ValueError(f"size must be one of {sorted(SIZES)}, got {size!r}")
