@@ -1,4 +1,4 @@
-"""``hyst width-disorder``: the width-disorder study, continuum and finite N (issue 18).
+"""``hyst width-disorder``: the width-disorder study, continuum and finite N.
 
 Runs (or resumes) :func:`analysis.experiments.width_disorder.run_study`: the continuous
 Preisach model ``N(s;0,R²)·N(r;p/2,σ_r²)`` at each σ_r and C from several initial conditions

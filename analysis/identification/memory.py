@@ -1,6 +1,6 @@
 """Memory bound of an identification: estimate the peak before allocating, refuse above a bound.
 
-Where memory scales (issue 21): every identification tabulates the Everett function on an
+Where memory scales: every identification tabulates the Everett function on an
 ``n_α × n_β`` lattice (protocol lattice of measured data, native grid of reversal fields × union
 of fields, or the operator's regular grid), with a handful of same-sized temporaries (the
 interpolation across reversal fields, the masks, the cell masses). The smoothing dominates:
@@ -26,9 +26,9 @@ Calibrated against ``tracemalloc`` peaks (``tests/test_analysis/identification/t
 protocol lattice n = 101/201/401 measured 45/40/38 B·N unsmoothed and 440/484/508 B·N smoothed
 (SF 3); native grid of the erf play n = 221/369/551 unsmoothed 29/26/25 B·N, n = 111/185 smoothed
 960 B·N (SF 2) and 2930–2980 B·N (SF 4); the lattice regression on the erf play's native table
-n = 101/201: 386/314 B·N (VARIFORC), 287/269 (``"auto"``), 281/249 (SF 3 with uncertainty) —
-until 2026-11 these were estimated with the scattered windows' term (of the far-field
-VARIFORC window or the largest ``"auto"`` candidate), 8 to 60 times the peak. The estimate
+n = 101/201: 386/314 B·N (VARIFORC), 287/269 (``"auto"``), 281/249 (SF 3 with uncertainty);
+a per-window term summed over scattered windows would overestimate these 8 to 60 times. The
+estimate
 is an upper bound: it lies between the measured peak and 1.75 times it (margin +0 % … +75 %;
 +65 % on the unsmoothed native grid, where the curves are half the lattice) on those cases.
 

@@ -8,8 +8,8 @@ per-node standard error ``se`` (:mod:`analysis.identification.variforc`).
 * **Peak interval**: the 95 % percentile interval of the peak's ``B_c`` and ``B_u`` over a
   parametric bootstrap of the noise, re-smoothed with the same smoothing
   (:mod:`analysis.identification.peak_bootstrap`; its coverage is tested on synthetic data).
-  (Until 2026-11 this was the range of the nodes not significantly below the peak, which
-  covered the true peak in every draw: conservative, not a 95 % interval.)
+  The range of the nodes not significantly below the peak would cover the true peak in every
+  draw: conservative, not a 95 % interval.
 * **Irreversible mass** ``Σ m_ij`` over the cells off the diagonal is a linear combination of the
   lattice values, ``Σ c_k v_k`` (the mixed differences telescope to the boundary of the region);
   with independent noise of variance ``σ²`` at the measured nodes its standard error is

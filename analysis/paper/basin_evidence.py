@@ -1,4 +1,4 @@
-"""Basin and realization evidence for the report's Discussion (issue 19, item 5): which
+"""Basin and realization evidence for the report's Discussion: which
 attractors coexist at the paper's disputed points and how much of the initial conditions each
 one attracts, computed by the report run itself.
 

@@ -1,4 +1,4 @@
-"""Periodic-orbit evidence for the report's Discussion (issue 19): the orbits behind the
+"""Periodic-orbit evidence for the report's Discussion: the orbits behind the
 disputed windows, their Floquet multipliers, and where continuation finds them born and dying.
 
 * the erf-play limit's periodic window at C = 3.80–3.88: the orbit at C = 3.85 continued up and

@@ -184,7 +184,7 @@ def run_paper(
     }
     if not only and size != "smoke":
         # the periodic orbits behind the disputed windows, and the basins of the coexisting
-        # attractors and the realizations' attractors (issue 19; the basins' tasks in the
+        # attractors and the realizations' attractors (the basins' tasks in the
         # run's store: written as they complete, resumed after a kill), for the Discussion
         _evidence(report, errors, "orbits", "periodic-orbit", orbit_evidence, lines)
         _evidence(report, errors, "basins", "basin", lambda: basin_evidence(ctx), lines)
