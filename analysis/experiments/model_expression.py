@@ -78,11 +78,18 @@ class ModelTerm:
     spelling: str = field(default="", compare=False, repr=False)
 
     def __str__(self) -> str:
-        w = abs(self.weight)
-        if w == 1.0:
-            return self.name
-        text = repr(w)
-        return f"{text[:-2] if text.endswith('.0') else text}*{self.name}"
+        """``"2*play"``, ``"-0.5*relay"``, ``"play"`` (weight 1), ``"-play"`` (weight -1)."""
+        return f"-{_magnitude(self)}" if self.weight < 0 else _magnitude(self)
+
+
+def _magnitude(term: ModelTerm) -> str:
+    """The term without its sign: the shortest round-trip decimal of ``|weight|`` (no ``.0``,
+    no ``1*``) joined to the name by ``*``."""
+    w = abs(term.weight)
+    if w == 1.0:
+        return term.name
+    text = repr(w)
+    return f"{text[:-2] if text.endswith('.0') else text}*{term.name}"
 
 
 @dataclass(frozen=True)
@@ -111,13 +118,11 @@ class ModelExpression:
         return None
 
     def __str__(self) -> str:
-        out = ""
-        for i, term in enumerate(self.terms):
-            sign = "-" if term.weight < 0 else "+"
-            if i == 0:
-                out = f"-{term}" if sign == "-" else str(term)
-            else:
-                out += f" {sign} {term}"
+        """The canonical text: ``"0.7*erf-play - 0.3*preisach"`` (see the module docstring)."""
+        first, *rest = self.terms
+        out = str(first)
+        for term in rest:
+            out += f" {'-' if term.weight < 0 else '+'} {_magnitude(term)}"
         return out
 
 

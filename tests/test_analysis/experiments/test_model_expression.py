@@ -97,6 +97,8 @@ def test_names_are_the_longest_accepted_spelling_cut_at_a_minus():
     assert expr.names == ("b", "c", "a") and expr.weights == (1.0, -1.0, -1.0)
     expr = parse_model_expression("2*old_a", SPELLINGS)
     assert expr.names == ("a",) and expr.terms[0].spelling == "old_a"
+    assert expr == ModelExpression((ModelTerm("a", 2.0),))  # the spelling is no part of it
+    assert [str(ModelTerm("a", w)) for w in (1.0, -1.0, 2.0, -0.5)] == ["a", "-a", "2*a", "-0.5*a"]
 
 
 ERRORS = [
