@@ -13,7 +13,7 @@ from typing import Any
 
 from analysis.cli._parsing import CliError, library_errors
 from analysis.cli._parsing import option_error as _option_error
-from analysis.experiments.models import MODELS, ModelParameters
+from analysis.experiments.models import MODELS, ModelParameters, parse_model
 from analysis.experiments.models import build_operator as build_model
 from analysis.experiments.models import model_record as record_model
 from analysis.experiments.store import ResultStore, StoreError
@@ -35,6 +35,8 @@ __all__ = [
     "initial_operator_state",
     "naming_divergence",
     "initial_record",
+    "model_parts",
+    "play_type",
     "model_parameters",
     "model_record",
     "store_error",
@@ -104,18 +106,33 @@ def model_parameters(args: argparse.Namespace, half_extent: float | None = None)
     )
 
 
+def model_parts(args: argparse.Namespace) -> tuple[str, ...]:
+    """The registry names ``--model`` is made of: one name, or the parts of a weighted sum."""
+    if args.model in MODELS:
+        return (args.model,)
+    return parse_model(args.model).names  # canonical text (the option's type made it)
+
+
+def play_type(args: argparse.Namespace) -> bool:
+    """Whether ``--model`` is a play-type model (its memory one wagon: ``--w0`` applies); never
+    a sum, whose state is its parts' states."""
+    spec = MODELS.get(args.model)
+    return spec is not None and spec.play_type
+
+
 def check_model_options(args: argparse.Namespace) -> None:
-    """Cross-option checks that one option's type cannot express; raises :class:`CliError`."""
+    """Cross-option checks that one option's type cannot express; raises :class:`CliError`.
+    A weighted sum is checked as each of its parts (the options apply to every part)."""
     model = args.model
-    spec = MODELS[model]
+    parts = model_parts(args)
     fields = getattr(args, "fields", None)
     if fields is not None:
-        if model != "dimers":
-            raise CliError("argument --fields: only for --model dimers")
+        if "dimers" not in parts:
+            raise CliError("argument --fields: only for --model dimers (or a sum with dimers)")
         if len(fields) % 2:
             raise CliError(f"argument --fields: needs pairs b1 b2 (got {len(fields)} values)")
     spins = args.spins if isinstance(args.spins, list) else [args.spins]
-    if model == "dimers" and fields is None:
+    if "dimers" in parts and fields is None:
         for n in spins:
             if n < 2 or n % 2:
                 raise CliError(f"argument --spins: dimers need an even N >= 2, got {n}")
@@ -124,18 +141,18 @@ def check_model_options(args: argparse.Namespace) -> None:
                 f"argument --width: dimers need p < 2J = {2.0 * args.spin_coupling:g} "
                 f"(--spin-coupling), got {args.width:g}"
             )
-    if model == "relay":
+    if "relay" in parts:
         alpha = 0.5 * args.width if args.alpha is None else args.alpha
         beta = -0.5 * args.width if args.beta is None else args.beta
         if alpha < beta:
             raise CliError(f"argument --alpha: must be >= --beta, got {alpha:g} < {beta:g}")
     elif args.alpha is not None or args.beta is not None:
-        raise CliError("argument --alpha/--beta: only for --model relay")
-    if model == "preisach-gauss" and args.width_spread <= 0:
+        raise CliError("argument --alpha/--beta: only for --model relay (or a sum with relay)")
+    if "preisach-gauss" in parts and args.width_spread <= 0:
         raise CliError("argument --width-spread: preisach-gauss needs sigma_r > 0, got 0")
     w0 = getattr(args, "w0", None)
     if w0 is not None:
-        if not spec.play_type:
+        if not play_type(args):
             raise CliError(
                 f"argument --w0: only for play-type models (erf-play, play), not {model}"
             )
@@ -155,13 +172,14 @@ def model_record(args: argparse.Namespace, half_extent: float | None = None) -> 
 def initial_record(args: argparse.Namespace) -> dict[str, Any]:
     """``q0``, ``v0`` and, for play-type models, the effective ``w0`` (default ``q0 - p/2``)."""
     out: dict[str, Any] = {"q0": args.q0, "v0": args.v0}
-    if MODELS[args.model].play_type:
+    if play_type(args):
         out["w0"] = args.q0 - 0.5 * args.width if args.w0 is None else args.w0
     return out
 
 
 def build_operator(args: argparse.Namespace) -> Any:
-    """The operator of ``--model`` (library errors reported against the option)."""
+    """The operator of ``--model``, a weighted sum's built by the library (library errors
+    reported against the option)."""
     with library_errors(MODEL_OPTIONS, "--model"):
         return build_model(args.model, model_parameters(args))
 

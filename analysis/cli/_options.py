@@ -37,7 +37,7 @@ from analysis.cli._parsing import (
     nonnegative_float,
     positive_float,
 )
-from analysis.experiments.models import MODELS, ModelParameters, canonical_model_name
+from analysis.experiments.models import MODELS, ModelExpressionError, ModelParameters, parse_model
 from analysis.experiments.parameters import DAMPING_RATIO, DEFAULT_Q0, FREQUENCY, V0
 from hysteresis.spin_dimers import MAX_SPINS
 from oscillators import FREQUENCY_RANGE, MAX_COUPLING, MAX_DAMPING_RATIO, MAX_PERIODS
@@ -70,30 +70,51 @@ def models_reading(dest: str, names: Sequence[str]) -> list[str]:
     return [n for n in names if dest in MODELS[n].parameters]
 
 
+#: the example of a weighted sum in ``--help`` and the errors (when its names are choices)
+SUM_EXAMPLE = "0.7*erf-play + 0.3*preisach"
+
+
+def _sum_example(names: Sequence[str]) -> str:
+    if all(n in names for n in ("erf-play", "preisach")) or len(names) < 2:
+        return SUM_EXAMPLE
+    return f"0.7*{names[1]} + 0.3*{names[0]}"
+
+
 def add_model_options(
     parser: argparse.ArgumentParser,
     models: Sequence[str] | None = None,
     default: str = "dimers",
     multiple_spins: bool = False,
+    sums: bool = True,
 ) -> None:
     """``--model`` and the model parameters (paper Table I defaults).
 
     ``models`` restricts the choices (default: every registered model); ``multiple_spins``
-    makes ``--spins`` take one or more values (ensembles). Only the options that one of the
-    choices reads are offered (the others keep their default in the namespace), and each
-    option's help names the models that read it unless every choice does.
+    makes ``--spins`` take one or more values (ensembles); ``sums`` lets ``--model`` be a
+    weighted sum of the choices (:func:`~analysis.experiments.models.parse_model`; the
+    namespace holds its canonical text). Only the options that one of the choices reads are
+    offered (the others keep their default in the namespace), and each option's help names the
+    models that read it unless every choice does.
     """
     d = ModelParameters()
     names = list(models) if models is not None else list(MODELS)
     g = parser.add_argument_group("model (shared by every command; see docs: CLI)")
+    sum_help = (
+        f"; or a weighted sum of these names, e.g. '{_sum_example(names)}' (terms NAME, "
+        "NUMBER*NAME or NAME*NUMBER joined by + or -, each name at most once; the model "
+        "options below apply to every part; a leading minus needs --model=-NAME)"
+        if sums
+        else ""
+    )
     g.add_argument(
         "--model",
-        type=_model_name(names),
+        type=_model_name(names, sums),
         default=default,
         metavar="{" + ",".join(names) + "}",
         help="hysteresis operator M: "
         + "; ".join(f"{n}: {MODELS[n].description}" for n in names)
-        + " (erf_play is a deprecated spelling of erf-play)",
+        + " (erf_play is a deprecated spelling of erf-play)"
+        + sum_help,
     )
 
     def add(option: str, default: Any, help: str, **kwargs: Any) -> None:
@@ -142,23 +163,37 @@ def add_model_options(
     add("--plays", d.plays, "pi: number K of plays", type=int_at_least(1, 10**5))
 
 
-def _model_name(names: Sequence[str]) -> Callable[[str], str]:
+def _model_name(names: Sequence[str], sums: bool) -> Callable[[str], str]:
+    """The type of ``--model``: the canonical name, or (``sums``) the canonical text of a
+    weighted sum of ``names``; any other text is refused in one line."""
+    choices = ", ".join(names)
+    or_sum = f" or a weighted sum of them such as '{_sum_example(names)}'" if sums else ""
+
     def parse(text: str) -> str:
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                name = canonical_model_name(text)
-        except ValueError:
+                expr = parse_model(text)
+        except ModelExpressionError as exc:
+            if exc.unknown is None:
+                raise argparse.ArgumentTypeError(exc.detail) from None
+            where = "" if exc.unknown == text.strip() else f" in {text!r}"
             raise argparse.ArgumentTypeError(
-                f"must be one of {', '.join(names)}; got {text!r}"
+                f"must be one of {choices}{or_sum}; got {exc.unknown!r}{where}"
             ) from None
         for w in caught:
             print(f"hyst: warning: {w.message}", file=sys.stderr)
-        if name not in names:
+        if expr.plain is None and not sums:
             raise argparse.ArgumentTypeError(
-                f"must be one of {', '.join(names)} for this command; got {text!r}"
+                f"must be one of {choices} (this command takes no sum of models); got {text!r}"
             )
-        return name
+        outside = [n for n in expr.names if n not in names]
+        if outside:
+            got = repr(text) if expr.plain is not None else f"{outside[0]!r} in {text!r}"
+            raise argparse.ArgumentTypeError(
+                f"must be one of {choices}{or_sum} for this command; got {got}"
+            )
+        return expr.plain or str(expr)
 
     parse.__name__ = "model"
     return parse

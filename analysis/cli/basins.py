@@ -28,6 +28,7 @@ from analysis.cli._build import (
     check_store,
     model_record,
     naming_divergence,
+    play_type,
     store_error,
 )
 from analysis.cli._options import (
@@ -62,7 +63,6 @@ from analysis.dynamics.basins import (
     basins,
 )
 from analysis.experiments.execution import run_tasks
-from analysis.experiments.models import MODELS
 from analysis.experiments.store import StoreError
 from oscillators import DEFAULT_V0, MAX_PERIODS
 
@@ -210,7 +210,7 @@ def _grid(args: argparse.Namespace) -> BasinGrid:
     if args.w0_range is not None:
         if args.v0_range is not None:
             raise CliError("argument --w0-range: give --v0-range or --w0-range, not both")
-        if not MODELS[args.model].play_type:
+        if not play_type(args):
             raise CliError(
                 f"argument --w0-range: only for play-type models (erf-play, play), not {args.model}"
             )

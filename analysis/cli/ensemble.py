@@ -59,7 +59,7 @@ def register(subparsers: Any) -> None:
         "per (N, C): means and self-averaging parameters of D_KY and D_BC, VAR[M_T], the "
         "number of regular realizations (D_KY = 0).",
     )
-    add_model_options(p, models=ENSEMBLE_MODELS, multiple_spins=True)
+    add_model_options(p, models=ENSEMBLE_MODELS, multiple_spins=True, sums=False)
     add_oscillator_options(p, coupling="multiple")
     g = p.add_argument_group("ensemble")
     g.add_argument(

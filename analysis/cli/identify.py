@@ -61,7 +61,7 @@ from analysis.cli._parsing import (
     nonnegative_float,
     positive_float,
 )
-from analysis.experiments.models import build_operator
+from analysis.experiments.models import MODELS, build_operator
 from analysis.identification import (
     compare_with_ridge,
     identify_from_curves,
@@ -418,7 +418,8 @@ def _identify_model(
         paths = figure_single_density(
             ident,
             out,
-            f"identify_{args.model}".replace(".", "_"),
+            # a sum's text is no file name
+            "identify_sum" if args.model not in MODELS else f"identify_{args.model}",
             title=title,
             smoothed=smoothing is not None,
             spread=args.spread if request.paper_reference else None,

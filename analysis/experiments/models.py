@@ -31,6 +31,13 @@ name                      operator
 Here ``s = (α + β)/2`` is a relay's centre and ``r = (α − β)/2`` its half-width, so the paper's
 ridge ``δ(r − p/2)`` is the limit ``σ_r -> 0``. The old spelling ``erf_play`` is accepted with a
 :class:`DeprecationWarning`.
+
+Where a model is named (:func:`build_operator`, :func:`model_record`), a **weighted sum** of
+names is accepted too, e.g. ``"0.7*erf-play + 0.3*preisach"`` (grammar and refusals:
+:mod:`analysis.experiments.model_expression`; :func:`parse_model` reads it): the operator
+``Σ_k w_k · M_k`` of :func:`hysteresis.weighted_sum`, every part built from the same
+:class:`ModelParameters` (one ``seed``, one ``N``, one ``p``, ...), so a name may appear once.
+A single name, or ``1*name``, is that model itself, exactly as before.
 """
 
 from __future__ import annotations
@@ -43,6 +50,11 @@ from typing import Any
 
 import numpy as np
 
+from analysis.experiments.model_expression import (
+    ModelExpression,
+    ModelExpressionError,
+    parse_model_expression,
+)
 from analysis.experiments.parameters import (
     PLAYS,
     SEED,
@@ -60,19 +72,24 @@ from hysteresis import (
     PreisachModel,
     Relay,
     SpinDimerEnsemble,
+    weighted_sum,
 )
 from hysteresis._validation import as_generator, positive_integer
 
 __all__ = [
     "ALIASES",
     "MODELS",
+    "ModelExpression",
+    "ModelExpressionError",
     "ModelParameters",
     "ModelSpec",
     "build_operator",
+    "canonical_model",
     "canonical_model_name",
     "describe_model",
     "model_names",
     "model_record",
+    "parse_model",
     "uniform_half_extent",
 ]
 
@@ -349,50 +366,120 @@ def _parameters(params: ModelParameters | None, overrides: Mapping[str, Any]) ->
     return replace(base, **overrides)
 
 
+def parse_model(text: str) -> ModelExpression:
+    """``text`` (a registry name or a weighted sum of them, see
+    :mod:`analysis.experiments.model_expression`) as a :class:`ModelExpression` of canonical
+    names; a deprecated spelling warns as in :func:`canonical_model_name`.
+
+    Raises
+    ------
+    ModelExpressionError
+        (a ``ValueError``) anything else, in one line; an unknown name lists the names.
+    """
+    spellings = {**{n: n for n in MODELS}, **ALIASES}
+    expr = parse_model_expression(text, spellings)
+    for term in expr.terms:
+        if term.spelling in ALIASES:
+            new = ALIASES[term.spelling]
+            warnings.warn(
+                f"model name {term.spelling!r} is deprecated; use {new!r}",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+    return expr
+
+
+def canonical_model(text: str) -> str:
+    """The canonical text of a model name or weighted sum (:func:`parse_model`): a name as
+    :func:`canonical_model_name` gives it, a sum as ``0.7*erf-play + 0.3*preisach``."""
+    if isinstance(text, str) and text in MODELS:
+        return text
+    expr = parse_model(text)
+    return expr.plain or str(expr)
+
+
+def _expression(name: str) -> ModelExpression | None:
+    """``None`` for a registry name or alias (or a non-string, refused by
+    :func:`canonical_model_name` as before), else the parsed text."""
+    if not isinstance(name, str) or name in MODELS or name in ALIASES:
+        return None
+    return parse_model(name)
+
+
+def _spec(name: str, expr: ModelExpression | None) -> ModelSpec:
+    """The registry entry of a plain name (``expr`` ``None``, or one term of weight 1)."""
+    return MODELS[canonical_model_name(name) if expr is None else str(expr.plain)]
+
+
 def build_operator(name: str, params: ModelParameters | None = None, **overrides: Any) -> Any:
-    """Build the operator registered as ``name``.
+    """Build the operator registered as ``name``, or the weighted sum ``name`` spells.
 
     Parameters
     ----------
     name:
-        A name of :data:`MODELS` (or a deprecated alias).
+        A name of :data:`MODELS` (or a deprecated alias), or a weighted sum of them such as
+        ``"0.7*erf-play + 0.3*preisach"`` (:func:`parse_model`).
     params:
-        Base parameters (default: :class:`ModelParameters`, the paper's values).
+        Base parameters (default: :class:`ModelParameters`, the paper's values); a sum builds
+        every part from them.
     **overrides:
         Fields of :class:`ModelParameters` to replace, e.g. ``spins=200, seed=3``.
 
     Returns
     -------
-    The hysteresis operator (a :class:`~hysteresis.base.Hysteron`).
+    The hysteresis operator (a :class:`~hysteresis.base.Hysteron`; a sum's is a
+    :class:`~hysteresis.algebra.WeightedSum`).
 
     Raises
     ------
     ValueError
-        Unknown model name, or a parameter outside its range (named in the message).
+        Unknown model name or a text that is no weighted sum of names, or a parameter outside
+        its range (named in the message).
     """
-    spec = MODELS[canonical_model_name(name)]
-    return spec.builder(_parameters(params, overrides))
+    expr = _expression(name)
+    if expr is None or expr.plain is not None:
+        return _spec(name, expr).builder(_parameters(params, overrides))
+    p = _parameters(params, overrides)
+    return weighted_sum([MODELS[n].builder(p) for n in expr.names], expr.weights)
+
+
+def _read(spec: ModelSpec, p: ModelParameters) -> dict[str, Any]:
+    """The parameters ``spec``'s model reads, JSON-ready."""
+    if spec.name == "preisach-uniform":
+        return {"half_extent": uniform_half_extent(p)}
+    if spec.name == "relay":
+        return {
+            "alpha": 0.5 * p.width if p.alpha is None else p.alpha,
+            "beta": -0.5 * p.width if p.beta is None else p.beta,
+        }
+    names = spec.parameters
+    if spec.name == "dimers" and p.fields is not None:
+        names = ("fields", "spin_coupling")
+    out: dict[str, Any] = {}
+    for n in names:
+        v = getattr(p, n)
+        out[n] = [list(row) for row in v] if n == "fields" else v
+    return out
 
 
 def model_record(
     name: str, params: ModelParameters | None = None, **overrides: Any
 ) -> dict[str, Any]:
-    """``{"model": name, <the parameters the model reads>}``, JSON-ready."""
-    spec = MODELS[canonical_model_name(name)]
+    """``{"model": name, <the parameters the model reads>}``, JSON-ready.
+
+    For a weighted sum, ``"model"`` is its canonical text (``"0.7*erf-play + 0.3*preisach"``),
+    ``"weights"`` maps each part's name to its weight, and the parameters are those any part
+    reads (each once: every part reads the same values).
+    """
+    expr = _expression(name)
+    if expr is None or expr.plain is not None:
+        spec = _spec(name, expr)
+        return {"model": spec.name, **_read(spec, _parameters(params, overrides))}
     p = _parameters(params, overrides)
-    out: dict[str, Any] = {"model": spec.name}
-    names = spec.parameters
-    if spec.name == "dimers" and p.fields is not None:
-        names = ("fields", "spin_coupling")
-    if spec.name == "preisach-uniform":
-        return {**out, "half_extent": uniform_half_extent(p)}
-    if spec.name == "relay":
-        out["alpha"] = 0.5 * p.width if p.alpha is None else p.alpha
-        out["beta"] = -0.5 * p.width if p.beta is None else p.beta
-        return out
-    for n in names:
-        v = getattr(p, n)
-        out[n] = [list(row) for row in v] if n == "fields" else v
+    weights = dict(zip(expr.names, expr.weights, strict=True))
+    out: dict[str, Any] = {"model": str(expr), "weights": weights}
+    for n in expr.names:
+        out.update(_read(MODELS[n], p))
     return out
 
 
@@ -413,10 +500,11 @@ _SYMBOLS = {
 
 def describe_model(record: Mapping[str, Any], extra: Sequence[tuple[str, Any]] = ()) -> str:
     """A one-line title, e.g. ``"dimers N=20000 p=2 R=1 J=2 seed=0, C=4"``, from a
-    :func:`model_record` (plus ``extra`` ``(symbol, value)`` pairs such as the coupling)."""
+    :func:`model_record` (plus ``extra`` ``(symbol, value)`` pairs such as the coupling); a sum
+    is written in parentheses, ``"(0.7*erf-play + 0.3*preisach) p=2 R=1 ..."``."""
     parts = []
     for key, value in record.items():
-        if key == "model":
+        if key in ("model", "weights"):
             continue
         sym = _SYMBOLS.get(key, key)
         if key == "fields":
@@ -424,6 +512,7 @@ def describe_model(record: Mapping[str, Any], extra: Sequence[tuple[str, Any]] =
         elif isinstance(value, float):
             value = f"{value:g}"
         parts.append(f"{sym}={value}")
-    text = f"{record['model']} " + " ".join(parts)
+    model = str(record["model"])
+    text = (f"({model}) " if " " in model else f"{model} ") + " ".join(parts)
     tail = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in extra)
     return f"{text.strip()}, {tail}" if tail else text.strip()
