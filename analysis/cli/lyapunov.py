@@ -113,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
         tangent_space=list(res.tangent_space),
         **dim.to_record(),
         switches=res.n_switches,
+        engine=res.extra.get("engine"),
         t_end=res.t_end,
         transient=res.transient,
         transient_periods=args.transient,
@@ -121,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
     write_record(out, "lyapunov.json", record)
     lines = [
         f"model {args.model}, C = {args.coupling}, averaged over "
-        f"[{res.transient:g}, {res.t_end:g}], {res.n_switches} switches",
+        f"[{res.transient:g}, {res.t_end:g}], {res.n_switches} switches "
+        f"({res.extra.get('engine')})",
         f"  tangent space ({', '.join(res.tangent_space)})",
         *(f"  lambda_{i} = {lam: .6f}" for i, lam in enumerate(res.exponents, start=1)),
         *dimension_lines(dim),

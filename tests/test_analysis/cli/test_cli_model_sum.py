@@ -21,7 +21,7 @@ def _in_tmp(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
 
 
-def test_lyapunov_of_a_mixed_sum_warns_in_one_line_and_names_the_sum():
+def test_lyapunov_of_a_mixed_sum_runs_compiled_and_names_the_sum():
     proc = subprocess.run(
         [sys.executable, "-m", "analysis.cli", "lyapunov", "--model",
          "0.70*erf-play+0.3 * preisach", "--spins", "50", "--coupling", "3", "--t-end", "50",
@@ -32,18 +32,34 @@ def test_lyapunov_of_a_mixed_sum_warns_in_one_line_and_names_the_sum():
         cwd=Path.cwd(),
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
-    # a play plus relays runs on the generic continuous engine: said once, in one line
-    lines = proc.stderr.splitlines()
-    assert len(lines) == 1, proc.stderr
-    assert lines[0].startswith("hyst lyapunov: warning: ") and "generic continuous" in lines[0]
-    assert ".py" not in lines[0]  # no source location, no traceback
+    # a play plus relays runs on the compiled continuous engine (relays as switching events)
+    assert proc.stderr == ""
     rec = json.loads(proc.stdout)
     expected = model_record("0.7*erf-play + 0.3*preisach", spins=50)
     assert {k: rec[k] for k in expected} == expected
     assert rec["model"] == "0.7*erf-play + 0.3*preisach"
+    assert rec["engine"] == "compiled continuous engine"
     # tangent space: (q, v) and the play's wagon (the sum's part 0); relays switch
     assert rec["tangent_space"] == ["q", "v", "0:w"]
     assert rec["switches"] > 0 and "w0" not in rec
+
+
+def test_a_sum_on_the_python_path_warns_in_one_line():
+    proc = subprocess.run(
+        [sys.executable, "-m", "analysis.cli", "lyapunov", "--model",
+         "0.7*erf-play + 0.3*preisach-gauss", "--coupling", "2", "--t-end", "10", "--quiet",
+         "--json"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=Path.cwd(),
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith("hyst lyapunov: warning: ") and "generic continuous" in lines[0]
+    assert ".py" not in lines[0]  # no source location, no traceback
+    assert "Python path" in json.loads(proc.stdout)["engine"]
 
 
 def test_a_relay_type_sum_runs_on_the_relay_engine_without_warning(capsys):
