@@ -74,6 +74,11 @@ __all__ = ["CompiledContinuousEngine", "METHODS"]
 METHODS = ("auto", "compiled", "generic")
 #: RK8 step (time units) for ρ = 1 (module docstring).
 DEFAULT_STEP = 0.05
+#: largest ζ the compiled continuous engine integrates: its explicit RK8 step is 0.05/(2ζ), so
+#: a forcing period costs ~250·ζ steps (measured, a PI operator: 0.05 s at ζ = 100, 0.55 s at
+#: 1e3, 4.5 s at 1e4); at the oscillator's limit ζ = 1e6 a period would take minutes, so such
+#: a system is refused when it is built (the relay kernels solve any ζ in closed form)
+STIFF_DAMPING_LIMIT = 1e4
 #: events kept per kernel call before the buffer is drained
 _EVENT_BUFFER = 4096
 #: smallest staircase capacity (entries; doubled when a push needs room)
@@ -119,6 +124,18 @@ class CompiledContinuousEngine(TangentFlow, Engine):
 
     name = "compiled continuous engine"
     kernel_module = "oscillators.engines._continuous_kernels"
+
+    @classmethod
+    def check_system(cls, system: Any) -> None:
+        """Refuse a damping ratio above :data:`STIFF_DAMPING_LIMIT` (the explicit step would
+        make every period cost ~250·ζ RK8 steps)."""
+        zeta = float(system.damping_ratio)
+        if zeta > STIFF_DAMPING_LIMIT:
+            raise ValueError(
+                f"damping_ratio must be <= {STIFF_DAMPING_LIMIT:g} for the compiled continuous "
+                f"engine, got {zeta:g}: its explicit RK8 step 0.05/(2ζ) would cost about "
+                f"{250 * zeta:.0e} steps per forcing period"
+            )
 
     def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **options: Any):
         if method not in METHODS:

@@ -28,3 +28,15 @@ def test_resolved_width_laws_stay_compiled():
     wide = ContinuousPreisachModel.gaussian(2.0, 1.0, MIN_COMPILED_WIDTH_SPREAD)
     assert wide.uncompiled_reason is None
     assert ForcedOscillator(wide, coupling=1.0).engine_class is CompiledContinuousEngine
+
+
+def test_stiff_damping_is_refused_by_the_compiled_continuous_engine_in_one_line():
+    """ζ = 1e6 (the oscillator's limit) would cost ~2e8 explicit RK8 steps per period: refused
+    when the system is built, naming the limit, instead of hanging."""
+    from hysteresis import PrandtlIshlinskii
+
+    pi = PrandtlIshlinskii([0.0, 1.0], [0.3, 0.3])
+    with pytest.raises(ValueError, match=r"damping_ratio must be <= 10000") as info:
+        ForcedOscillator(pi, coupling=1.0, damping_ratio=1e6)
+    assert "\n" not in str(info.value)
+    ForcedOscillator(pi, coupling=1.0, damping_ratio=1e4)  # the limit itself is accepted
