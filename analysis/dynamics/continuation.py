@@ -169,6 +169,12 @@ def system_factory(system: ForcedOscillator, parameter: str = "coupling") -> Cal
     return make
 
 
+#: largest relative residual ``|P^k(x) − x|`` of the orbit handed to :func:`continue_orbit`
+#: at ``start``: far above a refined orbit's (1e-10) and the integrators' error, far below what
+#: a parameter change of 1e-4 leaves (an orbit found at another value)
+START_RESIDUAL = 1e-6
+
+
 def continue_orbit(
     system: ForcedOscillator | Callable[[float], Any],
     orbit: PeriodicOrbit,
@@ -243,6 +249,13 @@ def continue_orbit(
         factory = system
     else:
         raise TypeError("system must be a ForcedOscillator or a callable value -> system")
+    for name, value in (("start", start), ("stop", stop)):
+        # a value the system refuses (a frequency of 0, a coupling beyond its bound) is bad
+        # input now, not a branch that creeps toward it for hours
+        try:
+            factory(value)
+        except ValueError as exc:
+            raise ValueError(f"{name}: {parameter} = {value:g}: {exc}") from None
     span = abs(stop - start)
     step = span / 50.0 if step is None else positive_scalar(step, "step")
     min_step = step / 4096.0 if min_step is None else positive_scalar(min_step, "min_step")
@@ -262,7 +275,15 @@ def continue_orbit(
     sys0 = factory(start)
     coords = _orbit_coordinates(sys0, orbit, engine_options)
     prob = BranchProblem(factory, coords, orbit.period, tolerance, max_iterations, engine_options)
-    first = prob.point(coords.vector(orbit.start), start, orbit.start)
+    x0 = coords.vector(orbit.start)
+    drift = float(np.max(np.abs(prob.residual(x0, start, orbit.start)[0])))
+    if drift > START_RESIDUAL * max(1.0, float(np.max(np.abs(x0)))):
+        # an orbit found at another parameter value would be relabelled silently
+        raise ValueError(
+            f"orbit is not a periodic orbit of the system at start = {start:g} "
+            f"(|P^k(x) − x| = {drift:.2g}): pass the {parameter} it was found at as start"
+        )
+    first = prob.point(x0, start, orbit.start)
     points = [first]
     events: list[ContinuationEvent] = []
     ds = step

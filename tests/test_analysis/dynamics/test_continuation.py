@@ -168,3 +168,20 @@ def test_bad_input_is_named():
         continue_orbit(system, orbit, 9.5, 9.0, parameter="mass")
     with pytest.raises(ValueError, match="step"):
         continue_orbit(system, orbit, 9.5, 9.0, step=-1.0)
+
+
+def test_a_stop_the_system_refuses_is_bad_input_at_once():
+    """Continuing the frequency toward 0 crept along ever longer periods (a hang): a stop the
+    system refuses is a one-line error before any branch point is computed."""
+    system = _dimer_pair(9.5)
+    orbit = find_periodic_orbit(system)
+    with pytest.raises(ValueError, match=r"stop: frequency = 0: frequency must lie in") as info:
+        continue_orbit(system, orbit, 1.0, 0.0, parameter="frequency")
+    assert "\n" not in str(info.value)
+
+
+def test_an_orbit_found_at_another_parameter_is_not_relabelled():
+    system = _dimer_pair(9.5)
+    orbit = find_periodic_orbit(system)
+    with pytest.raises(ValueError, match=r"not a periodic orbit of the system at start = 9.4"):
+        continue_orbit(system, orbit, 9.4, 9.0)
