@@ -30,8 +30,10 @@ class Trajectory:
     """Samples on a time grid plus the exact list of output switches.
 
     ``switches`` is a structured array with fields ``time``, ``q``, ``v``, ``jump`` (ΔM) —
-    empty for continuous operators, whose wall hits/reversals are in ``events`` (fields
-    ``time``, ``q``, ``v``, ``kind``: +1 leaving the play onto a wall, -1 entering the play).
+    the relay switches, also those of a composite's relays on a continuous engine (its events
+    of kind 2); empty for continuous operators, whose wall hits/reversals are in ``events``
+    (fields ``time``, ``q``, ``v``, ``kind``: +1 leaving the play onto a wall or a wipe-out,
+    -1 a reversal or entering the play, +2 relays of a composite switched).
     ``w`` is the play position for play-type operators, else ``None``. ``slides`` (relay
     engines) lists the Filippov sliding motions entered and left (fields ``time``, ``q``,
     ``v``, ``kind`` +1 slide-in / -1 slide-out, ``M``); while sliding the samples are

@@ -248,7 +248,7 @@ class ForcedOscillator:
             v=out[:, 1].copy(),
             phi=np.mod(start.phi + self._omega * times, 2.0 * math.pi),
             M=out[:, 2].copy(),
-            switches=rec.get("switches", np.empty(0, dtype=SWITCH_DTYPE)),
+            switches=_switches(rec),
             final=eng.state(),
             w=out[:, cols.index("w")].copy() if "w" in cols else None,
             events=rec.get("events"),
@@ -359,3 +359,18 @@ class ForcedOscillator:
         if bar is not None:
             bar.close()
         return out
+
+
+def _switches(records: dict) -> np.ndarray:
+    """The relay switches of a run: the relay engines' own record, or the events at which a
+    composite's relays switched (kind 2 of the continuous engines' events)."""
+    if "switches" in records:
+        return records["switches"]
+    events = records.get("events")
+    out = np.empty(0, dtype=SWITCH_DTYPE)
+    if events is not None and events.dtype.names and "jump" in events.dtype.names:
+        hits = events[events["jump"] != 0.0]
+        out = np.empty(hits.size, dtype=SWITCH_DTYPE)
+        for name in ("time", "q", "v", "jump"):
+            out[name] = hits[name]
+    return out

@@ -98,7 +98,8 @@ class Model:
 class Reference:
     """The reference's state (mutable; one orbit) and its event log.
 
-    ``events`` rows: ``(t, kind, q, v, ΔM, rate)``, kind +1 a breakpoint, −1 a reversal, rate
+    ``events`` rows: ``(t, kind, q, v, ΔM, rate)``, kind +2 relays switched, +1 another
+    breakpoint (a wall hit), −1 a reversal, rate
     the speed of the event function there (``v*``, or the acceleration at a reversal);
     ``switches`` the times at which relays switched (``M`` jumps there)."""
 
@@ -262,9 +263,9 @@ class Reference:
         rate = self.v
         if kind == "reversal":
             rate = -self.q + math.cos(self.phi0 + self.omega * t) + self.coupling * after
-        self.events.append(
-            (t, 1 if kind == "breakpoint" else -1, self.q, self.v, after - before, rate)
-        )
+        # the library's event codes: +2 relays switched (M jumped), +1 another breakpoint
+        code = -1 if kind == "reversal" else (2 if after != before else 1)
+        self.events.append((t, code, self.q, self.v, after - before, rate))
 
 
 def reference(

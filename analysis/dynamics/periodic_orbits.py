@@ -237,9 +237,15 @@ def event_sequence(events: np.ndarray) -> tuple:
     Relay switches: ``(sign of the jump, threshold)`` (the switch happens at ``q`` = the relay's
     threshold, rounded to 1e-9); play engines: ``(kind, side)`` with kind +1 a wall hit, −1 a
     reversal and side the sign of ``v`` just before (hits) or of the acceleration direction
-    (reversals: the sign of ``q − w``); the continuous engine: ``(kind,)``.
+    (reversals: the sign of ``q − w``); the continuous engines: ``(kind,)``, and for the
+    relays of a composite (kind 2) ``(2, sign of the jump, threshold)``.
     """
     names = events.dtype.names or ()
+    if "kind" in names and "jump" in names:  # the continuous engines' events
+        return tuple(
+            (2, int(np.sign(j)), round(float(q), 9)) if k == 2 else (int(k),)
+            for k, j, q in zip(events["kind"], events["jump"], events["q"], strict=True)
+        )
     if "jump" in names:
         return tuple(
             (int(np.sign(j)), round(float(q), 9))

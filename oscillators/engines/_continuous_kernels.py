@@ -112,6 +112,9 @@ OP_PREISACH = 1
 #: ``CompiledEverett.kind`` of a tabulated (C¹ bicubic Hermite) Everett function
 KIND_TABLE = 1
 
+#: the ``kind`` of a recorded event at which relays switched (the output jumps by ``Δy``)
+EVENT_SWITCH = 2
+
 DONE = 0
 GROW = 1
 EVENTS_FULL = 2
@@ -424,8 +427,9 @@ def _relay_switch(par, ist, st, rel, rord, Y):
     """Switch every relay at the threshold reached (``q = S_RBP``): rising, the down relays
     with α = q go up; falling, the up relays with β = q go down (the relay rule ``u < β``
     holds just past it). The output jumps by ``Δy = Σ 2 w_i·(±1)`` and each tangent column
-    gets the saltation ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). Returns False at a
-    turning point with the tangent flow on (infinite saltation: the caller raises)."""
+    gets the saltation ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). Returns (False, Δy)
+    at a turning point with the tangent flow on (infinite saltation: the caller raises), else
+    (True, Δy)."""
     n = rel.shape[0]
     d = ist[I_DIR]
     q = st[S_RBP]
@@ -460,11 +464,11 @@ def _relay_switch(par, ist, st, rel, rord, Y):
     if k > 0 and jump != 0.0:
         v = st[S_V]
         if v == 0.0:
-            return False
+            return False, jump
         f = par[P_C] * jump / v
         for j in range(k):
             Y[1, j] += f * Y[0, j]
-    return True
+    return True, jump
 
 
 # --------------------------------------------------------------------------------------------
@@ -479,12 +483,15 @@ def _event(
     input) or a reversal (kind −1) at the current (q, v); False at a grazing relay switch."""
     k = ist[I_K]
     q = st[S_Q]
+    jump = 0.0
     if kind > 0 and rel.shape[0] > 0 and st[S_BP] == st[S_RBP]:
-        if not _relay_switch(par, ist, st, rel, rord, Y):
+        ok, jump = _relay_switch(par, ist, st, rel, rord, Y)
+        if not ok:
             return False
+        kind = EVENT_SWITCH
         if st[S_BP] != st[S_CBP]:  # the continuous branch goes on
             nearest_breakpoint(ist, st, rel, rord)
-            _record_event(par, ist, st, kind, ep, et, ev)
+            _record_event(par, ist, st, kind, ep, et, ev, jump)
             return True
     if kind < 0:
         ist[I_RPTR] = -1  # a new direction: the relays' scan starts afresh
@@ -524,13 +531,13 @@ def _event(
         st[S_U0] = q  # the branch start (u0)
         preisach_branch(ist, st, stack, prefix, dlo, dhi, Y, F)
     merge_breakpoints(ist, st, rel, rord)
-    _record_event(par, ist, st, kind, ep, et, ev)
+    _record_event(par, ist, st, kind, ep, et, ev, jump)
     return True
 
 
 @njit(cache=True)
-def _record_event(par, ist, st, kind, ep, et, ev):
-    """Count the event and, when recording, write (t, q, v, kind, M after it)."""
+def _record_event(par, ist, st, kind, ep, et, ev, jump):
+    """Count the event and, when recording, write (t, q, v, kind, M after it, Δy)."""
     q = st[S_Q]
     ist[I_EVENTS] += 1
     if ist[I_RECORD]:
@@ -541,6 +548,7 @@ def _record_event(par, ist, st, kind, ep, et, ev):
         ev[i, 2] = st[S_V]
         ev[i, 3] = kind
         ev[i, 4] = output_now(ist, st, ep, et)
+        ev[i, 5] = jump
         ist[I_NEV] = i + 1
 
 

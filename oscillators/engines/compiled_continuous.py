@@ -192,7 +192,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         self._st[2] = v
         self._include_phase = False
         self._events: list[np.ndarray] = []
-        self._ev = np.zeros((0, 5))
+        self._ev = np.zeros((0, 6))
         self._F = np.zeros((3, 0))
         self._work = _k.make_work(0)
         # the initial direction: the sign of v, at rest that of the acceleration
@@ -320,7 +320,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         events_before = int(ist[3])
         span = float(times[-1]) - self.elapsed if times.size else 0.0
         if record and self._ev.shape[0] == 0:
-            self._ev = np.zeros((_EVENT_BUFFER, 5))
+            self._ev = np.zeros((_EVENT_BUFFER, 6))
         while True:
             status = _k.run(
                 self._par, ist, self._st, n_t, tau_t, buf, self._hw, self._wt, self._pos,
@@ -385,12 +385,13 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         )
 
     def records(self) -> dict[str, np.ndarray]:
-        ev = np.concatenate(self._events) if self._events else np.zeros((0, 5))
+        ev = np.concatenate(self._events) if self._events else np.zeros((0, 6))
         arr = np.empty(ev.shape[0], dtype=EVENT_DTYPE)
         arr["time"] = ev[:, 0]
         arr["q"] = ev[:, 1]
         arr["v"] = ev[:, 2]
         arr["kind"] = ev[:, 3].astype(np.int8)
+        arr["jump"] = ev[:, 5]
         arr["M"] = ev[:, 4]
         return {"events": arr}
 

@@ -77,11 +77,16 @@ from oscillators.engines.base import (
 )
 from oscillators.results import OscillatorState
 
-__all__ = ["ContinuousEngine", "EVENT_DTYPE"]
+__all__ = ["ContinuousEngine", "EVENT_DTYPE", "EVENT_SWITCH"]
 
-#: Fields of ``records()["events"]``: kind +1 a breakpoint (wall hit, wipe-out), -1 a reversal;
-#: ``M`` the operator output at the event.
-EVENT_DTYPE = np.dtype([("time", "f8"), ("q", "f8"), ("v", "f8"), ("kind", "i1"), ("M", "f8")])
+#: Fields of ``records()["events"]``: kind +1 a breakpoint (wall hit, wipe-out), -1 a reversal,
+#: +2 relays of a composite switched (the output jumped by ``jump``; 0 at the other kinds);
+#: ``M`` the operator output after the event.
+EVENT_DTYPE = np.dtype(
+    [("time", "f8"), ("q", "f8"), ("v", "f8"), ("kind", "i1"), ("M", "f8"), ("jump", "f8")]
+)
+#: ``kind`` of an event at which relays switched
+EVENT_SWITCH = 2
 
 #: Longest stretch integrated by one solve_ivp call (divergence is checked between calls).
 _MAX_CALL = 20.0
@@ -152,7 +157,7 @@ class ContinuousEngine(TangentFlow, Engine):
         self._op_state = op_state
         self._n = 0  # elapsed = n·T + tau, tau in [0, T)
         self._tau = 0.0
-        self._events: list[tuple[float, float, float, int, float]] = []
+        self._events: list[tuple[float, float, float, int, float, float]] = []
         self._n_events = 0
         self._direction = self._initial_direction()
         self._flow = checked_branch_flow(op, op_state, self._direction)
@@ -441,13 +446,16 @@ class ContinuousEngine(TangentFlow, Engine):
         self._n_events += 1
         new = checked_branch_flow(self._op, self._op_state, self._direction)
         if self._record:
+            jump = old.breakpoint_jump if kind == "breakpoint" else 0.0
+            code = -1 if kind == "reversal" else (EVENT_SWITCH if jump != 0.0 else 1)
             self._events.append(
                 (
                     self.start.t + self.elapsed,
                     self._q,
                     self._v,
-                    1 if kind == "breakpoint" else -1,
+                    code,
                     float(new.output(self._q)),
+                    jump,
                 )
             )
         if self._ntan:
@@ -506,6 +514,7 @@ class ContinuousEngine(TangentFlow, Engine):
             arr["v"] = ev[:, 2]
             arr["kind"] = ev[:, 3].astype(np.int8)
             arr["M"] = ev[:, 4]
+            arr["jump"] = ev[:, 5]
         return {"events": arr}
 
     # -- tangent flow --------------------------------------------------------------------------

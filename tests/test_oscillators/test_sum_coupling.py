@@ -364,7 +364,7 @@ def test_jacobian_matches_central_differences_of_the_stroboscopic_map(make, coup
         PERIOD, base.q, base.v, base.operator_state, 0.01, base.phi, engine_options=options
     )
     events = traj.events
-    assert np.count_nonzero(events["kind"] == 1) >= 2
+    assert np.count_nonzero(events["kind"] >= 1) >= 2
     turning = events["q"][events["kind"] == -1]
     for k, part in enumerate(op.parts):
         if part.piecewise_constant:
