@@ -243,19 +243,19 @@ class Hysteron(ABC, Generic[StateT]):
 
     @property
     def min_slope(self) -> float | None:
-        """Least slope ``dy/du`` of any branch of any state reachable from
-        :meth:`initial_state`, where a branch keeps it over an interval of inputs; ``None``
-        (the default) when the operator does not know it.
+        """Least slope ``dy/du`` that a branch keeps over an interval of inputs, over every
+        state reachable from :meth:`initial_state`; ``None`` (the default) when the operator
+        does not know it.
 
-        Optional. :class:`hysteresis.inverse.InverseOperator` reads it: ``0`` means some branch
-        is flat over an interval of inputs (a play between its walls), a negative value that
-        some branch falls; either way no input history reproduces every output history, and
-        the inverse is refused. A positive value guarantees strictly increasing branches.
-        ``None`` also covers operators whose slope vanishes only at isolated inputs or in the
-        saturated tails (a continuous Preisach model at every reversal, an erf shape of width
-        0), where it does not make a branch flat: the inverse then checks every branch it
-        follows. ``PlayOperator``: 0 (1 at width 0); ``PrandtlIshlinskii``: the least partial
-        sum of its weights (0 without a width-0 play); piecewise-constant operators: 0.
+        Optional. :class:`hysteresis.inverse.InverseOperator` reads it. ``0``: some branch is
+        flat over an interval of inputs (a play between its walls); negative: some branch
+        falls. Either way the output does not determine the input, and the inverse is refused.
+        A positive value guarantees strictly increasing branches. ``None`` is also the answer
+        of an operator whose slope vanishes only at isolated inputs or in the saturated tails,
+        which makes no branch flat (a continuous Preisach model at every reversal, an erf
+        shape of width 0): the inverse then checks each branch it follows.
+        ``PlayOperator``: 0 (1 at width 0); ``PrandtlIshlinskii``: the least partial sum of
+        its weights (0 without a width-0 play); piecewise-constant operators: 0.
         """
         return None
 

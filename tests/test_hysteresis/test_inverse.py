@@ -9,14 +9,19 @@ operator's rounding, ~1e-14 of the output scale here; the contract's 1e-10 is as
 
 import math
 import pickle
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 from scipy.special import erfinv
 
 from hysteresis import GeneralizedPlay, PlayOperator, PrandtlIshlinskii, PreisachModel, Relay
+from hysteresis.base import ContinuousHysteron
+from hysteresis.flow import BranchFlow
 from hysteresis.inverse import InverseOperator, InverseState
 from hysteresis.preisach.continuous import ContinuousPreisachModel
+from oscillators.system import ForcedOscillator
 
 ACCURACY = 1e-10
 LOWER, UPPER = -1.0, 1.5
@@ -29,6 +34,12 @@ def uniform_everett(a, b):
     return ((np.asarray(a) - np.asarray(b)) / SPAN) ** 2
 
 
+def uniform_gradient(a, b):
+    """(∂E/∂α, ∂E/∂β) of :func:`uniform_everett`."""
+    slope = 2.0 * (np.asarray(a) - np.asarray(b)) / SPAN**2
+    return slope, -slope
+
+
 def band_everett(a, b):
     """Uniform density on the band α − β >= BAND: no relay narrower than BAND, so every branch
     is flat for an input change of BAND after a reversal."""
@@ -37,7 +48,7 @@ def band_everett(a, b):
 
 
 def uniform_preisach():
-    return PreisachModel.from_everett(uniform_everett, LOWER, UPPER)
+    return PreisachModel.from_everett(uniform_everett, LOWER, UPPER, uniform_gradient)
 
 
 def pi_operator():
@@ -232,6 +243,52 @@ def test_a_flat_branch_found_while_inverting_raises():
         inv.apply([-0.5, 0.5, 0.4])  # after the reversal it stays flat for an input step BAND
 
 
+@dataclass(frozen=True)
+class _Input:
+    input: float
+
+
+class _StepUp(ContinuousHysteron):
+    """``y = u + [u >= 0]``: slope 1 everywhere, but a jump at 0 (as a sum with a relay)."""
+
+    def initial_state(self, u0):
+        return _Input(float(u0))
+
+    def apply(self, inputs, state=None):
+        u = np.asarray(inputs, dtype=float)
+        return u + (u >= 0.0), _Input(float(u[-1]))
+
+    @property
+    def output_range(self):
+        return (-math.inf, math.inf)
+
+    def branch_flow(self, state, direction):
+        u0, above = state.input, state.input >= 0.0
+        bp = (
+            (0.0 if direction > 0 else np.nextafter(0.0, -1.0))
+            if above != (direction > 0)
+            else direction * math.inf
+        )
+        return BranchFlow(
+            direction=direction,
+            input=u0,
+            labels=(),
+            memory=np.zeros(0),
+            slaved=np.zeros(0, dtype=bool),
+            output=lambda u: np.asarray(u, dtype=float) + float(above),
+            partials=lambda u: (1.0, np.zeros(0)),
+            breakpoint=bp,
+            breakpoint_jump=0.0 if math.isinf(bp) else float(direction),
+        )
+
+
+def test_a_jump_found_while_inverting_raises():
+    inv = InverseOperator(_StepUp())
+    np.testing.assert_allclose(inv.apply([-3.0, -1.0, -0.5])[0], [-3.0, -1.0, -0.5])
+    with pytest.raises(ValueError, match=r"has no inverse: its output jumps by 1.0 at input 0.0"):
+        inv.apply([-1.0, 0.5])
+
+
 def test_identity_play_is_its_own_inverse():
     y = np.array([0.0, 2.5, -1.0, 1e-3])
     u, _ = InverseOperator(PlayOperator(0.0)).apply(y)
@@ -289,3 +346,97 @@ def test_pickled_inverse_and_state_continue_identically(gaussian):
             copy.apply(y[30:], state_copy)[0], inv.apply(y[30:], state)[0]
         )
         assert copy.output_range == inv.output_range
+
+
+# -- branch flow: the inverse as an operator of the generic continuous engine -----------------
+def test_pi_branch_flow_inverts_the_forward_branch_with_closed_form_partials():
+    pi = pi_operator()
+    inv = InverseOperator(pi)
+    _, state = inv.apply([0.0, 3.0, 1.0])  # down from 3: the narrow plays dragged, wide ones not
+    flow = inv.branch_flow(state, -1)
+    forward = pi.branch_flow(state.forward, -1)
+    frozen = ~forward.slaved
+    assert flow.labels == tuple(np.array(forward.labels)[frozen])
+    assert flow.driven_labels == tuple(np.array(forward.labels)[forward.slaved])
+    assert flow.breakpoint == pytest.approx(forward.output(forward.breakpoint), abs=1e-15)
+    # on the branch u = u0 + (y − y0)/A with A the dragged weights: ∂u/∂y = 1/A,
+    # ∂u/∂w_j = −a_j/A for the frozen wagons (y = Σ a_i w_i)
+    dragged = float(np.sum(pi.weights[forward.slaved]))
+    for y in np.linspace(flow.breakpoint, 1.0, 5):
+        assert flow.output(y) == pytest.approx(inv.apply([y], state)[0][0], abs=1e-14)
+        assert flow.output(y) == pytest.approx(state.forward.input + (y - 1.0) / dragged, abs=1e-14)
+        d_y, d_m = flow.partials(y)
+        assert d_y == pytest.approx(1.0 / dragged, rel=1e-14)
+        np.testing.assert_allclose(d_m, -pi.weights[frozen] / dragged, rtol=1e-14)
+        values, d_du, d_dm = flow.driven(y)
+        shift = flow.output(y) - state.forward.input
+        np.testing.assert_allclose(
+            values, np.asarray(forward.memory)[forward.slaved] + shift, rtol=0, atol=1e-14
+        )
+        np.testing.assert_allclose(d_du, 1.0 / dragged, rtol=1e-14)
+        np.testing.assert_allclose(d_dm, np.tile(d_m, (d_du.size, 1)), rtol=1e-14)
+
+
+def _partner_root(model, extrema, target):
+    """u with the rising branch of the state after the history ``extrema`` at ``target``."""
+    flow = model.branch_flow(model.state_from_extrema(extrema), 1)
+    return brentq(lambda u: float(flow.output(u)) - target, flow.input, UPPER, xtol=1e-15)
+
+
+def test_preisach_branch_flow_partials_match_finite_differences():
+    model = uniform_preisach()
+    inv = InverseOperator(model)
+    extrema = [1.2, -0.6, 0.9, -0.2, 0.1]  # rising from the minimum -0.2, now at 0.1
+    forward = model.state_from_extrema(extrema)
+    state = InverseState(forward, model.output(forward))
+    flow = inv.branch_flow(state, 1)
+    assert flow.labels == ("M1", "m1", "M2", "m2") and flow.driven_labels == ()
+    y = 0.5 * (state.input + flow.breakpoint)  # halfway to the wiped-out maximum 0.9
+    h = 1e-5  # central differences: error ~h²·u''' + ε/h ~ 1e-10
+    fd_y = (flow.output(y + h) - flow.output(y - h)) / (2 * h)
+    d_y, d_m = flow.partials(y)
+    assert d_y == pytest.approx(fd_y, rel=1e-6)
+    for j in range(4):
+        up, down = list(extrema), list(extrema)
+        up[j] += h
+        down[j] -= h
+        fd = (_partner_root(model, up, y) - _partner_root(model, down, y)) / (2 * h)
+        assert d_m[j] == pytest.approx(fd, rel=1e-6, abs=1e-9)
+
+
+def test_preisach_reversal_pushes_the_input_with_the_arriving_gradient():
+    model = uniform_preisach()
+    inv = InverseOperator(model)
+    big, low, u_star = 1.2, -0.6, 0.4  # history: up to 1.2, down to -0.6, up to 0.4
+    forward = model.state_from_extrema([big, low, u_star])
+    state = InverseState(forward, model.output(forward))
+    flow = inv.branch_flow(state, -1)  # reversing: the forward pushes u* as "M2"
+    assert flow.labels == ("M1", "m1", "M2") and flow.pushed.tolist() == [False, False, True]
+    # the arriving branch y = c + 2E(u, m1), E = ((a − b)/SPAN)², with c from M1 and m1:
+    # S = 4(u* − m1)/SPAN², ∂y/∂M1 = 4(m1 − LOWER)/SPAN², ∂y/∂m1 = 4(M1 − u*)/SPAN²,
+    # so δu* = (δy − ∂y/∂M1 δM1 − ∂y/∂m1 δm1)/S
+    d_y, d_m = flow.pushed_gradient(state.input)
+    np.testing.assert_allclose(d_y, [SPAN**2 / (4 * (u_star - low))], rtol=1e-12)
+    expected = [-(low - LOWER) / (u_star - low), -(big - u_star) / (u_star - low), 0.0]
+    np.testing.assert_allclose(d_m, [expected], rtol=1e-12, atol=1e-15)
+    # the new branch leaves u* with slope 0: the inverse's slope is infinite there
+    assert flow.partials(state.input)[0] == math.inf
+
+
+def test_oscillator_with_the_numeric_inverse_follows_the_closed_form_inverse():
+    pi = pi_operator()
+    runs = []
+    for op in (InverseOperator(pi), pi.inverse()):
+        system = ForcedOscillator(op, 0.5, 0.1, 1.0)
+        engine = system.engine(system.initial_state(0.3, 0.2), method="generic")
+        engine.start_tangent(False)
+        out = np.empty((1, 3))
+        engine.advance(np.array([4.0 * np.pi]), out, record=True)
+        runs.append((out[0], engine.deviations()[:2, :2], engine.n_events))
+    (a, jac_a, n_a), (b, jac_b, n_b) = runs
+    assert n_a == n_b >= 10  # reversals (wagons freeze) and wall hits (wagons become driven)
+    # both integrate to rtol = atol = 1e-11 over ~6 periods of growth: agreement to ~1e-9
+    np.testing.assert_allclose(a, b, rtol=0.0, atol=1e-8)
+    # the (q, v) block of the stroboscopic map's Jacobian: memory held fixed means the same in
+    # both (the closed form's plays z_i are functions of the forward wagons w_j)
+    np.testing.assert_allclose(jac_a, jac_b, rtol=0.0, atol=1e-8)
