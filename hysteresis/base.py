@@ -249,11 +249,11 @@ class Hysteron(ABC, Generic[StateT]):
 
         Optional. :class:`hysteresis.inverse.InverseOperator` reads it. ``0``: some branch is
         flat over an interval of inputs (a play between its walls); negative: some branch
-        falls. Either way the output does not determine the input, and the inverse is refused.
-        A positive value guarantees strictly increasing branches. ``None`` is also the answer
-        of an operator whose slope vanishes only at isolated inputs or in the saturated tails,
-        which makes no branch flat (a continuous Preisach model at every reversal, an erf
-        shape of width 0): the inverse then checks each branch it follows.
+        decreases. Either way the output does not determine the input, and the inverse is
+        refused. A positive value guarantees strictly increasing branches. ``None`` is also the
+        answer of an operator whose slope vanishes only at isolated inputs or in the saturated
+        tails, which makes no branch flat (a continuous Preisach model at every reversal, an
+        erf shape of width 0): the inverse then checks each branch it follows.
         ``PlayOperator``: 0 (1 at width 0); ``PrandtlIshlinskii``: the least partial sum of
         its weights (0 without a width-0 play); piecewise-constant operators: 0.
         """

@@ -13,12 +13,14 @@ forward input moves in the direction ``d = sign(y_k − y_{k−1})``. On the bra
 forward operator is driven to the breakpoint (``apply``) and the next branch taken; otherwise
 ``Y(u) = y_k`` is solved on the bracket between the branch start and the breakpoint (or a
 bracket found by doubling steps) by Brent's method (``scipy.optimize.brentq``), and the forward
-operator driven to the root. Stopping criterion: the bracket is narrower than
-``4ε·max(|a|, |b|)`` (``ε`` the float64 epsilon; ``xtol = rtol = 4ε``), i.e. ``u`` to a few
-units in the last place, so ``|Y(u) − y_k| <= 8ε·slope·|u|`` plus the forward operator's own
-rounding: far below ``1e-10`` of the output scale unless the slope is ~1e5 output scales per
-input scale. A target equal to the breakpoint's output moves the input exactly to the
-breakpoint (a wiped-out extremum is wiped out, a wall is reached).
+operator driven to the root. Stopping criterion (``brentq`` with ``xtol = 4ε·max(|a|, |b|)``,
+``rtol = 4ε``, ``ε`` the float64 epsilon, ``[a, b]`` the bracket): the root's bracket is at most
+``8ε·max(|a|, |b|)`` wide, i.e. ``u`` to a few units in the last place of the bracket's scale,
+so ``|Y(u) − y_k| <= 8ε·slope·max(|a|, |b|)`` plus the forward operator's own rounding: far
+below ``1e-10`` of the output scale unless the slope is ~1e5 output scales per input scale
+(measured: at most 2e-15 of the output scale on the tests' sequences). A target equal to the
+breakpoint's output moves the input exactly to the breakpoint (a wiped-out extremum is wiped
+out, a wall is reached).
 
 What has an inverse (checked at construction, one-line ``ValueError`` otherwise): a
 continuous operator (a piecewise-constant one jumps: outputs between its levels are never
@@ -48,12 +50,13 @@ a root solve (a few to ~15 forward branch evaluations): the generic engine ran a
 driving the inverse of a four-play Prandtl–Ishlinskii operator 3.4× slower than one driving
 its closed-form inverse (10 periods). Outside the forward output range the inverse is
 undefined: an oscillator whose ``q`` leaves it stops with the ``ValueError`` of a target out of
-range. Where the forward slope vanishes the inverse's is
-infinite: at every reversal of a continuous Preisach model (``u − u* ∝ √(y − y*)``), where the
-variation of the oscillator's flow diverges (``∫ dt/|t − t*|``), so tangent quantities
-(Lyapunov spectra, Floquet multipliers) of an oscillator driving the inverse of a Preisach
-model are undefined; its trajectories are fine. Operators with ``min_slope > 0`` (a
-Prandtl–Ishlinskii operator with a linear term) have a bounded inverse slope everywhere.
+range. Where the forward slope vanishes the inverse's is infinite: at every reversal of a
+continuous Preisach model (``u − u* ∝ √(y − y*)``), where the variation of the oscillator's
+flow diverges (``∫ dt/|t − t*|``), so tangent quantities (Lyapunov spectra, Floquet
+multipliers) of an oscillator driving the inverse of a Preisach model are undefined (the
+partials are ``inf`` there); its trajectories integrate, ``u(y)`` being continuous. Operators
+with ``min_slope > 0`` (a Prandtl–Ishlinskii operator with a linear term) have a bounded
+inverse slope everywhere.
 """
 
 from __future__ import annotations
@@ -79,7 +82,7 @@ from hysteresis.seam import checked_branch_flow
 __all__ = ["InverseOperator", "InverseState"]
 
 _EPS = float(np.finfo(np.float64).eps)
-#: Brent's tolerances: the bracket's width at the stop is <= 4ε·max(|a|, |b|)
+#: Brent's tolerances: the root's bracket at the stop is <= 8ε·max(|a|, |b|) wide
 _RTOL = 4.0 * _EPS
 #: fractions of a branch piece where the outputs are sampled (min_slope unknown)
 _SAMPLES = 2.0 ** -np.arange(8, 0, -1)
@@ -134,7 +137,7 @@ class InverseOperator(ContinuousHysteron[InverseState]):
         if slope is not None:
             slope = finite_scalar(slope, f"{type(operator).__name__}.min_slope")
             if slope <= 0.0:
-                what = "flat over an interval of inputs" if slope == 0.0 else "falling"
+                what = "flat over an interval of inputs" if slope == 0.0 else "decreasing"
                 raise ValueError(
                     f"operator {operator!r} has no inverse: some branch is {what} (min_slope = "
                     f"{slope:g}), so the input that produced an output is not unique and the "
@@ -347,6 +350,7 @@ class InverseOperator(ContinuousHysteron[InverseState]):
             far = end
         else:
             step = 1e-3 * max(abs(u0), 1.0)
+            r_near = y0 - target
             while True:
                 far = near + d * step
                 if abs(far) > MAX_MAGNITUDE:
@@ -354,9 +358,16 @@ class InverseOperator(ContinuousHysteron[InverseState]):
                         f"operator {self._operator!r}: the target {target!r} lies beyond the "
                         f"branch followed from input {u0!r}, which saturates below it"
                     )
-                if residual(far) * d >= 0.0:
+                r_far = residual(far)
+                if r_far * d >= 0.0:
                     break
-                near, step = far, 2.0 * step
+                if (r_far - r_near) * d < 0.0:
+                    raise ValueError(
+                        f"operator {self._operator!r} has no inverse: a branch decreases, from "
+                        f"input {near!r} to {far!r} its output goes {r_near + target!r} -> "
+                        f"{r_far + target!r}"
+                    )
+                near, r_near, step = far, r_far, 2.0 * step
         # scipy.optimize costs ~0.25 s at import: loaded where used (fast `hyst` start)
         from scipy.optimize import brentq
 
@@ -382,10 +393,11 @@ class InverseOperator(ContinuousHysteron[InverseState]):
         if np.all(steps > 0.0):
             return
         k = int(np.argmax(steps <= 0.0))
+        shape = "is flat" if steps[k] == 0.0 else "decreases"
         raise ValueError(
             f"operator {self._operator!r} has no inverse: its branch in direction {d:+d} "
-            f"{'is flat' if steps[k] == 0.0 else 'falls'} from input {us[k]!r} to {us[k + 1]!r} "
-            f"(output {ys[k]!r} -> {ys[k + 1]!r}), so the inverse would jump"
+            f"{shape} from input {us[k]!r} to {us[k + 1]!r} (output {ys[k]!r} -> "
+            f"{ys[k + 1]!r}), so the inverse would jump"
         )
 
     # -- branch flow ------------------------------------------------------------------------------
@@ -413,7 +425,7 @@ class InverseOperator(ContinuousHysteron[InverseState]):
         op = self._operator
         forward = state.forward
         flow = checked_branch_flow(op, forward, d)
-        y0, u0 = float(state.input), float(flow.input)
+        y0 = float(state.input)
         keep = np.flatnonzero(~flow.slaved)
         moved = np.flatnonzero(flow.slaved)
         labels = tuple(flow.labels[i] for i in keep)
@@ -441,19 +453,15 @@ class InverseOperator(ContinuousHysteron[InverseState]):
             return d_y[()], d_m
 
         extra: dict[str, Any] = {}
-        if moved.size:
-            start = np.asarray(flow.memory, dtype=np.float64)[moved]
-
-            def driven(y):
-                u = solve(float(y))
-                d_y, d_m = gradient(u)
-                return start + (u - u0), np.full(moved.size, d_y), np.tile(d_m, (moved.size, 1))
-
-            extra.update(driven_labels=tuple(flow.labels[i] for i in moved), driven=driven)
+        if moved.size or flow.driven_labels:
+            driven_labels = tuple(flow.labels[i] for i in moved) + flow.driven_labels
+            extra.update(
+                driven_labels=driven_labels, driven=_driven(flow, solve, gradient, keep, moved)
+            )
         pushed = np.asarray(flow.pushed, dtype=bool)[keep]
         if np.any(pushed):
             arrived = checked_branch_flow(op, forward, -d)
-            extra["pushed_gradient"] = _pushed_gradient(arrived, u0, labels, pushed)
+            extra["pushed_gradient"] = _pushed_gradient(flow, arrived, keep, moved)
         gone = set(flow.breakpoint_resets) | set(flow.breakpoint_removes)
         return BranchFlow(
             direction=d,
@@ -508,19 +516,62 @@ def _inverse_gradient(
     return 1.0 / slope, -g_m[keep] / slope
 
 
-def _pushed_gradient(arrived: BranchFlow, u_star: float, labels: tuple[str, ...], pushed):
-    """``pushed_gradient`` of an inverse branch that starts with a reversal at ``u*``: the
-    pushed value is ``u*``, with ``δu* = (δy − Σ ∂G/∂m_j δm_j)/S`` on the forward branch
-    ``arrived`` that reached ``u*`` (its frozen variables are among ``labels``)."""
+def _driven(flow: BranchFlow, solve, gradient, keep: np.ndarray, moved: np.ndarray):
+    """``driven`` of the inverse branch: the forward's slaved variables, ``m_s0 + u(y) − u0``
+    with the gradient of ``u`` (``δm_s = δu = ∂u/∂y δy + ∂u/∂m δm``), then the forward's own
+    driven variables, ``δm_d = c·δu + D_keep δm`` with ``c = d_du + Σ_slaved D`` (their
+    forward gradient ``(d_du, D)``, the slaved columns moving with ``u``)."""
+    u0 = float(flow.input)
+    start = np.asarray(flow.memory, dtype=np.float64)[moved]
+    n_s, n_d, n = moved.size, len(flow.driven_labels), flow.n_memory
+
+    def driven(y):
+        u = solve(float(y))
+        d_y, d_m = gradient(u)
+        values = np.empty(n_s + n_d)
+        rows_y = np.full(n_s + n_d, d_y)
+        rows_m = np.tile(d_m, (n_s + n_d, 1))
+        values[:n_s] = start + (u - u0)
+        if n_d:
+            v, d_du, d_dm = flow.driven(u)
+            d_dm = np.asarray(d_dm, dtype=np.float64).reshape(n_d, n)
+            along = np.asarray(d_du, dtype=np.float64).reshape(n_d) + d_dm[:, moved].sum(axis=1)
+            values[n_s:] = np.asarray(v, dtype=np.float64).reshape(n_d)
+            rows_y[n_s:] = along * d_y
+            rows_m[n_s:] = along[:, None] * d_m[None, :] + d_dm[:, keep]
+        return values, rows_y, rows_m
+
+    return driven
+
+
+def _pushed_gradient(flow: BranchFlow, arrived: BranchFlow, keep: np.ndarray, moved: np.ndarray):
+    """``pushed_gradient`` of an inverse branch that starts with a reversal at ``u*``.
+
+    The forward pushes ``m_p`` with ``δm_p = p_du·δu* + P δm`` (its ``pushed_gradient``;
+    ``δm_p = δu*`` without one), and ``u*`` moves with ``δu* = (δy − Σ ∂G/∂m_j δm_j)/S`` on
+    the forward branch ``arrived`` that reached it (its frozen variables are among the
+    inverse's labels). Columns: the inverse's labels (``flow``'s frozen ones), zero on the
+    pushed ones."""
+    labels = [flow.labels[i] for i in keep]
     position = {label: i for i, label in enumerate(labels)}
+    u_star = float(flow.input)
     frozen = np.flatnonzero(~arrived.slaved)
-    d_y, d_m = _inverse_gradient(arrived, u_star, frozen, np.flatnonzero(arrived.slaved))
-    row = np.zeros(len(labels))
-    for j, value in zip(frozen, d_m, strict=True):
-        row[position[arrived.labels[j]]] = value
-    n_pushed = int(np.count_nonzero(pushed))
+    a_y, a_m = _inverse_gradient(arrived, u_star, frozen, np.flatnonzero(arrived.slaved))
+    a_row = np.zeros(len(labels))
+    for j, value in zip(frozen, a_m, strict=True):
+        a_row[position[arrived.labels[j]]] = value
+    n_p = int(np.count_nonzero(flow.pushed))
+    if flow.pushed_gradient is None:
+        along, p_keep = np.ones(n_p), np.zeros((n_p, len(labels)))
+    else:
+        p_du, p_dm = flow.pushed_gradient(u_star)
+        p_dm = np.asarray(p_dm, dtype=np.float64).reshape(n_p, flow.n_memory)
+        along = np.asarray(p_du, dtype=np.float64).reshape(n_p) + p_dm[:, moved].sum(axis=1)
+        p_keep = p_dm[:, keep]
+    d_y = along * a_y
+    d_m = along[:, None] * a_row[None, :] + p_keep
 
     def pushed_gradient(y):
-        return np.full(n_pushed, d_y), np.tile(row, (n_pushed, 1))
+        return d_y.copy(), d_m.copy()
 
     return pushed_gradient
