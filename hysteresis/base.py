@@ -37,7 +37,8 @@ method and what it must return).
   paths; an operator that offers one also offers the state constructor the compiled engine
   builds its states with, checked by :func:`oscillators.engines.select_engine`) and
   :attr:`~Hysteron.max_slope` (the largest branch slope, for the oscillator's instability
-  warning).
+  warning) and :attr:`~Hysteron.min_slope` (the least one, which decides whether
+  :class:`hysteresis.inverse.InverseOperator` can invert the operator).
 
 States: every operator state is immutable and exposes the input it last saw as ``.input``
 (:class:`HysteronState`); an operator is generic in its state type, ``Hysteron[StateT]``.
@@ -240,6 +241,24 @@ class Hysteron(ABC, Generic[StateT]):
         """
         return None
 
+    @property
+    def min_slope(self) -> float | None:
+        """Least slope ``dy/du`` that a branch keeps over an interval of inputs, over every
+        state reachable from :meth:`initial_state`; ``None`` (the default) when the operator
+        does not know it.
+
+        Optional. :class:`hysteresis.inverse.InverseOperator` reads it. ``0``: some branch is
+        flat over an interval of inputs (a play between its walls); negative: some branch
+        decreases. Either way the output does not determine the input, and the inverse is
+        refused. A positive value guarantees strictly increasing branches. ``None`` is also the
+        answer of an operator whose slope vanishes only at isolated inputs or in the saturated
+        tails, which makes no branch flat (a continuous Preisach model at every reversal, an
+        erf shape of width 0): the inverse then checks each branch it follows.
+        ``PlayOperator``: 0 (1 at width 0); ``PrandtlIshlinskii``: the least partial sum of
+        its weights (0 without a width-0 play); piecewise-constant operators: 0.
+        """
+        return None
+
     # -- pickling (worker processes, saved runs) -------------------------------------------
     #: attributes left out of a pickle: caches rebuilt on demand
     _transient_attributes: tuple[str, ...] = ()
@@ -277,6 +296,11 @@ class PiecewiseConstantHysteron(Hysteron[StateT]):
     """
 
     piecewise_constant = True
+
+    @property
+    def min_slope(self) -> float:
+        """0: the output is constant between switching inputs (and jumps at them)."""
+        return 0.0
 
     # -- what the oscillator's relay engine needs (oscillators.engines.select_engine) ----------
     @abstractmethod

@@ -25,6 +25,9 @@ On the branch each memory variable is either
 * **slaved** (``slaved[i]``): ``m_i`` follows the input, ``m_i(u) = m_i(u0) + (u − u0)``, and so
   does its perturbation, ``δm_i = δu`` (a wagon dragged by the finger on a wall).
 
+A variable that follows some other function of the input and the memory is *driven* and is not
+among ``labels`` on that branch (see "Driven memory" below).
+
 Output and derivatives
 ----------------------
 ``output(u)`` is ``y(u)`` on the branch (frozen memory fixed, slaved memory following ``u``);
@@ -56,13 +59,39 @@ there. A composite with piecewise-constant parts (``0.5 * play + 0.5 * relays``,
   a rising input switches a relay at ``u = α`` (``u >= α``), a falling one at the largest float
   below ``β`` (``u < β``), so the branch reports ``nextafter(β, -inf)`` and an integrator that
   stops exactly at the breakpoint and applies the operator there sees the switch. The
-  oscillator's saltation there is ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``).
+  oscillator's saltation there is ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). A jump
+  whose input moves with the memory (a cascade's relay threshold reached through a branch
+  ``x(u; m)`` of its inner operator) says how in ``breakpoint_gradient``:
+  ``∂u*/∂m_i`` for the frozen variables, and the saltation becomes
+  ``δv += C·Δy/v*·(δq − Σ_frozen ∂u*/∂m_i δm_i)`` (the event time moves by
+  ``(∂u*/∂m·δm − δq)/v*``).
 
 A **reversal** of the input at ``u*`` (``v = 0``) ends the branch too: play and
 Prandtl–Ishlinskii push nothing (``V_in = I``); a continuous Preisach model remembers ``u*`` as a
 new extremum (``reversal_pushes``), a new memory variable with ``δm := δu``. A branch that starts
 with such a reversal relative to its state (the state's last motion went the other way) flags
-the variable it created at ``u0`` in ``pushed``.
+the variable it created at ``u0`` in ``pushed``. Where the pushed value is not the input itself
+(a cascade whose outer Preisach model remembers the *inner output* ``x(u0; m)``),
+``pushed_gradient(u0) -> (d_du (n_p,), d_dm (n_p, n))`` gives it,
+``δm_p := d_du·δu + d_dm @ δm`` (rows in the order of the pushed variables, columns over all
+memory variables, zero on the pushed ones); ``None`` means ``δm_p := δu``.
+
+Driven memory
+-------------
+A cascade ``outer[inner[u]]`` has memory variables that follow the *outer's* input
+``x = x(u; m)`` rather than ``u``: a wagon of the outer play dragged by ``x`` moves by
+``δx = ∂x/∂u δu + ∂x/∂m δm``, which ``slaved`` (``δm = δu``) cannot say. Such variables are
+**driven** on the branch: they are listed in ``driven_labels``, *not* in ``labels`` (they are
+no coordinates of the branch: output and partials already contain them by the chain rule), and
+``driven(u) -> (values (n_d,), d_du (n_d,), d_dm (n_d, n))`` gives their values and gradient,
+``δm_driven = d_du·δu + d_dm @ δm`` with ``δm`` the perturbations of ``labels`` (a slaved
+variable's is ``δu``; ``driven`` is called with a scalar ``u``). ``slaved`` is the special case
+``d_du = 1, d_dm = 0`` of a variable that stays a coordinate. At an event an integrator
+
+* initialises a variable that was driven on the old branch and is a memory variable of the new
+  one (the same label in the new ``labels``) from the old gradient at the event,
+  ``δm := d_du·δq + d_dm @ δm_old``; it is then no free direction (like a reset);
+* drops a memory variable that becomes driven (its label leaves ``labels``), like a removed one.
 """
 
 from __future__ import annotations
@@ -117,6 +146,18 @@ class BranchFlow:
         state (``δm_i := δu`` there).
     constant_partials:
         True if ``partials`` does not depend on ``u``.
+    breakpoint_gradient:
+        ``∂u*/∂m_i`` of the breakpoint for the frozen memory variables (length ``len(memory)``,
+        read-only; slaved entries are ignored), used with ``breakpoint_jump``; ``None``: the
+        breakpoint does not move with the memory.
+    driven_labels:
+        Names of the driven variables (functions of the input and of the memory on this branch,
+        not in ``labels``).
+    driven:
+        ``u -> (values, d_du, d_dm)`` of the driven variables (scalar ``u``); required with
+        ``driven_labels``.
+    pushed_gradient:
+        ``u0 -> (d_du, d_dm)`` of the pushed variables (``None``: ``δm := δu``).
     """
 
     direction: int
@@ -133,6 +174,10 @@ class BranchFlow:
     reversal_pushes: bool = False
     pushed: np.ndarray | None = None
     constant_partials: bool = False
+    breakpoint_gradient: np.ndarray | None = None
+    driven_labels: tuple[str, ...] = ()
+    driven: Callable | None = None
+    pushed_gradient: Callable | None = None
 
     def __post_init__(self) -> None:
         if self.direction not in (-1, 1):
@@ -163,6 +208,25 @@ class BranchFlow:
             unknown = set(getattr(self, name)) - set(self.labels)
             if unknown:
                 raise ValueError(f"{name} names unknown memory labels {sorted(unknown)}")
+        if self.breakpoint_gradient is not None:
+            grad = readonly_array(self.breakpoint_gradient)
+            if grad.shape != (n,) or np.any(np.isnan(grad)):
+                raise ValueError(
+                    f"breakpoint_gradient must have one (non-NaN) entry per label ({n}), got "
+                    f"shape {grad.shape}"
+                )
+            object.__setattr__(self, "breakpoint_gradient", grad)
+        driven = tuple(self.driven_labels)
+        object.__setattr__(self, "driven_labels", driven)
+        if len(set(driven)) != len(driven) or set(driven) & set(self.labels):
+            raise ValueError(
+                f"driven_labels must be unique and not memory labels, got {driven} with labels "
+                f"{self.labels}"
+            )
+        if bool(driven) != callable(self.driven):
+            raise ValueError("driven must be a callable exactly when driven_labels are given")
+        if self.pushed_gradient is not None and not callable(self.pushed_gradient):
+            raise ValueError("pushed_gradient must be a callable or None")
 
     @property
     def n_memory(self) -> int:

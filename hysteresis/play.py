@@ -291,6 +291,12 @@ class PlayOperator(_PlayBase):
         """1: the output follows the input on a wall (0 inside the play)."""
         return 1.0
 
+    @property
+    def min_slope(self) -> float:
+        """0: between its walls the wagon stays and the output is flat (1 at width 0, the
+        identity)."""
+        return 1.0 if self._width == 0.0 else 0.0
+
     def compiled_play(self) -> CompiledPlay:
         """The plain play runs on the compiled play-limit kernel (identity shape)."""
         return CompiledPlay(width=self._width, shape="identity")
@@ -529,6 +535,13 @@ class GeneralizedPlay(_PlayBase):
         if self.shape_kind == "erf":
             return 1.0 / (float(self._spread) * math.sqrt(2.0 * math.pi))
         return None
+
+    @property
+    def min_slope(self) -> float | None:
+        """0 for width > 0: between the walls the output is flat. At width 0 the output is
+        ``shape(u)``, whose least slope the operator does not know (``None``: an erf shape's
+        slope vanishes only in the saturated tails)."""
+        return 0.0 if self._width > 0.0 else None
 
     #: the shape table (built on the first compiled_play() call) is rebuilt, not pickled
     _transient_attributes = ("_shape_table",)

@@ -159,6 +159,22 @@ class PrandtlIshlinskii(ContinuousHysteron[PIState]):
         partial sum ``a_0 + ... + a_i``, which is the same when all weights are >= 0)."""
         return float(np.sum(np.maximum(self._weights, 0.0)))
 
+    @property
+    def min_slope(self) -> float:
+        """Least branch slope: the least partial sum ``A_i = a_0 + ... + a_i`` (and 0 if the
+        narrowest play has a width > 0).
+
+        On a state reached from :meth:`initial_state` the plays dragged at their walls are the
+        narrowest ones (nested plays: a wider play on its wall drags every narrower one), so a
+        branch that has moved by ``2r`` since its last reversal has the slope ``A_i`` for
+        ``r_i < r < r_{i+1}``, and slope 0 for ``r < r_0`` if ``r_0 > 0``. It is positive
+        exactly when the closed-form :meth:`inverse` exists. (An explicit :meth:`state` may
+        put a wide play on its wall with a narrower one inside, which no input history does;
+        :attr:`max_slope` covers those too.)"""
+        partial = np.cumsum(self._weights)
+        least = float(np.min(partial))
+        return least if self._widths[0] == 0.0 else min(least, 0.0)
+
     def __repr__(self) -> str:
         return (
             f"PrandtlIshlinskii(widths={self._widths.tolist()}, weights={self._weights.tolist()})"

@@ -39,7 +39,12 @@ from hysteresis.preisach.everett_table import (
     density_table,
     everett_function_table,
 )
-from hysteresis.preisach.gaussian import BUILD_NODES, GaussianTable, gaussian_table
+from hysteresis.preisach.gaussian import (
+    BUILD_NODES,
+    GaussianTable,
+    gaussian_support,
+    gaussian_table,
+)
 
 __all__ = ["ContinuousPreisachModel"]
 
@@ -101,6 +106,23 @@ class ContinuousPreisachModel(PreisachModel, ContinuousHysteron[PreisachState], 
 
     def _saturation_input(self) -> float:
         return self._upper
+
+    @property
+    def min_slope(self) -> float | None:
+        """0 for a :meth:`gaussian` model whose width law is cut above ``r = 0``
+        (``r_lo = p/2 − 8σ_r > 0``: no relay narrower than ``2 r_lo``, so after every reversal
+        the output stays flat while the input moves by ``2 r_lo``); ``None`` otherwise.
+
+        Why not a number: a branch leaving a reversal at ``m`` has the slope
+        ``2 ∂E/∂α(u, m) = 2 ∫_m^u μ(u, β) dβ``, which vanishes at ``u = m`` for every bounded
+        density, so the least slope is always 0; yet the branches strictly increase (on
+        ``[lower, upper]``) exactly when every triangle at the diagonal has mass,
+        ``E(u, m) > 0`` for ``lower <= m < u <= upper``, a property of the density near the
+        diagonal that the model does not know in general (the inverse checks each branch)."""
+        gaussian = self.__dict__.get("_gaussian")
+        if gaussian is not None and gaussian_support(*gaussian)[3] > 0.0:
+            return 0.0
+        return None
 
     def __repr__(self) -> str:
         return f"ContinuousPreisachModel(lower={self._lower}, upper={self._upper})"

@@ -40,18 +40,24 @@ vector fields of ``(q, v)`` agree on both sides); at a breakpoint where the outp
 ``Δy`` (:attr:`BranchFlow.breakpoint_jump <hysteresis.flow.BranchFlow>`: the relays of a
 composite such as ``play + relays``) the acceleration jumps by ``C·Δy`` and
 ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``; at ``v* = 0`` it is infinite:
-:class:`~oscillators.engines.base.GrazingError`). Memory rows:
+:class:`~oscillators.engines.base.GrazingError`), with ``δq − Σ_frozen ∂u*/∂m_i δm_i`` in place
+of ``δq`` where the breakpoint moves with the memory (``breakpoint_gradient``: a cascade's relay
+threshold reached through its inner operator). Memory rows:
 
 * a memory variable that becomes slaved (wall hit, paper ``V_out``) or is created (a reversal of
-  a continuous Preisach input pushes an extremum) gets ``δm := δq``;
-* a wiped-out extremum's row is dropped;
+  a continuous Preisach input pushes an extremum) gets ``δm := δq`` (a pushed variable with a
+  ``pushed_gradient``: ``δm := d_du·δq + d_dm @ δm``);
+* a variable that was *driven* on the old branch (a cascade's outer wagon dragged by the inner
+  output, :mod:`hysteresis.flow` "Driven memory") gets ``δm := d_du·δq + d_dm @ δm_old`` from
+  the old branch's gradient at the event;
+* a wiped-out extremum's row, and the row of a variable that becomes driven, is dropped;
 * everything else is carried (``V_in = I`` at a play reversal).
 
 A start on a slaved branch (input on a wall, moving outward) or right at a reversal that pushes
 an extremum is such an event at ``t = 0`` (the one-sided derivative into the play is wiped out),
 as in the compiled play engine. :meth:`ContinuousEngine.rank_bound` is ``2`` (``3`` with the
 phase) plus the number of memory directions present at the last ``start_tangent`` /
-``set_deviations`` that were neither reset nor removed since, capped by ``k``.
+``set_deviations`` that were neither reset, removed nor driven since, capped by ``k``.
 """
 
 from __future__ import annotations
@@ -460,39 +466,84 @@ class ContinuousEngine(TangentFlow, Engine):
             )
         if self._ntan:
             if kind == "breakpoint" and old.breakpoint_jump != 0.0:
-                self._saltation(old.breakpoint_jump)
+                self._saltation(old)
             self._reconcile(old, new)
         self._flow = new
 
-    def _saltation(self, jump: float) -> None:
-        """``δv += C·Δy/v*·δq`` at a jump of the output (the event surface ``q = bp``)."""
+    def _saltation(self, old: Any) -> None:
+        """``δv += C·Δy/v*·(δq − Σ_frozen ∂u*/∂m_i δm_i)`` at a jump of the output (the event
+        surface ``q = bp(m)``; ``breakpoint_gradient`` None: ``q = bp``)."""
         if self._v == 0.0:
             raise GrazingError(
                 f"continuous engine: the output jumps at a turning point (q = {self._q}, "
                 f"t = {self.start.t + self.elapsed:.6g}): the saltation C·Δy/v* is infinite, so "
                 "the flow map is not differentiable on this orbit"
             )
-        self._dqv[1] = self._dqv[1] + (self._coupling * jump / self._v) * self._dqv[0]
+        moved = self._dqv[0]
+        grad = old.breakpoint_gradient
+        if grad is not None:
+            use = ~old.slaved & (grad != 0.0)
+            if np.any(use):
+                if not np.all(np.isfinite(grad[use])):
+                    raise GrazingError(
+                        f"continuous engine: the output jumps where its threshold is reached at "
+                        f"zero slope (q = {self._q}, t = {self.start.t + self.elapsed:.6g}): the "
+                        "event moves infinitely with the memory, so the flow map is not "
+                        "differentiable on this orbit"
+                    )
+                moved = moved - grad[use] @ self._dm[use]
+        self._dqv[1] = self._dqv[1] + (self._coupling * old.breakpoint_jump / self._v) * moved
+
+    def _pushed_rows(self, flow: Any, dm: np.ndarray) -> None:
+        """Rows of the variables ``flow`` pushed at its start: ``δm := δq``, or from the flow's
+        ``pushed_gradient`` (``d_du·δq + d_dm @ δm``, the other rows of ``dm`` already set)."""
+        idx = np.flatnonzero(flow.pushed)
+        if idx.size == 0:
+            return
+        dq = self._dqv[0]
+        if flow.pushed_gradient is None:
+            dm[idx] = dq
+            return
+        d_du, d_dm = flow.pushed_gradient(self._q)
+        d_du = np.asarray(d_du, dtype=np.float64).reshape(idx.size)
+        d_dm = np.asarray(d_dm, dtype=np.float64).reshape(idx.size, flow.n_memory)
+        dm[idx] = 0.0
+        dm[idx] = d_du[:, None] * dq[None, :] + d_dm @ dm
 
     def _reconcile(self, old: Any, new: Any) -> None:
-        """Saltation at an event: carry, reset (δm := δq) or drop memory rows by label."""
+        """Saltation at an event: carry, reset (δm := δq), initialise from the old branch's
+        driven gradient, or drop memory rows by label (hysteresis.flow, "Driven memory")."""
         index = {lab: i for i, lab in enumerate(old.labels)}
+        driven = {lab: i for i, lab in enumerate(old.driven_labels)}
+        gradient = None
         dq = self._dqv[0]
         dm = np.empty((new.n_memory, self._ntan))
         for i, lab in enumerate(new.labels):
             j = index.get(lab)
-            if j is None or new.pushed[i]:
-                dm[i] = dq  # created: δm := δq
-                self._free.discard(lab)
-            elif new.slaved[i]:
+            if new.pushed[i]:
+                self._free.discard(lab)  # created by the reversal: _pushed_rows below
+            elif j is not None and new.slaved[i]:
                 dm[i] = dq  # (re)set by V_out; already δq if it was slaved before
                 if not old.slaved[j]:
                     self._free.discard(lab)
-            else:
+            elif j is not None:
                 dm[i] = self._dm[j]  # carried (V_in = I)
+            elif lab in driven and not new.slaved[i]:
+                if gradient is None:
+                    _, d_du, d_dm = old.driven(self._q)
+                    d_du = np.asarray(d_du, dtype=np.float64).reshape(len(driven))
+                    d_dm = np.asarray(d_dm, dtype=np.float64).reshape(len(driven), old.n_memory)
+                    gradient = (d_du, d_dm)
+                k = driven[lab]  # δm := d_du·δq + d_dm @ δm_old, no free direction
+                dm[i] = gradient[0][k] * dq + gradient[1][k] @ self._dm
+                self._free.discard(lab)
+            else:
+                dm[i] = dq  # created (or slaved from the start): δm := δq
+                self._free.discard(lab)
+        self._pushed_rows(new, dm)
         for lab in old.labels:
             if lab not in new.labels:
-                self._free.discard(lab)
+                self._free.discard(lab)  # removed, or driven from now on
         self._dm = dm
 
     def state(self) -> OscillatorState:
@@ -534,6 +585,8 @@ class ContinuousEngine(TangentFlow, Engine):
             if flow.slaved[i] or (flow.pushed[i] and at_branch_start):
                 self._dm[i] = self._dqv[0]
                 self._free.discard(lab)
+        if at_branch_start:
+            self._pushed_rows(flow, self._dm)
         return k
 
     @property
