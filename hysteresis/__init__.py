@@ -16,7 +16,9 @@ from hysteresis.base import (
     PiecewiseConstantHysteron,
     Switching,
 )
+from hysteresis.cascade import Cascade, CascadeState
 from hysteresis.flow import BranchFlow
+from hysteresis.inverse import InverseOperator, InverseState
 from hysteresis.play import GeneralizedPlay, PlayOperator, PlayState
 from hysteresis.prandtl_ishlinskii import PIState, PrandtlIshlinskii
 from hysteresis.preisach import (
@@ -28,8 +30,15 @@ from hysteresis.preisach import (
 from hysteresis.relay import Relay, RelayState
 from hysteresis.relay_table import NestedPlan, RelayTable
 from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
+from hysteresis.static_map import StaticMap, StaticMapState
 
 __all__ = [
+    "Cascade",
+    "CascadeState",
+    "InverseOperator",
+    "InverseState",
+    "StaticMap",
+    "StaticMapState",
     "BranchSum",
     "RelaySum",
     "SumState",

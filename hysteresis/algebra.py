@@ -42,6 +42,7 @@ import numpy as np
 from hysteresis._validation import as_input_sequence, direction_sign
 from hysteresis.base import ContinuousHysteron, Hysteron, PiecewiseConstantHysteron, Switching
 from hysteresis.flow import BranchFlow, CompiledFlow
+from hysteresis.inverse import InverseOperator
 from hysteresis.relay_table import RelayTable
 from hysteresis.seam import check_state, checked_relay_outputs, checked_relay_table
 
@@ -210,17 +211,38 @@ class WeightedSum(Hysteron[SumState]):
 
     @property
     def max_slope(self) -> float | None:
-        """``Σ_k |weights[k]| · max_slope_k`` (a bound: the parts' steepest branches need not
-        meet); relay-type parts are flat between their jumps. ``None`` if a continuous part
-        does not know its own."""
+        """A bound of the steepest branch: ``Σ_k`` of ``w_k·max_slope_k`` for ``w_k >= 0`` and
+        ``w_k·min_slope_k`` for ``w_k < 0`` (``|w_k|·max_slope_k`` where the least slope is not
+        known); the parts' steepest branches need not meet. Relay-type parts are flat between
+        their jumps. ``None`` if a continuous part does not know its steepest slope."""
         total = 0.0
         for w, p in zip(self._weights, self._parts, strict=True):
-            if p.piecewise_constant:
+            w = float(w)
+            if p.piecewise_constant or w == 0.0:
                 continue
-            s = p.max_slope
-            if s is None:
+            top, low = p.max_slope, p.min_slope
+            if top is None:
                 return None
-            total += abs(float(w)) * float(s)
+            total += w * float(top) if w > 0.0 else (w * low if low is not None else -w * top)
+        return total
+
+    @property
+    def min_slope(self) -> float | None:
+        """The least branch slope, ``Σ_k`` of ``w_k·min_slope_k`` (``w_k >= 0``) and
+        ``w_k·max_slope_k`` (``w_k < 0``), or ``None`` if a part does not know the bound it
+        needs. Relay-type parts add 0 between their jumps (a sum with relays still has no
+        inverse: its output jumps)."""
+        total = 0.0
+        for w, p in zip(self._weights, self._parts, strict=True):
+            w = float(w)
+            if w == 0.0:
+                continue
+            bound = p.min_slope if w > 0.0 else p.max_slope
+            if p.piecewise_constant:
+                bound = 0.0
+            if bound is None:
+                return None
+            total += w * float(bound)
         return total
 
 
@@ -555,6 +577,15 @@ def _rsub(op: Hysteron, other: Any) -> Any:
     return _add(op, other)
 
 
+def _inverse(op: Hysteron) -> InverseOperator:
+    """``op.inverse()``: the numeric inverse operator (:class:`~hysteresis.inverse.
+    InverseOperator`, branch inversion to a few ulps); an operator with a closed-form inverse
+    (``PrandtlIshlinskii``) overrides it. An operator with jumps or flat branches raises a
+    one-line ``ValueError`` saying why it has none."""
+    return InverseOperator(op)
+
+
+Hysteron.inverse = _inverse  # type: ignore[attr-defined]
 Hysteron.__mul__ = _scaled  # type: ignore[method-assign]
 Hysteron.__rmul__ = _scaled  # type: ignore[method-assign]
 Hysteron.__add__ = _add  # type: ignore[method-assign]

@@ -196,7 +196,7 @@ def test_ranges_and_slopes_follow_the_parts():
     custom = GeneralizedPlay(1.0, np.tanh, lambda w: 1.0 / np.cosh(w) ** 2)
     assert (custom + PARTS["relay"]).max_slope is None  # a user's shape: not known
     p = 2.0 * PlayOperator(1.0) - 0.5 * PrandtlIshlinskii([0.0, 1.0], [1.0, 1.0])
-    assert p.max_slope == 2.0 + 0.5 * 2.0
+    assert p.max_slope == 2.0 - 0.5 * 1.0  # the PI rises at least with its linear weight 1
     assert p.output_range == (-math.inf, math.inf)
 
 
@@ -332,3 +332,31 @@ def test_a_composite_trajectory_lists_its_relay_switches(method):
     up = sw["jump"] > 0
     np.testing.assert_allclose(sw["q"][up], 0.5, atol=1e-12)
     np.testing.assert_allclose(sw["q"][~up], -0.5, atol=1e-12)
+
+
+def test_inverse_of_any_operator_and_of_a_sum():
+    """``op.inverse()``: the closed form where one exists (PI), the numeric inverse of a sum
+    with strictly increasing branches (its least slope: the weighted least slopes), and a
+    one-line refusal for jumps and flat branches."""
+    from hysteresis import InverseOperator
+
+    pi = PARTS["pi"]
+    assert isinstance(pi.inverse(), PrandtlIshlinskii)
+    s = 0.5 * pi + 0.5 * PARTS["erf"]
+    assert s.min_slope == 0.5 * pi.min_slope  # the erf play is flat inside: 0
+    inverse = s.inverse()
+    assert isinstance(inverse, InverseOperator)
+    y = s.apply(_walk(3, n=200, scale=2.0))[0]
+    u = inverse.apply(y)[0]
+    np.testing.assert_allclose(s.apply(u)[0], y, rtol=0, atol=1e-10 * np.max(np.abs(y)))
+    for op, why in ((PARTS["play"], "flat"), (PARTS["relays"], "jumps")):
+        with pytest.raises(ValueError, match=why) as info:
+            op.inverse()
+        assert "\n" not in str(info.value)
+
+
+def test_slope_bounds_of_a_sum_use_each_part_on_its_side():
+    play = PlayOperator(1.0)  # slopes in [0, 1]
+    assert (-1.0 * play).max_slope == 0.0  # -play never rises
+    assert (-1.0 * play).min_slope == -1.0
+    assert (2.0 * play - 0.5 * play).max_slope == 2.0

@@ -10,9 +10,11 @@ import pytest
 
 import hysteresis
 from hysteresis import (
+    Cascade,
     ContinuousHysteron,
     GeneralizedPlay,
     Hysteron,
+    InverseOperator,
     PiecewiseConstantHysteron,
     PlayOperator,
     PrandtlIshlinskii,
@@ -20,6 +22,7 @@ from hysteresis import (
     Relay,
     RelayTable,
     SpinDimerEnsemble,
+    StaticMap,
     Switching,
     WeightedSum,
 )
@@ -109,7 +112,14 @@ def _continuous_operators():
         PrandtlIshlinskii([0.0, 0.5, 1.5], [0.2, 0.5, 0.3]),
         PreisachModel.from_everett(lambda a, b: ((a - b) / 2.0) ** 2, -1.0, 1.0),
         0.7 * PlayOperator(1.0) + 0.3 * Relay(0.5, -0.5),  # a BranchSum
+        StaticMap(np.tanh, _tanh_slope),
+        Cascade(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), StaticMap(np.tanh, _tanh_slope)),
+        InverseOperator(PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5])),
     ]
+
+
+def _tanh_slope(u):
+    return 1.0 / np.cosh(u) ** 2
 
 
 def test_every_library_operator_belongs_to_one_family_and_is_complete():

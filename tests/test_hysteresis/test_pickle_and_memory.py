@@ -13,13 +13,16 @@ import pytest
 import hysteresis
 from analysis.experiments.models import build_operator, model_names
 from hysteresis import (
+    Cascade,
     ContinuousPreisachModel,
     GeneralizedPlay,
+    InverseOperator,
     PlayOperator,
     PrandtlIshlinskii,
     PreisachModel,
     Relay,
     SpinDimerEnsemble,
+    StaticMap,
     WeightedSum,
 )
 from hysteresis._validation import finite_array, finite_scalar, real_array
@@ -58,18 +61,22 @@ def _operators() -> dict[str, Hysteron]:
         "dimers": SpinDimerEnsemble.random(20, 2.0, 1.0, 2.0, seed=0),
         "relay-sum": 0.5 * Relay(1.0, -0.5) + 0.5 * PreisachModel.from_relays([1.0], [0.0]),
         "mixed-sum": 0.6 * GeneralizedPlay.erf(2.0, 1.0) - 0.4 * Relay(1.0, -0.5),
+        "static-map": StaticMap(np.tanh, _tanh_derivative),
+        "cascade": Cascade(
+            PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), StaticMap(np.tanh, _tanh_derivative)
+        ),
+        "inverse": InverseOperator(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5])),
     }
 
 
 def _same_state(a, b) -> bool:
     if isinstance(a, tuple):  # a sum's state: its parts' states
         return type(a) is type(b) and len(a) == len(b) and all(map(_same_state, a, b))
-    if hasattr(a, "__dataclass_fields__"):
-        return all(
-            np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True)
-            if isinstance(getattr(a, f), np.ndarray)
-            else getattr(a, f) == getattr(b, f)
-            for f in a.__dataclass_fields__
+    if isinstance(a, np.ndarray):
+        return np.array_equal(a, b, equal_nan=True)
+    if hasattr(a, "__dataclass_fields__"):  # a cascade's or an inverse's state holds states
+        return type(a) is type(b) and all(
+            _same_state(getattr(a, f), getattr(b, f)) for f in a.__dataclass_fields__
         )
     return a == b
 
