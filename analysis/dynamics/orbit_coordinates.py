@@ -14,6 +14,10 @@ engine's memory labels (never by class):
   rebuilt by ``operator.state(position=w, input=q)``;
 * **several wagons** (labels ``"w0" .. "w{K-1}"``: Prandtl–Ishlinskii): ``x = (q, v, w_0..)``,
   rebuilt by ``operator.state(positions, input=q)``;
+* **a composite of plays and relays** (its ``compiled_flow()`` hands over ``positions`` and
+  ``make_state``: a sum of plays, erf plays, Prandtl–Ishlinskii operators and relays): ``x = (q,
+  v, w_0..)`` with the wagons of every play part (labels ``"k:w"``, ``"k:w{j}"``), the relays'
+  configuration carried by the template state as for relay-type operators;
 * **a staircase** (labels ``"M1", "m1", "M2", ...``: a continuous Preisach model, any density):
   ``x = (q, v, e_1 .. e_n)`` with ``e_1 .. e_n`` the remembered extrema of the staircase at the
   section (all but its last entry, which is the running input ``q``), rebuilt by the model's
@@ -72,8 +76,12 @@ class StateCoordinates:
         eng.start_tangent(False)
         self.labels: tuple[str, ...] = tuple(eng.tangent_space)
         memory = self.labels[2:]
+        spec = None if op.piecewise_constant else op.compiled_flow()
         if op.piecewise_constant:
             self.kind = "relay"
+        elif spec is not None and getattr(spec, "make_state", None) is not None:
+            self.kind = "composite"
+            self._spec = spec
         elif memory == ("w",) and hasattr(op, "state"):
             self.kind = "wagon"
         elif memory and all(_WAGON.match(m) for m in memory) and hasattr(op, "state"):
@@ -90,10 +98,13 @@ class StateCoordinates:
             raise ValueError(
                 f"the memory of {op!r} (tangent rows {memory}) cannot be set from a vector of "
                 "fixed size; periodic orbits are computed for relay-type operators, plays, "
-                "Prandtl–Ishlinskii operators and continuous Preisach models"
+                "Prandtl–Ishlinskii operators, continuous Preisach models and sums of plays "
+                "and relays"
             )
         wagons = self.kind in ("wagon", "wagons")
         self.half_widths = self._half_widths(op) if wagons else np.zeros(0)
+        if self.kind == "composite":
+            self.half_widths = np.asarray(spec.half_widths, dtype=np.float64)
 
     @property
     def dimension(self) -> int:
@@ -114,6 +125,8 @@ class StateCoordinates:
         op_state = state.operator_state
         if self.kind == "wagon":
             return np.array([*head, float(op_state.position)])
+        if self.kind == "composite":
+            return np.concatenate([head, np.asarray(self._spec.positions(op_state), float)])
         if self.kind == "staircase":
             extrema = np.asarray(op_state.extrema, dtype=np.float64)
             if extrema.size != self.dimension - 1:
@@ -137,6 +150,13 @@ class StateCoordinates:
         op = self.system.operator
         if self.kind == "relay":
             op_state = template.operator_state
+        elif self.kind == "composite":
+            w = np.clip(x[2:], q - self.half_widths, q + self.half_widths)
+            spec = self._spec
+            if spec.relay_alpha is None:
+                op_state = spec.make_state(w, q)
+            else:  # the relays as the template has them (switching nothing at q)
+                op_state = spec.make_state(w, q, spec.relay_outputs(template.operator_state))
         elif self.kind == "staircase":
             op_state = self._staircase(x)
         else:
@@ -163,6 +183,9 @@ class StateCoordinates:
     def same_memory(self, a: OscillatorState, b: OscillatorState) -> bool:
         """Whether the discrete relay configurations of ``a`` and ``b`` agree (always true for
         continuous memory, which is part of the coordinates)."""
+        if self.kind == "composite" and self._spec.relay_alpha is not None:
+            outputs = self._spec.relay_outputs
+            return bool(np.array_equal(outputs(a.operator_state), outputs(b.operator_state)))
         if self.kind != "relay":
             return True
         op = self.system.operator
