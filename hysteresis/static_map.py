@@ -300,4 +300,4 @@ class StaticMap(ContinuousHysteron[StaticMapState]):
         )
 
     def __repr__(self) -> str:
-        return f"StaticMap({self._name or self._f!r})"
+        return f"StaticMap({self._name})" if self._name else f"StaticMap({self._f!r})"
