@@ -408,7 +408,7 @@ class Cascade(ContinuousHysteron[CascadeState]):
         outer = _part_flow(self._outer, state.outer, dx)
         return self._compose(state, inner, outer, dx)
 
-    def _compose(self, state: CascadeState, I: BranchFlow, O: BranchFlow, dx: int) -> BranchFlow:  # noqa: N803
+    def _compose(self, state: CascadeState, I: BranchFlow, O: BranchFlow, dx: int) -> BranchFlow:
         d, u0 = I.direction, I.input
         nI = I.n_memory
         so = np.array(O.slaved, dtype=bool)
@@ -554,7 +554,7 @@ class Cascade(ContinuousHysteron[CascadeState]):
             pushed_gradient=pushed_gradient,
         )
 
-    def _jump(self, state, I, O, bp, inner_jumps, n, nOf):  # noqa: N803
+    def _jump(self, state, I, O, bp, inner_jumps, n, nOf):
         """The output's jump at ``bp`` (what ``apply`` gives there minus the branch's value)
         and the breakpoint's motion with the frozen memory."""
         x_before = float(I.output(bp))

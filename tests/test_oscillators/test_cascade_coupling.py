@@ -182,33 +182,34 @@ def _fd_jacobian(flow_map, x0):
     return np.array(cols).T
 
 
-def _check_jacobian(op, coupling, build, read, duration, pre_time=30.0, not_free=()):
-    """The engine's Jacobian over ``duration`` from 0.3 after the third reversal (frozen memory
-    strictly inside) against central differences of the flow map in the coordinates
-    ``(q, v, φ, *memory labels)``; ``build(x, start, labels)`` makes a state from coordinates,
-    ``read(state, labels)`` the coordinates of a state. Returns the engine, the Jacobian and
-    the start's labels."""
+def _check_jacobian(op, coupling, build, read, pre_time=30.0, reversal=2, not_free=()):
+    """The Jacobian of the stroboscopic map (``system.jacobian`` over one period T), started
+    0.3 after a reversal (frozen memory strictly inside), against central differences of
+    ``system.stroboscopic_map`` in the coordinates ``(q, v, φ, *memory labels)``;
+    ``build(x, start, labels)`` makes a state from coordinates, ``read(state, labels)`` the
+    coordinates of a state. Returns the engine of the tangent run, the Jacobian and the start's
+    labels."""
     system = ForcedOscillator(op, coupling, ZETA, 1.0)
     pre = system.engine(system.initial_state(), **TIGHT)
     pre.advance(np.array([pre_time]), record=True)
     events = pre.records()["events"]
-    t_rev = events["time"][events["kind"] == -1][2]
+    t_rev = events["time"][events["kind"] == -1][reversal]
     warm = system.engine(system.initial_state(), **TIGHT)
     warm.advance(np.array([t_rev + 0.3]))
     start = warm.state()
     eng = system.engine(start, **TIGHT)
     eng.start_tangent(include_phase=True)
     labels0 = eng.tangent_space
-    eng.advance(np.array([duration]), record=True)
+    eng.advance(np.array([system.period]), record=True)
     jac, labels1 = eng.deviations(), eng.tangent_space
-    jac_api, labels_api = system.jacobian(duration, start, engine_options=TIGHT)
+    jac_api, labels_api = system.jacobian(system.period, start, engine_options=TIGHT)
     np.testing.assert_array_equal(jac_api, jac)
     assert labels_api == labels1
 
     def flow_map(x):
-        e = system.engine(build(x, start, labels0), **TIGHT)
-        e.advance(np.array([duration]))
-        return read(e.state(), labels1)
+        return read(
+            system.stroboscopic_map(build(x, start, labels0), engine_options=TIGHT), labels1
+        )
 
     fd = _fd_jacobian(flow_map, read(start, labels0))
     # δw0 alone is no state (w0 ≡ q), nor is an extremum pushed at the start (≡ x): the
@@ -246,19 +247,23 @@ def test_jacobian_of_a_static_map_in_front_of_prandtl_ishlinskii():
         state = CascadeState(F.initial_state(q), PI.state(pos, float(f_in(q))))
         return OscillatorState(q, x[1], x[2], state)
 
-    eng, jac, _ = _check_jacobian(op, 0.8, build, read, duration=9.0)
+    eng, jac, _ = _check_jacobian(op, 0.8, build, read)
     kinds = eng.records()["events"]["kind"]
-    assert np.sum(kinds == -1) >= 2 and np.sum(kinds == 1) >= 6
+    assert np.sum(kinds == -1) >= 1 and np.sum(kinds == 1) >= 6
     # every wagon was dragged at some point: only (q, v, φ) directions survive
     assert eng.rank_bound() == 3 == np.linalg.matrix_rank(jac, tol=1e-8)
 
 
-@pytest.mark.parametrize("duration", [7.0, 9.0])
-def test_jacobian_of_prandtl_ishlinskii_in_front_of_a_play(duration):
+@pytest.mark.parametrize("reversal", [2, 3])
+def test_jacobian_of_prandtl_ishlinskii_in_front_of_a_play(reversal):
     """The outer wagon dragged by x = Σ a_i w_i is driven, δw = a_0 δq + Σ a_i δw_i; at a
     reversal of x it becomes a coordinate again with that gradient."""
     play = PlayOperator(0.8)
-    op = Cascade(PI, play)
+    # weights summing to 1.2 (with every wagon dragged δx = 1.2 δq: a slaved outer wagon, δq,
+    # would be wrong) and a wide wagon that stays frozen when the outer one is released (the
+    # gradient's ∂x/∂w_3 = a_3 term)
+    pi = PrandtlIshlinskii([0.0, 0.6, 1.5, 6.0], [0.3, 0.4, 0.3, 0.2])
+    op = Cascade(pi, play)
 
     def read(state, labels):
         s = state.operator_state
@@ -273,16 +278,16 @@ def test_jacobian_of_prandtl_ishlinskii_in_front_of_a_play(duration):
         s0 = start.operator_state
         pos = _pi_positions(labels, x, s0.inner.positions, "in:w")
         pos[0] = q
-        inner = PI.state(pos, q)
-        xin = PI.output(inner)
+        inner = pi.state(pos, q)
+        xin = pi.output(inner)
         w_out = x[labels.index("out:w")] if "out:w" in labels else s0.outer.position
         if "out:w" not in labels:
             w_out += xin - s0.outer.input
         return OscillatorState(q, x[1], x[2], CascadeState(inner, play.state(w_out, xin)))
 
-    eng, _, _ = _check_jacobian(op, 0.8, build, read, duration=duration)
+    eng, _, _ = _check_jacobian(op, 0.8, build, read, reversal=reversal)
     kinds = eng.records()["events"]["kind"]
-    assert np.sum(kinds == -1) >= 2 and np.sum(kinds == 1) >= 8
+    assert np.sum(kinds == -1) >= 2 and np.sum(kinds == 1) >= 5
 
 
 def test_jacobian_of_relays_behind_prandtl_ishlinskii():
@@ -305,7 +310,7 @@ def test_jacobian_of_relays_behind_prandtl_ishlinskii():
         outer = relays.state_from_relay_outputs(relays.relay_outputs(s0.outer), pi.output(inner))
         return OscillatorState(q, x[1], x[2], CascadeState(inner, outer))
 
-    eng, jac, _ = _check_jacobian(op, 0.8, build, read, duration=3.0)
+    eng, jac, _ = _check_jacobian(op, 0.8, build, read)
     assert eng.n_events >= 4
     assert np.max(np.abs(jac[:, 4:])) > 0.05  # the frozen wagons move the switches
 
@@ -334,8 +339,10 @@ def test_jacobian_of_a_preisach_model_behind_prandtl_ishlinskii():
         outer = preisach.state_from_extrema([*extrema, pi.output(inner)])
         return OscillatorState(q, x[1], x[2], CascadeState(inner, outer))
 
-    eng, _, _ = _check_jacobian(op, 3.0, build, read, duration=4.0, pre_time=60.0)
-    assert eng.tangent_space[-1] == "out:m1"  # pushed at the reversal inside the window
+    eng, _, _ = _check_jacobian(op, 3.0, build, read, pre_time=60.0)
+    kinds = eng.records()["events"]["kind"]
+    # two reversals push x, between them a wipe-out removes the first pushed pair again
+    assert np.sum(kinds == -1) >= 2 and np.sum(kinds == 1) >= 2
 
 
 def test_jacobian_started_where_the_outer_preisach_model_has_just_turned():
@@ -359,8 +366,6 @@ def test_jacobian_started_where_the_outer_preisach_model_has_just_turned():
         outer = preisach.state_from_extrema([*x[4 : 4 + n_real], w])
         return OscillatorState(q, x[1], x[2], CascadeState(play.state(w, q), outer))
 
-    eng, jac, labels0 = _check_jacobian(
-        op, 3.0, build, read, duration=4.0, pre_time=60.0, not_free=("out:M1",)
-    )
+    eng, jac, labels0 = _check_jacobian(op, 3.0, build, read, pre_time=60.0, not_free=("out:M1",))
     assert labels0 == ("q", "v", "phi", "in:w", "out:M1")  # M1 pushed at the start
     assert np.sum(eng.records()["events"]["kind"] == 1) >= 1  # the inner wall hit
