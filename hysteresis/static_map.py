@@ -126,6 +126,8 @@ class StaticMap(ContinuousHysteron[StaticMapState]):
     name:
         Optional label.
 
+    Notes
+    -----
     The operator pickles when ``f`` and ``derivative`` do (module-level functions, numpy ufuncs,
     picklable callable objects; not lambdas or closures).
     """
