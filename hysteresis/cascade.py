@@ -408,7 +408,7 @@ class Cascade(ContinuousHysteron[CascadeState]):
         outer = _part_flow(self._outer, state.outer, dx)
         return self._compose(state, inner, outer, dx)
 
-    def _compose(self, state: CascadeState, I: BranchFlow, O: BranchFlow, dx: int) -> BranchFlow:  # noqa: N803
+    def _compose(self, state: CascadeState, I: BranchFlow, O: BranchFlow, dx: int) -> BranchFlow:
         d, u0 = I.direction, I.input
         nI = I.n_memory
         so = np.array(O.slaved, dtype=bool)
@@ -532,7 +532,7 @@ class Cascade(ContinuousHysteron[CascadeState]):
         jump, gradient = 0.0, None
         inner_jumps = inner_event and I.breakpoint_jump != 0.0
         if inner_jumps or (outer_event and O.breakpoint_jump != 0.0):
-            jump, gradient = self._jump(state, I, O, bp, inner_jumps, n, nOf)
+            jump, gradient = self._jump(state, I, O, bp, inner_jumps)
         return BranchFlow(
             direction=d,
             input=u0,
@@ -554,9 +554,12 @@ class Cascade(ContinuousHysteron[CascadeState]):
             pushed_gradient=pushed_gradient,
         )
 
-    def _jump(self, state, I, O, bp, inner_jumps, n, nOf):  # noqa: N803
+    def _jump(
+        self, state: CascadeState, I: BranchFlow, O: BranchFlow, bp: float, inner_jumps: bool
+    ) -> tuple[float, np.ndarray]:
         """The output's jump at ``bp`` (what ``apply`` gives there minus the branch's value)
         and the breakpoint's motion with the frozen memory."""
+        nOf = int(np.sum(~np.asarray(O.slaved, dtype=bool)))
         x_before = float(I.output(bp))
         x_after = self._x_at(state.inner, bp)
         if inner_jumps:

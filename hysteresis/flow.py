@@ -74,7 +74,10 @@ the variable it created at ``u0`` in ``pushed``. Where the pushed value is not t
 (a cascade whose outer Preisach model remembers the *inner output* ``x(u0; m)``),
 ``pushed_gradient(u0) -> (d_du (n_p,), d_dm (n_p, n))`` gives it,
 ``δm_p := d_du·δu + d_dm @ δm`` (rows in the order of the pushed variables, columns over all
-memory variables, zero on the pushed ones); ``None`` means ``δm_p := δu``.
+memory variables, zero on the pushed ones); ``None`` means ``δm_p := δu``. A variable flagged
+``pushed`` on two consecutive branches (the remembered value has not moved in between: a
+cascade's inner output stayed constant while the input turned and hit a wall) is one variable,
+created once: an integrator keeps the perturbation it gave it at the first branch.
 
 Driven memory
 -------------

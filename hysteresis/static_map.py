@@ -126,6 +126,8 @@ class StaticMap(ContinuousHysteron[StaticMapState]):
     name:
         Optional label.
 
+    Notes
+    -----
     The operator pickles when ``f`` and ``derivative`` do (module-level functions, numpy ufuncs,
     picklable callable objects; not lambdas or closures).
     """
@@ -300,4 +302,4 @@ class StaticMap(ContinuousHysteron[StaticMapState]):
         )
 
     def __repr__(self) -> str:
-        return f"StaticMap({self._name or self._f!r})"
+        return f"StaticMap({self._name})" if self._name else f"StaticMap({self._f!r})"

@@ -46,7 +46,8 @@ threshold reached through its inner operator). Memory rows:
 
 * a memory variable that becomes slaved (wall hit, paper ``V_out``) or is created (a reversal of
   a continuous Preisach input pushes an extremum) gets ``δm := δq`` (a pushed variable with a
-  ``pushed_gradient``: ``δm := d_du·δq + d_dm @ δm``);
+  ``pushed_gradient``: ``δm := d_du·δq + d_dm @ δm``; one still pending from the old branch
+  keeps its row);
 * a variable that was *driven* on the old branch (a cascade's outer wagon dragged by the inner
   output, :mod:`hysteresis.flow` "Driven memory") gets ``δm := d_du·δq + d_dm @ δm_old`` from
   the old branch's gradient at the event;
@@ -494,10 +495,12 @@ class ContinuousEngine(TangentFlow, Engine):
                 moved = moved - grad[use] @ self._dm[use]
         self._dqv[1] = self._dqv[1] + (self._coupling * old.breakpoint_jump / self._v) * moved
 
-    def _pushed_rows(self, flow: Any, dm: np.ndarray) -> None:
-        """Rows of the variables ``flow`` pushed at its start: ``δm := δq``, or from the flow's
-        ``pushed_gradient`` (``d_du·δq + d_dm @ δm``, the other rows of ``dm`` already set)."""
-        idx = np.flatnonzero(flow.pushed)
+    def _pushed_rows(self, flow: Any, dm: np.ndarray, keep: np.ndarray | None = None) -> None:
+        """Rows of the variables ``flow`` pushed at its start (but those in ``keep``):
+        ``δm := δq``, or from the flow's ``pushed_gradient`` (``d_du·δq + d_dm @ δm``, the
+        other rows of ``dm`` already set)."""
+        pushed = np.array(flow.pushed, dtype=bool)
+        idx = np.flatnonzero(pushed if keep is None else pushed & ~keep)
         if idx.size == 0:
             return
         dq = self._dqv[0]
@@ -505,10 +508,12 @@ class ContinuousEngine(TangentFlow, Engine):
             dm[idx] = dq
             return
         d_du, d_dm = flow.pushed_gradient(self._q)
-        d_du = np.asarray(d_du, dtype=np.float64).reshape(idx.size)
-        d_dm = np.asarray(d_dm, dtype=np.float64).reshape(idx.size, flow.n_memory)
+        n_pushed = int(pushed.sum())
+        d_du = np.asarray(d_du, dtype=np.float64).reshape(n_pushed)
+        d_dm = np.asarray(d_dm, dtype=np.float64).reshape(n_pushed, flow.n_memory)
+        rows = np.flatnonzero(~keep[pushed]) if keep is not None else np.arange(n_pushed)
         dm[idx] = 0.0
-        dm[idx] = d_du[:, None] * dq[None, :] + d_dm @ dm
+        dm[idx] = d_du[rows, None] * dq[None, :] + d_dm[rows] @ dm
 
     def _reconcile(self, old: Any, new: Any) -> None:
         """Saltation at an event: carry, reset (δm := δq), initialise from the old branch's
@@ -518,9 +523,15 @@ class ContinuousEngine(TangentFlow, Engine):
         gradient = None
         dq = self._dqv[0]
         dm = np.empty((new.n_memory, self._ntan))
+        pending = np.zeros(new.n_memory, dtype=bool)
         for i, lab in enumerate(new.labels):
             j = index.get(lab)
-            if new.pushed[i]:
+            if new.pushed[i] and j is not None and old.pushed[j]:
+                # pushed on the old branch and still pending (the value remembered has not
+                # moved since: a cascade's inner output stayed constant): the same variable
+                dm[i] = self._dm[j]
+                pending[i] = True
+            elif new.pushed[i]:
                 self._free.discard(lab)  # created by the reversal: _pushed_rows below
             elif j is not None and new.slaved[i]:
                 dm[i] = dq  # (re)set by V_out; already δq if it was slaved before
@@ -540,7 +551,7 @@ class ContinuousEngine(TangentFlow, Engine):
             else:
                 dm[i] = dq  # created (or slaved from the start): δm := δq
                 self._free.discard(lab)
-        self._pushed_rows(new, dm)
+        self._pushed_rows(new, dm, keep=pending)
         for lab in old.labels:
             if lab not in new.labels:
                 self._free.discard(lab)  # removed, or driven from now on
