@@ -45,31 +45,10 @@ from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.inverse import InverseOperator
 from hysteresis.relay_table import RelayTable
 from hysteresis.seam import check_state, checked_relay_outputs, checked_relay_table
+from hysteresis.sum_flows import compiled_sum_flow, composed_fields, play_parts
+from hysteresis.sum_state import SumState
 
 __all__ = ["SumState", "WeightedSum", "RelaySum", "BranchSum", "weighted_sum"]
-
-
-class SumState(tuple):
-    """The state of a sum: the tuple of its parts' states (immutable, like the parts' states).
-
-    ``input`` is the input the sum last saw (every part saw the same one).
-    """
-
-    __slots__ = ()
-
-    def __new__(cls, parts: Any) -> SumState:
-        return super().__new__(cls, tuple(parts))
-
-    def __reduce__(self) -> tuple:
-        return (SumState, (tuple(self),))
-
-    @property
-    def input(self) -> float:
-        """The input the sum last saw (its first part's)."""
-        return self[0].input
-
-    def __repr__(self) -> str:
-        return f"SumState({', '.join(repr(s) for s in self)})"
 
 
 def _check_weight(weight: Any, name: str = "weight") -> float:
@@ -346,8 +325,8 @@ class BranchSum(WeightedSum, ContinuousHysteron):
                     ends.append((math.nextafter(sw.lower, -math.inf), w * sw.jump_down, -1))
             else:
                 flow = p.branch_flow(s, direction)
-                if math.isfinite(flow.breakpoint):
-                    ends.append((float(flow.breakpoint), 0.0, len(flows)))
+                if math.isfinite(flow.breakpoint):  # (a cascade's output may jump there too)
+                    ends.append((float(flow.breakpoint), w * flow.breakpoint_jump, len(flows)))
                 flows.append((w, flow))
         breakpoint = direction * math.inf
         jump = 0.0
@@ -361,13 +340,15 @@ class BranchSum(WeightedSum, ContinuousHysteron):
             index = self._continuous_index(k)
             labels.extend(f"{index}:{lab}" for lab in flow.labels)
             sizes.append(flow.n_memory)
+        gradient_of = -1  # the part whose breakpoint moves with its memory (a cascade's)
         for bp, dy, k in ends:
             if bp != breakpoint:
                 continue
-            if k < 0:
-                jump += dy
-            else:
+            jump += dy
+            if k >= 0:
                 flow = flows[k][1]
+                if flow.breakpoint_gradient is not None and gradient_of < 0:
+                    gradient_of = k
                 index = self._continuous_index(k)
                 resets.extend(f"{index}:{lab}" for lab in flow.breakpoint_resets)
                 removes.extend(f"{index}:{lab}" for lab in flow.breakpoint_removes)
@@ -391,6 +372,8 @@ class BranchSum(WeightedSum, ContinuousHysteron):
                 d_m[..., bounds[k] : bounds[k + 1]] = a * np.asarray(dm_k, dtype=np.float64)
             return d_u[()], d_m
 
+        extra = composed_fields(parts, [self._continuous_index(k) for k in range(len(parts))],
+                                 bounds, gradient_of)  # fmt: skip
         return BranchFlow(
             direction=direction,
             input=u0,
@@ -406,6 +389,7 @@ class BranchSum(WeightedSum, ContinuousHysteron):
             reversal_pushes=any(f.reversal_pushes for f in parts),
             pushed=np.concatenate([f.pushed for f in parts]) if parts else None,
             constant_partials=all(f.constant_partials for f in parts),
+            **extra,
         )
 
     def _continuous_index(self, k: int) -> int:
@@ -413,116 +397,20 @@ class BranchSum(WeightedSum, ContinuousHysteron):
         part by its place in the sum)."""
         return [i for i, p in enumerate(self._parts) if not p.piecewise_constant][k]
 
-    # -- the compiled fast path: a sum of plays is one set of (shaped) plays ----------------------
-    def _play_parts(self) -> list[tuple[int, Any]] | None:
-        """Per part, its plays as the compiled engine takes them (a relay-type part: ``None``),
-        or ``None`` if a part is neither relays, a play (identity or erf shape) nor a
-        Prandtl–Ishlinskii operator."""
-        found: list[tuple[int, Any]] = []
-        for k, p in enumerate(self._parts):
-            if p.piecewise_constant:
-                found.append((k, None))
-                continue
-            cp = p.compiled_play()
-            if cp is not None and cp.shape in ("identity", "erf"):
-                found.append((k, cp))
-                continue
-            cf = p.compiled_flow()
-            if cf is not None and cf.kind == "prandtl_ishlinskii" and cf.positions is None:
-                found.append((k, cf))
-                continue
-            return None
-        return found
-
+    # -- the compiled fast path: a sum of plays and relays (hysteresis/sum_flows.py) --------------
     def compiled_flow(self) -> CompiledFlow | None:
         """A sum of plays (identity or erf shape), Prandtl–Ishlinskii operators and relay-type
-        operators is one set of plays ``y = Σ a_i f_i(w_i)`` plus relays ``Σ c_j y_j``, with the
-        part's weight folded into each ``a_i`` and ``c_j``: the oscillator's compiled
-        continuous engine integrates it (relays switch at their thresholds with the saltation
-        of the jump). Its states are read and built through the parts' own constructors
-        (``state(position, input)``, ``state(positions, input)``,
-        ``state_from_relay_outputs``); memory labels ``"k:w"``, ``"k:w{j}"`` as in
-        :meth:`branch_flow`. ``None`` for any other sum."""
-        found = self._play_parts()
-        if found is None:
-            return None
-        relays = [(k, checked_relay_table(self._parts[k])) for k, spec in found if spec is None]
-        found = [(k, spec) for k, spec in found if spec is not None]
-        half, weights, spreads, labels, sizes = [], [], [], [], []
-        for k, spec in found:
-            w = float(self._weights[k])
-            if isinstance(spec, CompiledFlow):
-                n = spec.half_widths.size
-                half.extend(spec.half_widths)
-                weights.extend(w * spec.weights)
-                spreads.extend(spec.spreads)
-                labels.extend(f"{k}:{spec.label(j)}" for j in range(n))
-            else:
-                n = 1
-                half.append(0.5 * spec.width)
-                weights.append(w)
-                spreads.append(spec.spread if spec.shape == "erf" else 0.0)
-                labels.append(f"{k}:w")
-            sizes.append(n)
-        bounds = np.cumsum([0, *sizes])
-        kinds = [isinstance(spec, CompiledFlow) for _, spec in found]
-        parts = self._parts
-
-        def positions(state: SumState) -> np.ndarray:
-            state = self._check_state(state)
-            return np.concatenate(
-                [
-                    np.asarray(state[k].positions if pi else [state[k].position], dtype=float)
-                    for (k, _), pi in zip(found, kinds, strict=True)
-                ]
-                or [np.zeros(0)]  # relays only (a negative weight kept them out of a RelaySum)
-            )
-
-        r_sizes = [t.n_relays for _, t in relays]
-        r_bounds = np.cumsum([0, *r_sizes])
-
-        def relay_outputs(state: SumState) -> np.ndarray:
-            state = self._check_state(state)
-            return np.concatenate(
-                [checked_relay_outputs(parts[k], t, state[k]) for k, t in relays] or [[]]
-            )
-
-        def make_state(pos: np.ndarray, input: float, y: np.ndarray | None = None) -> SumState:
-            out: list[Any] = [None] * len(parts)
-            for i, ((k, _), pi) in enumerate(zip(found, kinds, strict=True)):
-                chunk = pos[bounds[i] : bounds[i + 1]]
-                out[k] = parts[k].state(chunk if pi else float(chunk[0]), input)
-            for i, (k, _) in enumerate(relays):
-                out[k] = parts[k].state_from_relay_outputs(y[r_bounds[i] : r_bounds[i + 1]], input)
-            return SumState(out)
-
-        relay_fields: dict[str, Any] = {}
-        if relays:
-            relay_fields = {
-                "relay_alpha": np.concatenate([t.alpha for _, t in relays]),
-                "relay_beta": np.concatenate([t.beta for _, t in relays]),
-                "relay_weights": np.concatenate(
-                    [float(self._weights[k]) * t.weights for k, t in relays]
-                ),
-                "relay_outputs": relay_outputs,
-            }
-        return CompiledFlow(
-            kind="prandtl_ishlinskii",
-            label=labels.__getitem__,
-            half_widths=np.array(half),
-            weights=np.array(weights),
-            spreads=np.array(spreads),
-            positions=positions,
-            make_state=make_state,
-            **relay_fields,
-        )
+        operators is one set of plays ``y = Σ a_i f_i(w_i)`` plus relays ``Σ c_j y_j`` for the
+        oscillator's compiled continuous engine (:func:`hysteresis.sum_flows.compiled_sum_flow`);
+        ``None`` for any other sum."""
+        return compiled_sum_flow(self)
 
     @property
     def uncompiled_reason(self) -> str | None:
         """Why the oscillator integrates this sum with the generic (Python) engine, or ``None``
         when it has a compiled description (a sum of plays, erf plays and Prandtl–Ishlinskii
         operators)."""
-        if self._play_parts() is not None:
+        if play_parts(self) is not None:
             return None
         names = ", ".join(type(p).__name__ for p in self._parts)
         return (

@@ -360,3 +360,43 @@ def test_slope_bounds_of_a_sum_use_each_part_on_its_side():
     assert (-1.0 * play).max_slope == 0.0  # -play never rises
     assert (-1.0 * play).min_slope == -1.0
     assert (2.0 * play - 0.5 * play).max_slope == 2.0
+
+
+def _tanh_slope(u):
+    return 1.0 / np.cosh(u) ** 2
+
+
+def test_sum_of_a_cascade_and_an_inverse_carries_their_driven_memory():
+    """Parts whose memory is driven (a cascade's outer wagons follow the inner output, an
+    inverse's forward wagons follow u(y)): the sum composes their driven variables and pushed
+    gradients, so its Jacobian matches central differences of the stroboscopic map in every
+    coordinate the map has (q, v, φ and the memory rows frozen at the start)."""
+    from hysteresis import Cascade, InverseOperator, StaticMap
+
+    inner = PrandtlIshlinskii([0.0, 0.6], [0.5, 0.5])
+    cascade = Cascade(inner, PlayOperator(0.8))
+    inverse = InverseOperator(PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5]))
+    s = 0.5 * cascade + 0.3 * inverse + 0.2 * StaticMap(np.tanh, _tanh_slope)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GenericEngineWarning)
+        system = ForcedOscillator(s, coupling=0.6, damping_ratio=0.1, frequency=1.0)
+    start = system.stroboscopic_map(OscillatorState(q=0.4, v=-0.3, phi=0.0, operator_state=None))
+    start = OscillatorState(q=start.q, v=start.v, phi=0.0, operator_state=start.operator_state)
+    jac, labels = system.jacobian(system.period, start, include_phase=False)
+    h = 1e-6  # truncation ~h² |P'''| and round-off ~1e-11/h (the engine's rtol): both < 1e-5
+
+    def mapped(dq: float, dv: float) -> np.ndarray:
+        shifted = OscillatorState(
+            q=start.q + dq,
+            v=start.v + dv,
+            phi=0.0,
+            operator_state=s.apply([start.q + dq], start.operator_state)[1],
+        )
+        end = system.stroboscopic_map(shifted)
+        return np.array([end.q, end.v])
+
+    # a shift of q at the start also moves the memory that is dragged there (its rows are
+    # δq); the q column of the map is then J[:, q] + Σ_dragged J[:, m]
+    fd_v = (mapped(0.0, h) - mapped(0.0, -h)) / (2 * h)
+    np.testing.assert_allclose(jac[:2, 1], fd_v, rtol=0, atol=1e-5)
+    assert labels[:2] == ("q", "v") and all(":" in lab for lab in labels[2:])
