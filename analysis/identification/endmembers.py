@@ -227,10 +227,33 @@ def simplex_proportions(points: np.ndarray, vertices: np.ndarray) -> tuple[np.nd
     out = np.empty((t.shape[0], m))
     for i, row in enumerate(t):
         p, _ = nnls(a, np.append(row, big), maxiter=50 * m)
-        total = p.sum()
-        out[i] = p / total if total > 0 else np.full(m, 1.0 / m)
+        out[i] = _polish(p, row, v)
     dist = np.sqrt(np.sum((t - out @ v) ** 2, axis=1))
     return out, dist
+
+
+def _polish(p: np.ndarray, point: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The weighted-row NNLS solution made exact: the equality-constrained least squares on
+    its support (the KKT system ``[V_S V_Sᵀ 1; 1ᵀ 0]``), kept if it stays >= 0 (to 1e-9, then
+    clipped); else the NNLS solution renormalised."""
+    support = np.flatnonzero(p > 0)
+    total = p.sum()
+    fallback = p / total if total > 0 else np.full(p.size, 1.0 / p.size)
+    if support.size == 0:
+        return fallback
+    vs = v[support]
+    k = support.size
+    kkt = np.zeros((k + 1, k + 1))
+    kkt[:k, :k] = vs @ vs.T
+    kkt[:k, k] = kkt[k, :k] = 1.0
+    rhs = np.append(vs @ point, 1.0)
+    sol = np.linalg.lstsq(kkt, rhs, rcond=None)[0][:k]
+    if np.all(sol >= -1e-9):  # round-off below 0 of a coordinate that is 0 (a vertex, an edge)
+        sol = np.clip(sol, 0.0, None)
+        out = np.zeros(p.size)
+        out[support] = sol / sol.sum()
+        return out
+    return fallback
 
 
 def bootstrap_proportions(
