@@ -1,7 +1,8 @@
 """FORC unmixing of a sample series: a common lattice, FORC-PCA, end-members and proportions.
 
-:func:`unmix_forc` takes FORC files (any format :func:`~analysis.identification.forc_io.
-read_forc_file` reads), reversal curves or identifications, and returns a
+:func:`unmix_forc` takes FORC files (any format
+:func:`~analysis.identification.forc_io.read_forc_file` reads), reversal curves or
+identifications, and returns a
 :class:`~analysis.identification.unmixing_result.ForcUnmixing`.
 
 1. **Diagrams.** Every file is read and identified with the same smoothing (VARIFORC by
@@ -293,8 +294,8 @@ def _diagram(
 
 def _window_area(ident: PreisachIdentification) -> float:
     """Median area ``4 s_c s_b Δ²`` of the smoothing window in the ``(B_c, B_u)`` plane (the
-    correlation area of the smoothed density; :func:`~analysis.identification.endmembers.
-    component_test`)."""
+    correlation area of the smoothed density;
+    :func:`~analysis.identification.endmembers.component_test`)."""
     step = float(ident.step)
     if ident.smoothing_widths is not None:
         sc, sb = (np.asarray(w, dtype=float) for w in ident.smoothing_widths)

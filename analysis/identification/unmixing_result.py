@@ -54,9 +54,11 @@ class _EverettTable:
 
 @dataclass(frozen=True, eq=False)
 class ForcUnmixing:
-    """End-member unmixing of a FORC series (:func:`~analysis.identification.unmixing.
-    unmix_forc`). Arrays over samples follow the order of the inputs (those left out
-    omitted: :attr:`input_indices`, :attr:`excluded`).
+    """End-member unmixing of a FORC series, the result of
+    :func:`~analysis.identification.unmixing.unmix_forc`.
+
+    Arrays over samples follow the order of the inputs (those left out omitted:
+    :attr:`input_indices`, :attr:`excluded`).
 
     Attributes
     ----------
