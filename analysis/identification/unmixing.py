@@ -34,8 +34,11 @@ identifications, and returns a
 
 Independent per-node noise is what the bootstrap draws; the smoothed density's real noise is
 correlated over a smoothing window with a kernel of zero mean (a second derivative), which
-averages out of smooth directions, so for the smooth end-member directions the intervals
-are on the wide side (measured in tests/test_analysis/identification/test_unmixing.py).
+averages out of smooth directions, so the intervals are on the wide side: over 20 noise draws
+of a synthetic series the bootstrap's standard deviation was 1.6 times (median) the actual
+spread of the proportions and the 95 % intervals covered the truth in 98 % of the cases
+(tests/test_analysis/identification/test_unmixing.py, marked slow). The intervals hold the
+end-members' samples fixed (their own noise is in them, the choice of the samples is not).
 """
 
 from __future__ import annotations

@@ -289,3 +289,34 @@ def test_shipped_instrument_files_end_to_end(tmp_path):
     for m in res.models():
         assert np.all(m.weights >= 0)
     assert not math.isnan(res.sample_scale(0))
+
+
+@pytest.mark.slow
+def test_bootstrap_intervals_against_the_spread_over_noise_draws():
+    # 20 noise draws of the series: the bootstrap's standard deviation against the actual
+    # spread of the estimates, and the coverage of the true proportions by the 95 % intervals.
+    # Measured: bootstrap sd / spread median 1.63 (0.76-7.0 over the 27 mixed entries),
+    # coverage 98 %, bias < 0.001 against a spread of 0.003: conservative, as the module
+    # docstring says (independent node noise instead of the smoothed density's correlated
+    # noise, whose zero-mean kernel averages out of smooth directions). The spread of 20 draws
+    # scatters by ~16 % per entry; the median over 27 entries by less.
+    truth = core_proportions(N_SAMPLES, seed=1)
+    ests, ses, cover = [], [], []
+    for r in range(20):
+        rng = np.random.default_rng(100 + r)
+        res = unmix_forc([mixed_curves(p, NOISE, rng) for p in truth], seed=r, n_boot=100)
+        est, se = _aligned(res, truth)
+        cols = [int(np.argmax(truth[i])) for i in res.end_member_samples]
+        lo, hi = np.zeros_like(truth), np.zeros_like(truth)
+        lo[:, cols], hi[:, cols] = (
+            res.proportion_intervals[..., 0],
+            res.proportion_intervals[..., 1],
+        )
+        ests.append(est)
+        ses.append(se)
+        cover.append((lo - 1e-12 <= truth) & (truth <= hi + 1e-12))
+    ests, ses, cover = np.array(ests)[:, 3:], np.array(ses)[:, 3:], np.array(cover)[:, 3:]
+    ratio = ses.mean(axis=0) / ests.std(axis=0, ddof=1)
+    assert 1.0 <= np.median(ratio) <= 2.5
+    assert cover.mean() >= 0.93
+    assert np.max(np.abs(ests.mean(axis=0) - truth[3:])) < 0.5 * ests.std(axis=0).mean()
