@@ -31,6 +31,7 @@ from analysis.cli import (
     paper,
     poincare,
     trajectory,
+    unmix,
     width_disorder,
 )
 from analysis.cli._parsing import (
@@ -60,6 +61,7 @@ COMMANDS = (
     paper,
     poincare,
     trajectory,
+    unmix,
     width_disorder,
 )
 

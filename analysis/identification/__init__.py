@@ -14,11 +14,15 @@ Modules, by job:
   (:func:`compare_with_ridge`, and cell by cell along the ridge: :func:`compare_ridge_bins`);
 - :mod:`~analysis.identification.forc_io` — instrument FORC files (CSV, MicroMag, Lake Shore;
   the readers live in :mod:`analysis.identification.forc_files`);
+- :mod:`~analysis.identification.unmixing` — FORC unmixing of a sample series
+  (:func:`unmix_forc`: FORC-PCA, end-members, proportions with intervals, end-members as
+  Preisach operators; the algebra in :mod:`~analysis.identification.endmembers`);
 - :mod:`~analysis.identification.fitting` — Preisach / Prandtl–Ishlinskii models fitted to
   arbitrary input/output records;
 - :mod:`~analysis.identification.plots` — figures of identified densities and FORC diagrams.
 
-The names below are those of the first five modules; import the last three from their modules.
+The names below are those of the first five modules and :func:`unmix_forc`; import the rest
+from their modules.
 """
 
 from __future__ import annotations
@@ -42,6 +46,8 @@ from analysis.identification.metrics import (
 )
 from analysis.identification.result import PreisachIdentification
 from analysis.identification.smoothing import grid_quadratic_density, local_quadratic_density
+from analysis.identification.unmixing import unmix_forc
+from analysis.identification.unmixing_result import ForcUnmixing
 
 __all__ = [
     "ReversalCurves",
@@ -62,4 +68,6 @@ __all__ = [
     "protocol_lattice",
     "grid_quadratic_density",
     "auto_grid",
+    "unmix_forc",
+    "ForcUnmixing",
 ]
