@@ -23,7 +23,7 @@ A rising sweep from ``u`` to ``u1``, plain-Python reading of :func:`sweep`::
     loop:
         g = the list whose next entry has the least t            (merge of the lists)
         if t > u1: stop
-        i = order[ptr[g]]; ptr[g] += 1
+            i = order[ptr[g]]; ptr[g] += 1
         if s_i == +1 or n_i != nvals[g]: continue                (not this spin's threshold)
         u = t                                                    (the avalanche's trigger)
         flip i up; stack = [i]
@@ -43,7 +43,10 @@ makes the final state of an avalanche independent of the order of the flips (and
 input got from ``u`` to ``u1``), so relaxing at each trigger gives the state at ``u1`` too.
 
 Spins are stored as packed bits (``uint8``, little-endian within a byte, ``1`` = up): 1/8 byte
-per spin. The graph is either a periodic hypercubic lattice (``lat = [ndim, L0, L1, L2, s0, s1,
+per spin. The kernels also keep ``nup[i]``, the number of up neighbours of every spin (derived
+from the bits by :func:`count_up_neighbours`, then updated at every flip), so that a threshold
+test reads two bytes, and ``fsorted = fields[order]``, so that the lists are read in memory
+order. The graph is either a periodic hypercubic lattice (``lat = [ndim, L0, L1, L2, s0, s1,
 s2]``, neighbours by index arithmetic, nothing stored) or compressed rows (``offsets``, ``adj``;
 ``lat[0] = 0``).
 
@@ -61,10 +64,12 @@ from numba import njit
 
 __all__ = [
     "avalanche",
+    "count_up_neighbours",
     "next_trigger",
     "reference_sweep",
     "stable",
     "sweep",
+    "undo",
 ]
 
 #: :func:`sweep` status: every input done / the event buffer is full (call again from ``k``)
@@ -103,54 +108,56 @@ def _neighbours(i, lat, offsets, adj, buf):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _neighbour_sum(i, bits, lat, offsets, adj, buf):  # pragma: no cover - compiled
-    """``n_i = Σ_{j ~ i} s_j`` (up neighbours minus down neighbours)."""
-    deg = _neighbours(i, lat, offsets, adj, buf)
-    up = 0
-    for k in range(deg):
-        up += _spin(bits, buf[k])
-    return 2 * up - deg
-
-
-@njit(cache=True, inline="always")
-def _threshold(fields, order, coupling, m, n):  # pragma: no cover - compiled
-    """``t = −(f_i + J·n)`` of entry ``m`` of the sorted order."""
-    return -(fields[order[m]] + coupling * n)
+def _degree(i, lat, offsets):  # pragma: no cover - compiled
+    return 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
 
 
 @njit(cache=True)
-def _pointers(fields, order, coupling, nvals, u, rising, ptr, heads):  # pragma: no cover
+def count_up_neighbours(bits, lat, offsets, adj, max_degree, nup):  # pragma: no cover
+    """``nup[i]`` = number of up neighbours of spin ``i`` (the cached part of the neighbour
+    sum ``n_i = 2 nup_i − deg_i``)."""
+    buf = np.empty(max(max_degree, 1), np.int64)
+    for i in range(nup.size):
+        deg = _neighbours(i, lat, offsets, adj, buf)
+        up = 0
+        for k in range(deg):
+            up += _spin(bits, buf[k])
+        nup[i] = up
+
+
+@njit(cache=True)
+def _pointers(fsorted, coupling, nvals, u, rising, ptr, heads):  # pragma: no cover
     """Pointers and head thresholds of every list at input ``u``: rising, the first entry with
     ``t > u``; falling, the last entry with ``t <= u`` (binary search: t grows along a list)."""
-    size = order.size
+    size = fsorted.size
     for g in range(nvals.size):
         n = nvals[g]
-        lo, hi = 0, size  # count of entries with t <= u lies in [lo, hi]
+        lo, hi = 0, size  # the count of entries with t <= u lies in [lo, hi]
         while lo < hi:
             mid = (lo + hi) >> 1
-            if _threshold(fields, order, coupling, mid, n) <= u:
+            if -(fsorted[mid] + coupling * n) <= u:
                 lo = mid + 1
             else:
                 hi = mid
         if rising:
             ptr[g] = lo
-            heads[g] = _threshold(fields, order, coupling, lo, n) if lo < size else np.inf
+            heads[g] = -(fsorted[lo] + coupling * n) if lo < size else np.inf
         else:
             ptr[g] = lo - 1
-            heads[g] = _threshold(fields, order, coupling, lo - 1, n) if lo > 0 else -np.inf
+            heads[g] = -(fsorted[lo - 1] + coupling * n) if lo > 0 else -np.inf
 
 
 @njit(cache=True, inline="always")
-def _advance(fields, order, coupling, nvals, ptr, heads, g, rising):  # pragma: no cover
+def _advance(fsorted, coupling, nvals, ptr, heads, g, rising):  # pragma: no cover
     """Pass the head entry of list ``g``."""
     if rising:
         ptr[g] += 1
         m = ptr[g]
-        heads[g] = _threshold(fields, order, coupling, m, nvals[g]) if m < order.size else np.inf
+        heads[g] = -(fsorted[m] + coupling * nvals[g]) if m < fsorted.size else np.inf
     else:
         ptr[g] -= 1
         m = ptr[g]
-        heads[g] = _threshold(fields, order, coupling, m, nvals[g]) if m >= 0 else -np.inf
+        heads[g] = -(fsorted[m] + coupling * nvals[g]) if m >= 0 else -np.inf
 
 
 @njit(cache=True, inline="always")
@@ -163,63 +170,88 @@ def _best(heads, rising):  # pragma: no cover - compiled
     return g
 
 
+@njit(cache=True, inline="always")
+def _eligible(i, n, want, bits, nup, lat, offsets):  # pragma: no cover - compiled
+    """Spin ``i`` points the way that may flip (``want``) and its neighbour sum is ``n``."""
+    return _spin(bits, i) == want and 2 * nup[i] - _degree(i, lat, offsets) == n
+
+
 @njit(cache=True)
 def avalanche(
-    i, rising, u, bits, fields, coupling, lat, offsets, adj, stack, buf, buf2
+    i, rising, u, bits, nup, fields, coupling, lat, offsets, adj, queue, tail, buf
 ):  # pragma: no cover - compiled
-    """Flip spin ``i`` (up if ``rising``) and relax every spin it destabilises at input ``u``
-    (depth-first, each spin flips at most once); returns the number of flips."""
-    _flip(bits, i)
-    stack[0] = i
-    top = 1
-    count = 1
+    """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at input ``u``
+    (breadth first; each spin flips at most once), appending them to ``queue`` from ``tail``
+    and keeping ``nup`` up to date; returns the new tail (flips = new tail − tail)."""
     want = 0 if rising else 1  # the spins that may follow: down ones rising, up ones falling
-    while top > 0:
-        top -= 1
-        j = stack[top]
+    step = 1 if rising else -1
+    _flip(bits, i)
+    queue[tail] = i
+    head = tail
+    tail += 1
+    while head < tail:
+        j = queue[head]
+        head += 1
         deg = _neighbours(j, lat, offsets, adj, buf)
         for k in range(deg):
             m = buf[k]
+            nup[m] += step
             if _spin(bits, m) != want:
                 continue
-            h = u + (fields[m] + coupling * _neighbour_sum(m, bits, lat, offsets, adj, buf2))
+            nm = 2 * nup[m] - _degree(m, lat, offsets)
+            h = u + (fields[m] + coupling * nm)
             if (h >= 0.0) if rising else (h < 0.0):
                 _flip(bits, m)
-                stack[top] = m
-                top += 1
-                count += 1
-    return count
+                queue[tail] = m
+                tail += 1
+    return tail
+
+
+@njit(cache=True)
+def undo(bits, nup, queue, count, rising, lat, offsets, adj, max_degree):  # pragma: no cover
+    """Flip back the spins ``queue[:count]`` flipped by a ``rising`` sweep (``nup`` too)."""
+    buf = np.empty(max(max_degree, 1), np.int64)
+    step = -1 if rising else 1
+    for q in range(count):
+        j = queue[q]
+        _flip(bits, j)
+        deg = _neighbours(j, lat, offsets, adj, buf)
+        for k in range(deg):
+            nup[buf[k]] += step
 
 
 @njit(cache=True)
 def sweep(
-    bits, n_up, u, inputs, k0, fields, order, coupling, nvals, lat, offsets, adj, max_degree,
-    out, ev_input, ev_size, record,
+    bits, nup, n_up, u, inputs, k0, fields, fsorted, order, coupling, nvals, lat, offsets, adj,
+    max_degree, queue, out, ev_input, ev_size, record,
 ):  # pragma: no cover - compiled  # fmt: skip
-    """Follow ``inputs[k0:]`` from the state ``bits`` relaxed at ``u`` (module docstring),
-    every avalanche relaxed at its trigger input; ``out[k]`` is ``M`` after input ``k``.
+    """Follow ``inputs[k0:]`` from the state ``bits`` (with its up-neighbour counts ``nup``)
+    relaxed at ``u`` (module docstring), every avalanche relaxed at its trigger input; ``out[k]``
+    is ``M`` after input ``k``. The spins flipped by the last input are ``queue[:flips]``.
 
     With ``record`` each avalanche's trigger input (rising: the threshold; falling: the largest
     float below it) and size go to ``ev_input``/``ev_size``; when they are full the sweep stops
     before the next avalanche and returns ``FULL`` with the input ``u`` it stopped at (the
-    state is relaxed there): call again from ``k``. Returns ``(status, k, u, n_up, n_events)``.
+    state is relaxed there): call again from ``k``. Returns
+    ``(status, k, u, n_up, n_events, flips)``.
     """
     n = fields.size
     ng = nvals.size
     ptr = np.empty(ng, np.int64)
     heads = np.empty(ng)
-    stack = np.empty(n, np.int32)
     buf = np.empty(max(max_degree, 1), np.int64)
-    buf2 = np.empty(max(max_degree, 1), np.int64)
     direction = 0  # the pointers hold for (u, direction); 0: not computed yet
     n_ev = 0
+    tail = 0
     for k in range(k0, inputs.size):
         target = inputs[k]
         last = np.nan  # trigger input of the avalanche being counted (ties join it)
+        tail = 0  # one monotone step flips every spin at most once
         if target != u:
             rising = target > u
+            want = 0 if rising else 1
             if direction != (1 if rising else -1):
-                _pointers(fields, order, coupling, nvals, u, rising, ptr, heads)
+                _pointers(fsorted, coupling, nvals, u, rising, ptr, heads)
                 direction = 1 if rising else -1
             while True:
                 g = _best(heads, rising)
@@ -227,53 +259,51 @@ def sweep(
                 if not ((t <= target) if rising else (target < t)):
                     break
                 i = order[ptr[g]]
-                if _spin(bits, i) == (0 if rising else 1) and (
-                    _neighbour_sum(i, bits, lat, offsets, adj, buf) == nvals[g]
-                ):
+                if _eligible(i, nvals[g], want, bits, nup, lat, offsets):
                     at = t if rising else np.nextafter(t, -np.inf)
                     if record and at != last:
                         if n_ev == ev_size.size:
-                            return FULL, k, u, n_up, n_ev
+                            return FULL, k, u, n_up, n_ev, tail
                         ev_input[n_ev] = at
                         ev_size[n_ev] = 0
                         n_ev += 1
                         last = at
                     u = at
-                    c = avalanche(
-                        i, rising, u, bits, fields, coupling, lat, offsets, adj, stack, buf, buf2
-                    )
+                    new_tail = avalanche(
+                        i, rising, u, bits, nup, fields, coupling, lat, offsets, adj, queue,
+                        tail, buf,
+                    )  # fmt: skip
+                    c = new_tail - tail
+                    tail = new_tail
                     n_up += c if rising else -c
                     if record:
                         ev_size[n_ev - 1] += c
-                _advance(fields, order, coupling, nvals, ptr, heads, g, rising)
+                _advance(fsorted, coupling, nvals, ptr, heads, g, rising)
             u = target
         out[k] = (2 * n_up - n) / n
-    return DONE, inputs.size, u, n_up, n_ev
+    return DONE, inputs.size, u, n_up, n_ev, tail
 
 
 @njit(cache=True)
 def next_trigger(
-    bits, u, rising, fields, order, coupling, nvals, lat, offsets, adj, max_degree
-):  # pragma: no cover - compiled
+    bits, nup, u, rising, fsorted, order, coupling, nvals, lat, offsets
+):  # pragma: no cover
     """The next switching input of the state ``bits`` relaxed at ``u``: rising, the least
     threshold of a down spin (``+inf`` if none); falling, the greatest threshold of an up spin
     (``-inf`` if none; the output jumps once the input falls below it)."""
     ng = nvals.size
     ptr = np.empty(ng, np.int64)
     heads = np.empty(ng)
-    buf = np.empty(max(max_degree, 1), np.int64)
-    _pointers(fields, order, coupling, nvals, u, rising, ptr, heads)
+    want = 0 if rising else 1
+    _pointers(fsorted, coupling, nvals, u, rising, ptr, heads)
     while True:
         g = _best(heads, rising)
         t = heads[g]
         if not math.isfinite(t):
             return t
-        i = order[ptr[g]]
-        if _spin(bits, i) == (0 if rising else 1) and (
-            _neighbour_sum(i, bits, lat, offsets, adj, buf) == nvals[g]
-        ):
+        if _eligible(order[ptr[g]], nvals[g], want, bits, nup, lat, offsets):
             return t
-        _advance(fields, order, coupling, nvals, ptr, heads, g, rising)
+        _advance(fsorted, coupling, nvals, ptr, heads, g, rising)
 
 
 @njit(cache=True)
@@ -281,7 +311,11 @@ def stable(bits, u, fields, coupling, lat, offsets, adj, max_degree):  # pragma:
     """Index of the first spin that is unstable at input ``u`` (``-1``: the state is stable)."""
     buf = np.empty(max(max_degree, 1), np.int64)
     for i in range(fields.size):
-        h = u + (fields[i] + coupling * _neighbour_sum(i, bits, lat, offsets, adj, buf))
+        deg = _neighbours(i, lat, offsets, adj, buf)
+        up = 0
+        for k in range(deg):
+            up += _spin(bits, buf[k])
+        h = u + (fields[i] + coupling * (2 * up - deg))
         if (h >= 0.0) != (_spin(bits, i) == 1):
             return i
     return -1

@@ -27,16 +27,21 @@ through :meth:`RandomFieldIsing.switching` by the relay engine's exact Python re
 The algorithm (sorted lists of thresholds, O(flips) per monotone sweep) is described in
 :mod:`hysteresis._rfim_kernels`.
 
-Memory: the operator holds the fields (8 bytes per spin), the sorted order of the fields
-(4 bytes) and, for a general graph, its compressed adjacency (8 bytes per spin and 8 per edge);
-a lattice's neighbours are computed. A state holds the spins as packed bits (1/8 byte per
-spin), the input and the number of up spins. A sweep borrows a stack of 4 bytes per spin.
+Memory: the operator holds the fields twice (in site order and sorted, 16 bytes per spin),
+their sorted order (4 bytes) and, for a general graph, its compressed adjacency (8 bytes per
+spin and 8 per edge); a lattice's neighbours are computed. A state holds the spins as packed
+bits (1/8 byte per spin), the input and the number of up spins. What a sweep needs besides is
+cached in the operator, not copied per state: a *workspace* (the spins of the last state it
+saw, their up-neighbour counts and a queue of flipped spins, 5.1 bytes per spin), rebuilt in
+O(N) only when a call starts from another state than the one the last call returned; a lock
+keeps it to one thread at a time. In all about 25 bytes per spin.
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
+import threading
 from dataclasses import dataclass, field
 from numbers import Integral
 from typing import Any
@@ -96,6 +101,19 @@ class RandomFieldIsingState:
     def nbytes(self) -> int:
         """Bytes of the spins (1/8 per spin)."""
         return int(self.bits.nbytes)
+
+
+class _Workspace:
+    """The operator's mutable copy of one state (see the module docstring): the spins, their
+    up-neighbour counts and the queue of flipped spins; ``state`` is the state it equals
+    (``None``: none, e.g. after an interrupted call)."""
+
+    def __init__(self, model: RandomFieldIsing) -> None:
+        n = model.n_spins
+        self.bits = np.zeros((n + 7) // 8, dtype=np.uint8)
+        self.nup = np.zeros(n, dtype=np.uint8 if model.max_degree < 256 else np.int32)
+        self.queue = np.empty(n, dtype=np.int32)
+        self.state: RandomFieldIsingState | None = None
 
 
 def _ferromagnetic(coupling: Any) -> float:
@@ -228,6 +246,7 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
         self._shape = shape
         # fields descending: along this order every threshold −(f_i + J·n) grows
         self._order = readonly_array(np.argsort(-self._fields, kind="stable"), np.int32)
+        self._fsorted = readonly_array(self._fields[self._order])
         self._max_degree = (
             2 * int(lat[0]) if lat[0] > 0 else int(np.max(np.diff(offsets), initial=0))
         )
@@ -235,6 +254,15 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
         for part in (self._fields, self._lat, self._offsets, self._adj, np.array([j])):
             h.update(np.ascontiguousarray(part).tobytes())
         self._fingerprint = int.from_bytes(h.digest(), "little")
+        self._workspace: _Workspace | None = None
+        self._lock = threading.Lock()
+
+    _transient_attributes = ("_workspace", "_lock")
+
+    def __setstate__(self, state: Any) -> None:
+        super().__setstate__(state)
+        self._workspace = None
+        self._lock = threading.Lock()
 
     # -- parameters -------------------------------------------------------------------------
     @property
@@ -269,9 +297,13 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
 
     @property
     def nbytes(self) -> int:
-        """Bytes the operator holds (fields, their sorted order, a graph's adjacency)."""
-        arrays = (self._fields, self._order, self._offsets, self._adj, self._lat, self._nvals)
-        return int(sum(a.nbytes for a in arrays))
+        """Bytes the operator holds: fields, sorted fields and order, a graph's adjacency and
+        the cached workspace (counted whether built yet or not)."""
+        arrays = (self._fields, self._fsorted, self._order, self._offsets, self._adj, self._lat,
+                  self._nvals)  # fmt: skip
+        n = self.n_spins
+        workspace = (n + 7) // 8 + n * (1 if self._max_degree < 256 else 4) + 4 * n
+        return int(sum(a.nbytes for a in arrays)) + workspace
 
     def __repr__(self) -> str:
         where = f"lattice {self._shape}" if self._shape else f"graph of {self.n_spins} spins"
@@ -302,10 +334,6 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
             )
         return state
 
-    def _new_state(self, bits: np.ndarray, u: float, n_up: int) -> RandomFieldIsingState:
-        bits.setflags(write=False)
-        return RandomFieldIsingState(bits, float(u), int(n_up), self._fingerprint)
-
     def spins(self, state: RandomFieldIsingState) -> np.ndarray:
         """The spins of ``state`` as an int8 array of ±1 (site order)."""
         state = self._check_state(state)
@@ -329,25 +357,45 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
             raise ValueError(
                 f"spins must be stable at input {u!r}: spin {bad} points against its local field"
             )
-        return self._new_state(bits, u, int(np.count_nonzero(s > 0)))
+        bits.setflags(write=False)
+        return RandomFieldIsingState(bits, u, int(np.count_nonzero(s > 0)), self._fingerprint)
 
     def _topology(self) -> tuple:
         return (self._fields, self._coupling, self._lat, self._offsets, self._adj,
                 self._max_degree)  # fmt: skip
 
-    def _sweep(self, inputs: np.ndarray, bits: np.ndarray, u: float, n_up: int, record: bool):
-        """Follow ``inputs`` from ``bits`` (modified in place) relaxed at ``u``: the outputs,
-        ``(u, n_up)`` at the end and, with ``record``, the avalanches (trigger inputs, sizes)."""
+    def _workspace_at(self, state: RandomFieldIsingState | None) -> _Workspace:
+        """The workspace holding ``state`` (``None``: all spins down at −∞); rebuilt in O(N)
+        unless it holds that very state object already. Call with the lock held."""
+        ws = self._workspace
+        if ws is None:
+            ws = self._workspace = _Workspace(self)
+        if state is None or ws.state is not state:
+            ws.state = None
+            if state is None:
+                ws.bits[:] = 0
+                ws.nup[:] = 0
+            else:
+                ws.bits[:] = state.bits
+                kern.count_up_neighbours(
+                    ws.bits, self._lat, self._offsets, self._adj, self._max_degree, ws.nup
+                )
+        return ws
+
+    def _sweep(self, ws: _Workspace, inputs: np.ndarray, u: float, n_up: int, record: bool):
+        """Follow ``inputs`` from the workspace's spins relaxed at ``u`` (modified in place):
+        the outputs, ``(u, n_up)`` at the end, the flips of the last input and, with
+        ``record``, the avalanches (trigger inputs, sizes)."""
         out = np.empty(inputs.size)
         cap = _EVENTS0 if record else 0
         ev_t, ev_s = np.empty(cap), np.empty(cap, dtype=np.int64)
         triggers, sizes = [], []
         k = 0
         while True:
-            status, k, u, n_up, n_ev = kern.sweep(
-                bits, n_up, u, inputs, k, self._fields, self._order, self._coupling,
-                self._nvals, self._lat, self._offsets, self._adj, self._max_degree, out, ev_t,
-                ev_s, record,
+            status, k, u, n_up, n_ev, flips = kern.sweep(
+                ws.bits, ws.nup, n_up, u, inputs, k, self._fields, self._fsorted, self._order,
+                self._coupling, self._nvals, self._lat, self._offsets, self._adj,
+                self._max_degree, ws.queue, out, ev_t, ev_s, record,
             )  # fmt: skip
             if record:
                 triggers.append(ev_t[:n_ev].copy())
@@ -359,16 +407,28 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
         events = None
         if record:
             events = (np.concatenate(triggers), np.concatenate(sizes))
-        return out, u, n_up, events
+        return out, u, n_up, flips, events
+
+    def _run(self, inputs: np.ndarray, state: RandomFieldIsingState | None, record: bool):
+        """Outputs, final state and (with ``record``) avalanches of ``inputs`` from ``state``
+        (``None``: all down at −∞); the workspace then holds the final state."""
+        with self._lock:
+            ws = self._workspace_at(state)
+            u, n_up = (-math.inf, 0) if state is None else (state.input, state.n_up)
+            ws.state = None  # modified from here on
+            out, x, n_up, _, events = self._sweep(ws, inputs, u, n_up, record)
+            bits = ws.bits.copy()
+            bits.setflags(write=False)
+            final = RandomFieldIsingState(bits, float(x), int(n_up), self._fingerprint)
+            ws.state = final
+        return out, final, events
 
     # -- the operator contract --------------------------------------------------------------
     def initial_state(self, u0: float) -> RandomFieldIsingState:
         """All spins down, relaxed at ``u0`` (the input rising from −∞: every avalanche with a
         trigger ``<= u0`` has happened)."""
         u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
-        bits = np.zeros((self.n_spins + 7) // 8, dtype=np.uint8)
-        _, u, n_up, _ = self._sweep(np.array([u0]), bits, -math.inf, 0, False)
-        return self._new_state(bits, u, n_up)
+        return self._run(np.array([u0]), None, False)[1]
 
     def output(self, state: RandomFieldIsingState) -> float:
         """``M = (1/N) Σ s_i = (2 n_up − N)/N``."""
@@ -380,14 +440,12 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
         self, inputs: Any, state: RandomFieldIsingState | None = None
     ) -> tuple[np.ndarray, RandomFieldIsingState]:
         """``M`` after each input, every avalanche relaxed at the input that triggers it (the
-        spins are copied once per call: ``N/8`` bytes)."""
+        new state's spins are copied once per call: ``N/8`` bytes)."""
         u = as_input_sequence(inputs)
         if state is None:
             state = self.initial_state(float(u[0]))
-        state = self._check_state(state)
-        bits = np.array(state.bits)
-        out, x, n_up, _ = self._sweep(u, bits, state.input, state.n_up, False)
-        return out, self._new_state(bits, x, n_up)
+        out, final, _ = self._run(u, self._check_state(state), False)
+        return out, final
 
     def avalanches(
         self, inputs: Any, state: RandomFieldIsingState | None = None
@@ -399,10 +457,8 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
         u = as_input_sequence(inputs)
         if state is None:
             state = self.initial_state(float(u[0]))
-        state = self._check_state(state)
-        bits = np.array(state.bits)
-        _, x, n_up, (triggers, sizes) = self._sweep(u, bits, state.input, state.n_up, True)
-        return triggers, sizes, self._new_state(bits, x, n_up)
+        _, final, (triggers, sizes) = self._run(u, self._check_state(state), True)
+        return triggers, sizes, final
 
     def avalanche_sizes(
         self, inputs: Any, state: RandomFieldIsingState | None = None
@@ -414,20 +470,29 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
     def switching(self, state: RandomFieldIsingState) -> Switching:
         """The next switching inputs: ``upper`` the least threshold ``−(f_i + J·n_i)`` of a
         down spin, ``lower`` the greatest of an up spin; each jump is the ΔM of the whole
-        avalanche there (relaxed on a copy of the spins, at ``upper`` and at the largest float
-        below ``lower``)."""
+        avalanche there (relaxed in the workspace at ``upper`` and at the largest float below
+        ``lower``, then undone: O(avalanche), no copy of the spins)."""
         state = self._check_state(state)
         u, n_up = state.input, state.n_up
-        args = (self._fields, self._order, self._coupling, self._nvals, self._lat,
-                self._offsets, self._adj, self._max_degree)  # fmt: skip
-        upper = float(kern.next_trigger(state.bits, u, True, *args))
-        lower = float(kern.next_trigger(state.bits, u, False, *args))
         m = self.output(state)
-        jumps = []
-        for target in (upper, math.nextafter(lower, -math.inf)):
-            if math.isfinite(target):
-                out, *_ = self._sweep(np.array([target]), np.array(state.bits), u, n_up, False)
+        with self._lock:
+            ws = self._workspace_at(state)
+            bounds = []
+            jumps = []
+            for rising in (True, False):
+                t = float(kern.next_trigger(
+                    ws.bits, ws.nup, u, rising, self._fsorted, self._order, self._coupling,
+                    self._nvals, self._lat, self._offsets,
+                ))  # fmt: skip
+                bounds.append(t)
+                target = t if rising else math.nextafter(t, -math.inf)
+                if not math.isfinite(target):
+                    jumps.append(0.0)
+                    continue
+                ws.state = None  # modified until undone
+                out, _, _, flips, _ = self._sweep(ws, np.array([target]), u, n_up, False)
+                kern.undo(ws.bits, ws.nup, ws.queue, flips, rising, self._lat, self._offsets,
+                          self._adj, self._max_degree)  # fmt: skip
+                ws.state = state
                 jumps.append(float(out[0]) - m)
-            else:
-                jumps.append(0.0)
-        return Switching(lower=lower, upper=upper, jump_down=jumps[1], jump_up=jumps[0])
+        return Switching(lower=bounds[1], upper=bounds[0], jump_down=jumps[1], jump_up=jumps[0])
