@@ -17,10 +17,8 @@ saltation ``δv += C·ΔM/v*·δq`` at each switch. Methods (``engine_options={"
   the weights are multiples of one unit, else compensated (Neumaier) sums;
 * ``"generic"`` — the Python reference path through ``switching(state)`` / ``apply``;
 * ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"`` for
-  an operator without a relay table (``has_relay_table`` false: a
-  :class:`~hysteresis.base.SwitchingHysteron` such as the random-field Ising lattice, whose
-  avalanches are single jumps ``C·ΔM`` at their trigger inputs with the saltation
-  ``C·ΔM/v*``; ``n_events`` then counts jumps, not units switched).
+  an operator without a relay table (a :class:`~hysteresis.base.SwitchingHysteron`: a random-field
+  Ising lattice's avalanche is one jump, one event, saltation ``C·ΔM/v*``).
 
 Two classes: :class:`RelayKernelEngine` (the compiled kernels, nested or heap) and
 :class:`RelayReferenceEngine` (the Python reference path). :class:`RelayEngine`, their common
@@ -127,12 +125,10 @@ class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
         if cls is RelayEngine:
             if method not in METHODS:
                 raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-            table = system.operator.has_relay_table
+            table, name = system.operator.has_relay_table, type(system.operator).__name__
             if not table and method in ("nested", "heap"):
                 raise ValueError(
-                    f"method {method!r} runs on a relay table and "
-                    f"{type(system.operator).__name__} has none (its units interact): use "
-                    "method 'auto' or 'generic'"
+                    f"method {method!r} needs a relay table; {name} has none: use auto"
                 )
             cls = RelayReferenceEngine if method == "generic" or not table else RelayKernelEngine
         return super().__new__(cls)
@@ -647,10 +643,7 @@ class RelayReferenceEngine(RelayEngine):
     def relay_outputs(self) -> np.ndarray:
         """Relay outputs now (order of the operator's relay table)."""
         if not self._op.has_relay_table:
-            raise TypeError(
-                f"{type(self._op).__name__} has no relay table (has_relay_table is false): read "
-                "its state from state().operator_state"
-            )
+            raise TypeError(f"{type(self._op).__name__} has no relay table: read state()")
         return self._op.relay_outputs(self._opstate)
 
     def _now(self) -> tuple[float, float, Any]:

@@ -176,7 +176,7 @@ def test_engine_choice_and_a_sum_with_a_lattice():
     assert system.engine_class.__name__ == "RelayEngine"
     assert isinstance(system.engine(method="generic"), RelayReferenceEngine)
     for method in ("nested", "heap"):
-        with pytest.raises(ValueError, match="RandomFieldIsing has none"):
+        with pytest.raises(ValueError, match="needs a relay table; RandomFieldIsing has none"):
             system.engine(method=method)
     with pytest.raises(TypeError, match="no relay table"):
         system.engine().relay_outputs()
