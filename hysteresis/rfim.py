@@ -175,7 +175,8 @@ def _lattice_shape(shape: Any) -> tuple[int, ...]:
 
 
 class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
-    """The zero-temperature random-field Ising model as a hysteresis operator (module docstring).
+    """The zero-temperature random-field Ising model as a hysteresis operator (module docstring):
+    output ``M = (1/N) Σ s_i``; a periodic hypercubic lattice is :meth:`lattice`.
 
     Parameters
     ----------
@@ -187,8 +188,6 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
     spin_coupling:
         The ferromagnetic coupling ``J >= 0`` (``coupling`` means the oscillator's C in this
         toolkit, as for :class:`~hysteresis.spin_dimers.SpinDimerEnsemble`).
-
-    A periodic hypercubic lattice is :meth:`lattice`. Output ``M = (1/N) Σ s_i``.
     """
 
     def __init__(self, fields: Any, edges: Any, spin_coupling: float) -> None:

@@ -343,3 +343,26 @@ def test_independent_spins_and_zero_coupling():
                   RandomFieldIsing(f, [[0, 1], [2, 3]], 0.0)):  # fmt: skip
         y, _ = model.apply([-3.0, -0.5, 0.0, 1.0, -1.5, 3.0])
         np.testing.assert_array_equal(y, [-1.0, 0.0, 0.5, 1.0, -0.5, 1.0])  # thresholds −f_i
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        RandomFieldIsing.lattice((16, 16, 16), 2.16, seed=81),  # near R_c: large avalanches
+        RandomFieldIsing.lattice((64, 64), 0.9, seed=82),
+        RandomFieldIsing(
+            np.random.default_rng(83).normal(0, 3.0, 2000),
+            random_graph(2000, 12000, np.random.default_rng(84)),  # degrees up to ~25
+            1.0,
+        ),
+    ],
+    ids=["cubic_critical", "square_large", "dense_graph"],
+)
+def test_long_histories_equal_the_brute_force(model):
+    """1500 reversals of every size near the 3-D critical disorder, on a large square lattice
+    and on a graph with degrees up to ~25 (more lists than a lattice has)."""
+    u = wandering_inputs(np.random.default_rng(85), 1500, scale=6.0)
+    y, state = model.apply(u)
+    y_ref, s_ref = brute_history(model, u)
+    np.testing.assert_array_equal(y, y_ref)
+    np.testing.assert_array_equal(model.spins(state), s_ref)
