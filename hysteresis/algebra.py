@@ -7,7 +7,10 @@ parts are, so it couples to the forced oscillator like any operator:
 * every part piecewise constant and every weight ``>= 0`` (relays, discrete Preisach models,
   spin dimers): a :class:`RelaySum`, a piecewise-constant operator whose relay table is the
   parts' tables concatenated with their weights scaled; the oscillator's compiled relay engine
-  integrates it as it integrates one Preisach model;
+  integrates it as it integrates one Preisach model; with a part that has no relay table
+  (``has_relay_table`` false: a random-field Ising lattice) a :class:`SwitchingSum`, known by
+  its next switching inputs (the parts' nearest, jumps added), which the relay engine's Python
+  reference path integrates;
 * anything else (a continuous part, or a relay-type part with a negative weight, which no relay
   table with weights ``>= 0`` holds): a :class:`BranchSum`, whose branch flow
   (:class:`~hysteresis.flow.BranchFlow`) is assembled from the parts': the output and its
@@ -40,7 +43,13 @@ from typing import Any
 import numpy as np
 
 from hysteresis._validation import as_input_sequence, direction_sign
-from hysteresis.base import ContinuousHysteron, Hysteron, PiecewiseConstantHysteron, Switching
+from hysteresis.base import (
+    ContinuousHysteron,
+    Hysteron,
+    PiecewiseConstantHysteron,
+    Switching,
+    SwitchingHysteron,
+)
 from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.inverse import InverseOperator
 from hysteresis.relay_table import RelayTable
@@ -48,7 +57,7 @@ from hysteresis.seam import check_state, checked_relay_outputs, checked_relay_ta
 from hysteresis.sum_flows import compiled_sum_flow, composed_fields, play_parts
 from hysteresis.sum_state import SumState
 
-__all__ = ["SumState", "WeightedSum", "RelaySum", "BranchSum", "weighted_sum"]
+__all__ = ["SumState", "WeightedSum", "RelaySum", "SwitchingSum", "BranchSum", "weighted_sum"]
 
 
 def _check_weight(weight: Any, name: str = "weight") -> float:
@@ -65,8 +74,8 @@ def weighted_sum(parts: Any, weights: Any) -> WeightedSum:
     """The operator ``Σ_k weights[k] · parts[k]`` (see the module docstring).
 
     Parts that are sums themselves are flattened (their weights multiplied). The result is a
-    :class:`RelaySum` when every part is piecewise constant with a weight ``>= 0``, else a
-    :class:`BranchSum`.
+    :class:`RelaySum` when every part is piecewise constant with a weight ``>= 0`` (a
+    :class:`SwitchingSum` if a part has no relay table), else a :class:`BranchSum`.
     """
     parts = list(parts)
     weights = list(weights)
@@ -90,7 +99,8 @@ def weighted_sum(parts: Any, weights: Any) -> WeightedSum:
             flat_parts.append(part)
             flat_weights.append(w)
     relay_type = all(p.piecewise_constant for p in flat_parts) and min(flat_weights) >= 0.0
-    cls = RelaySum if relay_type else BranchSum
+    tables = all(p.has_relay_table for p in flat_parts)
+    cls = (RelaySum if tables else SwitchingSum) if relay_type else BranchSum
     return cls(flat_parts, flat_weights)
 
 
@@ -225,7 +235,36 @@ class WeightedSum(Hysteron[SumState]):
         return total
 
 
-class RelaySum(WeightedSum, PiecewiseConstantHysteron):
+class SwitchingSum(WeightedSum, SwitchingHysteron):
+    """A sum of piecewise-constant operators with weights ``>= 0``, known by its next switching
+    inputs (a part without a relay table, such as a random-field Ising lattice, keeps the sum
+    off the relay kernels: the relay engine's Python reference path integrates it)."""
+
+    @property
+    def n_units(self) -> int:
+        """The parts' units together."""
+        return sum(int(p.n_units) for p in self._parts)
+
+    def switching(self, state: SumState) -> Switching:
+        """The nearest switch of any part; parts switching at the same input add their jumps."""
+        state = self._check_state(state)
+        upper, lower, jump_up, jump_down = math.inf, -math.inf, 0.0, 0.0
+        for w, p, s in zip(self._weights, self._parts, state, strict=True):
+            if w == 0.0:
+                continue
+            sw = p.switching(s)
+            if sw.upper < upper:
+                upper, jump_up = sw.upper, float(w) * sw.jump_up
+            elif sw.upper == upper and math.isfinite(upper):
+                jump_up += float(w) * sw.jump_up
+            if sw.lower > lower:
+                lower, jump_down = sw.lower, float(w) * sw.jump_down
+            elif sw.lower == lower and math.isfinite(lower):
+                jump_down += float(w) * sw.jump_down
+        return Switching(lower=lower, upper=upper, jump_down=jump_down, jump_up=jump_up)
+
+
+class RelaySum(SwitchingSum, PiecewiseConstantHysteron):
     """A sum of piecewise-constant operators with weights ``>= 0``: its relay table is the
     parts' tables concatenated (weights scaled), in the order of the parts."""
 
@@ -276,24 +315,6 @@ class RelaySum(WeightedSum, PiecewiseConstantHysteron):
             p.state_from_relay_outputs(y[bounds[k] : bounds[k + 1]], input)
             for k, p in enumerate(self._parts)
         )
-
-    def switching(self, state: SumState) -> Switching:
-        """The nearest switch of any part; parts switching at the same input add their jumps."""
-        state = self._check_state(state)
-        upper, lower, jump_up, jump_down = math.inf, -math.inf, 0.0, 0.0
-        for w, p, s in zip(self._weights, self._parts, state, strict=True):
-            if w == 0.0:
-                continue
-            sw = p.switching(s)
-            if sw.upper < upper:
-                upper, jump_up = sw.upper, float(w) * sw.jump_up
-            elif sw.upper == upper and math.isfinite(upper):
-                jump_up += float(w) * sw.jump_up
-            if sw.lower > lower:
-                lower, jump_down = sw.lower, float(w) * sw.jump_down
-            elif sw.lower == lower and math.isfinite(lower):
-                jump_down += float(w) * sw.jump_down
-        return Switching(lower=lower, upper=upper, jump_down=jump_down, jump_up=jump_up)
 
 
 class BranchSum(WeightedSum, ContinuousHysteron):

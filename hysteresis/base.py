@@ -8,10 +8,10 @@ memory lives in a separate immutable *state* object, so
 
 never mutates anything and the memory never grows with the length of the input.
 
-Two families exist, and the forced-oscillator engines (:func:`oscillators.engines.select_engine`)
-treat them differently. The contract is exactly what those engines use; its required methods
-are abstract, so a class that misses one cannot be instantiated (the ``TypeError`` names the
-method and what it must return).
+Two families exist (the piecewise-constant one in two kinds), and the forced-oscillator engines
+(:func:`oscillators.engines.select_engine`) treat them differently. The contract is exactly what
+those engines use; its required methods are abstract, so a class that misses one cannot be
+instantiated (the ``TypeError`` names the method and what it must return).
 
 * **Piecewise-constant** operators (``piecewise_constant = True``: ``Relay``, discrete
   ``PreisachModel``, ``SpinDimerEnsemble``): the output is constant between switching inputs.
@@ -24,6 +24,16 @@ method and what it must return).
   library's operators override them with faster versions. Between switches the coupled
   oscillator is linear with a constant force ``C*M``; at a switch it applies the saltation
   matrix with entry ``C*ΔM/v*`` (paper eq. ``salt_matrix``).
+
+  An operator whose units interact (the spins of a random-field Ising lattice, whose flips
+  come in avalanches) is piecewise constant but no table of independent relays:
+  :class:`SwitchingHysteron`, the base of ``PiecewiseConstantHysteron``, asks only for
+  ``initial_state``, ``apply``, ``output``, :meth:`~SwitchingHysteron.switching` (next
+  switching inputs and the output jumps there, an avalanche being one jump) and
+  :attr:`~SwitchingHysteron.n_units` (the switch budget's scale). The contract attribute
+  ``has_relay_table`` tells the two kinds apart; the oscillator's relay engine integrates an
+  operator without a table exactly through ``switching``/``apply`` (its Python reference
+  path, ``RelayEngine(method="generic")``).
 * **Continuous** operators (``PlayOperator``, ``GeneralizedPlay``, continuous ``PreisachModel``,
   ``PrandtlIshlinskii``): for a fixed direction of input motion the output follows a smooth
   monotone branch between breakpoints. Required: ``initial_state``, ``apply`` (the state
@@ -74,6 +84,7 @@ __all__ = [
     "Hysteron",
     "HysteronState",
     "PiecewiseConstantHysteron",
+    "SwitchingHysteron",
     "ContinuousHysteron",
     "StateT",
     "Switching",
@@ -110,6 +121,11 @@ _MUST_RETURN = {
     "relay_table": "a hysteresis.relay_table.RelayTable (thresholds and weights)",
     "relay_outputs": "an array of the relays' outputs +1/-1 in table order",
     "state_from_relay_outputs": "the state whose relays output outputs at that input",
+    "output": "the output in that state (a float)",
+    "switching": "a hysteresis.base.Switching (the next switching inputs below and above the "
+    "state's input and the output jumps there)",
+    "n_units": "the number of switching units (relays, spins), the scale of the engine's switch "
+    "budget",
 }
 
 
@@ -117,8 +133,12 @@ def _missing_methods_message(cls: type) -> str:
     """One sentence naming the required methods ``cls`` misses and what they must return."""
     parts = []
     for name in sorted(cls.__abstractmethods__):
-        params = list(inspect.signature(getattr(cls, name)).parameters)[1:]
         what = _MUST_RETURN.get(name, "what its docstring in hysteresis.base says")
+        member = getattr(cls, name)
+        if isinstance(member, property):
+            parts.append(f"the property {name} returning {what}")
+            continue
+        params = list(inspect.signature(member).parameters)[1:]
         parts.append(f"{name}({', '.join(params)}) returning {what}")
     needs = "; and ".join(parts)
     return (
@@ -199,6 +219,9 @@ class Hysteron(ABC, Generic[StateT]):
 
     #: True for operators whose output is constant between switching inputs.
     piecewise_constant: bool = False
+    #: True for piecewise-constant operators that hand over a table of independent relays
+    #: (``relay_table()``, the compiled relay kernels); False for every other operator.
+    has_relay_table: bool = False
 
     def __new__(cls, *args: Any, **kwargs: Any) -> Any:
         # Python's own error names the missing methods only; this one also says what they
@@ -287,7 +310,39 @@ def _new_instance(cls: type) -> Any:
     return cls.__new__(cls)
 
 
-class PiecewiseConstantHysteron(Hysteron[StateT]):
+class SwitchingHysteron(Hysteron[StateT]):
+    """Operator whose output is constant between switching inputs, known by where it switches.
+
+    The output jumps at switching inputs; the jumps need not be those of independent relays
+    (a random-field Ising lattice flips its spins in avalanches whose size depends on the
+    state). A new operator writes ``initial_state``, ``apply``, ``output``, :meth:`switching`
+    and :attr:`n_units`. The oscillator's relay engine integrates it exactly: between switches
+    the motion is linear with the force ``C·M``, at ``switching(state).upper`` (reached) or
+    below ``switching(state).lower`` the operator is advanced by ``apply`` and the tangent flow
+    gets the saltation ``C·ΔM/v*`` of the whole jump (its Python reference path: no relay
+    table, no compiled kernel). :class:`PiecewiseConstantHysteron`, the relay-table kind,
+    derives all of this from its relays.
+    """
+
+    piecewise_constant = True
+
+    @abstractmethod
+    def switching(self, state: StateT) -> Switching:
+        """Where the output jumps next seen from ``state`` and by how much
+        (:class:`Switching`): the output jumps by ``jump_up`` once the input reaches ``upper``
+        and by ``jump_down`` once it falls strictly below ``lower``, with
+        ``lower <= state.input < upper``; each jump is the whole change (every unit that
+        switches there, an avalanche included)."""
+
+    @property
+    @abstractmethod
+    def n_units(self) -> int:
+        """Number of switching units (relays, spins): the oscillator's switch budget per
+        ``advance`` call scales with it (at most one jump per unit and direction of a
+        monotone input sweep)."""
+
+
+class PiecewiseConstantHysteron(SwitchingHysteron[StateT]):
     """Operator whose output is constant between switching inputs (relay-type).
 
     A new operator writes the three abstract methods (its relays, and its state to and from
@@ -295,7 +350,12 @@ class PiecewiseConstantHysteron(Hysteron[StateT]):
     call: a library operator overrides it with a faster version of the same answer.
     """
 
-    piecewise_constant = True
+    has_relay_table = True
+
+    @property
+    def n_units(self) -> int:
+        """The number of relays of :meth:`relay_table`."""
+        return checked_relay_table(self).n_relays
 
     @property
     def min_slope(self) -> float:

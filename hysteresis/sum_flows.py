@@ -30,6 +30,8 @@ def play_parts(total: Any) -> list[tuple[int, Any]] | None:
     found: list[tuple[int, Any]] = []
     for k, p in enumerate(total.parts):
         if p.piecewise_constant:
+            if not p.has_relay_table:  # interacting units: no relays for the kernel
+                return None
             found.append((k, None))
             continue
         cp = p.compiled_play()

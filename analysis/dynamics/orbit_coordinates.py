@@ -76,6 +76,12 @@ class StateCoordinates:
         eng.start_tangent(False)
         self.labels: tuple[str, ...] = tuple(eng.tangent_space)
         memory = self.labels[2:]
+        if op.piecewise_constant and not op.has_relay_table:
+            raise ValueError(
+                f"periodic orbits of {type(op).__name__} are not computed yet: its memory "
+                "(interacting units, no relay table) has no relay configuration to compare "
+                "between the orbit's start and end"
+            )
         spec = None if op.piecewise_constant else op.compiled_flow()
         if op.piecewise_constant:
             self.kind = "relay"

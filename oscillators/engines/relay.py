@@ -17,7 +17,8 @@ saltation ``δv += C·ΔM/v*·δq`` at each switch. Methods (``engine_options={"
   the weights are multiples of one unit, else compensated (Neumaier) sums;
 * ``"generic"`` — the Python reference path through ``switching(state)`` / ``apply``;
 * ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"`` for
-  an operator that implements ``switching()``/``apply()`` but not the relay contract.
+  an operator without a relay table (a :class:`~hysteresis.base.SwitchingHysteron`: a random-field
+  Ising lattice's avalanche is one jump, one event, saltation ``C·ΔM/v*``).
 
 Two classes: :class:`RelayKernelEngine` (the compiled kernels, nested or heap) and
 :class:`RelayReferenceEngine` (the Python reference path). :class:`RelayEngine`, their common
@@ -96,8 +97,8 @@ class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
     """Event-driven engine for piecewise-constant operators (see the module docstring).
 
     ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or,
-    for ``method="generic"``, a :class:`RelayReferenceEngine` (every piecewise-constant
-    operator has a relay table: the contract makes it abstract).
+    for ``method="generic"`` and for an operator without a relay table
+    (``has_relay_table`` false), a :class:`RelayReferenceEngine`.
 
     Parameters
     ----------
@@ -117,13 +118,19 @@ class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
         """Refuse (ζ, Ω) within :data:`~oscillators.parameters.RESONANCE_LIMIT` of resonance,
         and an operator whose ``relay_table()`` is not a relay table."""
         check_closed_form(float(system.damping_ratio), float(system.frequency))
-        checked_relay_table(system.operator)
+        if system.operator.has_relay_table:
+            checked_relay_table(system.operator)
 
     def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **_: Any):
         if cls is RelayEngine:
             if method not in METHODS:
                 raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-            cls = RelayReferenceEngine if method == "generic" else RelayKernelEngine
+            table, name = system.operator.has_relay_table, type(system.operator).__name__
+            if not table and method in ("nested", "heap"):
+                raise ValueError(
+                    f"method {method!r} needs a relay table; {name} has none: use auto"
+                )
+            cls = RelayReferenceEngine if method == "generic" or not table else RelayKernelEngine
         return super().__new__(cls)
 
     def __init__(
@@ -479,7 +486,7 @@ class RelayReferenceEngine(RelayEngine):
         self._n_switches = 0
         self._switches: list[tuple[float, float, float, float]] = []
         self._integral = 0.0  # ∫M dt since the start
-        self._n_relays = int(self._op.relay_table().n_relays)  # for the switch budget
+        self._n_relays = int(self._op.n_units)  # for the switch budget
         self._prev_switch = (math.nan, 0.0)  # (threshold, jump) of the previous switch
         self._start_on_sliding_set(self._q, self._v)
 
@@ -638,6 +645,8 @@ class RelayReferenceEngine(RelayEngine):
 
     def relay_outputs(self) -> np.ndarray:
         """Relay outputs now (order of the operator's relay table)."""
+        if not self._op.has_relay_table:
+            raise TypeError(f"{type(self._op).__name__} has no relay table: read state()")
         return self._op.relay_outputs(self._opstate)
 
     def _now(self) -> tuple[float, float, Any]:

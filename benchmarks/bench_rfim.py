@@ -1,0 +1,230 @@
+"""Speed and memory of the random-field Ising model (hysteresis.rfim), alone and coupled.
+
+Figures, all measured in one run:
+
+* ``loop``: a full hysteresis loop (from all down at −∞ to +∞ and back: every spin flips twice)
+  of an ``L³`` periodic lattice (default L = 100, 10⁶ spins, R = 2.6, J = 1, seed 0) with
+  ``apply``, and with ``avalanches`` (every avalanche's trigger and size recorded): spin flips
+  per second (median of ``--repeats``), the number of avalanches, the build time, and memory
+  per spin (the operator's arrays with its workspace, a state, the growth of the process's peak
+  resident memory over the build and the loops, the kernels compiled before);
+* ``baseline``: the same loop on an ``Lb³`` lattice (default 20³) followed by a plain numpy
+  brute force — at each of ``--baseline-steps`` inputs of a sweep up and down, every unstable
+  spin flipped until none is left (the tests' reference) — against the kernel on that lattice
+  and inputs; ratios kernel/baseline on the small lattice and for the 10⁶-spin loop;
+* ``coupled``: the oscillator (ζ = 0.05, Ω = 1, C = ``--coupling``) coupled to the 10⁶-spin
+  lattice through the relay engine's Python reference path (no relay table: every avalanche
+  one switch), over ``--coupled-time`` time units after ``--coupled-transient``: spin flips
+  per second (``Σ|ΔM|·N/2``) and avalanches per second; next to the compiled relay kernel on
+  10⁶ spin dimers (``SpinDimerEnsemble.random``, p = 2, R = 1, J = 2, the paper's, nested
+  plan) over ``--dimer-time``: relay switches per second (a dimer's two spins flip as one
+  switch). The issue's target is a lattice at >= 1/3 of the kernel's switches per second.
+
+    python benchmarks/bench_rfim.py [--side 100] [--disorder 2.6] [--repeats 3]
+        [--baseline-side 20] [--baseline-steps 400] [--coupling 2.9] [--coupled-time 2]
+        [--dimer-time 60]
+
+The last line is one JSON object with every figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import statistics
+import time
+
+import numpy as np
+
+from hysteresis.rfim import RandomFieldIsing
+from hysteresis.spin_dimers import SpinDimerEnsemble
+from oscillators import ForcedOscillator
+
+ZETA, OMEGA = 0.05, 1.0
+#: an input beyond every threshold (|f| < 10 R for 10⁶ Gaussian fields, |J·n| <= 6)
+FAR = 1e3
+
+
+def peak_rss_mb() -> float:
+    """Peak resident memory of this process so far (Linux: ru_maxrss in KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def full_loop(model: RandomFieldIsing, repeats: int) -> dict:
+    """Flips per second of ``apply([+FAR, -FAR])`` from all down (2N flips), median of
+    ``repeats``, and of the same loop with every avalanche recorded."""
+    bottom = model.initial_state(-FAR)
+    model.apply([FAR, -FAR], bottom)  # compile
+    n = model.n_spins
+    plain, recorded = [], []
+    count = 0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        model.apply([FAR, -FAR], bottom)
+        plain.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        _, sizes, _ = model.avalanches([FAR, -FAR], bottom)
+        recorded.append(time.perf_counter() - t0)
+        assert int(sizes.sum()) == 2 * n
+        count = sizes.size
+    dt, dt_rec = statistics.median(plain), statistics.median(recorded)
+    return {
+        "loop_s": dt,
+        "flips_per_s": 2 * n / dt,
+        "flips_per_s_recorded": 2 * n / dt_rec,
+        "avalanches_per_loop": count,
+    }
+
+
+def brute_force_rate(model: RandomFieldIsing, inputs: np.ndarray) -> tuple[float, int]:
+    """(flips per second, flips) of plain numpy relaxation along ``inputs`` from all down."""
+    e, f, j = model.edges(), np.asarray(model.fields), model.spin_coupling
+    s = -np.ones(model.n_spins, dtype=np.int64)
+    flips = 0
+    t0 = time.perf_counter()
+    for u in inputs:
+        while True:
+            n = np.zeros(s.size, dtype=np.int64)
+            np.add.at(n, e[:, 0], s[e[:, 1]])
+            np.add.at(n, e[:, 1], s[e[:, 0]])
+            bad = ((u + (f + j * n)) >= 0.0) != (s > 0)
+            k = int(bad.sum())
+            if not k:
+                break
+            s[bad] = -s[bad]
+            flips += k
+    return flips / (time.perf_counter() - t0), flips
+
+
+def baseline(side: int, disorder: float, steps: int) -> dict:
+    """The brute force and the kernel on the same small lattice and input sweep."""
+    model = RandomFieldIsing.lattice((side,) * 3, disorder, seed=0)
+    half = np.linspace(-8.0, 8.0, steps // 2)
+    inputs = np.concatenate([[-FAR], half, half[::-1], [-FAR]])
+    rate_bf, flips = brute_force_rate(model, inputs)
+    model.apply(inputs)  # compile
+    t0 = time.perf_counter()
+    y, _ = model.apply(inputs)
+    dt = time.perf_counter() - t0
+    return {
+        "baseline_side": side,
+        "baseline_flips": flips,
+        "baseline_flips_per_s": rate_bf,
+        "kernel_small_flips_per_s": flips / dt,
+        "ratio_small": flips / dt / rate_bf,
+    }
+
+
+def coupled(model: RandomFieldIsing, c: float, transient: float, t_run: float) -> dict:
+    """Spin flips and avalanches per second of the coupled lattice (Python reference path)."""
+    eng = ForcedOscillator(model, c, ZETA, OMEGA).engine()
+    eng.advance(np.array([transient]))
+    n0 = eng.n_events
+    t0 = time.perf_counter()
+    eng.advance(np.array([transient + t_run]), record=True)
+    dt = time.perf_counter() - t0
+    jumps = eng.records()["switches"]["jump"]
+    flips = float(np.abs(jumps).sum()) * model.n_spins / 2
+    return {
+        "coupled_avalanches": eng.n_events - n0,
+        "coupled_flips": round(flips),
+        "coupled_s": dt,
+        "coupled_flips_per_s": flips / dt,
+        "coupled_avalanches_per_s": (eng.n_events - n0) / dt,
+    }
+
+
+def dimer_kernel(n_spins: int, c: float, t_run: float) -> dict:
+    """Relay switches per second of the compiled kernel on ``n_spins`` spin dimers."""
+    ens = SpinDimerEnsemble.random(n_spins, 2.0, 1.0, 2.0, seed=0)
+    eng = ForcedOscillator(ens, c, ZETA, OMEGA).engine()
+    eng.advance(np.array([1.0]))  # plan and compile
+    n0 = eng.n_events
+    t0 = time.perf_counter()
+    eng.advance(np.array([1.0 + t_run]))
+    dt = time.perf_counter() - t0
+    return {
+        "dimer_method": eng.method,
+        "dimer_switches": eng.n_events - n0,
+        "dimer_switches_per_s": (eng.n_events - n0) / dt,
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--side", type=int, default=100)
+    ap.add_argument("--disorder", type=float, default=2.6)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--baseline-side", type=int, default=20)
+    ap.add_argument("--baseline-steps", type=int, default=400)
+    ap.add_argument("--coupling", type=float, default=2.9)
+    ap.add_argument("--coupled-transient", type=float, default=0.5)
+    ap.add_argument("--coupled-time", type=float, default=2.0)
+    ap.add_argument("--dimer-time", type=float, default=60.0)
+    args = ap.parse_args()
+
+    full_loop(RandomFieldIsing.lattice((8, 8, 8), args.disorder, seed=0), 1)  # compile first
+    rss0 = peak_rss_mb()
+    t0 = time.perf_counter()
+    model = RandomFieldIsing.lattice((args.side,) * 3, args.disorder, seed=0)
+    build = time.perf_counter() - t0
+    n = model.n_spins
+    loop = full_loop(model, args.repeats)
+    state = model.initial_state(0.0)
+    memory = {
+        "operator_bytes_per_spin": model.nbytes / n,
+        "state_bytes_per_spin": state.nbytes / n,
+        "peak_rss_mb_delta_per_spin_bytes": (peak_rss_mb() - rss0) * 2**20 / n,
+    }
+    print(
+        f"lattice {args.side}³ = {n} spins, R = {args.disorder}: built in {build:.2f} s; full "
+        f"loop {loop['loop_s']:.3f} s = {loop['flips_per_s']:.3e} flips/s "
+        f"({loop['flips_per_s_recorded']:.3e} recording {loop['avalanches_per_loop']} "
+        f"avalanches); memory per spin: operator {memory['operator_bytes_per_spin']:.2f} B, "
+        f"state {memory['state_bytes_per_spin']:.3f} B, peak RSS growth "
+        f"{memory['peak_rss_mb_delta_per_spin_bytes']:.1f} B"
+    )
+    base = baseline(args.baseline_side, args.disorder, args.baseline_steps)
+    base["ratio_loop"] = loop["flips_per_s"] / base["baseline_flips_per_s"]
+    print(
+        f"baseline numpy brute force on {args.baseline_side}³: "
+        f"{base['baseline_flips_per_s']:.3e} flips/s; kernel there "
+        f"{base['kernel_small_flips_per_s']:.3e} (x{base['ratio_small']:.0f}); the 10⁶ loop "
+        f"x{base['ratio_loop']:.0f}"
+    )
+    cpl = coupled(model, args.coupling, args.coupled_transient, args.coupled_time)
+    print(
+        f"coupled (C = {args.coupling}, Python reference path): {cpl['coupled_avalanches']} "
+        f"avalanches, {cpl['coupled_flips']} flips in {cpl['coupled_s']:.2f} s = "
+        f"{cpl['coupled_flips_per_s']:.3e} flips/s, {cpl['coupled_avalanches_per_s']:.3e} "
+        "avalanches/s"
+    )
+    dim = dimer_kernel(n, args.coupling, args.dimer_time)
+    ratio = cpl["coupled_flips_per_s"] / dim["dimer_switches_per_s"]
+    print(
+        f"relay kernel ({dim['dimer_method']}) on {n} dimer spins: {dim['dimer_switches']} "
+        f"switches, {dim['dimer_switches_per_s']:.3e} switches/s; lattice flips/s over kernel "
+        f"switches/s = {ratio:.4f} (target >= 1/3)"
+    )
+    print(
+        json.dumps(
+            {
+                "spins": n,
+                "side": args.side,
+                "disorder": args.disorder,
+                "coupling": args.coupling,
+                "build_s": build,
+                **loop,
+                **memory,
+                **base,
+                **cpl,
+                **dim,
+                "coupled_over_kernel": ratio,
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()
