@@ -6,7 +6,14 @@ from hysteresis._version import __version__
 # fail early, naming the culprit, if an unrelated distribution also installs "hysteresis"
 _check_import_name("hysteresis")
 
-from hysteresis.algebra import BranchSum, RelaySum, SumState, WeightedSum, weighted_sum
+from hysteresis.algebra import (
+    BranchSum,
+    RelaySum,
+    SumState,
+    SwitchingSum,
+    WeightedSum,
+    weighted_sum,
+)
 from hysteresis.base import (
     Branch,
     ContinuousHysteron,
@@ -15,6 +22,7 @@ from hysteresis.base import (
     Linearization,
     PiecewiseConstantHysteron,
     Switching,
+    SwitchingHysteron,
 )
 from hysteresis.cascade import Cascade, CascadeState
 from hysteresis.flow import BranchFlow
@@ -29,10 +37,15 @@ from hysteresis.preisach import (
 )
 from hysteresis.relay import Relay, RelayState
 from hysteresis.relay_table import NestedPlan, RelayTable
+from hysteresis.rfim import RandomFieldIsing, RandomFieldIsingState
 from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
 from hysteresis.static_map import StaticMap, StaticMapState
 
 __all__ = [
+    "RandomFieldIsing",
+    "RandomFieldIsingState",
+    "SwitchingHysteron",
+    "SwitchingSum",
     "Cascade",
     "CascadeState",
     "InverseOperator",

@@ -20,6 +20,7 @@ from hysteresis import (
     PlayOperator,
     PrandtlIshlinskii,
     PreisachModel,
+    RandomFieldIsing,
     Relay,
     SpinDimerEnsemble,
     StaticMap,
@@ -66,6 +67,8 @@ def _operators() -> dict[str, Hysteron]:
             PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), StaticMap(np.tanh, _tanh_derivative)
         ),
         "inverse": InverseOperator(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5])),
+        "rfim": RandomFieldIsing.lattice((4, 4), disorder=1.5, seed=0),
+        "switching-sum": RandomFieldIsing.lattice((6,), disorder=1.0, seed=1) + Relay(1.0, 0.0),
     }
 
 
