@@ -16,9 +16,8 @@ saltation ``δv += C·ΔM/v*·δq`` at each switch. Methods (``engine_options={"
   switched relay); relays at one threshold switch together; ``M`` in integer weight units when
   the weights are multiples of one unit, else compensated (Neumaier) sums;
 * ``"generic"`` — the Python reference path through ``switching(state)`` / ``apply``;
-* ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"`` for
-  an operator without a relay table (a :class:`~hysteresis.base.SwitchingHysteron`: a random-field
-  Ising lattice's avalanche is one jump, one event, saltation ``C·ΔM/v*``).
+* ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"``
+  without a relay table (:class:`~hysteresis.base.SwitchingHysteron`: an RFIM avalanche).
 
 Two classes: :class:`RelayKernelEngine` (the compiled kernels, nested or heap) and
 :class:`RelayReferenceEngine` (the Python reference path). :class:`RelayEngine`, their common
@@ -96,9 +95,8 @@ def _switch_budget(n_relays: int, omega: float, span: float) -> int:
 class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
     """Event-driven engine for piecewise-constant operators (see the module docstring).
 
-    ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or,
-    for ``method="generic"`` and for an operator without a relay table
-    (``has_relay_table`` false), a :class:`RelayReferenceEngine`.
+    ``RelayEngine(system, state, method, taylor)`` returns a :class:`RelayKernelEngine` or, for
+    ``method="generic"`` and without a relay table, a :class:`RelayReferenceEngine`.
 
     Parameters
     ----------
@@ -125,11 +123,10 @@ class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
         if cls is RelayEngine:
             if method not in METHODS:
                 raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-            table, name = system.operator.has_relay_table, type(system.operator).__name__
+            table = system.operator.has_relay_table
             if not table and method in ("nested", "heap"):
-                raise ValueError(
-                    f"method {method!r} needs a relay table; {name} has none: use auto"
-                )
+                name = type(system.operator).__name__
+                raise ValueError(f"method {method!r} needs a relay table; {name} has none")
             cls = RelayReferenceEngine if method == "generic" or not table else RelayKernelEngine
         return super().__new__(cls)
 
@@ -644,9 +641,8 @@ class RelayReferenceEngine(RelayEngine):
                 y[1, :ntan] += sal * y[0, :ntan]
 
     def relay_outputs(self) -> np.ndarray:
-        """Relay outputs now (order of the operator's relay table)."""
-        if not self._op.has_relay_table:
-            raise TypeError(f"{type(self._op).__name__} has no relay table: read state()")
+        """Relay outputs now (order of the operator's relay table; an operator without one
+        raises ``AttributeError``: read :meth:`state`)."""
         return self._op.relay_outputs(self._opstate)
 
     def _now(self) -> tuple[float, float, Any]:
