@@ -41,7 +41,8 @@ The continuation then goes on from the first point of the new sequence. When no 
 old coordinates follows, the next piece is found past the event along the branch (after a fold
 the failing step's grazing is sought ahead, the sign of the tangent's λ component): first by
 Newton for the old period from the last orbit (it finds unstable pieces too; accepted when it
-continues the last orbit's ``(q, v)`` within :data:`CONTINUITY`), then — only for a stable
+continues the last orbit's ``(q, v)`` within
+:data:`~analysis.dynamics.branch_loops.CONTINUITY`), then — only for a stable
 orbit heading toward ``stop`` — by re-detecting the orbit (and period) the motion settles on
 with :func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit`. Past a fold or from an
 unstable orbit a transient would find another attractor, a jump to another branch: the
@@ -86,6 +87,7 @@ from analysis.dynamics.branch import (
     same_sequence,
     smooth_events,
 )
+from analysis.dynamics.branch_loops import loop_closed, within
 from analysis.dynamics.floquet import floquet_multipliers
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import (
@@ -97,6 +99,13 @@ from analysis.dynamics.periodic_orbits import (
 from analysis.dynamics.staircase_orbits import StaircaseChangedError
 from hysteresis._validation import finite_scalar, positive_integer, positive_scalar
 from oscillators import ForcedOscillator
+from oscillators.engines import (
+    DivergenceError,
+    GrazingError,
+    SlidingError,
+    StepBudgetError,
+    SwitchBudgetError,
+)
 
 __all__ = [
     "PARAMETERS",
@@ -121,13 +130,19 @@ PARAMETERS = {
 METHODS = ("auto", "natural", "pseudo-arclength")
 #: event kinds
 KINDS = ("fold", "period-doubling", "torus", "grazing")
+#: what ends a branch part-way with its points so far (the integration or the orbit's
+#: structure failed), as opposed to a bug, which propagates
+NUMERICAL_FAILURES = (
+    DivergenceError,
+    GrazingError,
+    StepBudgetError,
+    SwitchBudgetError,
+    SlidingError,
+    StaircaseChangedError,
+    np.linalg.LinAlgError,
+)
 #: most accepted branch points of one call
 MAX_POINTS = 100_000
-#: largest relative jump in ``(q, v)`` by which a piece re-found by Newton past a grazing may
-#: continue the last orbit: a branch is continuous through a border collision and moves by
-#: ``|dx/dλ|·Δλ`` with ``Δλ <= 1000`` bracket widths (``<= 1e-5`` at the default
-#: ``locate_tolerance``), within 1e-3 for slopes up to 100; another orbit lies O(1) away
-CONTINUITY = 1e-3
 
 
 @dataclass(frozen=True)
@@ -232,6 +247,12 @@ def continue_orbit(
         orbit has a partner, ``−x(t + T/2)``. A branch that reaches an event of the partner of
         an event found before (the same kind, parameter and multipliers) has closed its loop
         up to the symmetry and stops there, ``stop_reason`` saying so.
+
+    A numerical failure part-way (:data:`NUMERICAL_FAILURES`: the integration diverged, a
+    switch grazed with the tangent flow on, the staircase changed, ...) ends the branch there:
+    the points and events computed so far are returned, ``stop_reason`` naming the failure.
+    A start or stop the system refuses, or an orbit that is not periodic at ``start`` (found
+    at another parameter value), raises ``ValueError`` before anything is computed.
     """
     start = finite_scalar(start, "start")
     stop = finite_scalar(stop, "stop")
@@ -293,109 +314,113 @@ def continue_orbit(
     except StaircaseChangedError:
         tangent, reason = None, _no_tangent(parameter, first)
     d = coords.dimension
-    while tangent is not None or not arclength:
-        a = points[-1]
-        if len(points) >= max_points:
-            reason = "max_points"
-            break
-        if direction * (stop - a.parameter) <= locate_tolerance:
-            break
-        z_a = np.append(a.point, a.parameter)
-        new = None
-        while ds >= min_step:
-            if arclength:
-                # the step in the parameter is about ds (ten times ds along the branch near a
-                # fold, where the tangent is nearly orthogonal to the parameter axis)
-                z_pred = z_a + ds / max(abs(tangent[d]), 0.1) * tangent
-                c = tangent
-            else:
-                lam = a.parameter + direction * ds
-                slope = _secant(points)
-                z_pred = np.append(a.point + slope * (lam - a.parameter), lam)
-                c = np.append(np.zeros(d), 1.0)
-            if direction * (z_pred[d] - stop) > 0.0:  # land on stop exactly
-                lam = stop
-                z_pred = np.append(a.point + _secant(points) * (lam - a.parameter), lam)
-                got = prob.correct(z_pred, np.append(np.zeros(d), 1.0), a.state, False)
-            else:
-                got = prob.correct(z_pred, c, a.state, arclength)
-            # a corrected point farther than 10 steps in the parameter, or beyond stop, jumped
-            # to another branch: a failed step
-            if got is not None and (
-                abs(got[0][d] - a.parameter) <= 10.0 * ds + locate_tolerance
-                and direction * (got[0][d] - stop) <= locate_tolerance
-            ):
-                z, image = got
-                new = prob.point(z[:d], float(z[d]), image)
+    try:  # a failure part-way returns the branch computed so far, with the reason
+        while tangent is not None or not arclength:
+            a = points[-1]
+            if len(points) >= max_points:
+                reason = "max_points"
                 break
-            ds *= 0.5
-        if new is None or not same_sequence(a.sequence, new.sequence):
-            # the old sequence ends between a and new (or the next failing step: along the
-            # branch, which runs away from stop after a fold)
-            ahead = math.copysign(1.0, tangent[d]) if arclength else direction
-            trial = new.parameter if new is not None else a.parameter + ahead * 2 * min_step
-            event, last = locate_grazing(prob, a, trial, locate_tolerance)
-            if event is None and new is None:
-                reason = "corrector failed (no grazing found)"
+            if direction * (stop - a.parameter) <= locate_tolerance:
                 break
-            if event is not None:
-                events.append(replace(event, index=len(points)))
-                if last is not a:
-                    points.append(last)
-            resumed, redetected = new, new is None
-            if resumed is None:
-                # a transient finds attractors only: it may stand in for the branch where the
-                # branch heads toward stop from a stable orbit; past a fold, or from an
-                # unstable orbit, only Newton can follow it (else it would jump)
-                settle = ahead == direction and last.max_abs_multiplier < 1.0
-                resumed = _redetect(
-                    prob, event, ahead, settle, stop, step, transient, max_period, tolerance
-                )
+            z_a = np.append(a.point, a.parameter)
+            new = None
+            while ds >= min_step:
+                if arclength:
+                    # the step in the parameter is about ds (ten times ds along the branch near a
+                    # fold, where the tangent is nearly orthogonal to the parameter axis)
+                    z_pred = z_a + ds / max(abs(tangent[d]), 0.1) * tangent
+                    c = tangent
+                else:
+                    lam = a.parameter + direction * ds
+                    slope = _secant(points)
+                    z_pred = np.append(a.point + slope * (lam - a.parameter), lam)
+                    c = np.append(np.zeros(d), 1.0)
+                if direction * (z_pred[d] - stop) > 0.0:  # land on stop exactly
+                    lam = stop
+                    z_pred = np.append(a.point + _secant(points) * (lam - a.parameter), lam)
+                    got = prob.correct(z_pred, np.append(np.zeros(d), 1.0), a.state, False)
+                else:
+                    got = prob.correct(z_pred, c, a.state, arclength)
+                # a corrected point farther than 10 steps in the parameter, or beyond stop, jumped
+                # to another branch: a failed step
+                if got is not None and (
+                    abs(got[0][d] - a.parameter) <= 10.0 * ds + locate_tolerance
+                    and direction * (got[0][d] - stop) <= locate_tolerance
+                ):
+                    z, image = got
+                    new = prob.point(z[:d], float(z[d]), image)
+                    break
+                ds *= 0.5
+            if new is None or not same_sequence(a.sequence, new.sequence):
+                # the old sequence ends between a and new (or the next failing step: along the
+                # branch, which runs away from stop after a fold)
+                ahead = math.copysign(1.0, tangent[d]) if arclength else direction
+                trial = new.parameter if new is not None else a.parameter + ahead * 2 * min_step
+                event, last = locate_grazing(prob, a, trial, locate_tolerance)
+                if event is None and new is None:
+                    reason = "corrector failed (no grazing found)"
+                    break
+                if event is not None:
+                    events.append(replace(event, index=len(points)))
+                    if last is not a:
+                        points.append(last)
+                resumed, redetected = new, new is None
                 if resumed is None:
-                    reason = (
-                        "no periodic orbit after the grazing"
-                        if settle
-                        else "no orbit continues the branch past the grazing (Newton from the "
-                        "last orbit failed; it runs "
-                        + ("against stop after a fold" if ahead != direction else "unstable")
-                        + ", where a transient would find another attractor)"
+                    # a transient finds attractors only: it may stand in for the branch where the
+                    # branch heads toward stop from a stable orbit; past a fold, or from an
+                    # unstable orbit, only Newton can follow it (else it would jump)
+                    settle = ahead == direction and last.max_abs_multiplier < 1.0
+                    resumed = _redetect(
+                        prob, event, ahead, settle, stop, step, transient, max_period, tolerance
                     )
+                    if resumed is None:
+                        reason = (
+                            "no periodic orbit after the grazing"
+                            if settle
+                            else "no orbit continues the branch past the grazing (Newton from the "
+                            "last orbit failed; it runs "
+                            + ("against stop after a fold" if ahead != direction else "unstable")
+                            + ", where a transient would find another attractor)"
+                        )
+                        break
+                    prob = resumed[0]
+                    resumed = resumed[1]
+                    d = prob.coords.dimension  # a re-detected staircase may have another length
+                closed = loop_closed(prob, [event], events[:-1], locate_tolerance, symmetric)
+                if closed:
+                    reason = closed.format("a grazing")
                     break
-                prob = resumed[0]
-                resumed = resumed[1]
-                d = prob.coords.dimension  # a re-detected staircase may have another length
-            closed = _loop_closed(prob, [event], events[:-1], locate_tolerance, symmetric)
-            if closed:
-                reason = closed.format("a grazing")
+                points.append(resumed)
+                # the new piece continues the old one's orientation (after a fold: backwards); a
+                # re-detected orbit (another problem) starts toward stop
+                if arclength:
+                    try:
+                        tangent = prob.tangent(resumed, None if redetected else tangent, ahead)
+                    except StaircaseChangedError:
+                        reason = _no_tangent(parameter, resumed)
+                        break
+                ds = step
+                continue
+            try:
+                new_tangent = prob.tangent(new, tangent, direction) if arclength else None
+            except StaircaseChangedError:
+                reason = _no_tangent(parameter, new)
                 break
-            points.append(resumed)
-            # the new piece continues the old one's orientation (after a fold: backwards); a
-            # re-detected orbit (another problem) starts toward stop
-            if arclength:
-                try:
-                    tangent = prob.tangent(resumed, None if redetected else tangent, ahead)
-                except StaircaseChangedError:
-                    reason = _no_tangent(parameter, resumed)
-                    break
-            ds = step
-            continue
-        try:
-            new_tangent = prob.tangent(new, tangent, direction) if arclength else None
-        except StaircaseChangedError:
-            reason = _no_tangent(parameter, new)
-            break
-        found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
-        closed = _loop_closed(prob, found, events, locate_tolerance, symmetric)
-        events.extend(replace(e, index=len(points)) for e in found)
-        points.append(new)
-        if closed:  # the branch came round to a fold (or other event) already found
-            reason = closed.format("an event")
-            break
-        tangent = new_tangent
-        ds = min(step, ds * 1.5)
-        if direction * (new.parameter - start) < -span:
-            reason = "turned back past start"
-            break
+            found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
+            closed = loop_closed(prob, found, events, locate_tolerance, symmetric)
+            events.extend(replace(e, index=len(points)) for e in found)
+            points.append(new)
+            if closed:  # the branch came round to a fold (or other event) already found
+                reason = closed.format("an event")
+                break
+            tangent = new_tangent
+            ds = min(step, ds * 1.5)
+            if direction * (new.parameter - start) < -span:
+                reason = "turned back past start"
+                break
+    except NUMERICAL_FAILURES as exc:
+        where = points[-1].parameter
+        reason = f"failed after {parameter} = {where:.10g}: {type(exc).__name__}: {exc}"
     return Continuation(
         parameter=PARAMETERS[parameter],
         method=method,
@@ -422,83 +447,6 @@ def _orbit_coordinates(system: Any, orbit: PeriodicOrbit, engine_options: dict |
     return coords
 
 
-def _within(d: np.ndarray, x: np.ndarray) -> bool:
-    """``|d|_∞ <= CONTINUITY·max(1, |x|_∞)``: ``d`` is a continuation-sized move at ``x``."""
-    return float(np.max(np.abs(d))) <= CONTINUITY * max(1.0, float(np.max(np.abs(x))))
-
-
-def _comparable(a: ContinuationEvent, b: ContinuationEvent, tol: float) -> bool:
-    """The same kind, period and coordinates (a staircase of another length is another
-    family), both located (brackets within ``10·tol``), at the same parameter to ten bracket
-    widths (at least ``10·tol``: a fold's bracket in λ can be far narrower than its location
-    error)."""
-    if a.kind != b.kind or a.period != b.period:
-        return False
-    if a.point is not None and b.point is not None and a.point.point.size != b.point.point.size:
-        return False
-    width = max(a.bracket[1] - a.bracket[0], b.bracket[1] - b.bracket[0])
-    if width > 10.0 * tol:
-        return False  # not located (its corrector failed): it cannot close a loop
-    return abs(a.parameter - b.parameter) <= 10.0 * max(width, tol)
-
-
-def _same_event(a: ContinuationEvent, b: ContinuationEvent, tol: float) -> bool:
-    """:func:`_comparable` and at the same orbit (``(q, v)`` within :data:`CONTINUITY`): a
-    branch followed continuously keeps its section point, so a genuine return meets it again
-    (two events at one λ on two sheets are not a loop)."""
-    if not _comparable(a, b, tol):
-        return False
-    return (
-        a.point is None
-        or b.point is None
-        or _within(a.point.point[:2] - b.point.point[:2], a.point.point)
-    )
-
-
-def _mirror(prob: BranchProblem, a: ContinuationEvent, b: ContinuationEvent, tol: float) -> bool:
-    """``b`` is the event of ``a``'s symmetric partner: :func:`_comparable`, the same
-    multipliers (to 1e-6), and ``b``'s orbit point is ``−x(t + T/2)`` of ``a``'s orbit, for one
-    of its ``k`` half-period points (all coordinates, to :data:`CONTINUITY`)."""
-    if a.point is None or b.point is None or not _comparable(a, b, tol):
-        return False
-    mu_a, mu_b = np.sort(np.abs(a.multipliers)), np.sort(np.abs(b.multipliers))
-    if np.max(np.abs(mu_a - mu_b), initial=0.0) > 1e-6:
-        return False
-    system = prob.system(a.point.parameter)
-    eng = system.engine(a.point.state, **(prob.eo or {}))
-    x = b.point.point
-    for j in range(a.period):
-        eng.advance(np.array([(j + 0.5) * system.period]))
-        try:
-            image = -StateCoordinates(system, eng.state(), prob.eo).vector(eng.state())
-        except ValueError:  # another number of memory coordinates there
-            continue
-        if image.size == x.size and _within(image - x, x):
-            return True
-    return False
-
-
-def _loop_closed(
-    prob: BranchProblem,
-    new: list[ContinuationEvent | None],
-    found: list[ContinuationEvent],
-    tol: float,
-    symmetric: bool,
-) -> str | None:
-    """The stop reason (``{}`` for the event's name) if one of the ``new`` events is one
-    already ``found`` (:func:`_same_event`) or, for a ``symmetric`` system, its partner's
-    (:func:`_mirror`); else ``None``."""
-    new = [b for b in new if b is not None]
-    if any(_same_event(a, b, tol) for b in new for a in found):
-        return "the branch returned to {} already found (a closed loop)"
-    if symmetric and any(_mirror(prob, a, b, tol) for b in new for a in found):
-        return (
-            "the branch reached the symmetric partner of an event already found (a closed loop "
-            "up to x -> -x with a half-period shift)"
-        )
-    return None
-
-
 def _secant(points: list[BranchPoint]) -> np.ndarray:
     """dx/dλ from the last two points of the same period and coordinates (zero if none: a
     re-detected staircase may have another length)."""
@@ -521,7 +469,8 @@ def _redetect(prob, event, side, settle, stop, step, transient, max_period, tole
     (:func:`~analysis.dynamics.periodic_orbits.refine_periodic_orbit`, which finds unstable
     orbits as well) at 10, 100 and 1000 bracket widths past the event, accepted when one of its
     section points continues the last orbit's ``(q, v)`` within
-    :data:`CONTINUITY` ``·max(1, |x|_∞)`` (a branch is continuous through a border collision).
+    :data:`~analysis.dynamics.branch_loops.CONTINUITY` ``·max(1, |x|_∞)`` (a branch is
+    continuous through a border collision).
     Then, only if ``settle`` (a stable orbit heading toward ``stop``), the orbit the motion
     settles on (:func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit`: an attractor,
     maybe of another period, as in the period-adding cascade) at ``10·bracket``, ``step``,
@@ -547,7 +496,7 @@ def _redetect(prob, event, side, settle, stop, step, transient, max_period, tole
             )
         except FAILURES:
             continue
-        if any(_within(p - last.point[:2], last.point) for p in orbit.points[:, :2]):
+        if any(within(p - last.point[:2], last.point) for p in orbit.points[:, :2]):
             return _resume(prob, system, orbit, lam)
     if not settle:
         return None

@@ -185,3 +185,28 @@ def test_an_orbit_found_at_another_parameter_is_not_relabelled():
     orbit = find_periodic_orbit(system)
     with pytest.raises(ValueError, match=r"not a periodic orbit of the system at start = 9.4"):
         continue_orbit(system, orbit, 9.4, 9.0)
+
+
+def test_a_failure_part_way_returns_the_branch_so_far(monkeypatch):
+    """An integration that fails after a few branch points (a stand-in divergence raised by
+    the fourth orbit shot of a point): the branch computed so far comes back, its stop reason
+    naming the failure."""
+    from analysis.dynamics import branch as branch_module
+    from oscillators.engines import DivergenceError
+
+    original = branch_module.BranchProblem.point
+    calls = {"n": 0}
+
+    def failing_point(self, *args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] > 3:
+            raise DivergenceError("stand-in failure")
+        return original(self, *args, **kwargs)
+
+    system = _dimer_pair(9.5)
+    orbit = find_periodic_orbit(system)
+    monkeypatch.setattr(branch_module.BranchProblem, "point", failing_point)
+    branch = continue_orbit(system, orbit, 9.5, 9.45, method="natural")
+    assert branch.stop_reason.startswith("failed after coupling = 9.")
+    assert "DivergenceError: stand-in failure" in branch.stop_reason
+    assert len(branch.points) == 3
