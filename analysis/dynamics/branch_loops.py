@@ -1,6 +1,7 @@
 """When a continued branch has closed its loop: an event found again, or (odd operators) its
-symmetric partner's, at the same orbit — the stop rule of :func:`~analysis.dynamics.continuation.
-continue_orbit` — and the continuity test it and the re-detection past a grazing share.
+symmetric partner's, at the same orbit — the stop rule of
+:func:`~analysis.dynamics.continuation.continue_orbit` — and the continuity test it and the
+re-detection past a grazing share.
 """
 
 from __future__ import annotations

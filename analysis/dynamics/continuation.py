@@ -248,6 +248,8 @@ def continue_orbit(
         an event found before (the same kind, parameter and multipliers) has closed its loop
         up to the symmetry and stops there, ``stop_reason`` saying so.
 
+    Notes
+    -----
     A numerical failure part-way (:data:`NUMERICAL_FAILURES`: the integration diverged, a
     switch grazed with the tangent flow on, the staircase changed, ...) ends the branch there:
     the points and events computed so far are returned, ``stop_reason`` naming the failure.
