@@ -36,7 +36,14 @@ import numpy as np
 #: off-diagonal masses vanish exactly, gives 1.2 ε E_max; constant data exactly 0)
 MASS_ROUNDOFF_ULPS = 6.0
 
-__all__ = ["PreisachIdentification"]
+#: the FORC peak and the profiles skip nodes with ``B_c < RIDGE_EXCLUSION_STEPS`` grid steps:
+#: the reversible ridge at ``B_c = 0`` and the nodes beside it, whose smoothing windows are
+#: one-sided (or reach the extension ``E = 0``), are not the sample's coercivity peak. PmagPy's
+#: FORC code excludes the same three field steps (on its conventional example the VARIFORC
+#: peak moves from the region's edge to the coercivity peak)
+RIDGE_EXCLUSION_STEPS = 3
+
+__all__ = ["PreisachIdentification", "RIDGE_EXCLUSION_STEPS"]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -163,13 +170,37 @@ class PreisachIdentification:
         bound = MASS_ROUNDOFF_ULPS * np.finfo(np.float64).eps * e_max
         return bool(np.all(np.abs(self.cell_mass) <= bound))
 
-    def density_peak(self) -> tuple[float, float, float]:
+    @property
+    def grid_step(self) -> float:
+        """The grid step ``Δ``: :attr:`step` on a regular grid, else the median α spacing."""
+        if self.step is not None:
+            return float(self.step)
+        return float(np.median(np.diff(self.alpha)))
+
+    def ridge_excluded(self) -> np.ndarray:
+        """Mask of the nodes, shape of :attr:`everett`: ``True`` where
+        ``B_c = (α − β)/2 < RIDGE_EXCLUSION_STEPS · Δ`` (:data:`RIDGE_EXCLUSION_STEPS`), the
+        ``B_c ≈ 0`` ridge that the peak search and the profiles skip."""
+        bc = 0.5 * (self.alpha[:, None] - self.beta[None, :])
+        # a node on the boundary (B_c = 3Δ exactly, up to the grid's round-off) is kept
+        return bc < RIDGE_EXCLUSION_STEPS * self.grid_step * (1.0 - 1e-9)
+
+    def peak_search_nodes(self, values: np.ndarray) -> np.ndarray:
+        """Mask of the nodes the peak is sought among: ``values`` finite and not
+        :meth:`ridge_excluded`, or every finite node if none lies beyond the ridge."""
+        finite = np.isfinite(values)
+        away = finite & ~self.ridge_excluded()
+        return away if away.any() else finite
+
+    def density_peak(self, exclude_ridge: bool = True) -> tuple[float, float, float]:
         """``(r, s, μ_αβ)`` at the node of the largest smoothed density.
 
         In FORC terms ``(B_c, B_u, ρ)`` (``ρ = μ_αβ``, Pike's −½ ∂²M/∂H_r∂H). Needs an
         identification made with ``smoothing``; NaN nodes (outside the measured region) are
-        ignored. A density exactly 0 (:attr:`density_is_zero`) has no peak: NaN three times,
-        with a warning.
+        ignored. With ``exclude_ridge`` (default) the nodes with ``B_c`` below
+        :data:`RIDGE_EXCLUSION_STEPS` grid steps are skipped (:meth:`ridge_excluded`), as
+        PmagPy does, unless no evaluated node lies beyond them. A density exactly 0
+        (:attr:`density_is_zero`) has no peak: NaN three times, with a warning.
         """
         if self.density_alpha_beta is None:
             raise ValueError("density_peak needs an identification made with smoothing")
@@ -183,6 +214,8 @@ class PreisachIdentification:
         dens = self.density_alpha_beta
         if not np.any(np.isfinite(dens)):
             raise ValueError("the smoothed density is NaN everywhere (too few data points)")
+        if exclude_ridge:
+            dens = np.where(self.peak_search_nodes(dens), dens, np.nan)
         i, j = np.unravel_index(np.nanargmax(dens), dens.shape)
         a, b = float(self.alpha[i]), float(self.beta[j])
         return 0.5 * (a - b), 0.5 * (a + b), float(dens[i, j])
