@@ -157,9 +157,25 @@ class PreisachIdentification:
     @property
     def irreversible_mass(self) -> float:
         """Mass of the cells off the diagonal (``α_lo >= β_hi``): :attr:`total_mass` without
-        :attr:`reversible_mass`. For FORC data in moment units this is the irreversible moment
-        ``∬ ρ dH_r dH`` (half the irreversible magnetisation change)."""
+        :attr:`reversible_mass`, the exact sum of the mixed differences of the Everett table.
+
+        Definition and coordinates: ``∬ μ_αβ dα dβ = ∬ ρ dH dH_r`` over the measured field
+        pairs ``(H, H_r)`` off the ``B_c = 0`` ridge; for a relay system the weight of the
+        relays with ``B_c > 0`` (1 for a saturated ``[−1, 1]`` operator without a reversible
+        part), for FORC data half the irreversible moment change ``M(H_r, H) − M(H_r, H_r)``
+        summed over the cells (``E = ΔM/2``). In the diagram's own coordinates
+        ``B_c = (H − H_r)/2``, ``B_u = (H + H_r)/2`` the Jacobian is
+        ``|∂(B_c, B_u)/∂(H, H_r)| = ½``, so ``∬ ρ dB_c dB_u`` — the integral of the plotted
+        diagram over its area, the convention of FORC software integrating ρ(B_c, B_u) such as
+        PmagPy's — is half of this: :attr:`irreversible_mass_bcbu`."""
         return float(self.cell_mass[~self._diagonal_cells()].sum())
+
+    @property
+    def irreversible_mass_bcbu(self) -> float:
+        """``∬ ρ dB_c dB_u = ½`` :attr:`irreversible_mass` (the Jacobian ``dB_c dB_u =
+        ½ dH dH_r``): the irreversible mass in the FORC diagram's coordinates (PmagPy's
+        convention)."""
+        return 0.5 * self.irreversible_mass
 
     @property
     def density_is_zero(self) -> bool:
