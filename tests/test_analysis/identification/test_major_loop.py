@@ -47,3 +47,12 @@ def test_coarse_remanence_unreachable_and_errors():
         )
     with pytest.raises(TypeError, match="ReversalCurves"):
         hysteresis_parameters([1, 2])
+
+
+def test_summary_rounding():
+    from analysis.cli._identify_batch import rounded
+
+    assert rounded(4.358170557778533e-06, 2.7e-08) == 4.358e-06  # to the se's 2nd digit
+    assert rounded(30.012749999, decimals=2) == 30.01
+    assert rounded(1.8609108659932419e-07) == 1.861e-07
+    assert rounded("") == "" and rounded(None) is None
