@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -38,7 +39,12 @@ SUMMARY_COLUMNS = (
     "rho_unit",
     "irreversible_mass",
     "irreversible_mass_se",
+    "irreversible_mass_bcbu",
     "mass_unit",
+    "ms",
+    "mrs",
+    "bc_mT",
+    "bcr_mT",
     "smoothing",
     "warnings",
 )
@@ -86,6 +92,27 @@ def forc_input_files(paths: list[Path]) -> tuple[list[Path], list[tuple[Path, st
     return files, skipped
 
 
+#: the summary's precision: a value with a standard error to the decade of the error's second
+#: significant digit, a field in mT to :data:`FIELD_DECIMALS` decimals (0.01 mT, below any
+#: instrument's field step), any other number to :data:`SIGNIFICANT_DIGITS` digits
+FIELD_DECIMALS = 2
+SIGNIFICANT_DIGITS = 4
+
+
+def rounded(value: Any, se: Any = None, decimals: int | None = None) -> Any:
+    """``value`` rounded for the summary (:data:`FIELD_DECIMALS`, :data:`SIGNIFICANT_DIGITS`);
+    blanks and non-numbers pass through."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        return value
+    if decimals is not None:
+        return round(float(value), decimals)
+    if isinstance(se, (int, float)) and math.isfinite(se) and se > 0:
+        return round(float(value), 1 - int(math.floor(math.log10(se))))
+    if value == 0:
+        return 0.0
+    return float(f"{value:.{SIGNIFICANT_DIGITS}g}")
+
+
 def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
     def pair(key: str, k: int) -> Any:
         v = rep.get(key)
@@ -110,23 +137,33 @@ def _summary_row(rep: dict[str, Any]) -> dict[str, Any]:
         warnings.append("incomplete measurement")
     if rep.get("error"):
         warnings.append(rep["error"])
+    hyst = rep.get("hysteresis") or {}
+    mass_se, rho_se = rep.get("irreversible_mass_se"), rep.get("peak_rho_se")
+    f = FIELD_DECIMALS
     return {
         "file": rep["input"],
         "status": rep["status"],
         "format": rep.get("format", ""),
         "n_curves": rep.get("n_curves", ""),
-        "peak_bc_mT": rep.get("peak_bc_mT", ""),
-        "peak_bu_mT": rep.get("peak_bu_mT", ""),
-        "peak_bc_lo_mT": pair("peak_bc_interval_mT", 0),
-        "peak_bc_hi_mT": pair("peak_bc_interval_mT", 1),
-        "peak_bu_lo_mT": pair("peak_bu_interval_mT", 0),
-        "peak_bu_hi_mT": pair("peak_bu_interval_mT", 1),
-        "peak_rho": rep.get("peak_rho", ""),
-        "peak_rho_se": rep.get("peak_rho_se", ""),
+        "peak_bc_mT": rounded(rep.get("peak_bc_mT", ""), decimals=f),
+        "peak_bu_mT": rounded(rep.get("peak_bu_mT", ""), decimals=f),
+        "peak_bc_lo_mT": rounded(pair("peak_bc_interval_mT", 0), decimals=f),
+        "peak_bc_hi_mT": rounded(pair("peak_bc_interval_mT", 1), decimals=f),
+        "peak_bu_lo_mT": rounded(pair("peak_bu_interval_mT", 0), decimals=f),
+        "peak_bu_hi_mT": rounded(pair("peak_bu_interval_mT", 1), decimals=f),
+        "peak_rho": rounded(rep.get("peak_rho", ""), rho_se),
+        "peak_rho_se": rounded(rho_se if rho_se is not None else ""),
         "rho_unit": rep.get("rho_unit", ""),
-        "irreversible_mass": rep.get("irreversible_mass", ""),
-        "irreversible_mass_se": rep.get("irreversible_mass_se", ""),
+        "irreversible_mass": rounded(rep.get("irreversible_mass", ""), mass_se),
+        "irreversible_mass_se": rounded(mass_se if mass_se is not None else ""),
+        "irreversible_mass_bcbu": rounded(
+            rep.get("irreversible_mass_bcbu", ""), None if mass_se is None else 0.5 * mass_se
+        ),
         "mass_unit": rep.get("mass_unit", ""),
+        "ms": rounded(hyst.get("ms", "")),
+        "mrs": rounded(hyst.get("mrs", "")),
+        "bc_mT": rounded(hyst.get("bc_mT", ""), decimals=f),
+        "bcr_mT": rounded(hyst.get("bcr_mT", ""), decimals=f),
         "smoothing": smoothing,
         "warnings": "; ".join(warnings),
     }

@@ -1,6 +1,7 @@
 """``hyst identify --input``: the words of ``--smoothing`` (a factor or two, ``variforc``,
 ``auto``), the unit of ρ, the uncertainty and colour options; and what the command says about
-the data: the kind of curves (in-field or remanence FORC) and the warnings about them. Errors
+the data: the kind of curves (in-field or remanence FORC), the warnings about them and the major
+loop's hysteresis parameters. Errors
 are one line naming the option (:class:`~analysis.cli._parsing.CliError`); what the options
 mean together is decided by :class:`~analysis.identification.request.IdentifyRequest`.
 """
@@ -14,6 +15,7 @@ import numpy as np
 
 from analysis.cli._parsing import CliError, int_at_least, positive_float
 from analysis.identification.curves import KIND_NAMES
+from analysis.identification.major_loop import hysteresis_parameters
 from analysis.identification.normalization import normalized_unit
 from analysis.identification.plots import colormap_name
 
@@ -24,6 +26,7 @@ __all__ = [
     "diagram_name",
     "data_warnings",
     "add_uncertainty_options",
+    "hysteresis_report",
 ]
 
 
@@ -134,3 +137,21 @@ def add_uncertainty_options(g: Any) -> None:
         help="colour map of the FORC diagram: any matplotlib map name (default: FORCinel-like, "
         "white at rho = 0, blue below, green-yellow-red above)",
     )
+
+
+def hysteresis_report(curves: Any, amount: float) -> dict[str, Any]:
+    """The major loop's parameters (moments divided by the normalisation ``amount``; fields
+    in mT; ``None`` where the data do not allow them)."""
+    hp = hysteresis_parameters(curves)
+    out = hp.as_dict()
+    for key in ("ms", "mrs"):
+        if out[key] is not None:
+            out[key] /= amount
+    return {
+        "ms": out["ms"],
+        "mrs": out["mrs"],
+        "bc_mT": out["bc"],
+        "bcr_mT": out["bcr"],
+        "mrs_ms": out["mrs_ms"],
+        "bcr_bc": out["bcr_bc"],
+    }

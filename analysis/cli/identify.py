@@ -38,6 +38,7 @@ from analysis.cli._identify_measured import (
     curve_kind,
     data_warnings,
     diagram_name,
+    hysteresis_report,
     rho_unit,
     smoothing_words,
 )
@@ -86,6 +87,7 @@ from analysis.identification.request import (
     VARIFORC_PARAMETERS,
     IdentifyRequest,
 )
+from analysis.identification.result import RIDGE_EXCLUSION_STEPS
 from analysis.identification.smoothing import WINDOWS
 from analysis.identification.uncertainty import summarize_uncertainty
 from analysis.identification.variforc import VariforcParameters
@@ -554,6 +556,13 @@ def _identify_measured(
         "peak_rho": rho * rho_factor,
         "rho_unit": rho_name,
         "irreversible_mass": ident.irreversible_mass / amount,
+        "irreversible_mass_definition": "sum of cell masses off the B_c = 0 ridge = "
+        "∬ρ dB dB_r (Preisach α-β plane)",
+        "irreversible_mass_bcbu": ident.irreversible_mass_bcbu / amount,
+        "irreversible_mass_bcbu_definition": "∬ρ dB_c dB_u over the FORC diagram = half of "
+        "irreversible_mass (Jacobian 1/2; PmagPy's convention)",
+        "peak_excludes_bc_below_mT": RIDGE_EXCLUSION_STEPS * step,
+        "hysteresis": hysteresis_report(data.curves, amount),
         "reversible_mass": ident.reversible_mass / amount,
         "mass_unit": normalized_unit(data.moment_unit, request.normalize),
         "normalize": request.normalize,

@@ -16,7 +16,9 @@ The lattice noise ``σ`` is the one the standard errors were computed with: ``se
 for any values), so ``σ = median(se/g)`` over the peak's region. The replicates' peaks are
 sought in the region whose density is within ``5·sqrt(se_peak² + se²)`` of the peak's
 (a node farther below cannot overtake the peak in a replicate but with probability
-``< 3·10⁻⁷``); only its nodes are re-smoothed, which keeps 200 replicates to seconds.
+``< 3·10⁻⁷``), without the nodes of the ``B_c ≈ 0`` ridge that
+:meth:`~analysis.identification.result.PreisachIdentification.density_peak` skips; only its
+nodes are re-smoothed, which keeps 200 replicates to seconds.
 
 What the interval covers: the peak of the smoothed density's expectation ``E ρ̂`` (the
 smoothing's own bias, e.g. a peak pulled by a broad window, is not in it). Coverage measured on
@@ -144,6 +146,8 @@ def peak_bootstrap(
     ok = np.isfinite(rho) & np.isfinite(se)
     if not ok.any():
         raise ValueError("the smoothed density is NaN everywhere (too few data points)")
+    # the peak and the replicates' peaks beyond the B_c ≈ 0 ridge, as density_peak
+    ok = ident.peak_search_nodes(np.where(ok, rho, np.nan))
     k = int(np.nanargmax(np.where(ok, rho, np.nan)))
     top, top_se = rho.flat[k], se.flat[k]
     region = ok & (top - rho <= REGION_Z * np.sqrt(top_se**2 + se**2))

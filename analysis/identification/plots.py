@@ -38,6 +38,7 @@ __all__ = [
     "plot_forc_diagram",
     "figure_forc",
     "forc_profiles",
+    "forc_limits",
     "forcinel_cmap",
     "colormap_name",
     "FORCINEL",
@@ -63,8 +64,13 @@ FORCINEL_NEGATIVE = 0.19
 #: a negative minimum beyond this fraction of the maximum counts as meaningful (diverging map)
 NEGATIVE_FRACTION = 0.05
 CONTOUR_FRACTIONS = (0.1, 0.3, 0.5, 0.7, 0.9)
-#: ``abs(ρ)/se`` below this is not significant at 95 % (hatched on the FORC diagram)
+#: ``abs(ρ)/se`` below this is not significant at 95 % (the contour line on the FORC diagram)
 SIGNIFICANT = 1.959963984540054
+#: the FORC diagram's default crop: the nodes with ``|ρ|`` at least this fraction of the peak
+#: (FORCinel's white band: below it the colour scale is white anyway) ...
+CROP_FRACTION = 0.025
+#: ... widened by this fraction of their span on every cropped side
+CROP_MARGIN = 0.1
 
 
 def plot_density_rs(
@@ -254,6 +260,36 @@ def figure_single_density(
     return paths
 
 
+def forc_limits(
+    ident: PreisachIdentification, fraction: float = CROP_FRACTION
+) -> tuple[float, float, float]:
+    """``(B_c max, B_u min, B_u max)`` of the cropped diagram: the nodes where
+    ``|ρ| >= fraction ×`` the peak (:data:`CROP_FRACTION`: FORCinel's white band, drawn white
+    anyway) and, with standard errors, significant at 95 %, widened by :data:`CROP_MARGIN` of
+    their span and kept within the evaluated nodes.
+    ``fraction=0`` gives the evaluated region's extent."""
+    if ident.density_alpha_beta is None:
+        raise ValueError("a FORC diagram needs an identification made with smoothing")
+    aa, bb = np.meshgrid(ident.alpha, ident.beta, indexing="ij")
+    rr, ss = 0.5 * (aa - bb), 0.5 * (aa + bb)
+    rho = np.where(bb <= aa, ident.density_alpha_beta, np.nan)
+    finite = np.isfinite(rho)
+    if not finite.any():
+        raise ValueError("the smoothed density is NaN everywhere (too few data points)")
+    full = (float(rr[finite].max()), float(ss[finite].min()), float(ss[finite].max()))
+    top = float(np.nanmax(np.abs(rho)))
+    shown = finite & (np.abs(np.nan_to_num(rho)) >= fraction * top)
+    if ident.density_se is not None:  # and significant at 95 %, where standard errors exist
+        with np.errstate(divide="ignore", invalid="ignore"):
+            shown &= np.nan_to_num(np.abs(rho) / ident.density_se) > SIGNIFICANT
+    if fraction <= 0.0 or top == 0.0 or shown.sum() < 2:
+        return full
+    r_hi = float(rr[shown].max())
+    s_lo, s_hi = float(ss[shown].min()), float(ss[shown].max())
+    pad_r, pad_s = CROP_MARGIN * r_hi, CROP_MARGIN * (s_hi - s_lo)
+    return min(r_hi + pad_r, full[0]), max(s_lo - pad_s, full[1]), min(s_hi + pad_s, full[2])
+
+
 def plot_forc_diagram(
     ax: Any,
     ident: PreisachIdentification,
@@ -263,12 +299,14 @@ def plot_forc_diagram(
     contours: Sequence[float] = CONTOUR_FRACTIONS,
     scale: float = 1.0,
     significance: bool = True,
+    limits: tuple[float, float, float] | None = None,
 ) -> Any:
     """FORC diagram of the smoothed density: ``ρ`` over ``(B_c, B_u)``; returns the mappable.
 
     The colours show ``scale · ρ``. With ``significance`` and an identification made with
-    ``uncertainty=True``, the nodes where ``|ρ| <= 1.96 se`` (not significant at 95 %) are
-    hatched and bounded by a dashed grey line.
+    ``uncertainty=True``, the 95 % significance level ``|ρ| = 1.96 se`` is drawn as one
+    contour line (dark grey, dashed; labelled in the legend): the density inside it is
+    significant, outside it is noise (FORCinel and FORCsensei draw it the same way).
 
     ``cmap="forcinel"`` (default): :func:`forcinel_cmap`, white at ``ρ = 0``
     (``TwoSlopeNorm``), the negative range down to the lowest value or 19 % of the peak,
@@ -276,9 +314,12 @@ def plot_forc_diagram(
     larger extreme) when at least 1 % of the nodes lie below −5 % of the peak (a negative
     region, e.g. of interacting single-domain particles), else from 0 (noise-level negatives
     drawn as 0). NaN nodes (outside the measured region) stay blank. Contours at
-    ``contours`` × the peak. ``B_c`` is horizontal, ``B_u`` vertical.
+    ``contours`` × the peak. ``B_c`` is horizontal, ``B_u`` vertical; the axes show
+    ``limits = (B_c max, B_u min, B_u max)``, by default :func:`forc_limits` (cropped to the
+    density above 2.5 % of the peak).
     """
     from matplotlib.colors import Normalize, TwoSlopeNorm
+    from matplotlib.lines import Line2D
 
     if ident.density_alpha_beta is None:
         raise ValueError("a FORC diagram needs an identification made with smoothing")
@@ -314,16 +355,17 @@ def plot_forc_diagram(
             sig = np.abs(ident.density_alpha_beta) / ident.density_se
         sig = np.ma.masked_invalid(np.where(finite, sig, np.nan))
         if sig.count() and sig.min() < SIGNIFICANT < sig.max():
-            ax.contourf(rr, ss, sig, levels=[0.0, SIGNIFICANT], colors="none", hatches=["...."])
-            ax.contour(
-                rr, ss, sig, levels=[SIGNIFICANT], colors="0.4", linewidths=0.6, linestyles="--"
-            )
-    ax.set_xlim(0.0, float(rr[finite].max()))
-    ax.set_ylim(float(ss[finite].min()), float(ss[finite].max()))
+            style = {"colors": "0.25", "linewidths": 0.9, "linestyles": "--"}
+            ax.contour(rr, ss, sig, levels=[SIGNIFICANT], **style)
+            line = Line2D([], [], color="0.25", lw=0.9, ls="--")
+            ax.legend([line], ["95 % significance"], loc="upper right", fontsize=7)
+    bc_max, bu_lo, bu_hi = limits if limits is not None else forc_limits(ident)
+    ax.set_xlim(0.0, bc_max)
+    ax.set_ylim(bu_lo, bu_hi)
     ax.set_aspect("equal")
     unit = f" ({field_unit})" if field_unit else ""
-    ax.set_xlabel(f"B_c = (B − B_r)/2{unit}")
-    ax.set_ylabel(f"B_u = (B + B_r)/2{unit}")
+    ax.set_xlabel(f"$B_c$ = ($B$ − $B_r$)/2{unit}")
+    ax.set_ylabel(f"$B_u$ = ($B$ + $B_r$)/2{unit}")
     return mappable
 
 
@@ -365,18 +407,27 @@ def colormap_name(text: str) -> str:
 def forc_profiles(ident: PreisachIdentification) -> tuple[np.ndarray, ...]:
     """Marginal profiles of the smoothed ``ρ``: ``(B_c, ∫ρ dB_u, B_u, ∫ρ dB_c)`` on the
     lattice (regular grids: the nodes with ``i − j = d`` lie at ``B_c = dΔ/2``, ``Δ`` apart
-    in ``B_u``; NaN nodes count as 0)."""
+    in ``B_u``; NaN nodes count as 0).
+
+    Both skip the ``B_c ≈ 0`` ridge as the peak search does
+    (:data:`~analysis.identification.result.RIDGE_EXCLUSION_STEPS` grid steps,
+    :meth:`~analysis.identification.result.PreisachIdentification.ridge_excluded`): the
+    ``B_c`` profile starts there, the ``B_u`` profile integrates ``B_c`` from there."""
     step = ident._require_regular()
     rho = np.nan_to_num(ident.density_alpha_beta, nan=0.0)
     i, j = np.indices(rho.shape)
     d = (i - j).ravel()
-    keep = d >= 0
-    bc_prof = np.bincount(d[keep], weights=rho.ravel()[keep]) * step
+    keep = (d >= 0) & ~ident.ridge_excluded().ravel()
+    bc_prof = np.bincount(d[keep], weights=rho.ravel()[keep], minlength=rho.shape[0]) * step
     k = (i + j).ravel()
-    bu_prof = np.bincount(k[keep], weights=rho.ravel()[keep]) * 0.5 * step
+    bu_prof = np.bincount(k[keep], weights=rho.ravel()[keep], minlength=2 * rho.shape[0] - 1)
+    # nodes with one i + j lie Δ apart in B_c (i − j steps by 2): the weight is Δ, as along a
+    # diagonal i − j (Δ apart in B_u)
+    bu_prof = bu_prof * step
     bc = np.arange(bc_prof.size) * 0.5 * step
+    first = int(np.min(d[keep])) if keep.any() else 0
     bu = ident.alpha[0] + np.arange(bu_prof.size) * 0.5 * step
-    return bc, bc_prof, bu, bu_prof
+    return bc[first:], bc_prof[first:], bu, bu_prof
 
 
 def figure_forc(
@@ -389,15 +440,20 @@ def figure_forc(
     cmap: str = FORCINEL,
     rho_factor: float = 1.0,
     rho_unit: str | None = None,
+    limits: tuple[float, float, float] | None = None,
 ) -> list[Path]:
     """FORC diagram of measured data: ``stem.png`` (150 dpi), ``stem.pdf`` (vector axes,
     raster mesh) and ``stem.npz`` (nodes, Everett table, cell masses, smoothed ρ, its standard
     error and significance when computed).
 
     ``ρ`` is drawn times ``rho_factor`` in ``rho_unit`` (default: moment per field unit²),
-    with the power of ten in the colour-bar label (no offset text to collide with the title);
-    on a regular lattice the ``B_c`` and ``B_u`` marginal profiles are drawn beside it."""
+    with the power of ten in the colour-bar label (no offset text to collide with the title).
+    On a regular lattice the profiles are drawn on the diagram's own axes: ``∫ρ dB_u`` below
+    it over the same ``B_c`` range, ``∫ρ dB_c`` to its right over the same ``B_u`` range
+    (both without the ``B_c ≈ 0`` ridge, :func:`forc_profiles`). ``limits``: ``(B_c max,
+    B_u min, B_u max)`` of the axes, default :func:`forc_limits` (the cropped diagram)."""
     import matplotlib.pyplot as plt
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -407,35 +463,45 @@ def figure_forc(
     top = float(np.nanmax(np.abs(ident.density_alpha_beta))) * abs(rho_factor)
     power = int(np.floor(np.log10(top))) if top > 0 and np.isfinite(top) else 0
     scale = rho_factor / 10.0**power
+    limits = limits if limits is not None else forc_limits(ident)
     profiles = ident.is_regular
-    if profiles:
-        fig = plt.figure(figsize=(9.6, 5.2))
-        grid = fig.add_gridspec(2, 2, width_ratios=(3, 1.3), height_ratios=(1, 1))
-        ax = fig.add_subplot(grid[:, 0])
-        ax_c, ax_u = fig.add_subplot(grid[0, 1]), fig.add_subplot(grid[1, 1])
-    else:
-        fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    mappable = plot_forc_diagram(ax, ident, field_unit, moment_unit, cmap, scale=scale)
+    fig, ax = plt.subplots(figsize=(7.6, 6.4) if profiles else (6.4, 4.8))
+    mappable = plot_forc_diagram(
+        ax, ident, field_unit, moment_unit, cmap, scale=scale, limits=limits
+    )
+    divider = make_axes_locatable(ax)
     exp = f"$10^{{{power}}}$ " if power else ""
-    bar = fig.colorbar(mappable, ax=ax, label=f"ρ = −½ ∂²M/∂B_r∂B ({exp}{unit});  μ_rs = 2ρ")
+    if profiles:
+        ax_u = divider.append_axes("right", size="28%", pad=0.12, sharey=ax)
+        ax_c = divider.append_axes("bottom", size="28%", pad=0.12, sharex=ax)
+    cax = divider.append_axes("right", size="4%", pad=0.35 if profiles else 0.15)
+    bar = fig.colorbar(mappable, cax=cax, label=f"$\\rho$ ({exp}{unit})")
     bar.ax.set_yscale("linear")  # a TwoSlopeNorm bar in proportion to ρ, not half and half
     if profiles:
         # rho_factor converts field unit⁻²; a profile has one field power less
         bc, pc, bu, pu = forc_profiles(ident)
         pfac = np.sqrt(abs(rho_factor))
         punit = f"{mu}/T" if rho_unit and rho_unit.endswith("/T²") else f"{mu}/{fu}"
-        ax_c.plot(bc, pc * pfac, "k-", lw=1)
-        ax_c.set_xlabel(f"B_c ({fu})")
-        ax_c.set_title(f"∫ρ dB_u ({punit})", fontsize=8)
-        ax_u.plot(bu, pu * pfac, "k-", lw=1)
-        ax_u.set_xlabel(f"B_u ({fu})")
-        ax_u.set_title(f"∫ρ dB_c ({punit})", fontsize=8)
+        pc, pu = pc * pfac, pu * pfac
+        ptop = max(float(np.max(np.abs(pc), initial=0.0)), float(np.max(np.abs(pu), initial=0.0)))
+        ppow = int(np.floor(np.log10(ptop))) if ptop > 0 and np.isfinite(ptop) else 0
+        pexp = f"$10^{{{ppow}}}$ " if ppow else ""  # the power in the label, as the bar's
+        ax_c.plot(bc, pc / 10.0**ppow, "k-", lw=1)
+        ax_c.set_xlabel(ax.get_xlabel())
+        ax_c.set_ylabel(f"$\\int\\rho\\,\\mathrm{{d}}B_u$\n({pexp}{punit})", fontsize=8)
+        ax_u.plot(pu / 10.0**ppow, bu, "k-", lw=1)
+        ax_u.set_xlabel(f"$\\int\\rho\\,\\mathrm{{d}}B_c$\n({pexp}{punit})", fontsize=8)
+        ax.tick_params(labelbottom=False)
+        ax.set_xlabel("")
+        ax_u.tick_params(labelleft=False)
+        ax_c.set_xlim(0.0, limits[0])  # the diagram's axes (shared), restated after plotting
+        ax_u.set_ylim(limits[1], limits[2])
+        ax_c.axhline(0.0, color="0.6", lw=0.5)
+        ax_u.axvline(0.0, color="0.6", lw=0.5)
         for a in (ax_c, ax_u):
             a.tick_params(labelsize=7)
-            a.yaxis.get_offset_text().set_fontsize(7)
     if title:
         fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
     paths = [out_dir / f"{stem}.png", out_dir / f"{stem}.pdf", out_dir / f"{stem}.npz"]
     fig.savefig(paths[0], dpi=150, bbox_inches="tight")
     fig.savefig(paths[1], dpi=150, bbox_inches="tight")

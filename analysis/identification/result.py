@@ -36,7 +36,14 @@ import numpy as np
 #: off-diagonal masses vanish exactly, gives 1.2 ε E_max; constant data exactly 0)
 MASS_ROUNDOFF_ULPS = 6.0
 
-__all__ = ["PreisachIdentification"]
+#: the FORC peak and the profiles skip nodes with ``B_c < RIDGE_EXCLUSION_STEPS`` grid steps:
+#: the reversible ridge at ``B_c = 0`` and the nodes beside it, whose smoothing windows are
+#: one-sided (or reach the extension ``E = 0``), are not the sample's coercivity peak. PmagPy's
+#: FORC code excludes the same three field steps (on its conventional example the VARIFORC
+#: peak moves from the region's edge to the coercivity peak)
+RIDGE_EXCLUSION_STEPS = 3
+
+__all__ = ["PreisachIdentification", "RIDGE_EXCLUSION_STEPS"]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -150,9 +157,25 @@ class PreisachIdentification:
     @property
     def irreversible_mass(self) -> float:
         """Mass of the cells off the diagonal (``α_lo >= β_hi``): :attr:`total_mass` without
-        :attr:`reversible_mass`. For FORC data in moment units this is the irreversible moment
-        ``∬ ρ dH_r dH`` (half the irreversible magnetisation change)."""
+        :attr:`reversible_mass`, the exact sum of the mixed differences of the Everett table.
+
+        Definition and coordinates: ``∬ μ_αβ dα dβ = ∬ ρ dH dH_r`` over the measured field
+        pairs ``(H, H_r)`` off the ``B_c = 0`` ridge; for a relay system the weight of the
+        relays with ``B_c > 0`` (1 for a saturated ``[−1, 1]`` operator without a reversible
+        part), for FORC data half the irreversible moment change ``M(H_r, H) − M(H_r, H_r)``
+        summed over the cells (``E = ΔM/2``). In the diagram's own coordinates
+        ``B_c = (H − H_r)/2``, ``B_u = (H + H_r)/2`` the Jacobian is
+        ``|∂(B_c, B_u)/∂(H, H_r)| = ½``, so ``∬ ρ dB_c dB_u`` — the integral of the plotted
+        diagram over its area, the convention of FORC software integrating ρ(B_c, B_u) such as
+        PmagPy's — is half of this: :attr:`irreversible_mass_bcbu`."""
         return float(self.cell_mass[~self._diagonal_cells()].sum())
+
+    @property
+    def irreversible_mass_bcbu(self) -> float:
+        """``∬ ρ dB_c dB_u = ½`` :attr:`irreversible_mass` (the Jacobian ``dB_c dB_u =
+        ½ dH dH_r``): the irreversible mass in the FORC diagram's coordinates (PmagPy's
+        convention)."""
+        return 0.5 * self.irreversible_mass
 
     @property
     def density_is_zero(self) -> bool:
@@ -163,13 +186,37 @@ class PreisachIdentification:
         bound = MASS_ROUNDOFF_ULPS * np.finfo(np.float64).eps * e_max
         return bool(np.all(np.abs(self.cell_mass) <= bound))
 
-    def density_peak(self) -> tuple[float, float, float]:
+    @property
+    def grid_step(self) -> float:
+        """The grid step ``Δ``: :attr:`step` on a regular grid, else the median α spacing."""
+        if self.step is not None:
+            return float(self.step)
+        return float(np.median(np.diff(self.alpha)))
+
+    def ridge_excluded(self) -> np.ndarray:
+        """Mask of the nodes, shape of :attr:`everett`: ``True`` where
+        ``B_c = (α − β)/2 < RIDGE_EXCLUSION_STEPS · Δ`` (:data:`RIDGE_EXCLUSION_STEPS`), the
+        ``B_c ≈ 0`` ridge that the peak search and the profiles skip."""
+        bc = 0.5 * (self.alpha[:, None] - self.beta[None, :])
+        # a node on the boundary (B_c = 3Δ exactly, up to the grid's round-off) is kept
+        return bc < RIDGE_EXCLUSION_STEPS * self.grid_step * (1.0 - 1e-9)
+
+    def peak_search_nodes(self, values: np.ndarray) -> np.ndarray:
+        """Mask of the nodes the peak is sought among: ``values`` finite and not
+        :meth:`ridge_excluded`, or every finite node if none lies beyond the ridge."""
+        finite = np.isfinite(values)
+        away = finite & ~self.ridge_excluded()
+        return away if away.any() else finite
+
+    def density_peak(self, exclude_ridge: bool = True) -> tuple[float, float, float]:
         """``(r, s, μ_αβ)`` at the node of the largest smoothed density.
 
         In FORC terms ``(B_c, B_u, ρ)`` (``ρ = μ_αβ``, Pike's −½ ∂²M/∂H_r∂H). Needs an
         identification made with ``smoothing``; NaN nodes (outside the measured region) are
-        ignored. A density exactly 0 (:attr:`density_is_zero`) has no peak: NaN three times,
-        with a warning.
+        ignored. With ``exclude_ridge`` (default) the nodes with ``B_c`` below
+        :data:`RIDGE_EXCLUSION_STEPS` grid steps are skipped (:meth:`ridge_excluded`), as
+        PmagPy does, unless no evaluated node lies beyond them. A density exactly 0
+        (:attr:`density_is_zero`) has no peak: NaN three times, with a warning.
         """
         if self.density_alpha_beta is None:
             raise ValueError("density_peak needs an identification made with smoothing")
@@ -183,6 +230,8 @@ class PreisachIdentification:
         dens = self.density_alpha_beta
         if not np.any(np.isfinite(dens)):
             raise ValueError("the smoothed density is NaN everywhere (too few data points)")
+        if exclude_ridge:
+            dens = np.where(self.peak_search_nodes(dens), dens, np.nan)
         i, j = np.unravel_index(np.nanargmax(dens), dens.shape)
         a, b = float(self.alpha[i]), float(self.beta[j])
         return 0.5 * (a - b), 0.5 * (a + b), float(dens[i, j])

@@ -127,7 +127,8 @@ def summarize_uncertainty(
         top_se = math.nan
         bc_interval = bu_interval = (math.nan, math.nan)
     else:
-        k = np.nanargmax(np.where(np.isfinite(se), rho, np.nan))
+        usable = ident.peak_search_nodes(np.where(np.isfinite(se), rho, np.nan))
+        k = np.nanargmax(np.where(usable, rho, np.nan))
         top_se = float(se.flat[k])
         bc_interval, bu_interval = peak_interval(ident, n_boot=n_boot, seed=seed)
     return UncertaintySummary(

@@ -57,7 +57,7 @@ def test_forc_diagram_default_norm_and_orientation():
         assert norm.vmin == pytest.approx(
             -max(-np.nanmin(rho), FORCINEL_NEGATIVE * np.nanmax(rho)), rel=1e-12
         )
-        assert ax.get_xlabel().startswith("B_c") and ax.get_ylabel().startswith("B_u")
+        assert ax.get_xlabel().startswith("$B_c$") and ax.get_ylabel().startswith("$B_u$")
         other = plot_forc_diagram(ax, ident, cmap="viridis")
         assert other.get_cmap().name == "viridis"
     finally:
