@@ -210,8 +210,10 @@ def register(subparsers: Any) -> None:
         "--columns",
         choices=COLUMN_LAYOUTS,
         default=None,
-        help="--input data-only file (two columns, no header): which column is which "
-        "(default field,moment)",
+        metavar="LAYOUT",  # argparse's {a,b} is ambiguous when the choices hold commas
+        help="--input data-only file (two columns, no header): which column is which, "
+        + " or ".join(f"'{c}'" for c in COLUMN_LAYOUTS)
+        + " (default field,moment)",
     )
     g.add_argument(
         "--reversible-ridge",
