@@ -193,8 +193,11 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
         "dimers": _system(build_operator("dimers", spins=n_spins, seed=ctx.seed), 4.0),
     }
     data: dict[str, np.ndarray] = {}
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharex=True, sharey=True)
-    for ax, (name, system) in zip(axes, systems.items(), strict=True):
+    # v and C·M are different quantities: phase portraits above, the force C·M[q] below
+    fig, grid = plt.subplots(
+        2, 2, figsize=(10, 6.4), sharex=True, sharey="row", gridspec_kw={"height_ratios": [3, 2]}
+    )
+    for ax, ax_m, (name, system) in zip(grid[0], grid[1], systems.items(), strict=True):
         sec = system.poincare_section(periods, transient_periods=transient)
         show = min(30, periods)
         traj = system.trajectory(
@@ -204,11 +207,11 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
             operator_state=sec.final.operator_state,
             sample_dt=0.02,
         )
-        ax.plot(traj.q, traj.v, "-", color="0.8", lw=0.5)
-        ax.plot(traj.q, traj.M * 4.0, "-", color="tab:red", lw=0.8, label="C·M")
-        ax.plot(sec.q, sec.v, ".", ms=1.5, color="tab:blue", label="Poincaré φ=0")
+        ax.plot(traj.q, traj.v, "-", color="0.75", lw=0.5, label="trajectory")
+        ax.plot(sec.q, sec.v, ".", ms=2.5, color="tab:blue", label="Poincaré φ=0")
+        ax_m.plot(traj.q, traj.M * 4.0, "-", color="tab:red", lw=0.8)
         ax.set_title("N = ∞ (erf play)" if name == "limit" else f"N = {n_spins} dimers", fontsize=9)
-        ax.set_xlabel("q")
+        ax_m.set_xlabel("q")
         data.update(
             {
                 f"{name}_section_q": sec.q,
@@ -218,8 +221,10 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
                 f"{name}_traj_M": traj.M,
             }
         )
-    axes[0].set_ylabel("v,  C·M")
-    axes[0].legend(fontsize=8, loc="upper left")
+    grid[0, 0].set_ylabel("v")
+    grid[1, 0].set_ylabel("C·M[q]  (C = 4)")
+    grid[0, 0].legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
     ctx.save_figure(fig, "fig:erf_10000", data)
 
     # deliberately lazy: scipy.stats costs about a second at every `hyst` start
