@@ -6,14 +6,16 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable, Iterator, Sequence
+import warnings
+from collections.abc import Callable, Collection, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from analysis.cli._parsing import CliError, library_errors
+from analysis.cli._options import models_reading
+from analysis.cli._parsing import CliError, given_options, library_errors
 from analysis.cli._parsing import option_error as _option_error
-from analysis.experiments.models import MODELS, ModelParameters, parse_model
+from analysis.experiments.models import MODELS, ModelParameters, parameters_read, parse_model
 from analysis.experiments.models import build_operator as build_model
 from analysis.experiments.models import model_record as record_model
 from analysis.experiments.store import ResultStore, StoreError
@@ -29,6 +31,7 @@ __all__ = [
     "build_operator",
     "build_system",
     "check_model_options",
+    "check_no_model_options",
     "check_run_length",
     "check_store",
     "check_transient",
@@ -120,9 +123,34 @@ def play_type(args: argparse.Namespace) -> bool:
     return spec is not None and spec.play_type
 
 
-def check_model_options(args: argparse.Namespace) -> None:
+#: model options (their ``dest``) that select one model's feature: given to a model without
+#: it, the user meant another model, and the command refuses
+MODEL_SPECIFIC = ("width_spread", "plays", "fields", "alpha", "beta")
+#: model options the paper's models share: given to a model that does not read them (a script
+#: running several models with one set of options), the command warns and goes on
+MODEL_SHARED = ("spins", "seed", "width", "spread", "spin_coupling")
+
+
+def _option(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def check_model_options(
+    args: argparse.Namespace,
+    command_reads: Collection[str] = (),
+    half_extent: float | None = None,
+) -> None:
     """Cross-option checks that one option's type cannot express; raises :class:`CliError`.
-    A weighted sum is checked as each of its parts (the options apply to every part)."""
+    A weighted sum is checked as each of its parts (the options apply to every part).
+
+    A model option given on the command line that neither the model (any part of a sum,
+    :func:`~analysis.experiments.models.parameters_read`) nor the command itself
+    (``command_reads``: ``dest`` names) reads is refused in one line when it is one model's
+    feature (:data:`MODEL_SPECIFIC`: ``--plays`` with ``erf-play``) and warned about once,
+    listing every such option, when the models share it (:data:`MODEL_SHARED`: ``--spins``
+    with ``erf-play``, the N -> infinity limit). Options left at their defaults never count.
+    ``half_extent``: as for :func:`model_parameters`.
+    """
     model = args.model
     parts = model_parts(args)
     fields = getattr(args, "fields", None)
@@ -160,6 +188,51 @@ def check_model_options(args: argparse.Namespace) -> None:
             raise CliError(
                 f"argument --w0: needs |q0 - w0| <= p/2 = {0.5 * args.width:g}, "
                 f"got q0 = {args.q0:g}, w0 = {w0:g}"
+            )
+    _check_unread(args, command_reads, half_extent)
+
+
+def _check_unread(
+    args: argparse.Namespace, command_reads: Collection[str], half_extent: float | None
+) -> None:
+    """Refuse or warn about the model options given that nothing reads (see
+    :func:`check_model_options`)."""
+    given = given_options(args)
+    if not given & {*MODEL_SPECIFIC, *MODEL_SHARED}:
+        return
+    reads = parameters_read(args.model, model_parameters(args, half_extent)) | set(command_reads)
+    for dest in MODEL_SPECIFIC:
+        if dest in given and dest not in reads:
+            readers = models_reading(dest, list(MODELS))
+            which = " or ".join(readers)
+            one = "it" if len(readers) == 1 else "one of them"
+            raise CliError(
+                f"argument {_option(dest)}: only for --model {which} (or a sum with {one}), "
+                f"not {args.model}"
+            )
+    unread = [_option(d) for d in MODEL_SHARED if d in given and d not in reads]
+    if unread:
+        read = [_option(d) for d in (*MODEL_SHARED, *MODEL_SPECIFIC) if d in reads]
+        it_reads = f"it reads {', '.join(read)}" if read else "it reads no model option"
+        warnings.warn(
+            f"--model {args.model} does not read {', '.join(unread)}: ignored ({it_reads})",
+            UserWarning,
+            stacklevel=3,
+        )
+
+
+def check_no_model_options(args: argparse.Namespace, source: str, active: bool) -> None:
+    """Refuse, when ``active``, a model option given with ``source`` (e.g. ``hyst identify
+    --input``: the files are identified and no model is built, so ``--model`` or ``--spins``
+    there means the user expected another source or a comparison the command does not make)."""
+    if not active:
+        return
+    given = given_options(args)
+    for dest in ("model", *MODEL_SHARED, *MODEL_SPECIFIC):
+        if dest in given:
+            raise CliError(
+                f"argument {_option(dest)}: a model option, not read with {source} (no model "
+                f"is built); give --model or {source}, not both"
             )
 
 

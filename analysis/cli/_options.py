@@ -20,6 +20,10 @@
   an error raised later inside the library or a worker process, ends the command with one line
   ``hyst COMMAND: error: ...`` on stderr and exit status 2, never a traceback (set the environment
   variable ``HYST_DEBUG=1`` to see the traceback of an unexpected error).
+* **Options nothing reads.** A model option given on the command line that the model does not
+  read is refused when it is another model's feature (``--plays`` with ``erf-play``,
+  ``--width-spread`` with ``dimers``) and warned about in one line when the models share it
+  (``--spins`` with ``erf-play``); ``hyst identify --input`` refuses every model option.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from analysis.cli._parsing import (
+    Given,
     finite_float,
     int_at_least,
     nonnegative_float,
@@ -94,7 +99,9 @@ def add_model_options(
     weighted sum of the choices (:func:`~analysis.experiments.models.parse_model`; the
     namespace holds its canonical text). Only the options that one of the choices reads are
     offered (the others keep their default in the namespace), and each option's help names the
-    models that read it unless every choice does.
+    models that read it unless every choice does. The options given on the command line are
+    recorded (:class:`~analysis.cli._parsing.Given`), so that one the model does not read is
+    refused or warned about (:func:`~analysis.cli._build.check_model_options`).
     """
     d = ModelParameters()
     names = list(models) if models is not None else list(MODELS)
@@ -110,6 +117,7 @@ def add_model_options(
         "--model",
         type=_model_name(names, sums),
         default=default,
+        action=Given,
         metavar="{" + ",".join(names) + "}",
         help="hysteresis operator M: "
         + "; ".join(f"{n}: {MODELS[n].description}" for n in names)
@@ -125,7 +133,7 @@ def add_model_options(
             return
         if len(readers) < len(names):
             help = f"{help} [{', '.join(readers)}]"
-        g.add_argument(option, default=default, help=help, **kwargs)
+        g.add_argument(option, default=default, help=help, action=Given, **kwargs)
 
     add(
         "--spins",

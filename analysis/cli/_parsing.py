@@ -18,11 +18,13 @@ from typing import Any, NoReturn
 __all__ = [
     "EXIT_USAGE",
     "CliError",
+    "Given",
     "HelpFormatter",
     "HystArgumentParser",
     "add_subcommand",
     "fail",
     "finite_float",
+    "given_options",
     "int_at_least",
     "library_errors",
     "nonnegative_float",
@@ -55,6 +57,33 @@ class HystArgumentParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)}\n")
+
+
+#: the namespace attribute where :class:`Given` records the options given on the command line
+GIVEN = "given_options"
+
+
+class Given(argparse.Action):
+    """``store``, and the option's ``dest`` recorded in the namespace's set
+    :data:`GIVEN`: an option the user gave is told apart from one at its default (even when
+    given its default value)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, values)
+        given = set(getattr(namespace, GIVEN, None) or ())
+        given.add(self.dest)
+        setattr(namespace, GIVEN, given)
+
+
+def given_options(args: argparse.Namespace) -> frozenset[str]:
+    """The ``dest`` of every :class:`Given` option given on the command line."""
+    return frozenset(getattr(args, GIVEN, None) or ())
 
 
 def one_line(text: str) -> str:

@@ -95,9 +95,9 @@ def float_fraction(text: str) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
-    check_model_options(args)
     if args.fields is not None:
         raise CliError("argument --fields: an ensemble draws its disorder (no explicit fields)")
+    check_model_options(args)
     if args.box_min_boxes < 1:
         raise CliError(f"argument --box-min-boxes: must be >= 1, got {args.box_min_boxes:g}")
     # every (N, C) must give a valid system: build one of each before any task runs

@@ -28,6 +28,7 @@ import numpy as np
 
 from analysis.cli._build import (
     check_model_options,
+    check_no_model_options,
     model_parameters,
     model_record,
     option_error,
@@ -211,8 +212,10 @@ def register(subparsers: Any) -> None:
         "--columns",
         choices=COLUMN_LAYOUTS,
         default=None,
-        help="--input data-only file (two columns, no header): which column is which "
-        "(default field,moment)",
+        metavar="LAYOUT",  # argparse's {a,b} is ambiguous when the choices hold commas
+        help="--input data-only file (two columns, no header): which column is which, "
+        + " or ".join(f"'{c}'" for c in COLUMN_LAYOUTS)
+        + " (default field,moment)",
     )
     g.add_argument(
         "--reversible-ridge",
@@ -319,6 +322,7 @@ def run(args: argparse.Namespace) -> int:
     """Check the options (the request), read ``--input`` or build the model, identify, write
     and report."""
     t0 = time.perf_counter()
+    check_no_model_options(args, "--input", args.input is not None)
     request = request_from(args)
     if request.measured:
         if request.batch:  # folders searched recursively; files no reader recognises skipped
@@ -342,7 +346,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _prepare_model(args: argparse.Namespace, request: IdentifyRequest) -> tuple[Any, Any, float]:
     """The operator, its thresholds (dimers) and the grid's half-extent."""
-    check_model_options(args)
+    # the grid's half-extent 5R + p/2 reads --width and --spread unless --saturation is given
+    grid_reads = ("width", "spread") if args.saturation is None else ()
+    check_model_options(args, grid_reads, half_extent=request.operator_half_extent)
     params = model_parameters(args, half_extent=request.operator_half_extent)
     try:
         operator = build_operator(args.model, params)

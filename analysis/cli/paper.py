@@ -25,7 +25,7 @@ from analysis.cli._parsing import (
 )
 from analysis.experiments.store import StoreError
 from analysis.paper import run_paper
-from analysis.paper.runner import check_only
+from analysis.paper.runner import check_only, figure_labels
 
 __all__ = ["register", "run"]
 
@@ -71,7 +71,9 @@ def register(subparsers: Any) -> None:
         nargs="+",
         default=None,
         metavar="LABEL",
-        help="build only these figures (LaTeX labels, e.g. fig:play; default: all)",
+        help="build only these figures, one or more of the paper's LaTeX labels: "
+        + ", ".join(figure_labels())
+        + " (default: all)",
     )
     add_output_options(p, writes="report.md, report.json, figures, results.sqlite")
 

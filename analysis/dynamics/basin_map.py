@@ -186,7 +186,20 @@ class BasinMap:
             ax.scatter(self.starts[:, 0], self.starts[:, 1], c=self.labels, cmap=cmap, norm=norm)
             ax.set_ylabel("$v_0$")
             ax.set_xlabel("$q_0$")
-        handles = [Patch(color=colours[a["label"] + 1], label=_legend(a)) for a in self.attractors]
+        if self.grid is None or self.grid.axis == "v0":  # the map's plane is the section's
+            limits = ax.get_xlim(), ax.get_ylim()
+            for a in self.attractors:
+                pts = _section_points(a)
+                if pts is not None:
+                    colour = colours[a["label"] + 1]
+                    ax.plot(pts[:, 0], pts[:, 1], "o", ms=5, mfc=colour, mec="black", mew=0.8)
+            if self.grid is not None:  # a point outside the grid does not move its frame
+                ax.set_xlim(*limits[0])
+                ax.set_ylim(*limits[1])
+        handles = [
+            Patch(color=colours[a["label"] + 1], label=text)
+            for a, text in zip(self.attractors, legend_texts(self.attractors), strict=True)
+        ]
         ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.8)
         if second is not None:
             t = second.reshape(g.size, g.size)
@@ -206,6 +219,30 @@ class BasinMap:
         fig.tight_layout()
         fig.savefig(path, dpi=150)
         return Path(path)
+
+
+def _section_points(a: dict) -> np.ndarray | None:
+    """An attractor's section points ``(q, v)`` (periodic ones), else None."""
+    pts = a.get("points")
+    if pts is None:
+        return None
+    pts = np.asarray(pts, dtype=float)
+    return pts[:, :2] if pts.ndim == 2 and pts.shape[1] >= 2 and len(pts) else None
+
+
+def legend_texts(attractors: list[dict]) -> list[str]:
+    """One legend line per attractor. Lines that would read alike (symmetric partner orbits
+    ``−x(t + T/2)`` of an odd operator share period and, often, fraction) name a point of
+    each orbit's section, the one of least q, so the legend tells them apart (the map marks
+    the points)."""
+    plain = [_legend(a) for a in attractors]
+    texts = list(plain)
+    for i, a in enumerate(attractors):
+        pts = _section_points(a)
+        if pts is not None and plain.count(plain[i]) > 1:
+            q, v = pts[int(np.argmin(pts[:, 0]))]
+            texts[i] = texts[i].replace(" (", f" through (q, v) = ({q:.2f}, {v:.2f}) (", 1)
+    return texts
 
 
 def _legend(a: dict) -> str:

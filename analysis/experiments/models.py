@@ -89,6 +89,7 @@ __all__ = [
     "describe_model",
     "model_names",
     "model_record",
+    "parameters_read",
     "parse_model",
     "uniform_half_extent",
 ]
@@ -460,6 +461,35 @@ def _read(spec: ModelSpec, p: ModelParameters) -> dict[str, Any]:
         v = getattr(p, n)
         out[n] = [list(row) for row in v] if n == "fields" else v
     return out
+
+
+def _reads(spec: ModelSpec, p: ModelParameters) -> set[str]:
+    """The :class:`ModelParameters` fields ``spec``'s builder reads with the values ``p``."""
+    if spec.name == "relay":  # p sets a threshold only where alpha or beta is not given
+        width = {"width"} if p.alpha is None or p.beta is None else set()
+        return {"alpha", "beta"} | width
+    if spec.name == "preisach-uniform" and p.half_extent is not None:
+        return {"half_extent", "resolution"}  # H given: 5R + p/2 is not computed
+    if spec.name == "preisach-uniform":
+        return {"width", "spread", "half_extent", "resolution"}
+    if spec.name == "dimers" and p.fields is not None:  # the fields replace N, p, R, seed
+        return {"fields", "spin_coupling"}
+    return set(spec.parameters)
+
+
+def parameters_read(
+    name: str, params: ModelParameters | None = None, **overrides: Any
+) -> frozenset[str]:
+    """The :class:`ModelParameters` fields that the model ``name`` (a registry name or a
+    weighted sum, whose parts' reads are joined) reads with these values: a field outside
+    the set does not change the operator (e.g. ``spins`` of ``erf-play``, the ``N -> inf``
+    limit; ``width`` of a ``relay`` whose two thresholds are given; ``spins``, ``width``,
+    ``spread``, ``seed`` of ``dimers`` with explicit ``fields``)."""
+    expr = _expression(name)
+    p = _parameters(params, overrides)
+    if expr is None or expr.plain is not None:
+        return frozenset(_reads(_spec(name, expr), p))
+    return frozenset().union(*(_reads(MODELS[n], p) for n in expr.names))
 
 
 def model_record(

@@ -57,15 +57,32 @@ def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
     system = _system(build_operator("n2", spin_coupling=2.0), C_N2_SECTION)
     sec = system.poincare_section(periods, transient_periods=min(100, periods))
     down = sec.M < 0
-    fig, ax = plt.subplots(figsize=(5, 4))
-    ax.plot(sec.q[down], sec.v[down], "s", ms=2.5, color="tab:blue", label="$S_1$ (M=-1)")
-    ax.plot(sec.q[~down], sec.v[~down], "x", ms=3, color="tab:red", label="$S_2$ (M=+1)")
-    for x in (-2.0, 0.0):
-        ax.axvline(x, color="grey", lw=0.6)
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    scale = max(float(np.ptp(sec.q)), float(np.ptp(sec.v)), 1e-12)
+    # the bistable region where both sheets exist, shaded so the claim's overlap is seen
+    ax.axvspan(-2.0, 0.0, color="0.92", zorder=0, label="bistable $-2<q<0$")
+    for sel, marker, color, name in ((down, "s", "tab:blue", "$S_1$ (M=-1)"),
+                                     (~down, "x", "tab:red", "$S_2$ (M=+1)")):  # fmt: skip
+        # a periodic section repeats its points: the legend says how many sites they fill
+        sites = _sites(np.c_[sec.q[sel], sec.v[sel]], 0.01 * scale)
+        ax.plot(
+            sec.q[sel],
+            sec.v[sel],
+            marker,
+            ms=5,
+            mew=1.2,
+            color=color,
+            linestyle="none",
+            label=f"{name}: {int(np.sum(sel))} points on {sites} sites",
+        )
+    lo, hi = float(np.min(sec.q, initial=-2.0)), float(np.max(sec.q, initial=0.0))
+    pad = 0.08 * (max(hi, 0.0) - min(lo, -2.0))
+    ax.set_xlim(min(lo, -2.0) - pad, max(hi, 0.0) + pad)  # both region edges inside
     ax.set_xlabel("q")
     ax.set_ylabel("v")
     ax.set_title(f"N=2, J=2, b=(2,0), C={C_N2_SECTION:g}: Poincaré section φ=0", fontsize=9)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
+    fig.tight_layout()
     ctx.save_figure(fig, "fig:N=2_schema", {"q": sec.q, "v": sec.v, "M": sec.M})
     bistable = (sec.q > -2.0) & (sec.q < 0.0)
     n1, n2 = int(np.sum(bistable & down)), int(np.sum(bistable & ~down))
@@ -88,6 +105,16 @@ def fig_n2_schema(ctx: PaperContext) -> list[Claim]:
             ),
         )
     ]
+
+
+def _sites(points: np.ndarray, radius: float) -> int:
+    """How many places ``points`` mark at a figure's resolution: greedy clusters, each point
+    joining the first site within ``radius`` (max norm) or opening a new one."""
+    sites: list[np.ndarray] = []
+    for x in points:
+        if not any(np.max(np.abs(x - c)) <= radius for c in sites):
+            sites.append(x)
+    return len(sites)
 
 
 def fig_n4_traj(ctx: PaperContext) -> list[Claim]:
@@ -166,8 +193,11 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
         "dimers": _system(build_operator("dimers", spins=n_spins, seed=ctx.seed), 4.0),
     }
     data: dict[str, np.ndarray] = {}
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharex=True, sharey=True)
-    for ax, (name, system) in zip(axes, systems.items(), strict=True):
+    # v and C·M are different quantities: phase portraits above, the force C·M[q] below
+    fig, grid = plt.subplots(
+        2, 2, figsize=(10, 6.4), sharex=True, sharey="row", gridspec_kw={"height_ratios": [3, 2]}
+    )
+    for ax, ax_m, (name, system) in zip(grid[0], grid[1], systems.items(), strict=True):
         sec = system.poincare_section(periods, transient_periods=transient)
         show = min(30, periods)
         traj = system.trajectory(
@@ -177,11 +207,11 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
             operator_state=sec.final.operator_state,
             sample_dt=0.02,
         )
-        ax.plot(traj.q, traj.v, "-", color="0.8", lw=0.5)
-        ax.plot(traj.q, traj.M * 4.0, "-", color="tab:red", lw=0.8, label="C·M")
-        ax.plot(sec.q, sec.v, ".", ms=1.5, color="tab:blue", label="Poincaré φ=0")
+        ax.plot(traj.q, traj.v, "-", color="0.75", lw=0.5, label="trajectory")
+        ax.plot(sec.q, sec.v, ".", ms=2.5, color="tab:blue", label="Poincaré φ=0")
+        ax_m.plot(traj.q, traj.M * 4.0, "-", color="tab:red", lw=0.8)
         ax.set_title("N = ∞ (erf play)" if name == "limit" else f"N = {n_spins} dimers", fontsize=9)
-        ax.set_xlabel("q")
+        ax_m.set_xlabel("q")
         data.update(
             {
                 f"{name}_section_q": sec.q,
@@ -191,8 +221,10 @@ def fig_erf_10000(ctx: PaperContext) -> list[Claim]:
                 f"{name}_traj_M": traj.M,
             }
         )
-    axes[0].set_ylabel("v,  C·M")
-    axes[0].legend(fontsize=8, loc="upper left")
+    grid[0, 0].set_ylabel("v")
+    grid[1, 0].set_ylabel("C·M[q]  (C = 4)")
+    grid[0, 0].legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
     ctx.save_figure(fig, "fig:erf_10000", data)
 
     # deliberately lazy: scipy.stats costs about a second at every `hyst` start

@@ -62,11 +62,20 @@ def fig_preis_dens(ctx: PaperContext) -> list[Claim]:
         mappable = plot_density_rs(
             ax, ident, r_max=WIDTH, s_limits=(-4 * SPREAD, 4 * SPREAD), vmax=vmax
         )
+        # the ridge is one column of cells: an equal-aspect r-s box would be a narrow strip in
+        # the middle of its slot, so the panels take the figure's width instead
+        ax.set_aspect("auto")
         # mark r = p/2 above the panel, not over the ridge it would hide
         top = ax.get_xaxis_transform()
         ax.plot([0.5 * WIDTH], [1.0], "v", color="0.3", transform=top, clip_on=False)
         ax.set_title(title)
-    fig.colorbar(mappable, ax=axes[1:], label="μ_rs (cell mass / r-s area)", shrink=0.85)
+    # (b) and (c) share the s axis and one colour scale (vmax of both): one bar, one s label
+    axes[2].sharey(axes[1])
+    axes[2].set_ylabel("")
+    axes[2].tick_params(labelleft=False)
+    fig.colorbar(
+        mappable, ax=axes[1:], label=r"$\mu_{rs}$ (cell mass / $r$-$s$ area)", fraction=0.05
+    )
     fig.suptitle(f"Preisach density, p = {WIDTH:g}, R = {SPREAD:g}, Δ = {step:g}", fontsize=10)
     data: dict[str, np.ndarray] = {}
     for key, ident in (("limit", limit), ("finite", finite)):
