@@ -20,6 +20,8 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from analysis.cli._identify_batch import forc_input_files
 from analysis.cli._identify_measured import add_uncertainty_options, smoothing_words
 from analysis.cli._options import add_output_options
@@ -206,7 +208,12 @@ def run(args: argparse.Namespace) -> int:
     _write_summary(out, result, files, skipped, report)
     m = result.n_components
     test = {row["end_members"]: row for row in result.component_test}
-    chi2 = f" (χ² {test[m]['chi2']:.3g} <= {test[m]['bound']:.3g})" if m in test else ""
+    row = test.get(m)
+    chi2 = ""
+    if row is not None and np.isfinite(row["chi2"]) and np.isfinite(row["bound"]):
+        chi2 = f" (χ² {row['chi2']:.3g} <= {row['bound']:.3g})"
+    elif row is not None:  # as many end-members as samples: nothing left to test
+        chi2 = " (no χ² test: as many end-members as samples)"
     left_out = f"; {len(result.excluded)} left out" if result.excluded else ""
     lines = [
         f"{result.n_samples} samples on a common lattice of {int(result.mask.sum())} nodes "

@@ -92,8 +92,8 @@ def plot_end_member(
         result.bc, result.bu, rho.T, cmap=colours, norm=norm, shading="nearest", rasterized=True
     )
     ax.set_aspect("equal")
-    ax.set_xlabel(f"B_c ({field_unit})")
-    ax.set_ylabel(f"B_u ({field_unit})")
+    ax.set_xlabel(f"$B_c$ ({field_unit})")
+    ax.set_ylabel(f"$B_u$ ({field_unit})")
     ax.set_title(f"EM{k + 1}", fontsize=9, color=_colour(k))
     return mappable
 
