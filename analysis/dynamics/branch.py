@@ -182,7 +182,7 @@ class BranchProblem:
             period=self.k,
             multipliers=mu,
             point=np.array(x, dtype=float),
-            sequence=self.sequence(shot.events),
+            sequence=self.sequence(shot.events) + self.coords.configuration(state),
             state=state,
             monodromy=shot.jacobian,
             multiplier_labels=tags,

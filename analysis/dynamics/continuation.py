@@ -362,6 +362,11 @@ def continue_orbit(
                 if event is None and new is None:
                     reason = "corrector failed (no grazing found)"
                     break
+                if event is None and ds >= 2.0 * min_step:
+                    # the old orbit holds at new's parameter (it grazes there within round-off,
+                    # or the corrector jumped to a coexisting orbit): on along it, shorter
+                    ds *= 0.5
+                    continue
                 if event is not None:
                     events.append(replace(event, index=len(points)))
                     if last is not a:

@@ -186,6 +186,20 @@ class StateCoordinates:
             )
         return op_state
 
+    def configuration(self, state: OscillatorState) -> tuple:
+        """The discrete memory of ``state`` as part of an orbit's event sequence: ``(("relays",
+        outputs),)`` for relay-type operators and composites with relays (their ±1 in table
+        order), ``()`` otherwise. Two orbits of one period without switches (a relay held up or
+        down all along) differ only here: the configuration changing between two branch points
+        is a grazing, like an event sequence changing."""
+        if self.kind == "relay":
+            outputs = self.system.operator.relay_outputs(state.operator_state)
+        elif self.kind == "composite" and self._spec.relay_alpha is not None:
+            outputs = self._spec.relay_outputs(state.operator_state)
+        else:
+            return ()
+        return (("relays", tuple(int(y) for y in np.asarray(outputs))),)
+
     def same_memory(self, a: OscillatorState, b: OscillatorState) -> bool:
         """Whether the discrete relay configurations of ``a`` and ``b`` agree (always true for
         continuous memory, which is part of the coordinates)."""

@@ -210,3 +210,19 @@ def test_a_failure_part_way_returns_the_branch_so_far(monkeypatch):
     assert branch.stop_reason.startswith("failed after coupling = 9.")
     assert "DivergenceError: stand-in failure" in branch.stop_reason
     assert len(branch.points) == 3
+
+
+def test_a_grazing_between_orbits_without_switches_is_found():
+    """Relay(9, −50), ζ = 0.05, Ω = 1: the orbit with the relay down, q = −C + 10 sin t, grazes
+    α = 9 at C = 1 exactly (closed form: amplitude 1/(2ζΩ) = 10). Neither it nor the orbit with
+    the relay up has a switch, so only the relay configuration tells them apart; the branch
+    must report the grazing there instead of running on along the other orbit."""
+    from hysteresis import Relay
+
+    system = ForcedOscillator(Relay(9.0, -50.0), coupling=1.5)
+    branch = continue_orbit(system, find_periodic_orbit(system), 1.5, 0.5)
+    grazings = [e for e in branch.events if e.kind == "grazing"]
+    assert len(grazings) == 1
+    assert abs(grazings[0].parameter - 1.0) <= 1e-8  # the default locate_tolerance
+    above = [p for p in branch.points if p.parameter > 1.0 + 1e-8]
+    assert above and all(p.sequence == (("relays", (-1,)),) for p in above)
