@@ -49,8 +49,11 @@ threshold reached through its inner operator). Memory rows:
   ``pushed_gradient``: ``δm := d_du·δq + d_dm @ δm``; one still pending from the old branch
   keeps its row);
 * a variable that was *driven* on the old branch (a cascade's outer wagon dragged by the inner
-  output, :mod:`hysteresis.flow` "Driven memory") gets ``δm := d_du·δq + d_dm @ δm_old`` from
-  the old branch's gradient at the event;
+  output, :mod:`hysteresis.flow` "Driven memory"; a Duhem operator's current ``z``) gets
+  ``δm := d_du·δq + d_dm @ δm_old`` from the old branch's gradient at the event; it is a free
+  direction only in place of free variables that leave the tangent space at that event and
+  enter its gradient (a Duhem operator's ``z0``, handed to the next branch at a reversal),
+  at most as many as those;
 * a wiped-out extremum's row, and the row of a variable that becomes driven, is dropped;
 * everything else is carried (``V_in = I`` at a play reversal).
 
@@ -521,6 +524,11 @@ class ContinuousEngine(TangentFlow, Engine):
         index = {lab: i for i, lab in enumerate(old.labels)}
         driven = {lab: i for i, lab in enumerate(old.driven_labels)}
         gradient = None
+        # free directions that leave the tangent space here: a variable initialised from a
+        # driven gradient that involves them carries them on (a Duhem operator's branch memory
+        # handed from one branch to the next at a reversal), at most one each
+        leaving = {lab for lab in old.labels if lab in self._free and lab not in new.labels}
+        heirs: list[str] = []
         dq = self._dqv[0]
         dm = np.empty((new.n_memory, self._ntan))
         pending = np.zeros(new.n_memory, dtype=bool)
@@ -545,9 +553,11 @@ class ContinuousEngine(TangentFlow, Engine):
                     d_du = np.asarray(d_du, dtype=np.float64).reshape(len(driven))
                     d_dm = np.asarray(d_dm, dtype=np.float64).reshape(len(driven), old.n_memory)
                     gradient = (d_du, d_dm)
-                k = driven[lab]  # δm := d_du·δq + d_dm @ δm_old, no free direction
+                k = driven[lab]  # δm := d_du·δq + d_dm @ δm_old
                 dm[i] = gradient[0][k] * dq + gradient[1][k] @ self._dm
                 self._free.discard(lab)
+                if any(gradient[1][k][index[m]] != 0.0 for m in leaving):
+                    heirs.append(lab)
             else:
                 dm[i] = dq  # created (or slaved from the start): δm := δq
                 self._free.discard(lab)
@@ -555,6 +565,8 @@ class ContinuousEngine(TangentFlow, Engine):
         for lab in old.labels:
             if lab not in new.labels:
                 self._free.discard(lab)  # removed, or driven from now on
+        # the heirs span at most as many directions as the free variables that left
+        self._free.update(heirs[: len(leaving)])
         self._dm = dm
 
     def state(self) -> OscillatorState:
