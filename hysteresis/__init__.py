@@ -24,7 +24,9 @@ from hysteresis.base import (
     Switching,
     SwitchingHysteron,
 )
+from hysteresis.bouc_wen import BoucWen
 from hysteresis.cascade import Cascade, CascadeState
+from hysteresis.duhem import Duhem, DuhemState
 from hysteresis.flow import BranchFlow
 from hysteresis.inverse import InverseOperator, InverseState
 from hysteresis.play import GeneralizedPlay, PlayOperator, PlayState
@@ -42,6 +44,9 @@ from hysteresis.spin_dimers import DimerThresholds, SpinDimerEnsemble
 from hysteresis.static_map import StaticMap, StaticMapState
 
 __all__ = [
+    "BoucWen",
+    "Duhem",
+    "DuhemState",
     "RandomFieldIsing",
     "RandomFieldIsingState",
     "SwitchingHysteron",

@@ -4,9 +4,8 @@ System (paper eq. eom_2)::
 
     q'' + 2ζ q' + q = cos(φ0 + Ω t) + C·y,   y = M[q](t)
 
-for any continuous operator providing :meth:`branch_flow(state, direction)
-<hysteresis.base.ContinuousHysteron.branch_flow>` (:class:`hysteresis.flow.BranchFlow`): play
-and generalized play with any shape, Prandtl–Ishlinskii, continuous Preisach.
+for any operator with :meth:`~hysteresis.base.ContinuousHysteron.branch_flow`
+(:class:`hysteresis.flow.BranchFlow`): plays, PI, Preisach, Duhem, composites.
 
 Segments and events
 -------------------
@@ -54,8 +53,7 @@ threshold reached through its inner operator). Memory rows:
   direction only in place of free variables that leave the tangent space at that event and
   enter its gradient (a Duhem operator's ``z0``, handed to the next branch at a reversal),
   at most as many as those;
-* a wiped-out extremum's row, and the row of a variable that becomes driven, is dropped;
-* everything else is carried (``V_in = I`` at a play reversal).
+* a wiped-out extremum's row, and a newly driven variable's, is dropped; the rest is carried.
 
 A start on a slaved branch (input on a wall, moving outward) or right at a reversal that pushes
 an extremum is such an event at ``t = 0`` (the one-sided derivative into the play is wiped out),

@@ -13,8 +13,10 @@ import pytest
 import hysteresis
 from analysis.experiments.models import build_operator, model_names
 from hysteresis import (
+    BoucWen,
     Cascade,
     ContinuousPreisachModel,
+    Duhem,
     GeneralizedPlay,
     InverseOperator,
     PlayOperator,
@@ -30,6 +32,25 @@ from hysteresis._validation import finite_array, finite_scalar, real_array
 from hysteresis.base import Hysteron
 from hysteresis.preisach import continuous
 from hysteresis.relay_table import RelayTable
+
+
+# a Duhem operator of module-level functions (picklable): z relaxes toward +1 while the input
+# rises and toward -1 while it falls, dz/du = 1 - d*z
+def _rise(u, z):
+    return 1.0 - z
+
+
+def _fall(u, z):
+    return 1.0 + z
+
+
+def _rise_partials(u, z):
+    return 0.0, -1.0
+
+
+def _fall_partials(u, z):
+    return 0.0, 1.0
+
 
 U = np.sin(np.linspace(0.0, 40.0, 1500)) * np.linspace(0.3, 7.0, 1500)
 PROTOCOLS = sorted({4, pickle.DEFAULT_PROTOCOL, pickle.HIGHEST_PROTOCOL})
@@ -67,6 +88,10 @@ def _operators() -> dict[str, Hysteron]:
             PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), StaticMap(np.tanh, _tanh_derivative)
         ),
         "inverse": InverseOperator(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5])),
+        "bouc-wen": BoucWen(1.0, 0.5, 0.5, 1.5),
+        "duhem": Duhem(
+            _rise, _fall, rising_partials=_rise_partials, falling_partials=_fall_partials
+        ),
         "rfim": RandomFieldIsing.lattice((4, 4), disorder=1.5, seed=0),
         "switching-sum": RandomFieldIsing.lattice((6,), disorder=1.0, seed=1) + Relay(1.0, 0.0),
     }
