@@ -1,6 +1,6 @@
 """The Bouc–Wen hysteresis operator, a Duhem operator (:mod:`hysteresis.duhem`).
 
-Bouc–Wen (Bouc 1967, Wen 1976) in its rate-independent form:
+Bouc–Wen (Bouc 1967, Wen 1976) in its rate-independent form::
 
     ż = A·u̇ − β·|u̇|·|z|ⁿ⁻¹·z − γ·u̇·|z|ⁿ   ⇔   dz/du = A − |z|ⁿ·(β·d·sign(z) + γ),
 
