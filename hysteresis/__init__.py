@@ -29,6 +29,7 @@ from hysteresis.cascade import Cascade, CascadeState
 from hysteresis.duhem import Duhem, DuhemState
 from hysteresis.flow import BranchFlow
 from hysteresis.inverse import InverseOperator, InverseState
+from hysteresis.jiles_atherton import JilesAtherton
 from hysteresis.play import GeneralizedPlay, PlayOperator, PlayState
 from hysteresis.prandtl_ishlinskii import PIState, PrandtlIshlinskii
 from hysteresis.preisach import (
@@ -54,6 +55,7 @@ __all__ = [
     "Cascade",
     "CascadeState",
     "InverseOperator",
+    "JilesAtherton",
     "InverseState",
     "StaticMap",
     "StaticMapState",

@@ -17,6 +17,7 @@ from hysteresis import (
     GeneralizedPlay,
     Hysteron,
     InverseOperator,
+    JilesAtherton,
     PiecewiseConstantHysteron,
     PlayOperator,
     PrandtlIshlinskii,
@@ -156,6 +157,7 @@ def _continuous_operators():
         Cascade(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), StaticMap(np.tanh, _tanh_slope)),
         InverseOperator(PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5])),
         BoucWen(1.0, 0.5, 0.5, 1.5),  # a Duhem operator
+        JilesAtherton(Ms=1.0, a=0.5, alpha=0.3, k=0.4, c=0.2),
         Duhem(_rise, _fall, rising_partials=_rise_partials, falling_partials=_fall_partials),
     ]
 

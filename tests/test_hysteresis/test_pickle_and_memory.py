@@ -19,6 +19,7 @@ from hysteresis import (
     Duhem,
     GeneralizedPlay,
     InverseOperator,
+    JilesAtherton,
     PlayOperator,
     PrandtlIshlinskii,
     PreisachModel,
@@ -89,6 +90,7 @@ def _operators() -> dict[str, Hysteron]:
         ),
         "inverse": InverseOperator(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5])),
         "bouc-wen": BoucWen(1.0, 0.5, 0.5, 1.5),
+        "jiles-atherton": JilesAtherton(Ms=1.0, a=0.5, alpha=0.3, k=0.4, c=0.2),
         "duhem": Duhem(
             _rise, _fall, rising_partials=_rise_partials, falling_partials=_fall_partials
         ),
