@@ -329,11 +329,13 @@ class BranchSum(WeightedSum, ContinuousHysteron):
         direction = direction_sign(direction)
         state = self._check_state(state)
         u0 = float(state.input)
-        flows: list[tuple[float, BranchFlow]] = []  # (weight, flow) of the continuous parts
+        # (weight, flow, index in the sum) of the continuous parts: labels name a part by its
+        # index in the sum
+        flows: list[tuple[float, BranchFlow, int]] = []
         constant = 0.0
         # (breakpoint, jump, index of the continuous flow or -1 for a relay-type part)
         ends: list[tuple[float, float, int]] = []
-        for w, p, s in zip(self._weights, self._parts, state, strict=True):
+        for i, (w, p, s) in enumerate(zip(self._weights, self._parts, state, strict=True)):
             w = float(w)
             if p.piecewise_constant:
                 constant += w * float(p.output(s))
@@ -348,7 +350,7 @@ class BranchSum(WeightedSum, ContinuousHysteron):
                 flow = p.branch_flow(s, direction)
                 if math.isfinite(flow.breakpoint):  # (a cascade's output may jump there too)
                     ends.append((float(flow.breakpoint), w * flow.breakpoint_jump, len(flows)))
-                flows.append((w, flow))
+                flows.append((w, flow, i))
         breakpoint = direction * math.inf
         jump = 0.0
         resets: list[str] = []
@@ -357,8 +359,7 @@ class BranchSum(WeightedSum, ContinuousHysteron):
             breakpoint = min(e[0] for e in ends) if direction > 0 else max(e[0] for e in ends)
         labels: list[str] = []
         sizes: list[int] = []
-        for k, (_, flow) in enumerate(flows):
-            index = self._continuous_index(k)
+        for _, flow, index in flows:
             labels.extend(f"{index}:{lab}" for lab in flow.labels)
             sizes.append(flow.n_memory)
         gradient_of = -1  # the part whose breakpoint moves with its memory (a cascade's)
@@ -367,14 +368,13 @@ class BranchSum(WeightedSum, ContinuousHysteron):
                 continue
             jump += dy
             if k >= 0:
-                flow = flows[k][1]
+                _, flow, index = flows[k]
                 if flow.breakpoint_gradient is not None and gradient_of < 0:
                     gradient_of = k
-                index = self._continuous_index(k)
                 resets.extend(f"{index}:{lab}" for lab in flow.breakpoint_resets)
                 removes.extend(f"{index}:{lab}" for lab in flow.breakpoint_removes)
-        weights = np.array([w for w, _ in flows])
-        parts = [f for _, f in flows]
+        weights = np.array([w for w, _, _ in flows])
+        parts = [f for _, f, _ in flows]
         bounds = np.cumsum([0, *sizes])
 
         def output(u):
@@ -393,8 +393,7 @@ class BranchSum(WeightedSum, ContinuousHysteron):
                 d_m[..., bounds[k] : bounds[k + 1]] = a * np.asarray(dm_k, dtype=np.float64)
             return d_u[()], d_m
 
-        extra = composed_fields(parts, [self._continuous_index(k) for k in range(len(parts))],
-                                 bounds, gradient_of)  # fmt: skip
+        extra = composed_fields(parts, [i for _, _, i in flows], bounds, gradient_of)
         return BranchFlow(
             direction=direction,
             input=u0,
@@ -412,11 +411,6 @@ class BranchSum(WeightedSum, ContinuousHysteron):
             constant_partials=all(f.constant_partials for f in parts),
             **extra,
         )
-
-    def _continuous_index(self, k: int) -> int:
-        """The index in :attr:`parts` of the ``k``-th continuous part (memory labels name the
-        part by its place in the sum)."""
-        return [i for i, p in enumerate(self._parts) if not p.piecewise_constant][k]
 
     # -- the compiled fast path: a sum of plays and relays (hysteresis/sum_flows.py) --------------
     def compiled_flow(self) -> CompiledFlow | None:

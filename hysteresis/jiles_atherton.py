@@ -35,7 +35,7 @@ from __future__ import annotations
 import cmath
 
 from hysteresis._validation import MAX_MAGNITUDE, finite_scalar, positive_scalar
-from hysteresis.duhem import Duhem, DuhemState, _BranchSolution
+from hysteresis.duhem import Duhem, DuhemState
 
 __all__ = ["JilesAtherton"]
 
@@ -171,10 +171,9 @@ class JilesAtherton(Duhem):
         """Rising from negative saturation: from the anhysteretic curve at ``H = −H_far``
         (module docstring) along the rising branch to ``u0``."""
         u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
-        far = -40.0 * (self.a + self.k + self.alpha * self.Ms)
-        start = min(far, u0)
-        z, _ = _BranchSolution(self, 1, start, self.anhysteretic(start))(u0)
-        return DuhemState(z, u0, 1)
+        far = min(-40.0 * (self.a + self.k + self.alpha * self.Ms), u0)
+        _, state = self.apply([u0], DuhemState(self.anhysteretic(far), far, 1))
+        return state
 
     def __repr__(self) -> str:
         return (

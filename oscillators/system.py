@@ -26,7 +26,7 @@ from hysteresis.base import Hysteron, HysteronState
 from oscillators.engines import (
     DivergenceError,
     Engine,
-    python_path_reason,
+    describe_engine,
     require_tangent_flow,
     select_engine,
     wrap_phase,
@@ -147,9 +147,8 @@ class ForcedOscillator:
     @property
     def engine_description(self) -> str:
         """The engine's name, and why a composite runs on the generic engine where it does."""
-        reason = python_path_reason(self._operator)
         name = getattr(self._engine_cls, "name", self._engine_cls.__name__)
-        return name if reason is None else f"{name} (Python path: {reason})"
+        return describe_engine(name, self._operator)
 
     def __repr__(self) -> str:
         return (

@@ -52,7 +52,7 @@ from oscillators import (
     Engine,
     OscillatorState,
 )
-from oscillators.engines import python_path_reason, require_tangent_flow
+from oscillators.engines import describe_engine, require_tangent_flow
 
 __all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]
 
@@ -523,14 +523,8 @@ def lyapunov_spectrum(
         kaplan_yorke=kaplan_yorke_dimension(exponents),
         final=stepper.state(),
         extra={
-            "engine": _engine_description(stepper.engine.name, system),
+            "engine": describe_engine(stepper.engine.name, system.operator),
             "renormalize_dt": dt,
             "n_collapses": n_collapses,
         },
     )
-
-
-def _engine_description(name: str, system: Any) -> str:
-    """The engine's name, and why a composite operator runs on the Python path where it does."""
-    reason = python_path_reason(system.operator)
-    return name if reason is None else f"{name} (Python path: {reason})"

@@ -35,7 +35,12 @@ from oscillators.engines.compiled_continuous import CompiledContinuousEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayReferenceEngine
-from oscillators.engines.select import GenericEngineWarning, python_path_reason, select_engine
+from oscillators.engines.select import (
+    GenericEngineWarning,
+    describe_engine,
+    python_path_reason,
+    select_engine,
+)
 
 __all__ = [
     "TIME_TOLERANCE",
@@ -56,6 +61,7 @@ __all__ = [
     "select_engine",
     "GenericEngineWarning",
     "python_path_reason",
+    "describe_engine",
     "split_times",
     "wrap_phase",
 ]

@@ -12,7 +12,7 @@ from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine
 
-__all__ = ["select_engine", "GenericEngineWarning", "python_path_reason"]
+__all__ = ["select_engine", "GenericEngineWarning", "python_path_reason", "describe_engine"]
 
 
 class GenericEngineWarning(UserWarning):
@@ -25,6 +25,13 @@ def python_path_reason(operator: Any) -> str | None:
     (the optional contract member ``uncompiled_reason``), or ``None``."""
     reason = getattr(operator, "uncompiled_reason", None)
     return str(reason) if reason else None
+
+
+def describe_engine(name: str, operator: Any) -> str:
+    """An engine's ``name``, and why a composite ``operator`` runs on the Python path where it
+    does (``"continuous engine (Python path: ...)"``)."""
+    reason = python_path_reason(operator)
+    return name if reason is None else f"{name} (Python path: {reason})"
 
 
 def select_engine(operator: Any) -> type[Engine]:

@@ -7,13 +7,13 @@ import inspect
 
 import numpy as np
 import pytest
+from duhem_support import relaxing_duhem
 
 import hysteresis
 from hysteresis import (
     BoucWen,
     Cascade,
     ContinuousHysteron,
-    Duhem,
     GeneralizedPlay,
     Hysteron,
     InverseOperator,
@@ -35,25 +35,6 @@ from hysteresis.flow import BranchFlow
 from hysteresis.rfim import RandomFieldIsing
 from oscillators import ForcedOscillator
 from oscillators.engines.relay import RelayReferenceEngine
-
-
-# a Duhem operator of module-level functions (picklable): z relaxes toward +1 while the input
-# rises and toward -1 while it falls, dz/du = 1 - d*z
-def _rise(u, z):
-    return 1.0 - z
-
-
-def _fall(u, z):
-    return 1.0 + z
-
-
-def _rise_partials(u, z):
-    return 0.0, -1.0
-
-
-def _fall_partials(u, z):
-    return 0.0, 1.0
-
 
 #: what a new operator of each family must write (everything else is derived or optional)
 PC_REQUIRED = ("relay_table", "relay_outputs", "state_from_relay_outputs")
@@ -158,7 +139,7 @@ def _continuous_operators():
         InverseOperator(PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5])),
         BoucWen(1.0, 0.5, 0.5, 1.5),  # a Duhem operator
         JilesAtherton(Ms=1.0, a=0.5, alpha=0.3, k=0.4, c=0.2),
-        Duhem(_rise, _fall, rising_partials=_rise_partials, falling_partials=_fall_partials),
+        relaxing_duhem(),
     ]
 
 

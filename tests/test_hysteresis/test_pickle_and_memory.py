@@ -9,6 +9,7 @@ import tracemalloc
 
 import numpy as np
 import pytest
+from duhem_support import relaxing_duhem
 
 import hysteresis
 from analysis.experiments.models import build_operator, model_names
@@ -16,7 +17,6 @@ from hysteresis import (
     BoucWen,
     Cascade,
     ContinuousPreisachModel,
-    Duhem,
     GeneralizedPlay,
     InverseOperator,
     JilesAtherton,
@@ -33,25 +33,6 @@ from hysteresis._validation import finite_array, finite_scalar, real_array
 from hysteresis.base import Hysteron
 from hysteresis.preisach import continuous
 from hysteresis.relay_table import RelayTable
-
-
-# a Duhem operator of module-level functions (picklable): z relaxes toward +1 while the input
-# rises and toward -1 while it falls, dz/du = 1 - d*z
-def _rise(u, z):
-    return 1.0 - z
-
-
-def _fall(u, z):
-    return 1.0 + z
-
-
-def _rise_partials(u, z):
-    return 0.0, -1.0
-
-
-def _fall_partials(u, z):
-    return 0.0, 1.0
-
 
 U = np.sin(np.linspace(0.0, 40.0, 1500)) * np.linspace(0.3, 7.0, 1500)
 PROTOCOLS = sorted({4, pickle.DEFAULT_PROTOCOL, pickle.HIGHEST_PROTOCOL})
@@ -91,9 +72,7 @@ def _operators() -> dict[str, Hysteron]:
         "inverse": InverseOperator(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5])),
         "bouc-wen": BoucWen(1.0, 0.5, 0.5, 1.5),
         "jiles-atherton": JilesAtherton(Ms=1.0, a=0.5, alpha=0.3, k=0.4, c=0.2),
-        "duhem": Duhem(
-            _rise, _fall, rising_partials=_rise_partials, falling_partials=_fall_partials
-        ),
+        "duhem": relaxing_duhem(),
         "rfim": RandomFieldIsing.lattice((4, 4), disorder=1.5, seed=0),
         "switching-sum": RandomFieldIsing.lattice((6,), disorder=1.0, seed=1) + Relay(1.0, 0.0),
     }
