@@ -76,7 +76,7 @@ from hysteresis._validation import (
     frozen_state_reduce,
 )
 from hysteresis.base import ContinuousHysteron
-from hysteresis.flow import BranchFlow
+from hysteresis.flow import BranchFlow, CompiledFlow
 
 __all__ = ["Duhem", "DuhemState", "RTOL", "ATOL"]
 
@@ -98,6 +98,16 @@ class DuhemState:
 
     def __reduce__(self) -> tuple:
         return frozen_state_reduce(self)
+
+
+def _z_label(i: int) -> str:
+    """The compiled engine's tangent row of the current internal variable."""
+    return "z"
+
+
+def _memory(state: DuhemState) -> float:
+    """The internal variable of a state (the compiled description's ``memory``)."""
+    return state.z
 
 
 def _label(direction: int) -> str:
@@ -325,6 +335,32 @@ class Duhem(ContinuousHysteron[DuhemState]):
         """``h(u, z)`` of the state (``z`` without an output map)."""
         state = self._check_state(state)
         return self.map_output(state.input, state.z)
+
+    # -- the compiled path ----------------------------------------------------------------------
+    def compiled_model(self) -> tuple[str, dict[str, float]] | None:
+        """The compiled right-hand side this operator's slope and output equal, as ``(model,
+        parameters)`` with ``model`` one of :mod:`hysteresis._duhem_kernels`' models
+        (``"bouc_wen"``: ``A, beta, gamma, n``; ``"jiles_atherton"``: ``ms, a, k, c,
+        alpha``), or ``None`` (the default: a general Duhem operator of user functions runs on
+        the generic engine). A subclass that changes ``slope`` or the output returns ``None``."""
+        return None
+
+    def compiled_flow(self) -> CompiledFlow | None:
+        """The ``"duhem"`` description of :meth:`compiled_model` for the oscillator's compiled
+        Duhem engine (``(q, v, z)`` integrated in time, :class:`hysteresis.flow.CompiledFlow`),
+        or ``None``."""
+        described = self.compiled_model()
+        if described is None:
+            return None
+        model, parameters = described
+        return CompiledFlow(
+            kind="duhem",
+            label=_z_label,
+            model=model,
+            parameters=parameters,
+            memory=_memory,
+            make_state=self.state,
+        )
 
     def apply(self, inputs: Any, state: DuhemState | None = None) -> tuple[np.ndarray, DuhemState]:
         """Integrate the ODE along every monotone piece of ``inputs`` (the input moves
