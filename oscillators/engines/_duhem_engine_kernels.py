@@ -60,7 +60,11 @@ import math
 import numpy as np
 from numba import njit
 
-from hysteresis._duhem_kernels import bouc_wen_slope
+from hysteresis._duhem_kernels import (
+    bouc_wen_slope,
+    jiles_atherton_magnetization,
+    jiles_atherton_slope,
+)
 from oscillators.engines import _dop853_kernel as _dop
 from oscillators.engines._play_kernels import _hermite_extrema
 from oscillators.engines._roots import find_root, secant_start
@@ -70,8 +74,8 @@ _N_STAGES = _dop.N_STAGES
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
 N_PAR = 8
 I_DIR, I_PERIOD, I_EVENTS, I_SAMPLE, I_NEV, I_RECORD, I_K, I_MODEL = range(8)
-I_STUCK, I_BAD, I_KINKS, I_SIDE = range(8, 12)
-N_IST = 12
+I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED = range(8, 13)
+N_IST = 13
 S_TAU, S_Q, S_V, S_Z, S_HNEXT = range(5)
 N_ST = 5
 
@@ -93,6 +97,9 @@ ILL_POSED = 6
 GRADE_FIRST = 2.0**-13
 #: the least subnormal number: a stage state on the step's side of the kink (see _slope)
 _TINY = 5e-324
+#: Jiles–Atherton: a stage on the side δ_M = 1 that rounding puts at δ_M = 0 is evaluated this
+#: far (relative to M_s) inside it (see _slope): its slope is then ~1e-12·M_s/k instead of ~0
+KINK_NUDGE = 1e-12
 #: events at zero distance in a row before STUCK
 _MAX_STUCK = 50
 
@@ -101,23 +108,75 @@ _MAX_STUCK = 50
 # the model
 # --------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
+def _natural(ist, mp, q, z, d):
+    """``(g, ∂g/∂q, ∂g/∂z)`` of the model in direction ``d`` as its kernel gives it; a state
+    where the model is ill-posed sets ``I_BAD`` (and gives zeros)."""
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        g, gz = bouc_wen_slope(z, d, mp[0], mp[1], mp[2], mp[3])
+        return g, 0.0, gz
+    g, gh, gi, ok = jiles_atherton_slope(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4])
+    if not ok:
+        ist[I_BAD] = 1
+        return 0.0, 0.0, 0.0
+    return g, gh, gi
+
+
+@njit(cache=True, inline="always")
 def _slope(ist, mp, q, z, d):
-    """``(g, ∂g/∂q, ∂g/∂z)`` of the model in direction ``d``. Bouc–Wen: on the side
-    ``ist[I_SIDE]`` of the kink that the step is on — a stage state a rounding error beyond
-    ``z = 0`` would take the other side's ``∂g/∂z`` (for ``n = 1`` it jumps by ``2γ``, and
-    one such stage errs the tangent by ``~h·b·v·2γ``, measured 1e-4), so it is evaluated at the
-    least subnormal number of the step's side (``|z|ⁿ`` is 0 there to rounding)."""
+    """``(g, ∂g/∂q, ∂g/∂z)`` on the side ``ist[I_SIDE]`` of the kink that the step is on (no
+    step straddles a kink; its stage states may lie a little beyond it, and there each side's
+    own smooth formula holds, not the other side's, whose ``∂g/∂z`` differs by a finite jump:
+    one such stage errs the tangent by ``~h·b·v·jump``, measured 1e-4).
+
+    Bouc–Wen (kink ``z = 0``): a stage beyond it is evaluated at the least subnormal number of
+    the step's side (``|z|ⁿ`` is 0 there to rounding). Jiles–Atherton (kink where ``δ_M``
+    switches, ``M_an = M_irr``): on the side ``δ_M = 0`` the slope is 0 (exactly that side's
+    formula); on the side ``δ_M = 1`` a stage the kernel puts at ``δ_M = 0`` (a rounding error
+    away) is evaluated ``KINK_NUDGE·M_s`` inside it."""
     side = ist[I_SIDE]
-    if side * z <= 0.0:
-        z = side * _TINY
-    g, gz = bouc_wen_slope(z, d, mp[0], mp[1], mp[2], mp[3])
-    return g, 0.0, gz
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        if side * z <= 0.0:
+            z = side * _TINY
+        return _natural(ist, mp, q, z, d)
+    if side < 0:
+        return 0.0, 0.0, 0.0
+    g, gh, gi = _natural(ist, mp, q, z, d)
+    if g == 0.0 and gi == 0.0 and gh == 0.0:
+        g, gh, gi = _natural(ist, mp, q, z - d * KINK_NUDGE * mp[0], d)
+    return g, gh, gi
+
+
+@njit(cache=True, inline="always")
+def _regime(ist, mp, q, z, d):
+    """The function whose sign tells the side of the kink, with ``(∂/∂q, ∂/∂z)``: Bouc–Wen
+    ``z``; Jiles–Atherton ``g_d − g_{−d}`` (positive where ``δ_M = 1`` for ``d``: ``g_d > 0 =
+    g_{−d}``; negative where ``δ_M = 0``: ``g_d = 0 < g_{−d}``; continuous through the kink)."""
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        return z, 0.0, 1.0
+    g1, h1, i1 = _natural(ist, mp, q, z, d)
+    g2, h2, i2 = _natural(ist, mp, q, z, -d)
+    return g1 - g2, h1 - h2, i1 - i2
+
+
+@njit(cache=True, inline="always")
+def _crossed(ist, mp, q, z, d, side):
+    """Whether ``(q, z)`` lies beyond the kink seen from ``side`` (Bouc–Wen: ``side·z <= 0``;
+    Jiles–Atherton from ``δ_M = 0``: ``g_d != 0``; an ill-posed point there is not flagged,
+    the step to the kink decides)."""
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        return side * z <= 0.0
+    bad = ist[I_BAD]
+    g = _natural(ist, mp, q, z, d)[0]
+    ist[I_BAD] = bad
+    return g != 0.0
 
 
 @njit(cache=True, inline="always")
 def _output(ist, mp, q, z):
     """``(y, ∂y/∂q, ∂y/∂z)``: the operator's output."""
-    return z, 0.0, 1.0
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        return z, 0.0, 1.0
+    return jiles_atherton_magnetization(q, z, mp[0], mp[1], mp[3], mp[4])
 
 
 @njit(cache=True)
@@ -127,11 +186,21 @@ def output_now(ist, st, mp):
 
 
 @njit(cache=True)
-def slope_now(ist, st, mp, d):
-    """``(g, ∂g/∂q, ∂g/∂z)`` at the current state in direction ``d``."""
-    z = st[S_Z]
-    ist[I_SIDE] = d if z == 0.0 else (1 if z > 0.0 else -1)
-    return _slope(ist, mp, st[S_Q], z, d)
+def side_now(ist, st, mp, d):
+    """The side of the kink the current state is on (``I_SIDE``), or at the kink the side it
+    moves into (Bouc–Wen: ``z' = A·v`` at ``z = 0``; Jiles–Atherton: after a kink landed on,
+    the other side); sets ``I_BAD`` where the model is ill-posed."""
+    r = _regime(ist, mp, st[S_Q], st[S_Z], d)[0]
+    if ist[I_LANDED]:
+        side = -ist[I_SIDE]
+    elif r == 0.0:
+        side = d if ist[I_MODEL] == MODEL_BOUC_WEN else -1
+    else:
+        side = 1 if r > 0.0 else -1
+    ist[I_LANDED] = 0
+    ist[I_SIDE] = side
+    _natural(ist, mp, st[S_Q], st[S_Z], d)
+    return side
 
 
 # --------------------------------------------------------------------------------------------
@@ -197,10 +266,11 @@ def _event_fn(tau, args):
     par, ist, mp, Y, t, y, z, dz, K, tmp, which, s = args
     _rk8(par, ist, mp, Y, t, y, tau, z, K, tmp, 0)
     _rhs(par, ist, mp, Y, t + tau, z, dz, 0)
+    d = ist[I_DIR]
     if which == 0:
-        d = ist[I_DIR]
         return -d * z[1], -d * dz[1]
-    return -s * z[2], -s * dz[2]
+    r, rq, rz = _regime(ist, mp, z[0], z[2], d)
+    return -s * r, -s * (rq * z[1] + rz * dz[2])
 
 
 @njit(cache=True, inline="always")
@@ -227,7 +297,8 @@ def _args(par, ist, mp, Y, t, y, which, s, work):
 def _locate(par, ist, mp, Y, t, y, hi, which, s, work):
     """Event time in (0, hi] of the step from (t, y): which 0 the reversal, 1 the kink."""
     args = _args(par, ist, mp, Y, t, y, which, s, work)
-    g_lo = -ist[I_DIR] * y[1] if which == 0 else -s * y[2]
+    d = ist[I_DIR]
+    g_lo = -d * y[1] if which == 0 else -s * _regime(ist, mp, y[0], y[2], d)[0]
     g_hi = _event_fn(hi, args)[0]
     tau = secant_start(0.0, hi, g_lo, g_hi)
     return find_root(_event_fn, args, 0.0, hi, tau, t)
@@ -332,9 +403,6 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
         h = rem if last else h_max
         t = st[S_TAU]
         d = ist[I_DIR]
-        # the side of the kink this step is on (no step straddles it): z's sign, or at the
-        # kink the side it moves into (z' = A·v there)
-        ist[I_SIDE] = d if y[2] == 0.0 else (1 if y[2] > 0.0 else -1)
         _stages(par, ist, mp, Y, t, y, h, y1, K, tmp, k, first)
         first = 0
         if ist[I_BAD]:
@@ -361,12 +429,14 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
                     tau = mid
         if kind == -1:
             tau = _locate(par, ist, mp, Y, t, y, tau, 0, 0.0, loc)
-        if kinked and y[2] != 0.0:
-            # the kink z = 0 first? (z is monotone up to the reversal: z' = g·v, g(0) = A > 0)
-            s = 1.0 if y[2] > 0.0 else -1.0
-            z_end = y1[2] if kind == 0 else _state_at(par, ist, mp, Y, t, y, tau, loc)[2]
-            if s * z_end <= 0.0:
-                tau = _locate(par, ist, mp, Y, t, y, tau, 1, s, loc)
+        side = ist[I_SIDE]
+        if kinked or side < 0:
+            # a kink before the step's end (or the reversal)? Bouc–Wen: z changed sign (z is
+            # monotone up to the reversal: z' = g·v, g(0) = A > 0). Jiles–Atherton: δ_M
+            # switched on (it switches off only at a reversal: M_irr relaxes toward M_an)
+            end = y1 if kind == 0 else _state_at(par, ist, mp, Y, t, y, tau, loc)
+            if _crossed(ist, mp, end[0], end[2], d, side):
+                tau = _locate(par, ist, mp, Y, t, y, tau, 1, float(side), loc)
                 kind = 1
         if kind == 0:
             for r in range(n):
@@ -386,15 +456,19 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
             y[r] = y1[r]
         _add_time(par, ist, st, tau)
         if kind > 0:
-            y[2] = 0.0  # z := 0 exactly (the kink)
+            if kinked:
+                y[2] = 0.0  # z := 0 exactly (the kink)
             ist[I_KINKS] += 1
+            ist[I_LANDED] = 1  # the side flips (side_now)
             if graded:
                 st[S_HNEXT] = h_step * GRADE_FIRST
             _store(st, Y, y, k)
+            side_now(ist, st, mp, d)
         else:
             y[1] = 0.0  # v := 0 exactly; the tangent passes unchanged (module docstring)
             ist[I_DIR] = -d
             _store(st, Y, y, k)
+            side_now(ist, st, mp, -d)
             _record_event(par, ist, st, mp, ev)
         ist[I_STUCK] = ist[I_STUCK] + 1 if tau == 0.0 else 0
         if ist[I_STUCK] > _MAX_STUCK:

@@ -181,9 +181,9 @@ class CompiledDuhemEngine(TangentFlow, Engine):
             acc = -q + math.cos(self._phi0) + coupling * float(y)
             d = 1 if acc >= 0.0 else -1
         self._ist[_k.I_DIR] = d
-        # a state the model cannot integrate is refused before any step (Jiles–Atherton's
-        # 1 − αχ <= 0): one slope evaluation there
-        _k.slope_now(self._ist, self._st, self._mp, d)
+        # the side of the kink the state is on; a state the model cannot integrate is refused
+        # before any step (Jiles–Atherton's 1 − αχ <= 0)
+        _k.side_now(self._ist, self._st, self._mp, d)
         self._check_posed()
 
     # -- helpers -------------------------------------------------------------------------------
