@@ -77,7 +77,7 @@ from hysteresis._validation import (
     frozen_state_reduce,
 )
 from hysteresis.base import ContinuousHysteron
-from hysteresis.flow import BranchFlow
+from hysteresis.flow import BranchFlow, CompiledFlow
 
 __all__ = ["Duhem", "DuhemDomainError", "DuhemState", "RTOL", "ATOL"]
 
@@ -105,6 +105,16 @@ class DuhemDomainError(ValueError):
     """The branch ODE of a Duhem operator is ill-posed at the state reached (an operator's
     ``slope`` raises it, e.g. Jiles–Atherton's pole). A branch solution integrates up to where
     it occurs and raises it only for inputs at or beyond that point."""
+
+
+def _z_label(i: int) -> str:
+    """The compiled engine's tangent row of the current internal variable."""
+    return "z"
+
+
+def _memory(state: DuhemState) -> float:
+    """The internal variable of a state (the compiled description's ``memory``)."""
+    return state.z
 
 
 def _label(direction: int) -> str:
@@ -371,6 +381,32 @@ class Duhem(ContinuousHysteron[DuhemState]):
         """``h(u, z)`` of the state (``z`` without an output map)."""
         state = self._check_state(state)
         return self.map_output(state.input, state.z)
+
+    # -- the compiled path ----------------------------------------------------------------------
+    def compiled_model(self) -> tuple[str, dict[str, float]] | None:
+        """The compiled right-hand side this operator's slope and output equal, as ``(model,
+        parameters)`` with ``model`` one of :mod:`hysteresis._duhem_kernels`' models
+        (``"bouc_wen"``: ``A, beta, gamma, n``; ``"jiles_atherton"``: ``ms, a, k, c,
+        alpha``), or ``None`` (the default: a general Duhem operator of user functions runs on
+        the generic engine). A subclass that changes ``slope`` or the output returns ``None``."""
+        return None
+
+    def compiled_flow(self) -> CompiledFlow | None:
+        """The ``"duhem"`` description of :meth:`compiled_model` for the oscillator's compiled
+        Duhem engine (``(q, v, z)`` integrated in time, :class:`hysteresis.flow.CompiledFlow`),
+        or ``None``."""
+        described = self.compiled_model()
+        if described is None:
+            return None
+        model, parameters = described
+        return CompiledFlow(
+            kind="duhem",
+            label=_z_label,
+            model=model,
+            parameters=parameters,
+            memory=_memory,
+            make_state=self.state,
+        )
 
     def apply(self, inputs: Any, state: DuhemState | None = None) -> tuple[np.ndarray, DuhemState]:
         """Integrate the ODE along every monotone piece of ``inputs`` (the input moves

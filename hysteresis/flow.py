@@ -100,7 +100,7 @@ variable's is ``δu``; ``driven`` is called with a scalar ``u``). ``slaved`` is 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -267,6 +267,12 @@ class CompiledFlow:
     ``kind`` ``"preisach"``: ``everett``, the model's Everett
     function as a :class:`~hysteresis.preisach.everett_table.CompiledEverett` (the states have
     ``extrema``; the operator rebuilds a state with ``state_from_extrema(extrema)``).
+    ``kind`` ``"duhem"``: a Duhem operator whose slope is one of the compiled right-hand sides
+    of :mod:`hysteresis._duhem_kernels`: ``model`` names it (``"bouc_wen"``,
+    ``"jiles_atherton"``), ``parameters`` maps the model's parameter names to values,
+    ``memory(state)`` is the internal variable ``z`` of a state and ``make_state(z, input,
+    direction)`` the state from it; the engine integrates ``(q, v, z)`` in time and names the
+    tangent row of ``z`` ``label(0)``.
     ``label(i)`` names memory variable ``i`` as :meth:`BranchFlow.labels` does (``"w3"``,
     ``"m2"``, ...), so that both engines name the tangent space alike.
     """
@@ -283,6 +289,9 @@ class CompiledFlow:
     relay_beta: np.ndarray | None = None
     relay_weights: np.ndarray | None = None
     relay_outputs: Callable | None = None
+    model: str | None = None
+    parameters: Mapping[str, float] | None = None
+    memory: Callable | None = None
 
     def __post_init__(self) -> None:
         if self.kind == "prandtl_ishlinskii":
@@ -313,5 +322,16 @@ class CompiledFlow:
         elif self.kind == "preisach":
             if self.everett is None:
                 raise ValueError("a 'preisach' CompiledFlow needs its compiled Everett function")
+        elif self.kind == "duhem":
+            if not isinstance(self.model, str) or not self.model:
+                raise ValueError(f"a 'duhem' CompiledFlow needs a model name, got {self.model!r}")
+            if self.memory is None or self.make_state is None or self.parameters is None:
+                raise ValueError("a 'duhem' CompiledFlow needs parameters, memory and make_state")
+            values = {str(k): float(v) for k, v in dict(self.parameters).items()}
+            if not all(math.isfinite(v) for v in values.values()):
+                raise ValueError(f"parameters of a 'duhem' CompiledFlow must be finite: {values}")
+            object.__setattr__(self, "parameters", values)
         else:
-            raise ValueError(f"kind must be 'prandtl_ishlinskii' or 'preisach', got {self.kind!r}")
+            raise ValueError(
+                f"kind must be 'prandtl_ishlinskii', 'preisach' or 'duhem', got {self.kind!r}"
+            )

@@ -18,6 +18,11 @@ engine's memory labels (never by class):
   ``make_state``: a sum of plays, erf plays, Prandtl–Ishlinskii operators and relays): ``x = (q,
   v, w_0..)`` with the wagons of every play part (labels ``"k:w"``, ``"k:w{j}"``), the relays'
   configuration carried by the template state as for relay-type operators;
+* **a Duhem operator on the compiled Duhem engine** (its ``compiled_flow()`` of kind
+  ``"duhem"``: Bouc–Wen, Jiles–Atherton; tangent row ``"z"``): ``x = (q, v, z)`` with ``z``
+  the current internal variable, rebuilt by the description's ``make_state(z, q, direction)``
+  (the generic engine's branch memory ``"z-"``/``"z+"`` changes its label at every reversal
+  and has no such form);
 * **a staircase** (labels ``"M1", "m1", "M2", ...``: a continuous Preisach model, any density):
   ``x = (q, v, e_1 .. e_n)`` with ``e_1 .. e_n`` the remembered extrema of the staircase at the
   section (all but its last entry, which is the running input ``q``), rebuilt by the model's
@@ -85,6 +90,9 @@ class StateCoordinates:
         spec = None if op.piecewise_constant else op.compiled_flow()
         if op.piecewise_constant:
             self.kind = "relay"
+        elif spec is not None and spec.kind == "duhem" and memory == (spec.label(0),):
+            self.kind = "duhem"
+            self._spec = spec
         elif spec is not None and getattr(spec, "make_state", None) is not None:
             self.kind = "composite"
             self._spec = spec
@@ -104,8 +112,8 @@ class StateCoordinates:
             raise ValueError(
                 f"the memory of {op!r} (tangent rows {memory}) cannot be set from a vector of "
                 "fixed size; periodic orbits are computed for relay-type operators, plays, "
-                "Prandtl–Ishlinskii operators, continuous Preisach models and sums of plays "
-                "and relays"
+                "Prandtl–Ishlinskii operators, continuous Preisach models, sums of plays "
+                "and relays, and Bouc–Wen and Jiles–Atherton on the compiled Duhem engine"
             )
         wagons = self.kind in ("wagon", "wagons")
         self.half_widths = self._half_widths(op) if wagons else np.zeros(0)
@@ -129,6 +137,8 @@ class StateCoordinates:
         if self.kind == "relay":
             return np.array(head)
         op_state = state.operator_state
+        if self.kind == "duhem":
+            return np.array([*head, float(self._spec.memory(op_state))])
         if self.kind == "wagon":
             return np.array([*head, float(op_state.position)])
         if self.kind == "composite":
@@ -156,6 +166,10 @@ class StateCoordinates:
         op = self.system.operator
         if self.kind == "relay":
             op_state = template.operator_state
+        elif self.kind == "duhem":
+            # the direction is informative only (hysteresis.duhem): the sign of v
+            direction = 1 if v > 0.0 else (-1 if v < 0.0 else 0)
+            op_state = self._spec.make_state(float(x[2]), q, direction)
         elif self.kind == "composite":
             w = np.clip(x[2:], q - self.half_widths, q + self.half_widths)
             spec = self._spec

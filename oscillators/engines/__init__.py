@@ -12,10 +12,12 @@
   ``branch_flow``);
 * :mod:`~oscillators.engines.compiled_continuous` — :class:`CompiledContinuousEngine`
   (compiled RK8 for Prandtl–Ishlinskii and continuous Preisach, ``compiled_flow()``);
+* :mod:`~oscillators.engines.compiled_duhem` — :class:`CompiledDuhemEngine` (compiled RK8
+  of ``(q, v, z)`` for Bouc–Wen and Jiles–Atherton, a ``"duhem"`` ``compiled_flow()``);
 * :mod:`~oscillators.engines.select` — :func:`select_engine` (from the operator's contract).
 
 Compiled kernels: ``_relay_kernels.py``, ``_play_kernels.py``, ``_continuous_kernels.py``,
-``_dop853_kernel.py``.
+``_duhem_engine_kernels.py``, ``_dop853_kernel.py``.
 """
 
 from oscillators.engines.base import (
@@ -32,6 +34,7 @@ from oscillators.engines.base import (
     wrap_phase,
 )
 from oscillators.engines.compiled_continuous import CompiledContinuousEngine
+from oscillators.engines.compiled_duhem import CompiledDuhemEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayReferenceEngine
@@ -45,6 +48,7 @@ from oscillators.engines.select import (
 __all__ = [
     "TIME_TOLERANCE",
     "CompiledContinuousEngine",
+    "CompiledDuhemEngine",
     "ContinuousEngine",
     "DivergenceError",
     "Engine",

@@ -8,6 +8,7 @@ from typing import Any
 from hysteresis.base import ContinuousHysteron
 from oscillators.engines.base import Engine
 from oscillators.engines.compiled_continuous import CompiledContinuousEngine
+from oscillators.engines.compiled_duhem import CompiledDuhemEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine
@@ -40,7 +41,9 @@ def select_engine(operator: Any) -> type[Engine]:
     ``operator.piecewise_constant`` -> :class:`RelayEngine` (the compiled kernels, or the Python
     reference path for ``method="generic"``); ``operator.compiled_play()`` not ``None`` ->
     :class:`PlayEngine`; else ``operator.compiled_flow()`` not ``None`` ->
-    :class:`CompiledContinuousEngine` (``method="generic"``: the generic engine); any other
+    :class:`CompiledContinuousEngine`, of kind ``"duhem"`` (Bouc–Wen, Jiles–Atherton: the
+    state constructor ``make_state`` comes with the description) ->
+    :class:`CompiledDuhemEngine` (``method="generic"``: the generic engine); any other
     (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow`` — with a
     one-line :class:`GenericEngineWarning` when the operator says why it has no compiled
     description (``uncompiled_reason``: a composite whose parts the compiled engines cannot
@@ -61,6 +64,8 @@ def select_engine(operator: Any) -> type[Engine]:
         _require(operator, "state", "compiled_play()", "state(position, input)", "the wagon")
         return PlayEngine
     spec = operator.compiled_flow()
+    if spec is not None and spec.kind == "duhem":
+        return CompiledDuhemEngine
     if spec is not None:
         if spec.kind == "preisach":
             _require(

@@ -1,0 +1,500 @@
+"""Compiled kernels of the Duhem engine (see :mod:`oscillators.engines.compiled_duhem`).
+
+System (paper eq. eom_2) with a Duhem operator of internal variable ``z``::
+
+    q' = v,   v' = −2ζ v − q + cos(φ0 + Ω t) + C·y(q, z),   z' = g_d(q, z)·v,   d = sign v
+
+``g_d`` the model's slope while the input moves in direction ``d`` and ``y`` its output
+(Bouc–Wen ``MODEL_BOUC_WEN``: ``y = z``; Jiles–Atherton ``MODEL_JILES_ATHERTON``: ``z`` the
+irreversible magnetisation, ``y = M(H, M_irr)``). The right-hand sides are those of
+:mod:`hysteresis._duhem_kernels` (their one home); this module integrates them.
+
+Layouts (named constants below): ``par`` (float64) ``P_ZETA`` ζ, ``P_OMEGA`` Ω, ``P_C`` C,
+``P_PHI0`` φ0, ``P_H`` the RK8 step, ``P_PERIOD`` T, ``P_BOUND`` the divergence bound,
+``P_T0`` the start time; ``mp`` the model's parameters in the kernel's order (Bouc–Wen
+``A, β, γ, n``; Jiles–Atherton ``M_s, a, k, c, α``); ``ist`` (int64) ``I_DIR`` d,
+``I_PERIOD`` period index, ``I_EVENTS`` reversals since the start, ``I_SAMPLE`` next sample,
+``I_NEV`` events in ``ev``, ``I_RECORD``, ``I_K`` tangent columns (0: off), ``I_MODEL``,
+``I_STUCK`` events at zero distance in a row, ``I_BAD`` the model was evaluated where it is
+ill-posed, ``I_KINKS`` kinks landed on, ``I_SIDE`` the side of the kink the current step is
+on; ``st`` (float64) ``S_TAU`` time in the period,
+``S_Q``, ``S_V``, ``S_Z``, ``S_HNEXT`` the next graded step behind a kink (0: none).
+
+Tangent flow: ``Y`` (4, k), rows δq, δv, δφ (zero without the phase), δz::
+
+    δq' = δv
+    δv' = −2ζ δv − δq − sin φ δφ + C (∂y/∂q δq + ∂y/∂z δz)
+    δz' = g_d δv + v (∂g/∂q δq + ∂g/∂z δz)
+
+Events. A **reversal** ``v = 0`` switches ``d``; the vector field is continuous there (``z' =
+g_d·v`` is 0 on both sides), so the saltation matrix ``I + (f₊ − f₋)nᵀ/(nᵀf₋)`` is the
+identity and the tangent passes unchanged (only the coefficient ``g_d`` of ``δv`` in ``δz'``
+changes). A **kink** of ``g`` (Bouc–Wen: ``z = 0``, where ``|z|ⁿ`` is not smooth) is landed on
+so that no RK8 step straddles it; ``g`` is continuous there, so again no saltation. A step
+whose end has ``d·v <= 0`` (or whose cubic Hermite interpolant of ``v`` dips through zero)
+contains the reversal; one whose ``z`` changed sign, the kink; both are located by the
+safeguarded Newton root finder (:func:`oscillators.engines._roots.find_root`) on the step's own
+RK8 map, then ``v := 0`` or ``z := 0`` exactly. The step's end derivative (computed for the
+velocity-dip test) is the next step's first stage.
+
+A non-integer exponent ``n`` leaves ``|z|ⁿ`` singular at the kink even on one side (``z`` is
+``~(t − t*)^(n+1)`` near it), so an RK8 step that starts or ends there errs by ``~h^(n+1)``
+(measured: 8e-9 over 40 time units at n = 1.5, h = 0.05). The steps are therefore graded
+geometrically on both sides: approaching, each step is half the predicted distance ``−z/z'``
+down to ``h·GRADE_FIRST``, which crosses the kink and locates it; behind it the steps grow
+from ``h·GRADE_FIRST`` by doubling. A step as long as its distance from the singularity errs
+by ``~h_j^(n+1)`` times the RK8 error constant and a binomial coefficient ~1e-3 (negligible), so
+the grading leaves the steps at the singularity itself, ``~(h·GRADE_FIRST)^(n+1)``
+(about 12 extra steps per kink). Integer ``n`` is smooth on each
+side: no grading.
+
+Status codes of :func:`run`: ``DONE``, ``EVENTS_FULL`` (``ev`` full: drained and called again),
+``DIVERGED``, ``STUCK``, ``ILL_POSED`` (the model's slope is undefined at a state reached:
+Jiles–Atherton with ``1 − α·χ <= 0``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hysteresis._duhem_kernels import (
+    bouc_wen_slope,
+    jiles_atherton_magnetization,
+    jiles_atherton_slope,
+)
+from oscillators.engines import _dop853_kernel as _dop
+from oscillators.engines._play_kernels import _hermite_extrema
+from oscillators.engines._roots import find_root, secant_start
+
+_N_STAGES = _dop.N_STAGES
+
+P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
+N_PAR = 8
+I_DIR, I_PERIOD, I_EVENTS, I_SAMPLE, I_NEV, I_RECORD, I_K, I_MODEL = range(8)
+I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED = range(8, 13)
+N_IST = 13
+S_TAU, S_Q, S_V, S_Z, S_HNEXT = range(5)
+N_ST = 5
+
+MODEL_BOUC_WEN = 0
+MODEL_JILES_ATHERTON = 1
+
+#: the ``kind`` of a recorded reversal (as the generic engine's)
+EVENT_REVERSAL = -1
+
+DONE = 0
+EVENTS_FULL = 2
+DIVERGED = 3
+STUCK = 4
+ILL_POSED = 6
+
+#: the least graded step at a kink of a non-integer exponent, relative to the step (module
+#: docstring): the ungraded steps at the kink err by ~h^(n+1) (8e-9 over 40 time units at
+#: n = 1.5), the graded ones by (h·GRADE_FIRST)^(n+1), (2^-6)^2.5 = 3e-5 of that; 6 halvings
+#: on each side (measured 1e-12 over 40 time units)
+GRADE_FIRST = 2.0**-6
+#: the least subnormal number: a stage state on the step's side of the kink (see _slope)
+_TINY = 5e-324
+#: Jiles–Atherton: a stage on the side δ_M = 1 that rounding puts at δ_M = 0 is evaluated this
+#: far (relative to M_s) inside it (see _slope): its slope is then ~1e-12·M_s/k instead of ~0
+KINK_NUDGE = 1e-12
+#: events at zero distance in a row before STUCK
+_MAX_STUCK = 50
+
+
+# --------------------------------------------------------------------------------------------
+# the model
+# --------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _natural(ist, mp, q, z, d):
+    """``(g, ∂g/∂q, ∂g/∂z)`` of the model in direction ``d`` as its kernel gives it; a state
+    where the model is ill-posed sets ``I_BAD`` (and gives zeros)."""
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        g, gz = bouc_wen_slope(z, d, mp[0], mp[1], mp[2], mp[3])
+        return g, 0.0, gz
+    g, gh, gi, ok = jiles_atherton_slope(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4])
+    if not ok:
+        ist[I_BAD] = 1
+        return 0.0, 0.0, 0.0
+    return g, gh, gi
+
+
+@njit(cache=True, inline="always")
+def _slope(ist, mp, q, z, d):
+    """``(g, ∂g/∂q, ∂g/∂z)`` on the side ``ist[I_SIDE]`` of the kink that the step is on (no
+    step straddles a kink; its stage states may lie a little beyond it, and there each side's
+    own smooth formula holds, not the other side's, whose ``∂g/∂z`` differs by a finite jump:
+    one such stage errs the tangent by ``~h·b·v·jump``, measured 1e-4).
+
+    Bouc–Wen (kink ``z = 0``): a stage beyond it is evaluated at the least subnormal number of
+    the step's side (``|z|ⁿ`` is 0 there to rounding). Jiles–Atherton (kink where ``δ_M``
+    switches, ``M_an = M_irr``): on the side ``δ_M = 0`` the slope is 0 (exactly that side's
+    formula); on the side ``δ_M = 1`` a stage the kernel puts at ``δ_M = 0`` (a rounding error
+    away) is evaluated ``KINK_NUDGE·M_s`` inside it."""
+    side = ist[I_SIDE]
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        if side * z <= 0.0:
+            z = side * _TINY
+        return _natural(ist, mp, q, z, d)
+    if side < 0:
+        return 0.0, 0.0, 0.0
+    g, gh, gi = _natural(ist, mp, q, z, d)
+    if g == 0.0 and gi == 0.0 and gh == 0.0:
+        g, gh, gi = _natural(ist, mp, q, z - d * KINK_NUDGE * mp[0], d)
+    return g, gh, gi
+
+
+@njit(cache=True, inline="always")
+def _regime(ist, mp, q, z, d):
+    """The function whose sign tells the side of the kink, with ``(∂/∂q, ∂/∂z)``: Bouc–Wen
+    ``z``; Jiles–Atherton ``g_d − g_{−d}`` (positive where ``δ_M = 1`` for ``d``: ``g_d > 0 =
+    g_{−d}``; negative where ``δ_M = 0``: ``g_d = 0 < g_{−d}``; continuous through the kink)."""
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        return z, 0.0, 1.0
+    g1, h1, i1 = _natural(ist, mp, q, z, d)
+    g2, h2, i2 = _natural(ist, mp, q, z, -d)
+    return g1 - g2, h1 - h2, i1 - i2
+
+
+@njit(cache=True, inline="always")
+def _crossed(ist, mp, q, z, d, side):
+    """Whether ``(q, z)`` lies beyond the kink seen from ``side`` (Bouc–Wen: ``side·z <= 0``;
+    Jiles–Atherton from ``δ_M = 0``: ``g_d != 0``; an ill-posed point there is not flagged,
+    the step to the kink decides)."""
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        return side * z <= 0.0
+    bad = ist[I_BAD]
+    g = _natural(ist, mp, q, z, d)[0]
+    ist[I_BAD] = bad
+    return g != 0.0
+
+
+@njit(cache=True, inline="always")
+def _output(ist, mp, q, z):
+    """``(y, ∂y/∂q, ∂y/∂z)``: the operator's output."""
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        return z, 0.0, 1.0
+    return jiles_atherton_magnetization(q, z, mp[0], mp[1], mp[3], mp[4])
+
+
+@njit(cache=True)
+def output_now(ist, st, mp):
+    """The operator output at the current state."""
+    return _output(ist, mp, st[S_Q], st[S_Z])[0]
+
+
+@njit(cache=True)
+def side_now(ist, st, mp, d):
+    """The side of the kink the current state is on (``I_SIDE``), or at the kink the side it
+    moves into (Bouc–Wen: ``z' = A·v`` at ``z = 0``; Jiles–Atherton: after a kink landed on,
+    the other side); sets ``I_BAD`` where the model is ill-posed."""
+    r = _regime(ist, mp, st[S_Q], st[S_Z], d)[0]
+    if ist[I_LANDED]:
+        side = -ist[I_SIDE]
+    elif r == 0.0:
+        side = d if ist[I_MODEL] == MODEL_BOUC_WEN else -1
+    else:
+        side = 1 if r > 0.0 else -1
+    ist[I_LANDED] = 0
+    ist[I_SIDE] = side
+    _natural(ist, mp, st[S_Q], st[S_Z], d)
+    return side
+
+
+# --------------------------------------------------------------------------------------------
+# the RK8 step
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _rhs(par, ist, mp, Y, t, y, dy, k):
+    """Right-hand side of (q, v, z) and of k tangent columns (δq, δv, δz) at time t."""
+    zeta = par[P_ZETA]
+    c = par[P_C]
+    q = y[0]
+    v = y[1]
+    z = y[2]
+    ph = par[P_PHI0] + par[P_OMEGA] * t
+    g, gq, gz = _slope(ist, mp, q, z, ist[I_DIR])
+    out, yq, yz = _output(ist, mp, q, z)
+    dy[0] = v
+    dy[1] = -2.0 * zeta * v - q + math.cos(ph) + c * out
+    dy[2] = g * v
+    if k > 0:
+        sph = math.sin(ph)
+        cq = c * yq - 1.0
+        cz = c * yz
+        vq = v * gq
+        vz = v * gz
+        for j in range(k):
+            dq = y[3 + 3 * j]
+            dv = y[4 + 3 * j]
+            dz = y[5 + 3 * j]
+            dy[3 + 3 * j] = dv
+            dy[4 + 3 * j] = -2.0 * zeta * dv + cq * dq + cz * dz - sph * Y[2, j]
+            dy[5 + 3 * j] = g * dv + vq * dq + vz * dz
+
+
+@njit(cache=True)
+def _rk8(par, ist, mp, Y, t, y, h, out, K, tmp, k):
+    """One 8th-order Dormand–Prince step from (t, y) over h into ``out`` (3 + 3k entries)."""
+    _stages(par, ist, mp, Y, t, y, h, out, K, tmp, k, 0)
+
+
+@njit(cache=True)
+def _stages(par, ist, mp, Y, t, y, h, out, K, tmp, k, first):
+    """The RK8 step (:func:`oscillators.engines._dop853_kernel.rk8_step`, written around its
+    stage and end sums: the right-hand side takes arrays) with stages ``first``.. evaluated
+    (``first = 1``: ``K[0] = f(t, y)`` is there, the previous step's end derivative)."""
+    n = 3 + 3 * k
+    if first == 0:
+        _rhs(par, ist, mp, Y, t, y, K[0], k)
+    for i in range(1, _N_STAGES):
+        ti = _dop.rk8_stage(i, t, y, h, K, tmp, n)
+        _rhs(par, ist, mp, Y, ti, tmp, K[i], k)
+    _dop.rk8_end(y, h, K, out, n)
+
+
+# --------------------------------------------------------------------------------------------
+# events
+# --------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _event_fn(tau, args):
+    """Root function after the state-only RK8 step over ``tau`` from (t, y): ``which`` 0 the
+    reversal ``(−d·v, −d·a)``, 1 the kink ``(−s·z, −s·z')`` (``s`` the sign of ``z`` at the
+    step start); both negative at τ = 0."""
+    par, ist, mp, Y, t, y, z, dz, K, tmp, which, s = args
+    _rk8(par, ist, mp, Y, t, y, tau, z, K, tmp, 0)
+    _rhs(par, ist, mp, Y, t + tau, z, dz, 0)
+    d = ist[I_DIR]
+    if which == 0:
+        return -d * z[1], -d * dz[1]
+    r, rq, rz = _regime(ist, mp, z[0], z[2], d)
+    return -s * r, -s * (rq * z[1] + rz * dz[2])
+
+
+@njit(cache=True, inline="always")
+def _dip_fn(tau, args):
+    """Root function of a velocity dip's minimum: ``(d·a, 0)`` (bisection)."""
+    par, ist, mp, Y, t, y, z, dz, K, tmp, which, s = args
+    _rk8(par, ist, mp, Y, t, y, tau, z, K, tmp, 0)
+    _rhs(par, ist, mp, Y, t + tau, z, dz, 0)
+    return ist[I_DIR] * dz[1], 0.0
+
+
+@njit(cache=True)
+def _args(par, ist, mp, Y, t, y, which, s, work):
+    """Arguments of the root functions: the step start (t, y[:3]) copied into ``work``."""
+    y3 = work[3, :3]
+    y3[0] = y[0]
+    y3[1] = y[1]
+    y3[2] = y[2]
+    K = work[4 : 4 + _N_STAGES, :3]
+    return (par, ist, mp, Y, t, y3, work[0, :3], work[1, :3], K, work[2, :3], which, s)
+
+
+@njit(cache=True)
+def _locate(par, ist, mp, Y, t, y, hi, which, s, work):
+    """Event time in (0, hi] of the step from (t, y): which 0 the reversal, 1 the kink."""
+    args = _args(par, ist, mp, Y, t, y, which, s, work)
+    d = ist[I_DIR]
+    g_lo = -d * y[1] if which == 0 else -s * _regime(ist, mp, y[0], y[2], d)[0]
+    g_hi = _event_fn(hi, args)[0]
+    tau = secant_start(0.0, hi, g_lo, g_hi)
+    return find_root(_event_fn, args, 0.0, hi, tau, t)
+
+
+@njit(cache=True)
+def _state_at(par, ist, mp, Y, t, y, tau, work):
+    """The state-only RK8 step over ``tau`` from (t, y) (into ``work[0, :3]``)."""
+    args = _args(par, ist, mp, Y, t, y, 0, 0.0, work)
+    z = args[6]
+    _rk8(par, ist, mp, Y, t, args[5], tau, z, args[8], args[9], 0)
+    return z
+
+
+@njit(cache=True)
+def _add_time(par, ist, st, h):
+    st[S_TAU] += h
+    if st[S_TAU] >= par[P_PERIOD]:
+        st[S_TAU] -= par[P_PERIOD]
+        ist[I_PERIOD] += 1
+        if st[S_TAU] >= par[P_PERIOD] or st[S_TAU] < 0.0:  # rounding
+            extra = math.floor(st[S_TAU] / par[P_PERIOD])
+            ist[I_PERIOD] += int(extra)
+            st[S_TAU] -= extra * par[P_PERIOD]
+            if st[S_TAU] < 0.0:
+                st[S_TAU] = 0.0
+
+
+@njit(cache=True)
+def _load(st, Y, y, k):
+    y[0] = st[S_Q]
+    y[1] = st[S_V]
+    y[2] = st[S_Z]
+    for j in range(k):
+        y[3 + 3 * j] = Y[0, j]
+        y[4 + 3 * j] = Y[1, j]
+        y[5 + 3 * j] = Y[3, j]
+
+
+@njit(cache=True)
+def _store(st, Y, y, k):
+    st[S_Q] = y[0]
+    st[S_V] = y[1]
+    st[S_Z] = y[2]
+    for j in range(k):
+        Y[0, j] = y[3 + 3 * j]
+        Y[1, j] = y[4 + 3 * j]
+        Y[3, j] = y[5 + 3 * j]
+
+
+@njit(cache=True)
+def _record_event(par, ist, st, mp, ev):
+    """Count the reversal and, when recording, write (t, q, v, kind, M, 0)."""
+    ist[I_EVENTS] += 1
+    if ist[I_RECORD]:
+        i = ist[I_NEV]
+        ev[i, 0] = par[P_T0] + ist[I_PERIOD] * par[P_PERIOD] + st[S_TAU]
+        ev[i, 1] = st[S_Q]
+        ev[i, 2] = st[S_V]
+        ev[i, 3] = EVENT_REVERSAL
+        ev[i, 4] = output_now(ist, st, mp)
+        ev[i, 5] = 0.0
+        ist[I_NEV] = i + 1
+
+
+@njit(cache=True)
+def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
+    """Integrate to (period nt, time taut), handling every event on the way."""
+    k = ist[I_K]
+    n = 3 + 3 * k
+    y = work[0, :n]
+    y1 = work[1, :n]
+    dy = work[2, :n]
+    tmp = work[3, :n]
+    K = work[4 : 4 + _N_STAGES, :n]
+    loc = work[4 + _N_STAGES :, :]
+    h_step = par[P_H]
+    bound = par[P_BOUND]
+    kinked = ist[I_MODEL] == MODEL_BOUC_WEN
+    # a non-integer exponent makes |z|ⁿ singular at the kink (z ~ t^(n+1) behind it): the
+    # steps on both sides are graded geometrically down to h·GRADE_FIRST (module docstring)
+    graded = kinked and mp[3] != math.floor(mp[3])
+    first = 0  # 1: K[0] holds f(t, y), the previous step's end derivative
+    _load(st, Y, y, k)
+    while True:
+        rem = (nt - ist[I_PERIOD]) * par[P_PERIOD] + (taut - st[S_TAU])
+        if rem <= 0.0:
+            break
+        if ist[I_RECORD] and ist[I_NEV] >= ev.shape[0]:
+            _store(st, Y, y, k)
+            return EVENTS_FULL
+        h_max = h_step if st[S_HNEXT] == 0.0 else min(h_step, st[S_HNEXT])
+        if graded and y[2] != 0.0:
+            # approaching the kink: steps of half the predicted distance (z/z' to first
+            # order), down to the least graded step, which then crosses it and locates it
+            zdot = _slope(ist, mp, y[0], y[2], ist[I_DIR])[0] * y[1]
+            if y[2] * zdot < 0.0:
+                ahead = -y[2] / zdot
+                if ahead < 2.0 * h_max:
+                    h_max = max(0.5 * ahead, h_step * GRADE_FIRST)
+        last = rem <= h_max
+        h = rem if last else h_max
+        t = st[S_TAU]
+        d = ist[I_DIR]
+        _stages(par, ist, mp, Y, t, y, h, y1, K, tmp, k, first)
+        first = 0
+        if ist[I_BAD]:
+            _store(st, Y, y, k)
+            return ILL_POSED
+        if not (abs(y1[0]) <= bound and abs(y1[1]) <= bound and abs(y1[2]) <= bound):
+            st[S_Q] = y1[0]
+            st[S_V] = y1[1]
+            return DIVERGED
+        kind = 0
+        tau = h
+        if d * y1[1] <= 0.0:
+            kind = -1
+        else:
+            # a dip of v to zero and back within the step: cubic Hermite of d·v (a = v'); the
+            # end derivative is the next step's first stage
+            _rhs(par, ist, mp, Y, t + h, y1, dy, k)
+            vmax, vmin = _hermite_extrema(d * y[1], d * K[0, 1], d * y1[1], d * dy[1], h)
+            if vmin < 0.0:
+                args = _args(par, ist, mp, Y, t, y, 0, 0.0, loc)
+                mid = find_root(_dip_fn, args, 0.0, h, 0.5 * h, t)
+                if d * _state_at(par, ist, mp, Y, t, y, mid, loc)[1] <= 0.0:
+                    kind = -1
+                    tau = mid
+        if kind == -1:
+            tau = _locate(par, ist, mp, Y, t, y, tau, 0, 0.0, loc)
+        side = ist[I_SIDE]
+        if kinked or side < 0:
+            # a kink before the step's end (or the reversal)? Bouc–Wen: z changed sign (z is
+            # monotone up to the reversal: z' = g·v, g(0) = A > 0). Jiles–Atherton: δ_M
+            # switched on (it switches off only at a reversal: M_irr relaxes toward M_an)
+            end = y1 if kind == 0 else _state_at(par, ist, mp, Y, t, y, tau, loc)
+            if _crossed(ist, mp, end[0], end[2], d, side):
+                tau = _locate(par, ist, mp, Y, t, y, tau, 1, float(side), loc)
+                kind = 1
+        if kind == 0:
+            for r in range(n):
+                y[r] = y1[r]
+                K[0, r] = dy[r]
+            first = 1
+            if st[S_HNEXT] != 0.0 and h == st[S_HNEXT]:
+                st[S_HNEXT] = 2.0 * h if 2.0 * h < h_step else 0.0
+            if last:
+                ist[I_PERIOD] = nt
+                st[S_TAU] = taut
+            else:
+                _add_time(par, ist, st, h)
+            continue
+        _stages(par, ist, mp, Y, t, y, tau, y1, K, tmp, k, 1)
+        for r in range(n):
+            y[r] = y1[r]
+        _add_time(par, ist, st, tau)
+        if kind > 0:
+            if kinked:
+                y[2] = 0.0  # z := 0 exactly (the kink)
+            ist[I_KINKS] += 1
+            ist[I_LANDED] = 1  # the side flips (side_now)
+            if graded:
+                st[S_HNEXT] = h_step * GRADE_FIRST
+            _store(st, Y, y, k)
+            side_now(ist, st, mp, d)
+        else:
+            y[1] = 0.0  # v := 0 exactly; the tangent passes unchanged (module docstring)
+            ist[I_DIR] = -d
+            _store(st, Y, y, k)
+            side_now(ist, st, mp, -d)
+            _record_event(par, ist, st, mp, ev)
+        ist[I_STUCK] = ist[I_STUCK] + 1 if tau == 0.0 else 0
+        if ist[I_STUCK] > _MAX_STUCK:
+            return STUCK
+    _store(st, Y, y, k)
+    return DONE
+
+
+@njit(cache=True)
+def run(par, ist, st, mp, nts, tauts, out, Y, ev, work):
+    """Advance through the targets ``(nts[i], tauts[i])`` from sample ``ist[I_SAMPLE]`` on,
+    writing ``(q, v, M)`` into ``out[i]``; returns a status code (module docstring)."""
+    i = ist[I_SAMPLE]
+    while i < nts.size:
+        status = _to_target(par, ist, mp, st, nts[i], tauts[i], Y, ev, work)
+        if status != DONE:
+            return status
+        out[i, 0] = st[S_Q]
+        out[i, 1] = st[S_V]
+        out[i, 2] = output_now(ist, st, mp)
+        i += 1
+        ist[I_SAMPLE] = i
+    return DONE
+
+
+def make_work(k: int) -> np.ndarray:
+    """Scratch space of :func:`run` with k tangent columns (the last rows: event location)."""
+    return np.zeros((2 * (4 + _N_STAGES), 3 + 3 * k))
