@@ -27,18 +27,11 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import sys
 import time
-from pathlib import Path
 
 from analysis.experiments.models import build_operator
 from hysteresis import BoucWen, JilesAtherton
 from oscillators import ForcedOscillator
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-# the bridge while BoucWen/JilesAtherton do not override Duhem.compiled_model (tests/
-# duhem_support.py): then it returns the operator itself and this import can go
-from duhem_support import compiled  # noqa: E402
 
 ZETA, OMEGA = 0.05, 1.0
 
@@ -53,10 +46,10 @@ def period_time(system: ForcedOscillator, periods: int, options: dict | None = N
 def cases() -> dict[str, tuple]:
     """name -> (operator, coupling)."""
     return {
-        "bouc-wen n=1": (compiled(BoucWen(1.0, 0.5, 0.3, 1.0)), -0.8),
-        "bouc-wen n=1.5": (compiled(BoucWen(1.0, 0.5, 0.3, 1.5)), -0.8),
-        "bouc-wen n=2": (compiled(BoucWen(1.0, 0.5, 0.3, 2.0)), -0.8),
-        "jiles-atherton": (compiled(JilesAtherton(ms=1.0, a=0.5, k=0.4, c=0.2, alpha=0.1)), 0.5),
+        "bouc-wen n=1": (BoucWen(1.0, 0.5, 0.3, 1.0), -0.8),
+        "bouc-wen n=1.5": (BoucWen(1.0, 0.5, 0.3, 1.5), -0.8),
+        "bouc-wen n=2": (BoucWen(1.0, 0.5, 0.3, 2.0), -0.8),
+        "jiles-atherton": (JilesAtherton(ms=1.0, a=0.5, k=0.4, c=0.2, alpha=0.1), 0.5),
     }
 
 

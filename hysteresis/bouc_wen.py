@@ -127,5 +127,10 @@ class BoucWen(Duhem):
         """``z = z_max``: rising from negative saturation (module docstring)."""
         return DuhemState(self.z_max, finite_scalar(u0, "u0", MAX_MAGNITUDE), 1)
 
+    def compiled_model(self) -> tuple[str, dict[str, float]]:
+        """``("bouc_wen", {A, beta, gamma, n})``: the oscillator's compiled Duhem engine
+        evaluates the right-hand side from :mod:`hysteresis._duhem_kernels`."""
+        return "bouc_wen", {"A": self.A, "beta": self.beta, "gamma": self.gamma, "n": self.n}
+
     def __repr__(self) -> str:
         return f"BoucWen(A={self.A!r}, beta={self.beta!r}, gamma={self.gamma!r}, n={self.n!r})"

@@ -208,6 +208,13 @@ class JilesAtherton(Duhem):
     ) -> JilesAthertonInstability:
         return JilesAthertonInstability(self, u, z, direction)
 
+    def compiled_model(self) -> tuple[str, dict[str, float]]:
+        """``("jiles_atherton", {ms, a, k, c, alpha})``: the oscillator's compiled Duhem engine
+        evaluates the right-hand side from :mod:`hysteresis._duhem_kernels`."""
+        return "jiles_atherton", {
+            "ms": self.ms, "a": self.a, "k": self.k, "c": self.c, "alpha": self.alpha,
+        }  # fmt: skip
+
     def __repr__(self) -> str:
         return (
             f"JilesAtherton(ms={self.ms!r}, a={self.a!r}, k={self.k!r}, c={self.c!r}, "

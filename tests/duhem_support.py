@@ -26,24 +26,3 @@ def _fall_partials(u, z):
 def relaxing_duhem() -> Duhem:
     """The operator described in the module docstring."""
     return Duhem(_rise, _fall, rising_partials=_rise_partials, falling_partials=_fall_partials)
-
-
-def compiled(op: Duhem) -> Duhem:
-    """``op`` when its class declares its compiled model (``Duhem.compiled_model``), else the
-    same operator as an instance of a subclass that declares it (Bouc–Wen, Jiles–Atherton).
-
-    A bridge while ``BoucWen``/``JilesAtherton`` (edited on another branch) do not yet override
-    ``compiled_model``; once they do it returns ``op`` itself and can be removed."""
-    if op.compiled_model() is not None:
-        return op
-    names = {"BoucWen": ("bouc_wen", ("A", "beta", "gamma", "n")),
-             "JilesAtherton": ("jiles_atherton", ("ms", "a", "k", "c", "alpha"))}  # fmt: skip
-    model, params = names[type(op).__name__]
-
-    def compiled_model(self):
-        return model, {name: getattr(self, name) for name in params}
-
-    cls = type(type(op).__name__, (type(op),), {"compiled_model": compiled_model})
-    clone = cls.__new__(cls)
-    clone.__dict__.update(op.__dict__)
-    return clone

@@ -23,7 +23,6 @@ import math
 
 import numpy as np
 import pytest
-from duhem_support import compiled
 from scipy.integrate import solve_ivp
 
 from analysis.dynamics.continuation import continue_orbit
@@ -41,11 +40,11 @@ FD_TOLERANCE = 1e-5
 
 
 def bouc_wen(n: float) -> BoucWen:
-    return compiled(BoucWen(1.0, 0.5, 0.3, n))
+    return BoucWen(1.0, 0.5, 0.3, n)
 
 
 def jiles_atherton() -> JilesAtherton:
-    return compiled(JilesAtherton(ms=1.0, a=0.5, k=0.4, c=0.2, alpha=0.1))
+    return JilesAtherton(ms=1.0, a=0.5, k=0.4, c=0.2, alpha=0.1)
 
 
 class Model:
@@ -251,7 +250,7 @@ def test_periodic_orbit_floquet_and_continuation_of_the_bouc_wen_oscillator():
 
 def test_an_ill_posed_jiles_atherton_state_is_refused():
     # α(1 − c)|M_an − M_irr|/k reaches 1 on a loop: the slope would pass through a pole
-    op = compiled(JilesAtherton(ms=1.0, a=0.2, k=0.05, c=0.1, alpha=0.2))
+    op = JilesAtherton(ms=1.0, a=0.2, k=0.05, c=0.1, alpha=0.2)
     system = system_of(op, 0.5)
     with pytest.raises(ValueError, match="ill-posed"):
         system.trajectory(60.0, sample_dt=0.1)

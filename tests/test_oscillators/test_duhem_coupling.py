@@ -34,6 +34,8 @@ from oscillators.system import ForcedOscillator
 
 ZETA, OMEGA = 0.05, 1.0
 TIGHT = {"rtol": 1e-12, "atol": 1e-12}
+# the generic engine over the branch flow (the compiled Duhem engine has its own tests)
+GENERIC = {"method": "generic", **TIGHT}
 BW = BoucWen(1.0, 0.5, 0.3, 1.5)
 FD_STEP = 1e-6
 FD_TOLERANCE = 1e-5
@@ -100,8 +102,8 @@ def test_trajectory_against_an_independent_integration(kind):
     with warnings.catch_warnings():  # the sum says it runs on the generic engine
         warnings.simplefilter("ignore", GenericEngineWarning)
         system = ForcedOscillator(op, coupling=coupling, damping_ratio=ZETA, frequency=OMEGA)
-    assert system.engine_class is ContinuousEngine
-    traj = system.trajectory(40.0, sample_dt=0.05, engine_options=TIGHT)
+    assert isinstance(system.engine(method="generic"), ContinuousEngine)
+    traj = system.trajectory(40.0, sample_dt=0.05, engine_options=GENERIC)
     ref = reference_trajectory(BW, force, coupling, traj.t, -1.0, 0.1, BW.z_max)
     assert np.max(np.abs(traj.q - ref[:, 0])) < 1e-7
     assert np.max(np.abs(traj.v - ref[:, 1])) < 1e-7
@@ -135,23 +137,23 @@ def branch_value(bw, d, u_a, z_a, u_b):
 
 def test_jacobian_against_central_differences_of_the_stroboscopic_map():
     system = ForcedOscillator(BW, coupling=-0.8, damping_ratio=ZETA, frequency=OMEGA)
-    pre = system.engine(system.initial_state(), **TIGHT)
+    pre = system.engine(system.initial_state(), **GENERIC)
     pre.advance(np.array([30.0]), record=True)
     events = pre.records()["events"]
     t_rev = events["time"][events["kind"] == -1][2]
-    warm = system.engine(system.initial_state(), **TIGHT)
+    warm = system.engine(system.initial_state(), **GENERIC)
     warm.advance(np.array([t_rev + 0.3]))
     start = warm.state()
     d0 = 1 if start.v > 0 else -1
     q_s, z_s = start.q, start.operator_state.z
 
-    eng = system.engine(start, **TIGHT)
+    eng = system.engine(start, **GENERIC)
     eng.start_tangent(include_phase=True)
     labels0 = eng.tangent_space
     eng.advance(np.array([system.period]), record=True)
     jac, labels1 = eng.deviations(), eng.tangent_space
     assert labels0 == ("q", "v", "phi", "z-" if d0 > 0 else "z+")
-    jac_api, _ = system.jacobian(system.period, start, engine_options=TIGHT)
+    jac_api, _ = system.jacobian(system.period, start, engine_options=GENERIC)
     np.testing.assert_array_equal(jac_api, jac)
     ev = eng.records()["events"]
     assert np.sum(ev["kind"] == -1) >= 1  # the driven gradient was used at a reversal
@@ -175,8 +177,8 @@ def test_jacobian_against_central_differences_of_the_stroboscopic_map():
         xp, xm = x0.copy(), x0.copy()
         xp[j] += FD_STEP
         xm[j] -= FD_STEP
-        fp = read(system.stroboscopic_map(build(xp), engine_options=TIGHT))
-        fm = read(system.stroboscopic_map(build(xm), engine_options=TIGHT))
+        fp = read(system.stroboscopic_map(build(xp), engine_options=GENERIC))
+        fm = read(system.stroboscopic_map(build(xm), engine_options=GENERIC))
         cols.append((fp - fm) / (2 * FD_STEP))
     fd = np.array(cols).T
     np.testing.assert_allclose(jac, fd, rtol=0, atol=FD_TOLERANCE * np.max(np.abs(fd)))

@@ -22,6 +22,8 @@ from oscillators.system import ForcedOscillator
 
 ZETA, OMEGA = 0.05, 1.0
 TIGHT = {"rtol": 1e-12, "atol": 1e-12}
+# the generic engine over the branch flow (the compiled Duhem engine has its own tests)
+GENERIC = {"method": "generic", **TIGHT}
 JA = JilesAtherton(ms=1.0, a=0.5, k=0.4, c=0.2, alpha=0.3)
 FD_STEP = 1e-6
 FD_TOLERANCE = 1e-5
@@ -40,17 +42,17 @@ def branch_value(d, u_a, z_a, u_b):
 
 def test_jacobian_against_central_differences_of_the_stroboscopic_map():
     system = ForcedOscillator(JA, coupling=0.8, damping_ratio=ZETA, frequency=OMEGA)
-    pre = system.engine(system.initial_state(), **TIGHT)
+    pre = system.engine(system.initial_state(), **GENERIC)
     pre.advance(np.array([30.0]), record=True)
     events = pre.records()["events"]
     t_rev = events["time"][events["kind"] == -1][2]
-    warm = system.engine(system.initial_state(), **TIGHT)
+    warm = system.engine(system.initial_state(), **GENERIC)
     warm.advance(np.array([t_rev + 0.3]))
     start = warm.state()
     d0 = 1 if start.v > 0 else -1
     q_s, z_s = start.q, start.operator_state.z
 
-    eng = system.engine(start, **TIGHT)
+    eng = system.engine(start, **GENERIC)
     eng.start_tangent(include_phase=True)
     assert eng.tangent_space == ("q", "v", "phi", "z-" if d0 > 0 else "z+")
     eng.advance(np.array([system.period]), record=True)
@@ -76,19 +78,26 @@ def test_jacobian_against_central_differences_of_the_stroboscopic_map():
         xp, xm = x0.copy(), x0.copy()
         xp[j] += FD_STEP
         xm[j] -= FD_STEP
-        fp = read(system.stroboscopic_map(build(xp), engine_options=TIGHT))
-        fm = read(system.stroboscopic_map(build(xm), engine_options=TIGHT))
+        fp = read(system.stroboscopic_map(build(xp), engine_options=GENERIC))
+        fm = read(system.stroboscopic_map(build(xm), engine_options=GENERIC))
         cols.append((fp - fm) / (2 * FD_STEP))
     fd = np.array(cols).T
     np.testing.assert_allclose(jac, fd, rtol=0, atol=FD_TOLERANCE * np.max(np.abs(fd)))
 
 
-def test_an_ill_posed_model_stops_the_coupled_run_with_its_error():
+@pytest.mark.parametrize("method", ["auto", "generic"])
+def test_an_ill_posed_model_stops_the_coupled_run_with_its_error(method):
     """c = 0, α·ms/(3a) = 2, k ≪ a: the virgin curve from the demagnetised state hits
     ``1 − αχ = 0`` at ``H* = k(1 − ln 2)`` (test_jiles_atherton.py); the oscillator pushed
     from q = 0 upward reaches it."""
     ill = JilesAtherton(ms=1.0, a=1.0, k=1e-3, c=0.0, alpha=6.0)
     system = ForcedOscillator(ill, coupling=0.1, damping_ratio=ZETA, frequency=OMEGA)
     with pytest.raises(JilesAthertonInstability) as info:
-        system.trajectory(5.0, q0=0.0, v0=0.5, operator_state=ill.state(0.0, 0.0))
+        system.trajectory(
+            5.0,
+            q0=0.0,
+            v0=0.5,
+            operator_state=ill.state(0.0, 0.0),
+            engine_options={"method": method},
+        )
     assert info.value.field == pytest.approx(1e-3 * (1 - np.log(2.0)), rel=1e-3)
