@@ -11,6 +11,7 @@ from oscillators.engines.compiled_continuous import CompiledContinuousEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine
+from oscillators.engines.switching import SwitchingKernelEngine
 
 __all__ = ["select_engine", "GenericEngineWarning", "python_path_reason", "describe_engine"]
 
@@ -38,7 +39,9 @@ def select_engine(operator: Any) -> type[Engine]:
     """The engine class for ``operator``, chosen from what its contract hands over.
 
     ``operator.piecewise_constant`` -> :class:`RelayEngine` (the compiled kernels, or the Python
-    reference path for ``method="generic"``); ``operator.compiled_play()`` not ``None`` ->
+    reference path for ``method="generic"``), or for interacting spins without a relay table
+    (``compiled_switching()`` not ``None``) :class:`SwitchingKernelEngine` (the same hops, the
+    spins' sorted lists; ``method="generic"``: the reference path); ``operator.compiled_play()`` not ``None`` ->
     :class:`PlayEngine`; else ``operator.compiled_flow()`` not ``None`` ->
     :class:`CompiledContinuousEngine` (``method="generic"``: the generic engine); any other
     (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow`` — with a
@@ -51,6 +54,8 @@ def select_engine(operator: Any) -> type[Engine]:
     when the system is built.
     """
     if operator.piecewise_constant:
+        if not operator.has_relay_table and operator.compiled_switching() is not None:
+            return SwitchingKernelEngine
         return RelayEngine
     if not isinstance(operator, ContinuousHysteron):
         raise TypeError(
