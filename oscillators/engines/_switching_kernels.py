@@ -156,7 +156,9 @@ def _prev_set(sets, lay, base, levels, p):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def build_lists(nup, lat, offsets, max_degree, gidx, rank, listed, sets, lay, levels):  # pragma: no cover
+def build_lists(
+    nup, lat, offsets, max_degree, gidx, rank, listed, sets, lay, levels
+):  # pragma: no cover
     """List every spin in the list of its neighbour sum ``2·nup − degree``."""
     for i in range(nup.size):
         g = gidx[2 * nup[i] - _degree(i, lat, offsets) + max_degree]

@@ -41,8 +41,9 @@ def select_engine(operator: Any) -> type[Engine]:
     ``operator.piecewise_constant`` -> :class:`RelayEngine` (the compiled kernels, or the Python
     reference path for ``method="generic"``), or for interacting spins without a relay table
     (``compiled_switching()`` not ``None``) :class:`SwitchingKernelEngine` (the same hops, the
-    spins' sorted lists; ``method="generic"``: the reference path); ``operator.compiled_play()`` not ``None`` ->
-    :class:`PlayEngine`; else ``operator.compiled_flow()`` not ``None`` ->
+    spins' sorted lists; ``method="generic"``: the reference path);
+    ``operator.compiled_play()`` not ``None`` -> :class:`PlayEngine`; else
+    ``operator.compiled_flow()`` not ``None`` ->
     :class:`CompiledContinuousEngine` (``method="generic"``: the generic engine); any other
     (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow`` — with a
     one-line :class:`GenericEngineWarning` when the operator says why it has no compiled

@@ -148,5 +148,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
                 u = float(st[sk.S_U])  # sliding on a trigger: the input of the last event
         bits = self._plan[11].copy()
         opstate = self._spec.make_state(bits, self.n_up, u)
-        check_state(opstate, f"returned by {type(self._op).__name__}.compiled_switching().make_state")
+        check_state(
+            opstate, f"returned by {type(self._op).__name__}.compiled_switching().make_state"
+        )
         return q, v, opstate
