@@ -33,7 +33,15 @@ instantiated (the ``TypeError`` names the method and what it must return).
   :attr:`~SwitchingHysteron.n_units` (the switch budget's scale). The contract attribute
   ``has_relay_table`` tells the two kinds apart; the oscillator's relay engine integrates an
   operator without a table exactly through ``switching``/``apply`` (its Python reference
-  path, ``RelayEngine(method="generic")``).
+  path, ``RelayEngine(method="generic")``). Optional, the compiled path (the generalisation
+  of ``relay_table`` to interacting units): :meth:`~SwitchingHysteron.compiled_switching`
+  returns a :class:`hysteresis.compiled_spins.CompiledSpins` — Ising spins with fields
+  ``f_i``, a ferromagnetic coupling ``J`` on a lattice or graph, and two callables between
+  the operator's state and packed spins — and the oscillator's switching engine
+  (:mod:`oscillators.engines.switching`) couples it without a trial run: the next switching
+  input in each direction from its compiled plan (sorted lists of the thresholds
+  ``−(f_i + J·n)``, one per neighbour-sum value ``n``), each avalanche one jump ``C·ΔM`` at
+  its trigger input with the saltation ``C·ΔM/v*``, ``n_events`` counting spin flips.
 * **Continuous** operators (``PlayOperator``, ``GeneralizedPlay``, continuous ``PreisachModel``,
   ``PrandtlIshlinskii``): for a fixed direction of input motion the output follows a smooth
   monotone branch between breakpoints. Required: ``initial_state``, ``apply`` (the state
@@ -76,6 +84,7 @@ from typing import Any, Generic, Protocol, TypeVar, runtime_checkable
 import numpy as np
 
 from hysteresis._validation import as_input_sequence
+from hysteresis.compiled_spins import CompiledSpins
 from hysteresis.flow import BranchFlow
 from hysteresis.relay_table import RelayTable
 from hysteresis.seam import checked_branch_flow, checked_relay_outputs, checked_relay_table
@@ -340,6 +349,15 @@ class SwitchingHysteron(Hysteron[StateT]):
         """Number of switching units (relays, spins): the oscillator's switch budget per
         ``advance`` call scales with it (at most one jump per unit and direction of a
         monotone input sweep)."""
+
+    def compiled_switching(self) -> CompiledSpins | None:
+        """The operator's units as interacting Ising spins for the compiled switching engine
+        (:class:`hysteresis.compiled_spins.CompiledSpins`: fields, coupling, graph, the sorted
+        order of the fields, and the state to and from packed spins), else ``None`` (the
+        default: the relay engine's Python reference path through :meth:`switching` and
+        ``apply``). A fast path only: the engine follows the same avalanches, at the same
+        trigger inputs, to the same states."""
+        return None
 
 
 class PiecewiseConstantHysteron(SwitchingHysteron[StateT]):

@@ -23,7 +23,9 @@ spin-dimer ensemble: the dimers' thresholds ``α = J − b1``, ``β = −J − b
 
 The operator is piecewise constant, but its jumps are avalanches, not independent relays: it is
 a :class:`~hysteresis.base.SwitchingHysteron` (no relay table), coupled to the oscillator
-through :meth:`RandomFieldIsing.switching` by the relay engine's exact Python reference path.
+through :meth:`RandomFieldIsing.compiled_switching` by the compiled switching engine
+(:mod:`oscillators.engines.switching`), or through :meth:`RandomFieldIsing.switching` by the
+relay engine's exact Python reference path (``method="generic"``).
 The algorithm (sorted lists of thresholds, O(flips) per monotone sweep) is described in
 :mod:`hysteresis._rfim_kernels`.
 
@@ -63,6 +65,7 @@ from hysteresis._validation import (
     readonly_array,
 )
 from hysteresis.base import Switching, SwitchingHysteron
+from hysteresis.compiled_spins import CompiledSpins
 from hysteresis.spin_dimers import MAX_SPINS
 
 __all__ = ["RandomFieldIsing", "RandomFieldIsingState"]
@@ -465,6 +468,33 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
         """The sizes of the avalanches of :meth:`avalanches` (int64) and the final state."""
         _, sizes, final = self.avalanches(inputs, state)
         return sizes, final
+
+    def compiled_switching(self) -> CompiledSpins:
+        """The lattice or graph as interacting spins for the oscillator's compiled switching
+        engine (:class:`~hysteresis.compiled_spins.CompiledSpins`; the operator's own arrays,
+        no copy)."""
+        return CompiledSpins(
+            fields=self._fields,
+            spin_coupling=self._coupling,
+            lattice=self._lat,
+            offsets=self._offsets,
+            adjacency=self._adj,
+            max_degree=self._max_degree,
+            neighbour_sums=self._nvals,
+            order=self._order,
+            sorted_fields=self._fsorted,
+            spins=self._packed_spins,
+            make_state=self._state_from_bits,
+        )
+
+    def _packed_spins(self, state: RandomFieldIsingState) -> tuple[np.ndarray, int]:
+        state = self._check_state(state)
+        return state.bits, state.n_up
+
+    def _state_from_bits(self, bits: np.ndarray, n_up: int, input: float) -> RandomFieldIsingState:
+        """The state with packed ``bits`` (taken over, made read-only) relaxed at ``input``."""
+        bits.setflags(write=False)
+        return RandomFieldIsingState(bits, float(input), int(n_up), self._fingerprint)
 
     def switching(self, state: RandomFieldIsingState) -> Switching:
         """The next switching inputs: ``upper`` the least threshold ``−(f_i + J·n_i)`` of a

@@ -9,7 +9,9 @@ engine's memory labels (never by class):
 
 * **piecewise constant** (relays, discrete Preisach, dimers): ``x = (q, v)``; the discrete
   relay configuration is carried by a template state (the engine applies the new ``q`` to it,
-  which switches nothing while ``q`` stays between the thresholds);
+  which switches nothing while ``q`` stays between the thresholds); interacting spins (a
+  random-field Ising lattice, ``compiled_switching()``) likewise, their configuration the
+  packed spins (``configuration``: ``(("spins", bytes),)``);
 * **one wagon** (memory label ``"w"``: play, generalized play): ``x = (q, v, w)``, the state
   rebuilt by ``operator.state(position=w, input=q)``;
 * **several wagons** (labels ``"w0" .. "w{K-1}"``: Prandtl–Ishlinskii): ``x = (q, v, w_0..)``,
@@ -81,14 +83,20 @@ class StateCoordinates:
         eng.start_tangent(False)
         self.labels: tuple[str, ...] = tuple(eng.tangent_space)
         memory = self.labels[2:]
+        spins = None
         if op.piecewise_constant and not op.has_relay_table:
-            raise ValueError(
-                f"periodic orbits of {type(op).__name__} are not computed yet: its memory "
-                "(interacting units, no relay table) has no relay configuration to compare "
-                "between the orbit's start and end"
-            )
+            spins = op.compiled_switching()
+            if spins is None:
+                raise ValueError(
+                    f"periodic orbits of {type(op).__name__} are not computed: its memory "
+                    "(interacting units, no relay table, no compiled_switching() spins) has no "
+                    "configuration to compare between the orbit's start and end"
+                )
         spec = None if op.piecewise_constant else op.compiled_flow()
-        if op.piecewise_constant:
+        if spins is not None:
+            self.kind = "spins"
+            self._spins = spins
+        elif op.piecewise_constant:
             self.kind = "relay"
         elif spec is not None and spec.kind == "duhem" and memory == (spec.label(0),):
             self.kind = "duhem"
@@ -134,7 +142,7 @@ class StateCoordinates:
     def vector(self, state: OscillatorState) -> np.ndarray:
         """``(q, v, *memory)`` of ``state``."""
         head = [float(state.q), float(state.v)]
-        if self.kind == "relay":
+        if self.kind in ("relay", "spins"):
             return np.array(head)
         op_state = state.operator_state
         if self.kind == "duhem":
@@ -164,7 +172,7 @@ class StateCoordinates:
             )
         q, v = float(x[0]), float(x[1])
         op = self.system.operator
-        if self.kind == "relay":
+        if self.kind in ("relay", "spins"):
             op_state = template.operator_state
         elif self.kind == "duhem":
             # the direction is informative only (hysteresis.duhem): the sign of v
@@ -203,9 +211,12 @@ class StateCoordinates:
     def configuration(self, state: OscillatorState) -> tuple:
         """The discrete memory of ``state`` as part of an orbit's event sequence: ``(("relays",
         outputs),)`` for relay-type operators and composites with relays (their ±1 in table
-        order), ``()`` otherwise. Two orbits of one period without switches (a relay held up or
-        down all along) differ only here: the configuration changing between two branch points
-        is a grazing, like an event sequence changing."""
+        order), ``(("spins", packed bits),)`` for interacting spins, ``()`` otherwise. Two
+        orbits of one period without switches (a relay held up or down all along) differ only
+        here: the configuration changing between two branch points is a grazing, like an event
+        sequence changing."""
+        if self.kind == "spins":
+            return (("spins", self._spins.spins(state.operator_state)[0].tobytes()),)
         if self.kind == "relay":
             outputs = self.system.operator.relay_outputs(state.operator_state)
         elif self.kind == "composite" and self._spec.relay_alpha is not None:
@@ -220,6 +231,9 @@ class StateCoordinates:
         if self.kind == "composite" and self._spec.relay_alpha is not None:
             outputs = self._spec.relay_outputs
             return bool(np.array_equal(outputs(a.operator_state), outputs(b.operator_state)))
+        if self.kind == "spins":
+            bits = self._spins.spins
+            return bool(np.array_equal(bits(a.operator_state)[0], bits(b.operator_state)[0]))
         if self.kind != "relay":
             return True
         op = self.system.operator

@@ -7,6 +7,8 @@
   :class:`StepBudgetError` (the step budget);
 * :mod:`~oscillators.engines.relay` — :class:`RelayEngine`: :class:`RelayKernelEngine`
   (compiled, nested or heap plan) and :class:`RelayReferenceEngine` (Python reference path);
+* :mod:`~oscillators.engines.switching` — :class:`SwitchingKernelEngine` (interacting spins:
+  a random-field Ising lattice, ``compiled_switching()``; the relay kernel's hops);
 * :mod:`~oscillators.engines.play` — :class:`PlayEngine` (compiled play limit);
 * :mod:`~oscillators.engines.continuous` — :class:`ContinuousEngine` (solve_ivp over
   ``branch_flow``);
@@ -16,8 +18,8 @@
   of ``(q, v, z)`` for Bouc–Wen and Jiles–Atherton, a ``"duhem"`` ``compiled_flow()``);
 * :mod:`~oscillators.engines.select` — :func:`select_engine` (from the operator's contract).
 
-Compiled kernels: ``_relay_kernels.py``, ``_play_kernels.py``, ``_continuous_kernels.py``,
-``_duhem_engine_kernels.py``, ``_dop853_kernel.py``.
+Compiled kernels: ``_relay_kernels.py``, ``_switching_kernels.py``, ``_play_kernels.py``,
+``_continuous_kernels.py``, ``_duhem_engine_kernels.py``, ``_dop853_kernel.py``.
 """
 
 from oscillators.engines.base import (
@@ -44,6 +46,7 @@ from oscillators.engines.select import (
     python_path_reason,
     select_engine,
 )
+from oscillators.engines.switching import SwitchingKernelEngine
 
 __all__ = [
     "TIME_TOLERANCE",
@@ -60,6 +63,7 @@ __all__ = [
     "SlidingError",
     "StepBudgetError",
     "SwitchBudgetError",
+    "SwitchingKernelEngine",
     "TangentFlow",
     "require_tangent_flow",
     "select_engine",

@@ -536,51 +536,12 @@ def _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction):
     return 2.0 * dw
 
 
-# -- the event loop (one body for every table kind) ----------------------------------------------
-@njit(cache=True, fastmath=_CONTRACT)
-def advance_table(
-    par, kind, tf, ti, bits, lay, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
-):
-    """Advance the kernel state (st, ist, table state) to period time ``tau_stop``.
-
-    Switch records go to ``sw`` (rows: time, q, v, ΔM) while ``rec_on``. Returns 0 when
-    ``tau_stop`` was reached, 1 if the record buffer filled up (state left right after the last
-    recorded switch; call again to continue), 2 at a grazing switch (v* = 0) while ``tan_on``
-    (state left right after that switch, tangent not updated by it), 3 when the switch count
-    reaches ``ist[I_MAXSW]`` (the switch budget; state right after that switch, which is neither
-    recorded nor applied to the tangent; its jump and direction in ``st[S_JMP]``,
-    ``st[S_DIR]``), 4 at a switch where the motion enters a Filippov sliding motion (it
-    reverses the previous switch at the same threshold with the opposite jump, the flow pushes
-    into the threshold from both sides and the excursion just begun lasts ``2|v|/|q''| <=
-    par[P_SL]``; state right after that switch, neither recorded nor applied to the tangent,
-    its jump and direction in ``st[S_JMP]``, ``st[S_DIR]``; the caller integrates the slide,
-    :mod:`oscillators.engines._sliding`). Tangent vectors (columns of ``y``, rows δq, δv,
-    δφ) are propagated while ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and ``st[S_MV]`` must be current
-    (:func:`_table_refresh`).
-    """
-    zeta = par[P_ZETA]
-    omega = par[P_OMEGA]
-    coupling = par[P_C]
-    phi0 = par[P_PHI0]
-    amp_a = par[P_A]
-    amp_b = par[P_B]
-    period = par[P_T]
-    h_taylor = par[P_HT]
-    h_small = par[P_HS]
-    h_slide = par[P_SL]
-    cap = sw.shape[0]
-    q = st[S_Q]
-    v = st[S_V]
-    tau = st[S_TAU]
-    c = st[S_COS]
-    s = st[S_SIN]
-    up = st[S_UP]
-    down = st[S_DN]
-    mv = st[S_MV]
-    nsw = ist[I_NSW]
-    nsw_max = ist[I_MAXSW]
-    # the fast hop's coefficients as locals: loads from mp inside the loop would be repeated
-    # after every store (numba arrays carry no aliasing information)
+@njit(cache=True)
+def hop_coefficients(mp):
+    """The fast hop's coefficients (rows 2-6 of the hop tables, columns ``TC_*``, and the
+    propagator's g = Φ_01 and g' Taylor coefficients) as one tuple: held in registers by
+    :func:`hop` (loads from ``mp`` inside the loop would be repeated after every store:
+    numba arrays carry no aliasing information)."""
     t2q = mp[2, TC_Q]
     t2v = mp[2, TC_V]
     t2f = mp[2, TC_F]
@@ -624,6 +585,312 @@ def advance_table(
         mp[5, 3],
         mp[6, 3],
     )
+    return (
+        t2q, t2v, t2f, t2c, t2s, t3q, t3v, t3f, t3c, t3s, t4q, t4v, t4f, t4c, t4s, t5q,
+        t5v, t5f, t5c, t5s, t6q, t6v, t6f, t6c, t6s, g0, g1, g2, g3, g4, g5, g6, d0, d1,
+        d2, d3, d4, d5, d6
+    )  # fmt: skip
+
+
+@njit(cache=True, fastmath=_CONTRACT, inline="always")
+def hop(
+    par, coefs, mp, e, q, v, tau, c, s, up, down, mv, tau_stop, tan_on, ntan,
+    a0, a1, a2, b0, b1, b2, f0, f1, f2, integral,
+):  # fmt: skip
+    """One hop of the event loop (module docstring): from (q, v) at period time ``tau`` with
+    the output ``mv`` to the first crossing of ``up`` (reached) or ``down`` (left below) on the
+    exact solution, or to ``tau_stop`` (> ``tau``) if none comes first; fast short hop, Taylor
+    hop or exact flight, the tangent columns propagated while ``tan_on``. Returns
+    ``(direction, q, v, tau, c, s, a0, a1, a2, b0, b1, b2, integral)``: direction +1 / -1 at a
+    crossing (q set exactly on the threshold), 0 at ``tau_stop``. Shared by every event loop
+    over piecewise-constant operators (the relay tables here, interacting spins in
+    :mod:`oscillators.engines._switching_kernels`); inlined, so it costs no call."""
+    zeta = par[P_ZETA]
+    omega = par[P_OMEGA]
+    coupling = par[P_C]
+    phi0 = par[P_PHI0]
+    amp_a = par[P_A]
+    amp_b = par[P_B]
+    h_taylor = par[P_HT]
+    h_small = par[P_HS]
+    (
+        t2q, t2v, t2f, t2c, t2s, t3q, t3v, t3f, t3c, t3s, t4q, t4v, t4f, t4c, t4s, t5q,
+        t5v, t5f, t5c, t5s, t6q, t6v, t6f, t6c, t6s, g0, g1, g2, g3, g4, g5, g6, d0, d1,
+        d2, d3, d4, d5, d6
+    ) = coefs  # fmt: skip
+    horizon = tau_stop - tau
+    force = coupling * mv
+    mode = 0  # 1 Taylor hop to a switch, 2 Taylor hop to the stop, 0 exact flight, 3 fast hop
+    direction = 0
+    h = 0.0
+    theta = 0.0
+    tdir = 0
+    if h_small > 0.0 and v != 0.0:
+        # fast short hop (see the module docstring): q's Taylor coefficients as linear forms,
+        # series reversion of q(h) = theta from the linear estimate x, one Newton step
+        theta = up if v > 0.0 else down
+        gap = theta - q
+        if abs(gap) < h_small * abs(v):
+            e2 = t2q * q + t2v * v + t2f * force
+            e2 += t2c * c + t2s * s
+            e3 = t3q * q + t3v * v + t3f * force
+            e3 += t3c * c + t3s * s
+            e4 = t4q * q + t4v * v + t4f * force
+            e4 += t4c * c + t4s * s
+            e5 = t5q * q + t5v * v + t5f * force
+            e5 += t5c * c + t5s * s
+            e6 = t6q * q + t6v * v + t6f * force
+            e6 += t6c * c + t6s * s
+            r = 1.0 / v
+            x = gap * r
+            k2 = e2 * r
+            k3 = e3 * r
+            # series reversion of x = h + k2 h^2 + k3 h^3 + ... to third order
+            xx = x * x
+            h0 = x + xx * (x * (2.0 * k2 * k2 - k3) - k2)
+            # everything the Newton step needs is a polynomial in h0, side by side and in
+            # Estrin form (short dependency chains): the residual, 1/q'(h0) = r/(1 + u) by
+            # its series, v and q'' at h0, and the phase rotation; the step then corrects
+            # them to first order in dh
+            hh2 = h0 * h0
+            res = h0 * (v + e2 * h0 + hh2 * (e3 + e4 * h0 + hh2 * (e5 + e6 * h0))) - gap
+            u = h0 * (2.0 * k2 + 3.0 * k3 * h0 + 4.0 * e4 * r * hh2)
+            uu = u * u
+            inv = r * ((1.0 - u) + uu * (1.0 - u))
+            dp0 = (v + 2.0 * e2 * h0) + hh2 * ((3.0 * e3 + 4.0 * e4 * h0)
+                  + hh2 * (5.0 * e5 + 6.0 * e6 * h0))  # fmt: skip
+            pp0 = (2.0 * e2 + 6.0 * e3 * h0) + hh2 * (12.0 * e4 + 20.0 * e5 * h0)
+            xr = omega * h0
+            x2 = xr * xr
+            cx = 1.0 - x2 * (0.5 - x2 * (1.0 / 24.0))
+            sx = xr * (1.0 - x2 * (1.0 / 6.0 - x2 * (1.0 / 120.0)))
+            c0r = c * cx - s * sx
+            s0r = s * cx + c * sx
+            dh = res * inv
+            hf = h0 - dh
+            av = abs(v)
+            # accept when the step's error (derivative series: |dh| u^4; Newton and the
+            # first-order corrections: ~|q''|/|v| dh^2) is far below one ulp of the time and
+            # q is provably monotone on [0, hf] (|v(s) - v| < |v|/2): theta is then the first
+            # crossing
+            ae2 = abs(e2)
+            slope = hf * (2.0 * ae2 + hf * (3.0 * abs(e3) + hf * (4.0 * abs(e4)
+                    + hf * (5.0 * abs(e5) + hf * 6.0 * abs(e6)))))  # fmt: skip
+            err = abs(dh) * (u * u * u * u + 1e-13) + dh * dh * (ae2 + 3.0 * abs(e3)) / av
+            if 0.0 < hf <= horizon and hf < h_small and err <= 1e-17 and slope < 0.5 * av:
+                v1 = dp0 - dh * pp0
+                dphi = omega * dh
+                c1 = c0r + dphi * s0r
+                s1 = s0r - dphi * c0r
+                if tan_on:
+                    # Φ(h) = [[g' + 2ζg, g], [-g, g']], g = Φ_01 (degree 6 in h)
+                    hp2 = hf * hf
+                    hp4 = hp2 * hp2
+                    g = (g0 + g1 * hf) + hp2 * (g2 + g3 * hf) + hp4 * (g4 + g5 * hf + hp2 * g6)
+                    gd = (d0 + d1 * hf) + hp2 * (d2 + d3 * hf) + hp4 * (d4 + d5 * hf + hp2 * d6)
+                    m00 = gd + 2.0 * zeta * g
+                    a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                        m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                        a0, a1, a2, b0, b1, b2, f0, f1, f2,
+                    )  # fmt: skip
+                direction = 1 if v > 0.0 else -1
+                c = c1
+                s = s1
+                v = v1
+                integral += mv * hf
+                q = theta
+                tau += hf
+                mode = 3
+    if mode == 0 and h_taylor > 0.0:
+        # general Taylor path: coefficients up to ORDER from the same linear forms
+        e[0] = q
+        e[1] = v
+        for n in range(2, ORDER + 1):
+            e[n] = (
+                mp[n, TC_Q] * q
+                + mp[n, TC_V] * v
+                + mp[n, TC_F] * force
+                + mp[n, TC_C] * c
+                + mp[n, TC_S] * s
+            )
+        av = abs(v)
+        if v > 0.0:
+            tdir = 1
+            theta = up
+            gap = up - q
+        elif v < 0.0:
+            tdir = -1
+            theta = down
+            gap = q - down
+        else:
+            gap = np.inf
+        disc = v * v + 4.0 * tdir * e[2] * gap
+        if gap < h_taylor * av and disc > 0.0:
+            # start from the root of the quadratic Taylor polynomial (stable form), then
+            # Newton; stop once the next Newton error (~ |q''|/(2|v|) dh^2) is below 1e-17
+            h = 2.0 * gap / (av + math.sqrt(disc))
+            curv = abs(e[2]) + abs(e[3]) * h
+            converged = False
+            for _ in range(8):
+                p, dp = _poly2(e, h)
+                dh = (p - theta) / dp
+                h -= dh
+                if dh * dh * curv <= 1e-17 * av:
+                    converged = True
+                    break
+            if converged and 0.0 < h <= h_taylor and _slope_bound(e, h) < 0.5 * av:
+                mode = 1 if h <= horizon else 2
+        if mode == 0 and horizon <= h_taylor:
+            b = _excursion_bound(e, horizon)
+            if q + b < up and q - b >= down:
+                mode = 2
+    if mode == 1 or mode == 2:
+        hh = h if mode == 1 else horizon
+        p, dp = _poly2(e, hh)
+        cx, sx = _rotation(omega * hh)
+        c1 = c * cx - s * sx
+        s1 = s * cx + c * sx
+        if tan_on:
+            m00 = mp[ORDER, 0]
+            m01 = mp[ORDER, 1]
+            m10 = mp[ORDER, 2]
+            m11 = mp[ORDER, 3]
+            for n in range(ORDER - 1, -1, -1):
+                m00 = m00 * hh + mp[n, 0]
+                m01 = m01 * hh + mp[n, 1]
+                m10 = m10 * hh + mp[n, 2]
+                m11 = m11 * hh + mp[n, 3]
+            a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                a0, a1, a2, b0, b1, b2, f0, f1, f2,
+            )  # fmt: skip
+        c = c1
+        s = s1
+        v = dp
+        integral += mv * hh  # M is constant over the hop
+        if mode == 2:
+            q = p
+            tau = tau_stop
+            return 0, q, v, tau, c, s, a0, a1, a2, b0, b1, b2, integral
+        q = theta
+        tau += hh
+        direction = tdir
+    elif mode == 0:
+        ph = phi0 + omega * tau
+        c = math.cos(ph)
+        s = math.sin(ph)
+        hc, direction = scan_crossing(par, force, q, v, c, s, tau, horizon, up, down)
+        hh = hc if direction != 0 else horizon
+        ph1 = phi0 + omega * (tau + hh)
+        c1 = math.cos(ph1)
+        s1 = math.sin(ph1)
+        q1, v1 = exact_step(q, v, c, s, c1, s1, force, hh, zeta, omega, amp_a, amp_b)
+        if tan_on:
+            m00, m01, m10, m11 = hom_matrix(hh, zeta)
+            a0, a1, a2, b0, b1, b2 = _hop_tangent(
+                m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
+                a0, a1, a2, b0, b1, b2, f0, f1, f2,
+            )  # fmt: skip
+        c = c1
+        s = s1
+        v = v1
+        integral += mv * hh
+        if direction == 0:
+            q = q1
+            tau = tau_stop
+            return 0, q, v, tau, c, s, a0, a1, a2, b0, b1, b2, integral
+        q = up if direction > 0 else down
+        tau += hh
+    return direction, q, v, tau, c, s, a0, a1, a2, b0, b1, b2, integral
+
+
+@njit(cache=True, fastmath=_CONTRACT, inline="always")
+def settle_switch(
+    par, st, ist, q, v, c, tau, mv, jump, direction, nsw, nsw_max, prev_q, prev_jump, tan_on,
+    ntan, a0, a1, a2, b0, b1, b2, rec_on, sw, sw_count,
+):  # fmt: skip
+    """What follows a switch of ``jump`` in ``direction`` at ``q`` (the ``nsw``-th event; ``mv``
+    the output after it), in every event loop: the sliding test, the switch budget, the
+    saltation of the tangent columns and the record. Returns ``(status, b0, b1, b2, prev_q,
+    prev_jump)`` with status 0 (go on) or the stop of :func:`advance_table` (1 record buffer
+    full, 2 grazing, 3 budget spent, 4 sliding: jump and direction in ``st[S_JMP]``,
+    ``st[S_DIR]``)."""
+    zeta = par[P_ZETA]
+    coupling = par[P_C]
+    if jump == -prev_jump and q == prev_q and jump != 0.0:
+        a_now = c - q - 2.0 * zeta * v + coupling * mv
+        a_before = a_now - coupling * jump
+        if (
+            direction * a_before > 0.0
+            and direction * a_now < 0.0
+            and 2.0 * abs(v) <= par[P_SL] * abs(a_now)
+        ):
+            st[S_JMP] = jump
+            st[S_DIR] = direction
+            return 4, b0, b1, b2, prev_q, prev_jump  # sliding: the caller integrates it
+    prev_q = q
+    prev_jump = jump
+    if nsw >= nsw_max:
+        # switch budget spent (the caller raises SlidingError or SwitchBudgetError); the
+        # tangent and the record of this last switch are left out
+        st[S_JMP] = jump
+        st[S_DIR] = direction
+        return 3, b0, b1, b2, prev_q, prev_jump
+    if tan_on and coupling * jump != 0.0:
+        if v == 0.0:
+            return 2, b0, b1, b2, prev_q, prev_jump  # grazing: infinite saltation
+        # saltation X = [[1,0,0],[C ΔM / v*, 1, 0],[0,0,1]]
+        sal = coupling * jump / v
+        b0 += sal * a0
+        b1 += sal * a1
+        if ntan == 3:
+            b2 += sal * a2
+    if rec_on:
+        i = sw_count[0]
+        sw[i, 0] = par[P_TBASE] + ist[I_N] * par[P_T] + tau
+        sw[i, 1] = q
+        sw[i, 2] = v
+        sw[i, 3] = jump
+        sw_count[0] = i + 1
+        if i + 1 >= sw.shape[0]:
+            return 1, b0, b1, b2, prev_q, prev_jump
+    return 0, b0, b1, b2, prev_q, prev_jump
+
+
+# -- the event loop (one body for every table kind) ----------------------------------------------
+@njit(cache=True, fastmath=_CONTRACT)
+def advance_table(
+    par, kind, tf, ti, bits, lay, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
+):
+    """Advance the kernel state (st, ist, table state) to period time ``tau_stop``.
+
+    Switch records go to ``sw`` (rows: time, q, v, ΔM) while ``rec_on``. Returns 0 when
+    ``tau_stop`` was reached, 1 if the record buffer filled up (state left right after the last
+    recorded switch; call again to continue), 2 at a grazing switch (v* = 0) while ``tan_on``
+    (state left right after that switch, tangent not updated by it), 3 when the switch count
+    reaches ``ist[I_MAXSW]`` (the switch budget; state right after that switch, which is neither
+    recorded nor applied to the tangent; its jump and direction in ``st[S_JMP]``,
+    ``st[S_DIR]``), 4 at a switch where the motion enters a Filippov sliding motion (it
+    reverses the previous switch at the same threshold with the opposite jump, the flow pushes
+    into the threshold from both sides and the excursion just begun lasts ``2|v|/|q''| <=
+    par[P_SL]``; state right after that switch, neither recorded nor applied to the tangent,
+    its jump and direction in ``st[S_JMP]``, ``st[S_DIR]``; the caller integrates the slide,
+    :mod:`oscillators.engines._sliding`). Tangent vectors (columns of ``y``, rows δq, δv,
+    δφ) are propagated while ``tan_on``. ``st[S_UP]``, ``st[S_DN]`` and ``st[S_MV]`` must be current
+    (:func:`_table_refresh`).
+    """
+    q = st[S_Q]
+    v = st[S_V]
+    tau = st[S_TAU]
+    c = st[S_COS]
+    s = st[S_SIN]
+    up = st[S_UP]
+    down = st[S_DN]
+    mv = st[S_MV]
+    nsw = ist[I_NSW]
+    nsw_max = ist[I_MAXSW]
+    # the fast hop's coefficients as locals (hop_coefficients)
+    coefs = hop_coefficients(mp)
     integral = st[S_IM]
     # the tangent columns live in registers during the loop (y is 3×3; unused columns are zero)
     a0, a1, a2 = y[0, 0], y[0, 1], y[0, 2]
@@ -638,235 +905,24 @@ def advance_table(
         horizon = tau_stop - tau
         if horizon <= 0.0:
             break
-        force = coupling * mv
-        mode = 0  # 1 Taylor hop to a switch, 2 Taylor hop to the stop, 0 exact flight, 3 fast hop
-        direction = 0
-        h = 0.0
-        theta = 0.0
-        tdir = 0
-        if h_small > 0.0 and v != 0.0:
-            # fast short hop (see the module docstring): q's Taylor coefficients as linear forms,
-            # series reversion of q(h) = theta from the linear estimate x, one Newton step
-            theta = up if v > 0.0 else down
-            gap = theta - q
-            if abs(gap) < h_small * abs(v):
-                e2 = t2q * q + t2v * v + t2f * force
-                e2 += t2c * c + t2s * s
-                e3 = t3q * q + t3v * v + t3f * force
-                e3 += t3c * c + t3s * s
-                e4 = t4q * q + t4v * v + t4f * force
-                e4 += t4c * c + t4s * s
-                e5 = t5q * q + t5v * v + t5f * force
-                e5 += t5c * c + t5s * s
-                e6 = t6q * q + t6v * v + t6f * force
-                e6 += t6c * c + t6s * s
-                r = 1.0 / v
-                x = gap * r
-                k2 = e2 * r
-                k3 = e3 * r
-                # series reversion of x = h + k2 h^2 + k3 h^3 + ... to third order
-                xx = x * x
-                h0 = x + xx * (x * (2.0 * k2 * k2 - k3) - k2)
-                # everything the Newton step needs is a polynomial in h0, side by side and in
-                # Estrin form (short dependency chains): the residual, 1/q'(h0) = r/(1 + u) by
-                # its series, v and q'' at h0, and the phase rotation; the step then corrects
-                # them to first order in dh
-                hh2 = h0 * h0
-                res = h0 * (v + e2 * h0 + hh2 * (e3 + e4 * h0 + hh2 * (e5 + e6 * h0))) - gap
-                u = h0 * (2.0 * k2 + 3.0 * k3 * h0 + 4.0 * e4 * r * hh2)
-                uu = u * u
-                inv = r * ((1.0 - u) + uu * (1.0 - u))
-                dp0 = (v + 2.0 * e2 * h0) + hh2 * ((3.0 * e3 + 4.0 * e4 * h0)
-                      + hh2 * (5.0 * e5 + 6.0 * e6 * h0))  # fmt: skip
-                pp0 = (2.0 * e2 + 6.0 * e3 * h0) + hh2 * (12.0 * e4 + 20.0 * e5 * h0)
-                xr = omega * h0
-                x2 = xr * xr
-                cx = 1.0 - x2 * (0.5 - x2 * (1.0 / 24.0))
-                sx = xr * (1.0 - x2 * (1.0 / 6.0 - x2 * (1.0 / 120.0)))
-                c0r = c * cx - s * sx
-                s0r = s * cx + c * sx
-                dh = res * inv
-                hf = h0 - dh
-                av = abs(v)
-                # accept when the step's error (derivative series: |dh| u^4; Newton and the
-                # first-order corrections: ~|q''|/|v| dh^2) is far below one ulp of the time and
-                # q is provably monotone on [0, hf] (|v(s) - v| < |v|/2): theta is then the first
-                # crossing
-                ae2 = abs(e2)
-                slope = hf * (2.0 * ae2 + hf * (3.0 * abs(e3) + hf * (4.0 * abs(e4)
-                        + hf * (5.0 * abs(e5) + hf * 6.0 * abs(e6)))))  # fmt: skip
-                err = abs(dh) * (u * u * u * u + 1e-13) + dh * dh * (ae2 + 3.0 * abs(e3)) / av
-                if 0.0 < hf <= horizon and hf < h_small and err <= 1e-17 and slope < 0.5 * av:
-                    v1 = dp0 - dh * pp0
-                    dphi = omega * dh
-                    c1 = c0r + dphi * s0r
-                    s1 = s0r - dphi * c0r
-                    if tan_on:
-                        # Φ(h) = [[g' + 2ζg, g], [-g, g']], g = Φ_01 (degree 6 in h)
-                        hp2 = hf * hf
-                        hp4 = hp2 * hp2
-                        g = (g0 + g1 * hf) + hp2 * (g2 + g3 * hf) + hp4 * (g4 + g5 * hf + hp2 * g6)
-                        gd = (d0 + d1 * hf) + hp2 * (d2 + d3 * hf) + hp4 * (d4 + d5 * hf + hp2 * d6)
-                        m00 = gd + 2.0 * zeta * g
-                        a0, a1, a2, b0, b1, b2 = _hop_tangent(
-                            m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b, ntan,
-                            a0, a1, a2, b0, b1, b2, f0, f1, f2,
-                        )  # fmt: skip
-                    direction = 1 if v > 0.0 else -1
-                    c = c1
-                    s = s1
-                    v = v1
-                    integral += mv * hf
-                    q = theta
-                    tau += hf
-                    mode = 3
-        if mode == 0 and h_taylor > 0.0:
-            # general Taylor path: coefficients up to ORDER from the same linear forms
-            e[0] = q
-            e[1] = v
-            for n in range(2, ORDER + 1):
-                e[n] = (
-                    mp[n, TC_Q] * q
-                    + mp[n, TC_V] * v
-                    + mp[n, TC_F] * force
-                    + mp[n, TC_C] * c
-                    + mp[n, TC_S] * s
-                )
-            av = abs(v)
-            if v > 0.0:
-                tdir = 1
-                theta = up
-                gap = up - q
-            elif v < 0.0:
-                tdir = -1
-                theta = down
-                gap = q - down
-            else:
-                gap = np.inf
-            disc = v * v + 4.0 * tdir * e[2] * gap
-            if gap < h_taylor * av and disc > 0.0:
-                # start from the root of the quadratic Taylor polynomial (stable form), then
-                # Newton; stop once the next Newton error (~ |q''|/(2|v|) dh^2) is below 1e-17
-                h = 2.0 * gap / (av + math.sqrt(disc))
-                curv = abs(e[2]) + abs(e[3]) * h
-                converged = False
-                for _ in range(8):
-                    p, dp = _poly2(e, h)
-                    dh = (p - theta) / dp
-                    h -= dh
-                    if dh * dh * curv <= 1e-17 * av:
-                        converged = True
-                        break
-                if converged and 0.0 < h <= h_taylor and _slope_bound(e, h) < 0.5 * av:
-                    mode = 1 if h <= horizon else 2
-            if mode == 0 and horizon <= h_taylor:
-                b = _excursion_bound(e, horizon)
-                if q + b < up and q - b >= down:
-                    mode = 2
-        if mode == 1 or mode == 2:
-            hh = h if mode == 1 else horizon
-            p, dp = _poly2(e, hh)
-            cx, sx = _rotation(omega * hh)
-            c1 = c * cx - s * sx
-            s1 = s * cx + c * sx
-            if tan_on:
-                m00 = mp[ORDER, 0]
-                m01 = mp[ORDER, 1]
-                m10 = mp[ORDER, 2]
-                m11 = mp[ORDER, 3]
-                for n in range(ORDER - 1, -1, -1):
-                    m00 = m00 * hh + mp[n, 0]
-                    m01 = m01 * hh + mp[n, 1]
-                    m10 = m10 * hh + mp[n, 2]
-                    m11 = m11 * hh + mp[n, 3]
-                a0, a1, a2, b0, b1, b2 = _hop_tangent(
-                    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
-                    a0, a1, a2, b0, b1, b2, f0, f1, f2,
-                )  # fmt: skip
-            c = c1
-            s = s1
-            v = dp
-            integral += mv * hh  # M is constant over the hop
-            if mode == 2:
-                q = p
-                tau = tau_stop
-                break
-            q = theta
-            tau += hh
-            direction = tdir
-        elif mode == 0:
-            ph = phi0 + omega * tau
-            c = math.cos(ph)
-            s = math.sin(ph)
-            hc, direction = scan_crossing(par, force, q, v, c, s, tau, horizon, up, down)
-            hh = hc if direction != 0 else horizon
-            ph1 = phi0 + omega * (tau + hh)
-            c1 = math.cos(ph1)
-            s1 = math.sin(ph1)
-            q1, v1 = exact_step(q, v, c, s, c1, s1, force, hh, zeta, omega, amp_a, amp_b)
-            if tan_on:
-                m00, m01, m10, m11 = hom_matrix(hh, zeta)
-                a0, a1, a2, b0, b1, b2 = _hop_tangent(
-                    m00, m01, m10, m11, c, s, c1, s1, omega, amp_a, amp_b, ntan,
-                    a0, a1, a2, b0, b1, b2, f0, f1, f2,
-                )  # fmt: skip
-            c = c1
-            s = s1
-            v = v1
-            integral += mv * hh
-            if direction == 0:
-                q = q1
-                tau = tau_stop
-                break
-            q = up if direction > 0 else down
-            tau += hh
+        direction, q, v, tau, c, s, a0, a1, a2, b0, b1, b2, integral = hop(
+            par, coefs, mp, e, q, v, tau, c, s, up, down, mv, tau_stop, tan_on, ntan,
+            a0, a1, a2, b0, b1, b2, f0, f1, f2, integral,
+        )  # fmt: skip
+        if direction == 0:
+            break
         # the switch: every relay at this threshold flips at once
         jump = _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction)
         up = st[S_UP]
         down = st[S_DN]
         mv = st[S_MV]
         nsw += 1
-        if jump == -prev_jump and q == prev_q and jump != 0.0:
-            a_now = c - q - 2.0 * zeta * v + coupling * mv
-            a_before = a_now - coupling * jump
-            if (
-                direction * a_before > 0.0
-                and direction * a_now < 0.0
-                and 2.0 * abs(v) <= h_slide * abs(a_now)
-            ):
-                st[S_JMP] = jump
-                st[S_DIR] = direction
-                status = 4  # sliding: the caller integrates it in closed form
-                break
-        prev_q = q
-        prev_jump = jump
-        if nsw >= nsw_max:
-            # switch budget spent (the caller raises SlidingError or SwitchBudgetError); the
-            # tangent and the record of this last switch are left out
-            st[S_JMP] = jump
-            st[S_DIR] = direction
-            status = 3
+        status, b0, b1, b2, prev_q, prev_jump = settle_switch(
+            par, st, ist, q, v, c, tau, mv, jump, direction, nsw, nsw_max, prev_q, prev_jump,
+            tan_on, ntan, a0, a1, a2, b0, b1, b2, rec_on, sw, sw_count,
+        )  # fmt: skip
+        if status != 0:
             break
-        if tan_on and coupling * jump != 0.0:
-            if v == 0.0:
-                status = 2  # grazing: infinite saltation, the caller raises GrazingError
-                break
-            # saltation X = [[1,0,0],[C ΔM / v*, 1, 0],[0,0,1]]
-            sal = coupling * jump / v
-            b0 += sal * a0
-            b1 += sal * a1
-            if ntan == 3:
-                b2 += sal * a2
-        if rec_on:
-            i = sw_count[0]
-            sw[i, 0] = par[P_TBASE] + ist[I_N] * period + tau
-            sw[i, 1] = q
-            sw[i, 2] = v
-            sw[i, 3] = jump
-            sw_count[0] = i + 1
-            if i + 1 >= cap:
-                status = 1
-                break
     st[S_Q] = q
     st[S_V] = v
     st[S_TAU] = tau

@@ -17,7 +17,7 @@ saltation ``δv += C·ΔM/v*·δq`` at each switch. Methods (``engine_options={"
   the weights are multiples of one unit, else compensated (Neumaier) sums;
 * ``"generic"`` — the Python reference path through ``switching(state)`` / ``apply``;
 * ``"auto"`` (default) — ``"nested"`` when the plan exists, else ``"heap"``; ``"generic"``
-  without a relay table (:class:`~hysteresis.base.SwitchingHysteron`: an RFIM avalanche).
+  without a relay table (spins with ``compiled_switching()``: :mod:`.switching` instead).
 
 Two classes: :class:`RelayKernelEngine` (the compiled kernels, nested or heap) and
 :class:`RelayReferenceEngine` (the Python reference path). :class:`RelayEngine`, their common

@@ -12,6 +12,7 @@ from oscillators.engines.compiled_duhem import CompiledDuhemEngine
 from oscillators.engines.continuous import ContinuousEngine
 from oscillators.engines.play import PlayEngine
 from oscillators.engines.relay import RelayEngine
+from oscillators.engines.switching import SwitchingKernelEngine
 
 __all__ = ["select_engine", "GenericEngineWarning", "python_path_reason", "describe_engine"]
 
@@ -39,12 +40,14 @@ def select_engine(operator: Any) -> type[Engine]:
     """The engine class for ``operator``, chosen from what its contract hands over.
 
     ``operator.piecewise_constant`` -> :class:`RelayEngine` (the compiled kernels, or the Python
-    reference path for ``method="generic"``); ``operator.compiled_play()`` not ``None`` ->
-    :class:`PlayEngine`; else ``operator.compiled_flow()`` not ``None`` ->
-    :class:`CompiledContinuousEngine`, of kind ``"duhem"`` (Bouc–Wen, Jiles–Atherton: the
-    state constructor ``make_state`` comes with the description) ->
-    :class:`CompiledDuhemEngine` (``method="generic"``: the generic engine); any other
-    (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow`` — with a
+    reference path for ``method="generic"``), or for interacting spins without a relay table
+    (``compiled_switching()`` not ``None``) :class:`SwitchingKernelEngine` (the same hops, the
+    spins' sorted lists; ``method="generic"``: the reference path);
+    ``operator.compiled_play()`` not ``None`` -> :class:`PlayEngine`; else
+    ``operator.compiled_flow()`` not ``None`` -> :class:`CompiledContinuousEngine`, of kind
+    ``"duhem"`` (Bouc–Wen, Jiles–Atherton: the state constructor ``make_state`` comes with the
+    description) -> :class:`CompiledDuhemEngine` (``method="generic"``: the generic engine);
+    any other (continuous) operator -> :class:`ContinuousEngine` over its ``branch_flow`` — with a
     one-line :class:`GenericEngineWarning` when the operator says why it has no compiled
     description (``uncompiled_reason``: a composite whose parts the compiled engines cannot
     take together). A fast path
@@ -54,6 +57,8 @@ def select_engine(operator: Any) -> type[Engine]:
     when the system is built.
     """
     if operator.piecewise_constant:
+        if not operator.has_relay_table and operator.compiled_switching() is not None:
+            return SwitchingKernelEngine
         return RelayEngine
     if not isinstance(operator, ContinuousHysteron):
         raise TypeError(

@@ -31,10 +31,12 @@ from hysteresis import (
 )
 from hysteresis.algebra import SwitchingSum
 from hysteresis.base import Branch, Linearization, SwitchingHysteron
+from hysteresis.compiled_spins import CompiledSpins
 from hysteresis.flow import BranchFlow
 from hysteresis.rfim import RandomFieldIsing
 from oscillators import ForcedOscillator
 from oscillators.engines.relay import RelayReferenceEngine
+from oscillators.engines.switching import SwitchingKernelEngine
 
 #: what a new operator of each family must write (everything else is derived or optional)
 PC_REQUIRED = ("relay_table", "relay_outputs", "state_from_relay_outputs")
@@ -194,7 +196,9 @@ def test_piecewise_constant_contract(op):
 @pytest.mark.parametrize("op", _switching_operators(), ids=lambda op: type(op).__name__)
 def test_switching_contract(op):
     """No relay table: next switching inputs around the state's input, the jumps the state
-    makes there, and the oscillator's Python reference path (the kernels refused by name)."""
+    makes there, and the oscillator's engines: the compiled switching engine where the operator
+    hands over spins (``compiled_switching()``), else the Python reference path; the relay
+    kernels refused by name."""
     assert op.piecewise_constant and not op.has_relay_table
     state = op.apply([0.3, 2.0, -0.2])[1]
     sw = op.switching(state)
@@ -205,7 +209,11 @@ def test_switching_contract(op):
     assert op.apply([below], state)[0][0] - m == pytest.approx(sw.jump_down, abs=1e-15)
     assert isinstance(op.n_units, int) and op.n_units >= 64
     system = ForcedOscillator(op, coupling=0.5)
-    assert isinstance(system.engine(), RelayReferenceEngine)
+    spins = op.compiled_switching()
+    assert spins is None or isinstance(spins, CompiledSpins)
+    expected = RelayReferenceEngine if spins is None else SwitchingKernelEngine
+    assert isinstance(system.engine(), expected)
+    assert isinstance(system.engine(method="generic"), RelayReferenceEngine)
     with pytest.raises(ValueError, match="has none"):
         system.engine(method="heap")
 

@@ -1,0 +1,154 @@
+"""The switching engine: the oscillator coupled exactly to interacting spins, compiled.
+
+An operator without a relay table whose ``compiled_switching()`` hands over interacting Ising
+spins (:class:`hysteresis.compiled_spins.CompiledSpins`: a random-field Ising lattice) is
+integrated here: between events the relay kernel's closed-form hops, the next trigger input
+in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`,
+O(G·log₆₄ N) per event, no trial run), each avalanche one jump ``C·ΔM`` at its trigger input
+with the saltation ``δv += C·ΔM/v*·δq``, ``n_events`` counting spin flips. Filippov sliding,
+the switch budget, grazing, the tangent flow and the records are the relay kernel engine's
+(:class:`~oscillators.engines.relay.RelayKernelEngine`, whose Python side this class reuses).
+
+Methods (``engine_options={"method": ...}``): ``"auto"`` (this engine) or ``"generic"`` (the
+relay engine's Python reference path through ``switching()``/``apply()``, the reference the
+tests compare with); ``"nested"``/``"heap"`` need a relay table and are refused.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from hysteresis._rfim_kernels import count_up_neighbours
+from hysteresis.compiled_spins import CompiledSpins
+from hysteresis.seam import check_state
+from oscillators.engines import _relay_kernels as rk
+from oscillators.engines import _switching_kernels as sk
+from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayReferenceEngine
+from oscillators.results import OscillatorState
+
+__all__ = ["SwitchingKernelEngine"]
+
+
+class SwitchingKernelEngine(RelayKernelEngine):
+    """Compiled event-driven engine for interacting spins (module docstring).
+
+    ``SwitchingKernelEngine(system, state, method="generic")`` returns the reference
+    :class:`~oscillators.engines.relay.RelayReferenceEngine` instead.
+    """
+
+    name = "switching kernel (interacting spins, sorted lists)"
+    kernel_module = "oscillators.engines._switching_kernels"
+
+    def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **kw: Any):
+        if method == "generic":
+            return RelayReferenceEngine(system, state, method, **kw)
+        if method in ("nested", "heap"):
+            name = type(system.operator).__name__
+            raise ValueError(f"method {method!r} needs a relay table; {name} has none")
+        return super().__new__(cls, system, state, method, **kw)
+
+    def __init__(
+        self, system: Any, state: OscillatorState, method: str = "auto", taylor: bool = True
+    ) -> None:
+        RelayEngine.__init__(self, system, state, method, taylor)
+        spec = self._op.compiled_switching()
+        if not isinstance(spec, CompiledSpins):
+            raise TypeError(
+                f"{type(self._op).__name__}.compiled_switching() must return a "
+                f"hysteresis.compiled_spins.CompiledSpins, got {type(spec).__name__}"
+            )
+        self._spec = spec
+        self.method = "compiled"
+        q0, v0 = float(state.q), float(state.v)
+        bits, n_up = spec.spins(self._opstate0)
+        u0 = float(self._opstate0.input)
+        n = spec.n_spins
+        deg = int(spec.max_degree)
+        nvals = np.asarray(spec.neighbour_sums, dtype=np.int64)
+        small = np.uint8 if deg < 256 else np.int32
+        gidx = np.full(2 * deg + 1, -1, dtype=np.int64)
+        gidx[nvals + deg] = np.arange(nvals.size)
+        rank = np.empty(n, dtype=np.int32)
+        rank[spec.order] = np.arange(n, dtype=np.int32)
+        bits = np.array(bits, dtype=np.uint8)
+        nup = np.zeros(n, dtype=small)
+        count_up_neighbours(bits, spec.lattice, spec.offsets, spec.adjacency, deg, nup)
+        lay, levels, words = sk.bitset_layout(n, nvals.size)
+        sets = np.zeros(words, dtype=np.uint64)
+        listed = np.empty(n, dtype=small)
+        sk.build_lists(nup, spec.lattice, spec.offsets, deg, gidx, rank, listed, sets, lay, levels)
+        fs, j = spec.sorted_fields, float(spec.spin_coupling)
+        # pointers: the entries of every list with t <= u0 (binary search; t grows along a list)
+        ptr = np.array(
+            [np.searchsorted(-(fs + j * nv), u0, side="right") for nv in nvals.tolist()],
+            dtype=np.int64,
+        )
+        self._plan = (
+            spec.fields, fs, spec.order, rank, nvals, gidx, spec.lattice, spec.offsets,
+            spec.adjacency, deg, j, bits, nup, listed, np.empty(max(n, 1), dtype=np.int32),
+            sets, lay, levels, ptr,
+        )  # fmt: skip
+        self._n_relays = n  # the switch budget scales with the spins
+        self._mp = rk.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
+        self._tn1 = np.zeros(1, dtype=np.int64)
+        self._tt1 = np.zeros(1)
+        self._nobuf = np.empty((0, 3))
+        self._nosw = np.empty((1, 4))
+        self._cnt = np.zeros(1, dtype=np.int64)
+        self._tf = self._ti = self._bits = self._lay = None  # the relay tables' slots: unused
+        st = np.zeros(rk.N_ST)
+        st[: rk.S_SIN + 1] = (q0, v0, 0.0, math.cos(self._phi0), math.sin(self._phi0))
+        st[sk.S_U] = u0
+        st[rk.S_MV] = (2 * n_up - n) / n
+        ist = np.zeros(rk.N_IST, dtype=np.int64)
+        ist[sk.I_NUP] = n_up
+        sk.refresh(st, fs, j, nvals, sets, lay, levels, ptr)
+        self._st, self._ist = st, ist
+        self._start_on_sliding_set(q0, v0)
+
+    def _run(self, par, _tf, _ti, _bits, _lay, st, ist, *rest):  # noqa: ANN001, ANN202
+        """:meth:`RelayKernelEngine._run_targets`'s kernel call, on the spins' plan."""
+        return sk.run_spins(par, st, ist, *rest, *self._plan)
+
+    def _switched_copy(self, direction: int) -> tuple[float, float, float]:
+        """(output, next up, next down trigger) after the event at the current trigger in
+        ``direction``, on a copy of the plan (O(N): only where a start sits on a trigger)."""
+        st, ist = self._st.copy(), self._ist.copy()
+        plan = tuple(a.copy() if isinstance(a, np.ndarray) else a for a in self._plan)
+        sk.switch(direction, st, ist, *plan[:11], *plan[11:])
+        return float(st[rk.S_MV]), float(st[rk.S_UP]), float(st[rk.S_DN])
+
+    def _slide_switch(self, direction: int) -> None:
+        sk.switch(direction, self._st, self._ist, *self._plan)
+
+    def relay_outputs(self) -> np.ndarray:
+        """No relay table: the spins are in :meth:`state` (``operator.spins(...)``)."""
+        raise AttributeError(
+            f"{type(self._op).__name__} has no relay_outputs (no relay table): read the spins "
+            "from engine.state().operator_state"
+        )
+
+    @property
+    def n_up(self) -> int:
+        """The number of up spins now."""
+        return int(self._ist[sk.I_NUP])
+
+    def _now(self) -> tuple[float, float, Any]:
+        st = self._st
+        q, v = float(st[rk.S_Q]), float(st[rk.S_V])
+        # the spins are stable at every input in [next down trigger, next up trigger); right
+        # after a falling event q sits on the trigger the input has just left below
+        u = q
+        if not st[rk.S_DN] <= u < st[rk.S_UP]:
+            u = float(np.nextafter(q, -np.inf))
+            if not st[rk.S_DN] <= u < st[rk.S_UP]:
+                u = float(st[sk.S_U])  # sliding on a trigger: the input of the last event
+        bits = self._plan[11].copy()
+        opstate = self._spec.make_state(bits, self.n_up, u)
+        check_state(
+            opstate, f"returned by {type(self._op).__name__}.compiled_switching().make_state"
+        )
+        return q, v, opstate
