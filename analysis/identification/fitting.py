@@ -28,69 +28,24 @@ start a record with a saturating excursion, or discard its beginning, if that is
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from analysis.identification._record_fit import RecordFit, check_record, fit_result
+from analysis.identification.differential_fits import fit_bouc_wen, fit_jiles_atherton
 from hysteresis._validation import real_array
 from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
 from hysteresis.preisach import DiscretePreisachModel
 
 __all__ = [
     "RecordFit",
+    "fit_bouc_wen",
+    "fit_jiles_atherton",
     "relay_outputs",
     "fit_preisach_record",
     "fit_prandtl_ishlinskii",
 ]
-
-
-@dataclass(frozen=True, eq=False)
-class RecordFit:
-    """A model fitted to an input/output record.
-
-    Attributes
-    ----------
-    model:
-        The fitted operator (:class:`~hysteresis.DiscretePreisachModel`, normalised, or
-        :class:`~hysteresis.PrandtlIshlinskii`).
-    offset, scale:
-        Output model ``y ≈ offset + scale · model(u)`` (``scale = 1`` for Prandtl–Ishlinskii,
-        whose weights carry the amplitude).
-    train_rms, validation_rms:
-        Root-mean-square error on the training and validation samples (NaN without
-        validation samples).
-    n_train, n_validation:
-        Sample counts.
-    """
-
-    model: Any
-    offset: float
-    scale: float
-    train_rms: float
-    validation_rms: float
-    n_train: int
-    n_validation: int
-
-    def predict(self, inputs: Any) -> np.ndarray:
-        """``offset + scale · model(inputs)`` from the model's default initial state."""
-        y, _ = self.model.apply(np.asarray(inputs, dtype=float))
-        return self.offset + self.scale * y
-
-
-def _record(u: Any, y: Any, train_fraction: float) -> tuple[np.ndarray, np.ndarray, int]:
-    u = real_array(u, "u")
-    y = real_array(y, "y")
-    if u.ndim != 1 or y.shape != u.shape or u.size < 2:
-        raise ValueError("u and y must be 1-D arrays of the same length (>= 2)")
-    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(y))):
-        raise ValueError("u and y must be finite (no NaN/inf)")
-    if not (isinstance(train_fraction, (int, float)) and 0.0 < train_fraction <= 1.0):
-        raise ValueError(f"train_fraction must be in (0, 1], got {train_fraction!r}")
-    n_train = int(math.floor(train_fraction * u.size))
-    if n_train < 2:
-        raise ValueError("train_fraction leaves fewer than 2 training samples")
-    return u, y, n_train
 
 
 def relay_outputs(u: Any, alpha: Any, beta: Any, initial: int = -1) -> np.ndarray:
@@ -138,7 +93,7 @@ def fit_preisach_record(
     RecordFit
         ``model`` normalised (weights sum 1), ``y ≈ offset + scale · model(u)``.
     """
-    u, y, n_train = _record(u, y, train_fraction)
+    u, y, n_train = check_record(u, y, train_fraction)
     x = np.asarray(nodes, dtype=float)
     if x.ndim != 1 or x.size < 2 or np.any(np.diff(x) <= 0) or not np.all(np.isfinite(x)):
         raise ValueError("nodes must be a strictly increasing 1-D array of >= 2 finite values")
@@ -158,7 +113,7 @@ def fit_preisach_record(
     w = masses[keep] / total
     model = DiscretePreisachModel(alpha[keep], beta[keep], w / w.sum())
     pred = design @ np.concatenate([[coef[0]], masses])
-    return _fit_result(model, float(coef[0]), total, pred, y, n_train)
+    return fit_result(model, float(coef[0]), total, pred, y, n_train)
 
 
 def fit_prandtl_ishlinskii(
@@ -189,7 +144,7 @@ def fit_prandtl_ishlinskii(
     RecordFit
         ``model`` a :class:`~hysteresis.PrandtlIshlinskii`, ``y ≈ offset + model(u)``.
     """
-    u, y, n_train = _record(u, y, train_fraction)
+    u, y, n_train = check_record(u, y, train_fraction)
     p = np.asarray(widths, dtype=float).ravel()
     if p.size == 0 or not np.all(np.isfinite(p)) or np.any(p < 0):
         raise ValueError("widths must be a non-empty sequence of finite values >= 0")
@@ -212,7 +167,7 @@ def fit_prandtl_ishlinskii(
     weights = np.diff(np.concatenate([[0.0], partial]))
     model = PrandtlIshlinskii(p, weights)
     pred = design @ np.concatenate([[coef[0]], partial])
-    return _fit_result(model, float(coef[0]), 1.0, pred, y, n_train)
+    return fit_result(model, float(coef[0]), 1.0, pred, y, n_train)
 
 
 def _bounded_lstsq(design: np.ndarray, y: np.ndarray, lower: np.ndarray) -> np.ndarray:
@@ -227,13 +182,3 @@ def _bounded_lstsq(design: np.ndarray, y: np.ndarray, lower: np.ndarray) -> np.n
 
     z, _ = nnls(aug, shifted, maxiter=50 * aug.shape[1])
     return np.concatenate([[z[0] - z[1]], lower + z[2:]])
-
-
-def _fit_result(
-    model: Any, offset: float, scale: float, pred: np.ndarray, y: np.ndarray, n_train: int
-) -> RecordFit:
-    err = pred - y
-    train = float(np.sqrt(np.mean(err[:n_train] ** 2)))
-    n_val = y.size - n_train
-    val = float(np.sqrt(np.mean(err[n_train:] ** 2))) if n_val else float("nan")
-    return RecordFit(model, offset, scale, train, val, n_train, n_val)
