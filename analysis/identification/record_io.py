@@ -123,9 +123,7 @@ def read_record(
     for row, (lineno, line) in enumerate(body):
         fields = _split(line, sep)
         if len(fields) < need:
-            raise ValueError(
-                f"{path} line {lineno}: {len(fields)} fields, the columns need {need}"
-            )
+            raise ValueError(f"{path} line {lineno}: {len(fields)} fields, the columns need {need}")
         for arr, col, name in ((u, index[0], used[0]), (y, index[1], used[1])):
             value = _number(fields[col])
             if value is None:
@@ -142,7 +140,9 @@ def read_record(
     return InputOutputRecord(u, y, used, str(path))
 
 
-def write_record(path: str | Path, u: Any, y: Any, columns: tuple[str, str] = DEFAULT_COLUMNS) -> Path:
+def write_record(
+    path: str | Path, u: Any, y: Any, columns: tuple[str, str] = DEFAULT_COLUMNS
+) -> Path:
     """Write ``u`` and ``y`` as a CSV file with the header ``columns`` (what
     :func:`read_record` reads back exactly: ``repr`` of every float)."""
     u = np.asarray(u, dtype=float).ravel()
