@@ -22,16 +22,24 @@ the named parameters' errors follow by the delta method, ``cov = G·cov(θ)·G�
 Jacobian of the map θ -> parameters (central differences). A correlated noise makes them too
 small; a parameter at a bound (listed in ``info["at_bounds"]``) has no meaningful error.
 
-Bouc–Wen (:func:`fit_bouc_wen`). Output model ``y = offset + z``, ``z`` the output of
-``BoucWen(A, beta, gamma, n)``. Identifiability: scaling ``z -> λz`` maps
+Bouc–Wen (:func:`fit_bouc_wen`). Output model ``y = offset + linear·u + σ·z``, ``z`` the output
+of ``BoucWen(A, beta, gamma, n)`` — the Bouc–Wen restoring force ``α·k·u + (1 − α)·k·z`` up to
+an offset. ``σ = ±1`` is the loop's orientation, read from the record (the sign of
+``∮ y du``): ``z`` is a smooth *stop* (its loop runs clockwise in ``(u, z)``: the rising branch
+on top), so a play-like actuator (counter-clockwise, e.g. a piezo stack ``y = d·u − z``) has
+``σ = −1``; it is not fitted. Identifiability: scaling ``z -> λz`` (``λ > 0``) maps
 ``(A, β, γ) -> (λA, λ^{1−n}β, λ^{1−n}γ)`` and gives the same loop ``λ`` times taller, so a
-separate output scale would be degenerate with these three; it is not fitted — ``z`` carries
-the record's output units, ``A`` is the slope ``dy/du`` where ``z = 0``, the saturation is
-``z_max = (A/(β + γ))^{1/n}``. Fitted coordinates: ``log A``, ``log z_max``,
-``w = β/(β + γ) >= 0`` (the slope just after a reversal at saturation is ``2wA``),
-``log n`` and the offset; ``(A, β, γ, n, offset)`` and ``z_max`` are reported. The first
-sample fixes the initial state: ``z = y[0] − offset`` at ``u[0]`` (clipped into
-``[−z_max, z_max]``).
+separate output scale (the restoring force's ``(1 − α)k``) would be degenerate with these three;
+it is not fitted — ``z`` carries the record's output units, ``A`` is the slope of ``σz`` where
+``z = 0``, the saturation is ``z_max = (A/(β + γ))^{1/n}``. ``linear`` (the force's ``α·k``)
+is the slope where ``z`` saturates, ``linear + 2wσA`` the slope just after a reversal there,
+``linear + σA`` the slope at ``z = 0``: all identifiable once the record approaches saturation
+(a record that stays in the loop's middle correlates ``linear``, ``A`` and ``z_max``: their
+standard errors say so). Fitted coordinates: ``log A``, ``log z_max``,
+``w = β/(β + γ) >= 0``, ``log n``, the offset and ``linear``; ``(A, β, γ, n, offset,
+linear)`` and ``z_max`` are reported. The first sample fixes the initial state:
+``z = σ(y[0] − offset − linear·u[0])`` at ``u[0]`` (clipped into ``[−z_max, z_max]``; with
+``linear=False`` and ``σ = +1``, ``z = y[0] − offset``).
 
 Jiles–Atherton (:func:`fit_jiles_atherton`). Output ``M`` of
 ``JilesAtherton(ms, a, k, c, alpha)`` for the field ``H``; fitted coordinates ``log ms``,
@@ -51,13 +59,13 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from analysis.identification._record_fit import RecordFit, check_record, fit_result
-from hysteresis import BoucWen, JilesAtherton
+from hysteresis import BoucWen, JilesAtherton, StaticMap, weighted_sum
 
 __all__ = ["fit_bouc_wen", "fit_jiles_atherton", "loop_features"]
 
@@ -274,6 +282,14 @@ def _finish(
 _BW_NAMES = ("A", "beta", "gamma", "n", "offset", "z_max")
 
 
+def _identity(u: np.ndarray) -> np.ndarray:
+    return u
+
+
+def _unit_slope(u: np.ndarray) -> np.ndarray:
+    return np.ones_like(u)
+
+
 def _bw_dimensionless(theta: np.ndarray) -> tuple[float, float, float, float, float, float]:
     """``(A, β, γ, n, offset, z_max)`` of the dimensionless record from θ."""
     a = math.exp(theta[0])
@@ -284,12 +300,25 @@ def _bw_dimensionless(theta: np.ndarray) -> tuple[float, float, float, float, fl
     return a, w * s, (1.0 - w) * s, n, float(theta[4]), z_max
 
 
-def _bw_simulate(theta: np.ndarray, u: np.ndarray, y0: float) -> np.ndarray:
-    a, beta, gamma, n, offset, _ = _bw_dimensionless(theta)
-    op = BoucWen(a, beta, gamma, n)
-    lim = op.z_max * (1.0 - 1e-9)
-    z, _ = op.apply(u, op.state(min(max(y0 - offset, -lim), lim), float(u[0])))
-    return offset + z
+def _orientation(u: np.ndarray, y: np.ndarray) -> int:
+    """+1 when the loop runs clockwise in ``(u, y)`` (``∮ y du > 0``: the rising branch above
+    the falling one, as Bouc–Wen's ``z``, a smooth stop), −1 counter-clockwise (a play-like
+    actuator, ``y = d·u − z``)."""
+    area = float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(u)))
+    return 1 if area >= 0.0 else -1
+
+
+def _tip_slope(u: np.ndarray, y: np.ndarray) -> float:
+    """Median slope over the last 15 % of the input range before each reversal (where ``z``
+    saturates, the slope is the linear term's)."""
+    su = 0.5 * float(np.ptp(u))
+    slopes = []
+    for run in _monotone_runs(u)[:-1]:
+        near = run[np.abs(u[run] - u[run[-1]]) <= 0.15 * su]
+        slopes.append(_slope(u[near], y[near]))
+    v = np.asarray(slopes, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(np.median(v)) if v.size else 0.0
 
 
 def fit_bouc_wen(
@@ -298,9 +327,11 @@ def fit_bouc_wen(
     *,
     train_fraction: float = 0.7,
     n_starts: int = 3,
+    linear: bool = True,
     initial: Mapping[str, float] | None = None,
 ) -> RecordFit:
-    """Fit ``y ≈ offset + BoucWen(A, beta, gamma, n)[u]`` to a record (module docstring).
+    """Fit ``y ≈ offset + linear·u + σ·BoucWen(A, beta, gamma, n)[u]`` to a record (module
+    docstring; ``σ = ±1`` the loop's orientation, from the sign of ``∮ y du``).
 
     Parameters
     ----------
@@ -309,79 +340,128 @@ def fit_bouc_wen(
     train_fraction:
         Fraction (0, 1] of the record, from its start, used for the fit.
     n_starts:
-        Starts from the loop features (:func:`loop_features`): ``A`` the initial
-        susceptibility, ``z_max`` the saturation, ``offset`` the centre, ``w`` from the
-        reversal susceptibility, and ``n`` taking the values 1, 2, 4, 1.5, 3, ... in turn.
+        Starts from the loop features (:func:`loop_features` of ``σ(y − linear·u)``): the
+        linear term the slope before the reversals, ``A`` the initial susceptibility,
+        ``z_max`` the saturation, ``offset`` the centre, ``w`` from the reversal
+        susceptibility; ``n`` takes the values 1, 2, 4, 1.5, 3, ... in turn.
+    linear:
+        Fit the linear term (else ``linear = 0``).
     initial:
-        An extra first start ``{"A", "beta", "gamma", "n"[, "offset"]}`` in the record's units.
+        An extra first start ``{"A", "beta", "gamma", "n"[, "offset", "linear"]}`` in the
+        record's units.
 
     Returns
     -------
     RecordFit
-        ``model`` a :class:`~hysteresis.BoucWen`, ``y ≈ offset + model(u)`` from
-        ``initial_state`` (``z = y[0] − offset`` at ``u[0]``); ``parameters`` and
-        ``standard_errors`` for ``A, beta, gamma, n, offset, z_max``.
+        ``model`` the operator ``linear·u + σ·z`` (a :class:`~hysteresis.algebra.WeightedSum`
+        of an identity :class:`~hysteresis.StaticMap` and a :class:`~hysteresis.BoucWen`; the
+        :class:`~hysteresis.BoucWen` itself when ``linear=False`` and ``σ = +1``),
+        ``y ≈ offset + model(u)`` from ``initial_state`` (``z = σ(y[0] − offset −
+        linear·u[0])`` at ``u[0]``); ``parameters`` and ``standard_errors`` for ``A, beta,
+        gamma, n, offset, z_max`` (and ``linear``); ``info["orientation"]`` is ``σ``.
     """
     t0 = time.perf_counter()
     u, y, n_train = check_record(u, y, train_fraction, MIN_SAMPLES)
     n_starts = _check_starts(n_starts)
+    if not isinstance(linear, bool):
+        raise TypeError(f"linear must be a bool, got {type(linear).__name__}")
     su, sy, cy = _scales(u, y, centred=True)
     un, yn = u / su, (y - cy) / sy
+    sign = _orientation(un[:n_train], yn[:n_train])
+
+    def parts(theta: np.ndarray, u0: float, y0: float) -> tuple[Any, Any, float, float]:
+        a, beta, gamma, n, offset, _ = _bw_dimensionless(theta)
+        d = float(theta[5]) if linear else 0.0
+        op = BoucWen(a, beta, gamma, n)
+        lim = op.z_max * (1.0 - 1e-9)
+        z0 = min(max(sign * (y0 - offset - d * u0), -lim), lim)
+        return op, op.state(z0, u0), offset, d
+
+    def simulate(theta: np.ndarray, uu: np.ndarray, y0: float) -> np.ndarray:
+        op, state, offset, d = parts(theta, float(uu[0]), y0)
+        z, _ = op.apply(uu, state)
+        return offset + d * uu + sign * z
 
     def natural(theta: np.ndarray) -> np.ndarray:
         a, beta, gamma, n, offset, z_max = _bw_dimensionless(theta)
         k = sy ** (1.0 - n) / su  # z = s_y·z̃, u = s_u·ũ (module docstring)
-        return np.array([a * sy / su, beta * k, gamma * k, n, cy + sy * offset, sy * z_max])
+        out = [a * sy / su, beta * k, gamma * k, n, cy + sy * offset, sy * z_max]
+        return np.array(out + ([float(theta[5]) * sy / su] if linear else []))
 
+    lower = [math.log(1e-3), math.log(0.05), 0.0, 0.0, -2.0] + ([-50.0] if linear else [])
+    upper = [math.log(1e4), math.log(50.0), 20.0, math.log(30.0), 2.0] + ([50.0] if linear else [])
     problem = _Problem(
-        _BW_NAMES,
-        ("log A", "log z_max", "w", "log n", "offset"),
-        _bw_simulate,
+        _BW_NAMES + (("linear",) if linear else ()),
+        ("log A", "log z_max", "w", "log n", "offset") + (("linear",) if linear else ()),
+        simulate,
         natural,
-        np.array([math.log(1e-3), math.log(0.05), 0.0, 0.0, -2.0]),
-        np.array([math.log(1e4), math.log(50.0), 20.0, math.log(30.0), 2.0]),
+        np.array(lower),
+        np.array(upper),
     )
-    feats = loop_features(un, yn)
+    d0 = _tip_slope(un[:n_train], yn[:n_train]) if linear else 0.0
+    feats = loop_features(un[:n_train], sign * (yn[:n_train] - d0 * un[:n_train]))
     a0 = feats["initial_susceptibility"]
     a0 = a0 if math.isfinite(a0) and a0 > 0 else 2.0
     w0 = feats["reversal_susceptibility"] / (2.0 * a0)
     w0 = min(max(w0, 0.05), 5.0) if math.isfinite(w0) else 0.75
+    zm0 = min(max(1.02 * feats["saturation"], 0.1), 10.0)
+    o0 = sign * feats["center"]
     exponents = (1.0, 2.0, 4.0, 1.5, 3.0, 6.0, 1.2, 2.5, 5.0, 8.0)
     starts = [
-        np.array([math.log(a0), math.log(1.02), w0, math.log(n), 0.0])
+        np.array([math.log(a0), math.log(zm0), w0, math.log(n), o0] + ([d0] if linear else []))
         for n in (exponents * 5)[:n_starts]
     ]
     if initial is not None:
-        starts.insert(0, _bw_theta(initial, su, sy, cy))
-    guess = {"A": a0 * sy / su, "z_max": 1.02 * sy, "w": w0, "offset": cy}
+        starts.insert(0, _bw_theta(initial, su, sy, cy, linear))
+    guess = {
+        "A": a0 * sy / su,
+        "z_max": zm0 * sy,
+        "w": w0,
+        "offset": cy + sy * o0,
+        "linear": d0 * sy / su,
+        "orientation": sign,
+    }
     res, costs = _least_squares(problem, starts, un[:n_train], yn[:n_train])
 
     def build(p: dict[str, float]) -> tuple[Any, Any, float]:
-        model = BoucWen(p["A"], p["beta"], p["gamma"], p["n"])
-        lim = model.z_max * (1.0 - 1e-9)
-        z0 = min(max(float(y[0]) - p["offset"], -lim), lim)
-        return model, model.state(z0, float(u[0])), p["offset"]
+        bw = BoucWen(p["A"], p["beta"], p["gamma"], p["n"])
+        u0 = float(u[0])
+        d = p.get("linear", 0.0)
+        lim = bw.z_max * (1.0 - 1e-9)
+        state = bw.state(min(max(sign * (float(y[0]) - p["offset"] - d * u0), -lim), lim), u0)
+        if not linear and sign == 1:
+            return bw, state, p["offset"]
+        ident = StaticMap(_identity, _unit_slope, name="u")
+        model = (
+            weighted_sum([ident, bw], [d, float(sign)]) if linear else weighted_sum([bw], [-1.0])
+        )
+        states = (ident.initial_state(u0), state) if linear else (state,)
+        return model, model.state(*states), p["offset"]
 
-    return _finish(problem, res, costs, guess, t0, build, u, y, n_train)
+    fit = _finish(problem, res, costs, guess, t0, build, u, y, n_train)
+    return replace(fit, info={**dict(fit.info or {}), "orientation": sign})
 
 
-def _bw_theta(initial: Mapping[str, float], su: float, sy: float, cy: float) -> np.ndarray:
+def _bw_theta(
+    initial: Mapping[str, float], su: float, sy: float, cy: float, linear: bool
+) -> np.ndarray:
     """θ of a guess in the record's units (checked by building the operator)."""
     if not isinstance(initial, Mapping):
         raise TypeError(f"initial must be a mapping of parameters, got {type(initial).__name__}")
-    unknown = sorted(set(initial) - {"A", "beta", "gamma", "n", "offset"})
+    known = {"A", "beta", "gamma", "n", "offset", "linear"}
+    unknown = sorted(set(initial) - known)
     if unknown:
-        raise ValueError(f"initial has unknown keys {unknown}; known: A, beta, gamma, n, offset")
+        raise ValueError(f"initial has unknown keys {unknown}; known: {sorted(known)}")
     try:
         op = BoucWen(initial["A"], initial["beta"], initial["gamma"], initial.get("n", 1.0))
     except KeyError as exc:
         raise ValueError(f"initial must give A, beta and gamma (missing {exc})") from None
-    n = op.n
     a = op.A * su / sy
     z_max = op.z_max / sy
     w = op.beta / (op.beta + op.gamma)
     offset = (float(initial.get("offset", cy)) - cy) / sy
-    return np.array([math.log(a), math.log(z_max), w, math.log(n), offset])
+    theta = [math.log(a), math.log(z_max), w, math.log(op.n), offset]
+    return np.array(theta + ([float(initial.get("linear", 0.0)) * su / sy] if linear else []))
 
 
 # -- Jiles–Atherton -----------------------------------------------------------------------------

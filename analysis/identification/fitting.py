@@ -8,6 +8,8 @@ input record is fixed, so the identification is a constrained linear least-squar
   cell (the corner relays of :mod:`hysteresis.preisach.projection`),
   ``y_t ≈ c + Σ_k m_k r_k(t)`` with the relay outputs ``r_k(t) ∈ {−1, +1}`` computed from the
   input record and ``m_k >= 0``.
+* :func:`fit_bouc_wen`, :func:`fit_jiles_atherton` — the differential models, nonlinear in their
+  parameters (:mod:`analysis.identification.differential_fits`, re-exported here).
 * :func:`fit_prandtl_ishlinskii` — a Prandtl–Ishlinskii operator,
   ``y_t ≈ c + Σ_i a_i F_{p_i}[u]_t`` with plays of given widths (width 0 = the linear term).
   The weights may be negative (a saturating actuator needs them: its loading curve is
@@ -142,7 +144,10 @@ def fit_prandtl_ishlinskii(
     Returns
     -------
     RecordFit
-        ``model`` a :class:`~hysteresis.PrandtlIshlinskii`, ``y ≈ offset + model(u)``.
+        ``model`` a :class:`~hysteresis.PrandtlIshlinskii`, ``y ≈ offset + model(u)``;
+        ``parameters`` the offset and the weights ``a_i`` of the widths ``model.widths``, with
+        their ``standard_errors`` (``s²(XᵀX)⁻¹`` of the linear regression, conditional on the
+        partial sums held at their bound).
     """
     u, y, n_train = check_record(u, y, train_fraction)
     p = np.asarray(widths, dtype=float).ravel()
@@ -167,7 +172,40 @@ def fit_prandtl_ishlinskii(
     weights = np.diff(np.concatenate([[0.0], partial]))
     model = PrandtlIshlinskii(p, weights)
     pred = design @ np.concatenate([[coef[0]], partial])
-    return fit_result(model, float(coef[0]), 1.0, pred, y, n_train)
+    errors = _linear_errors(
+        design[:n_train], y[:n_train] - pred[:n_train], partial, min_partial_sum
+    )
+    names = ["offset", *(f"a_{i}" for i in range(p.size))]
+    return fit_result(
+        model,
+        float(coef[0]),
+        1.0,
+        pred,
+        y,
+        n_train,
+        parameters=dict(zip(names, [float(coef[0]), *weights.tolist()], strict=True)),
+        standard_errors=dict(zip(names, errors.tolist(), strict=True)),
+    )
+
+
+def _linear_errors(
+    design: np.ndarray, residuals: np.ndarray, partial: np.ndarray, lower: float
+) -> np.ndarray:
+    """Standard errors of ``(offset, a_0, …, a_K)`` of the partial-sum regression
+    ``y ≈ c + Σ A_i D_i``: ``s²(XᵀX)⁻¹`` over the offset and the partial sums off their bound
+    (those at the bound held fixed: the errors are conditional on the active set), carried to
+    the weights ``a_i = A_i − A_{i−1}`` linearly."""
+    free = np.concatenate([[True], partial > lower * (1.0 + 1e-9)])
+    x = design[:, free]
+    dof = max(design.shape[0] - x.shape[1], 1)
+    s2 = float(residuals @ residuals) / dof
+    cov_free = s2 * np.linalg.pinv(x.T @ x)
+    cov = np.zeros((free.size, free.size))
+    cov[np.ix_(free, free)] = cov_free
+    # (c, A_0..A_K) -> (c, a_0..a_K): a_i = A_i − A_{i−1}
+    t = np.eye(free.size)
+    t[np.arange(2, free.size), np.arange(1, free.size - 1)] = -1.0
+    return np.sqrt(np.maximum(np.diag(t @ cov @ t.T), 0.0))
 
 
 def _bounded_lstsq(design: np.ndarray, y: np.ndarray, lower: np.ndarray) -> np.ndarray:
