@@ -67,6 +67,7 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis import _duhem_kernels as _kernels
 from hysteresis._validation import (
     MAX_MAGNITUDE,
     as_input_sequence,
@@ -78,7 +79,7 @@ from hysteresis._validation import (
 from hysteresis.base import ContinuousHysteron
 from hysteresis.flow import BranchFlow
 
-__all__ = ["Duhem", "DuhemState", "RTOL", "ATOL"]
+__all__ = ["Duhem", "DuhemDomainError", "DuhemState", "RTOL", "ATOL"]
 
 #: tolerances of every branch integration (DOP853)
 RTOL = 1e-12
@@ -100,6 +101,12 @@ class DuhemState:
         return frozen_state_reduce(self)
 
 
+class DuhemDomainError(ValueError):
+    """The branch ODE of a Duhem operator is ill-posed at the state reached (an operator's
+    ``slope`` raises it, e.g. Jiles–Atherton's pole). A branch solution integrates up to where
+    it occurs and raises it only for inputs at or beyond that point."""
+
+
 def _label(direction: int) -> str:
     """Memory label of a branch in ``direction``: where the opposite motion ended."""
     return "z-" if direction > 0 else "z+"
@@ -119,10 +126,19 @@ class _BranchSolution:
         self._ends: dict[int, list[float]] = {1: [], -1: []}
         self._pieces: dict[int, list[Any]] = {1: [], -1: []}
         self._tip: dict[int, tuple[float, float, float]] = {1: (u0, z0, 1.0), -1: (u0, z0, 1.0)}
+        # per side: the domain error met at the end of the integrated stretch (None: none)
+        self._limit: dict[int, DuhemDomainError | None] = {1: None, -1: None}
+        self._error: DuhemDomainError | None = None
 
     def _rhs(self, u: float, y: np.ndarray) -> np.ndarray:
-        g = self._op.slope(u, y[0], self._d)
-        gz = self._op.slope_partials(u, y[0], self._d)[1]
+        try:
+            g = self._op.slope(u, y[0], self._d)
+            gz = self._op.slope_partials(u, y[0], self._d)[1]
+        except DuhemDomainError as error:
+            # NaN makes the integrator reject the step and shrink it: it closes in on the
+            # point of ill-posedness, where its step collapses (status -1, handled below)
+            self._error = error
+            return np.array([math.nan, math.nan])
         return np.array([g, gz * y[1]])
 
     def extend_to(self, u: float) -> None:
@@ -132,6 +148,8 @@ class _BranchSolution:
         reach = abs(self._tip[side][0] - self._u0)
         if abs(u - self._u0) <= reach and (self._pieces[side] or u == self._u0):
             return
+        if self._limit[side] is not None:
+            raise self._limit[side]
         target = self._u0 + side * max(abs(u - self._u0) * 1.5, reach + _MIN_SPAN)
         self._integrate(side, target)
 
@@ -142,6 +160,11 @@ class _BranchSolution:
 
         kinks = self._op.kinks
         u_a, z_a, phi_a = self._tip[side]
+        try:
+            self._op.slope(u_a, z_a, self._d)
+        except DuhemDomainError as error:
+            self._limit[side] = error
+            raise
         for _ in range(4 * len(kinks) + 8):  # each kink is crossed at most a few times
             events = []
             for c in kinks:
@@ -166,7 +189,15 @@ class _BranchSolution:
                 rtol=RTOL,
                 atol=ATOL,
             )
-            if sol.status < 0 or not np.all(np.isfinite(sol.y[:, -1])):
+            if sol.status < 0:
+                # the step collapsed: at a point of ill-posedness (NaN from the slope) or
+                # approaching one (a slope growing without bound); the operator names it
+                if self._error is None:
+                    u_t, z_t = float(sol.t[-1]), float(sol.y[0, -1])
+                    self._error = self._op._domain_error(u_t, z_t, self._d, sol.message)
+                self._stop_at_domain_error(side, sol)
+                return
+            if not np.all(np.isfinite(sol.y[:, -1])):
                 raise ValueError(
                     f"{type(self._op).__name__}: the branch ODE could not be integrated from "
                     f"u = {u_a!r}, z = {z_a!r} (direction {self._d:+d}): {sol.message}"
@@ -189,12 +220,27 @@ class _BranchSolution:
             f"u = {u_a!r} (direction {self._d:+d})"
         )
 
+    def _stop_at_domain_error(self, side: int, sol: Any) -> None:
+        """Keep the steps accepted before the domain error; raise it for the inputs beyond
+        them (only if they are asked for: the extension past the requested input is a margin)."""
+        if sol.t.size > 1:
+            ode = sol.sol
+            for k, interp in enumerate(ode.interpolants):
+                lo, hi = ode.ts[k], ode.ts[k + 1]
+                self._ends[side].append(abs(max(lo, hi, key=lambda t: side * t) - self._u0))
+                self._pieces[side].append(interp)
+            self._tip[side] = (float(sol.t[-1]), float(sol.y[0, -1]), float(sol.y[1, -1]))
+        self._limit[side] = self._error
+        self._error = None
+
     def __call__(self, u: float) -> tuple[float, float]:
         """``(Z(u), Φ(u))`` for a scalar ``u``."""
         if u == self._u0:
             return self._z0, 1.0
         self.extend_to(u)
         side = 1 if u > self._u0 else -1
+        if self._limit[side] is not None and abs(u - self._u0) > abs(self._tip[side][0] - self._u0):
+            raise self._limit[side]
         ends = self._ends[side]
         k = min(bisect.bisect_left(ends, abs(u - self._u0)), len(ends) - 1)
         y = self._pieces[side][k](u)
@@ -352,12 +398,52 @@ class Duhem(ContinuousHysteron[DuhemState]):
                 z_all[k] = branch(float(u[k]))[0]
             u_a, z_a, direction = float(u[j - 1]), float(z_all[j - 1]), d
             i = j
-        y = (
-            z_all
-            if self._h is None
-            else np.array([self.map_output(a, b) for a, b in zip(u, z_all, strict=True)])
+        return self._outputs(u, z_all), DuhemState(z_a, u_a, direction)
+
+    def _compiled_apply(
+        self,
+        inputs: Any,
+        state: DuhemState | None,
+        model: int,
+        params: np.ndarray,
+        z_scale: float,
+        u_scale: float,
+    ) -> tuple[np.ndarray, DuhemState]:
+        """``apply`` by the compiled kernel of a built-in model (``model``, ``params`` of
+        :func:`hysteresis._duhem_kernels.integrate_record`; ``z_scale``, ``u_scale`` the scales
+        of ``z`` and of the input)."""
+        u = as_input_sequence(inputs)
+        state = self.initial_state(float(u[0])) if state is None else self._check_state(state)
+        z = np.empty(u.size)
+        status, u_end, z_end, done = _kernels.integrate_record(
+            model, params, z_scale, u_scale, u, state.input, state.z, z
         )
-        return y, DuhemState(z_a, u_a, direction)
+        steps = np.diff(np.concatenate(([state.input], u[: done + 1])))
+        moved = np.flatnonzero(steps)
+        direction = state.direction if moved.size == 0 else (1 if steps[moved[-1]] > 0 else -1)
+        if status == _kernels.STATUS_ILL_POSED:
+            raise self._domain_error(u_end, z_end, direction)
+        if status != _kernels.STATUS_OK:
+            raise ValueError(
+                f"{self!r}: the integration step collapsed at u = {u_end!r}, z = {z_end!r}"
+            )
+        return self._outputs(u, z), DuhemState(float(z_end), float(u_end), direction)
+
+    def _domain_error(
+        self, u: float, z: float, direction: int, reason: str = "its step collapsed"
+    ) -> DuhemDomainError:
+        """The error for a branch that cannot be continued past ``(u, z)`` (a subclass with a
+        known ill-posedness names its parameters)."""
+        return DuhemDomainError(
+            f"{type(self).__name__}: the branch ODE could not be integrated past u = {u!r}, "
+            f"z = {z!r} (direction {direction:+d}): {reason}"
+        )
+
+    def _outputs(self, inputs: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """The outputs ``h(u_i, z_i)`` of a record (``z`` itself without an output map)."""
+        if self._h is None:
+            return z
+        return np.array([self.map_output(a, b) for a, b in zip(inputs, z, strict=True)])
 
     # -- the branch flow -------------------------------------------------------------------
     def branch_flow(self, state: DuhemState, direction: int) -> BranchFlow:

@@ -2,64 +2,71 @@
 
 Input the field ``H``, output the magnetisation ``M`` (both in A/m, or any consistent units).
 Jiles & Atherton (J. Magn. Magn. Mater. 61 (1986) 48; Jiles, Thoelke & Devine, IEEE Trans.
-Magn. 28 (1992) 27), in the rate-independent differential form most codes use::
+Magn. 28 (1992) 27), exactly these equations::
 
-    H_e  = H + α·M                                  (effective field)
-    M_an = M_s·L(H_e/a),   L(x) = coth(x) − 1/x      (anhysteretic magnetisation, Langevin)
-    χ_irr = δ_M·(M_an − M) / (δ·k − α·(M_an − M))
-    dM/dH = [(1 − c)·χ_irr + c·M_an'(H_e)] / [1 − α·c·M_an'(H_e)]
+    He       = H + α·M                                   (effective field)
+    M_an(He) = ms·(coth(He/a) − a/He)                    (anhysteretic, ms·L(He/a))
+    M        = (1 − c)·M_irr + c·M_an(He)                (solved for M at every H)
+    dM_irr/dHe = δ_M·(M_an − M_irr)/(k·δ),   δ = sign(dH),
+                 δ_M = 1 if δ·(M_an − M_irr) > 0 else 0
 
-with ``δ = sign(dH)`` the direction of the field's motion, ``M_an' = dM_an/dH_e =
-(M_s/a)·L'(H_e/a)``, and ``δ_M = 1`` when the irreversible change moves ``M`` toward ``M_an``
-(``δ·(M_an − M) > 0``), else 0 — the usual correction (Deane, Venkataraman) that keeps the
-differential susceptibility from turning negative after a reversal. Parameters: ``Ms`` the
-saturation magnetisation, ``a`` the anhysteretic shape (a field), ``alpha`` the mean-field
-coupling, ``k`` the pinning (a field: about the coercivity), ``c`` the reversible fraction.
+hence ``dM/dH = χ/(1 − α·χ)`` with ``χ = (1 − c)·χ_irr + c·M_an'(He)``, ``χ_irr = dM_irr/dHe``.
 
-Validity (checked): ``Ms, a, k > 0``, ``0 <= c < 1``, ``alpha >= 0`` and ``α·M_s/(3a) < 1``:
-``max L' = 1/3`` at 0, so this keeps the anhysteretic curve single-valued (``H_e`` increasing in
-``H``) and the denominator ``1 − α·c·M_an'`` positive. The irreversible denominator
-``δk − α(M_an − M)`` is positive wherever ``δ_M = 1`` and ``α|M_an − M| < k``; where it is not
-(far from the anhysteretic curve, a known defect of the formulation: the susceptibility would
-pass through a pole and turn negative) the irreversible term is taken as 0, like ``δ_M``.
+As a Duhem operator the memory variable is ``z = M_irr``: ``dHe/dH = 1/(1 − αχ)`` gives the
+slope ``g = dM_irr/dH = χ_irr/(1 − αχ)``, and the output is the output map ``M(H, M_irr)``, the
+root of ``F(M) = M − (1 − c)M_irr − c·M_an(H + αM)``. ``F' = 1 − αc·M_an' >= 1 − αc·ms/(3a)``
+(``max L' = 1/3`` at 0) and ``F(±ms)`` has the sign of ``±1`` when ``|M_irr| < ms``: the root is
+unique, in ``[−ms, ms]``, iff ``αc·ms/(3a) < 1`` — the condition validated (``c = 0``: ``M =
+M_irr`` for any ``α``). Its partials: ``∂M/∂H = c·M_an'/F'``, ``∂M/∂M_irr = (1 − c)/F'``.
+``dM/dH = ∂M/∂H + ∂M/∂M_irr·g = χ/(1 − αχ)`` (the identity above). The formulas live once, as
+compiled functions, in :mod:`hysteresis._duhem_kernels`.
 
-Numerics: ``∂g/∂M`` (the variational equation of the branch) by the complex-step derivative of
-the right-hand side, exact to rounding where ``δ_M`` does not switch; ``L`` by its series
-``x/3 − x³/45 + 2x⁵/945`` for ``|x| < 1e-3`` (error below ``1e-16·|x|``). The initial state
-("rising from negative saturation") starts on the anhysteretic curve at ``H = −H_far`` with
-``H_far = 40·(a + k + α·M_s)`` and follows the rising branch to ``u0``.
+Ill-posedness (the known Jiles–Atherton instability): where ``1 − α·χ <= 0`` the slope would be
+infinite or negative. Where ``δ_M = 0``, ``1 − αχ = F' > 0``; where ``δ_M = 1`` it can reach 0
+when ``α(1 − c)|M_an − M_irr|/k`` approaches 1 — ``α`` too large for ``k``, or a steep
+anhysteretic curve (``α·ms/(3a) > 1``). Near such a point ``g ~ (H* − H)^{-1/2}``; :meth:`apply`
+and the branch flow integrate up to it and raise :class:`JilesAthertonInstability` (a one-line
+``ValueError`` naming the parameters and the field ``H*``), never a clipped slope.
+
+State and initial state: :meth:`state` ``(M_irr, H)`` with ``|M_irr| < ms``; the demagnetised
+state is ``state(0.0, 0.0)``. :meth:`initial_state` (rising from negative saturation) starts on
+the anhysteretic curve at ``H = −H_far``, ``H_far = 40·(a + k + α·ms)``, where ``M = M_irr =
+M_an`` (``|He/a| >= 40``: ``M_an`` is within ``ms/40`` of ``−ms`` and the curve is unique there
+whatever ``α``), and follows the rising branch to ``u0``. ``c = 1`` gives the anhysteretic curve
+itself (``M = M_an(H)``, M_irr invisible).
+
+``apply`` runs the compiled adaptive Dormand–Prince 5(4) kernel (:mod:`hysteresis._duhem_kernels`,
+``1e-12`` per step); the branch flow of the oscillator's generic engine keeps the ``solve_ivp``
+path of :class:`~hysteresis.duhem.Duhem` (``Duhem.apply`` is that path too, the tests' reference).
 """
 
 from __future__ import annotations
 
-import cmath
+from typing import Any
 
+import numpy as np
+
+from hysteresis import _duhem_kernels as kern
 from hysteresis._validation import MAX_MAGNITUDE, finite_scalar, positive_scalar
-from hysteresis.duhem import Duhem, DuhemState
+from hysteresis.duhem import Duhem, DuhemDomainError, DuhemState
 
-__all__ = ["JilesAtherton"]
-
-#: the complex step of ∂g/∂M (relative to M_s): far below any scale of the model, and the
-#: complex-step derivative has no subtraction error, so its size does not matter beyond that
-_COMPLEX_STEP = 1e-30
+__all__ = ["JilesAtherton", "JilesAthertonInstability"]
 
 
-def _langevin(x: complex) -> complex:
-    """``L(x) = coth(x) − 1/x`` (series near 0, complex arguments for the complex step)."""
-    if abs(x) < 1e-3:
-        x2 = x * x
-        return x * (1.0 / 3.0 - x2 / 45.0 + 2.0 * x2 * x2 / 945.0)
-    return 1.0 / cmath.tanh(x) - 1.0 / x
+class JilesAthertonInstability(DuhemDomainError):
+    """``1 − α·χ <= 0`` at the field reached: the Jiles–Atherton equations are ill-posed there
+    (module docstring)."""
 
-
-def _langevin_slope(x: complex) -> complex:
-    """``L'(x) = 1/x² − 1/sinh²(x)`` (series ``1/3 − x²/15 + 2x⁴/189`` near 0)."""
-    if abs(x) < 1e-3:
-        x2 = x * x
-        return 1.0 / 3.0 - x2 / 15.0 + 2.0 * x2 * x2 / 189.0
-    if abs(x.real) > 350.0:  # sinh² overflows; 1/sinh² is 0 to double precision there
-        return 1.0 / (x * x)
-    return 1.0 / (x * x) - 1.0 / cmath.sinh(x) ** 2
+    def __init__(self, model: JilesAtherton, field: float, m_irr: float, direction: int) -> None:
+        self.field = float(field)
+        self.m_irr = float(m_irr)
+        motion = "rising" if direction > 0 else "falling"
+        super().__init__(
+            f"Jiles-Atherton is ill-posed at H = {self.field!r} ({motion}, "
+            f"M_irr = {self.m_irr!r}): 1 - alpha*chi <= 0 for ms={model.ms!r}, a={model.a!r}, "
+            f"k={model.k!r}, c={model.c!r}, alpha={model.alpha!r} (the slope dM/dH would be "
+            "infinite or negative: alpha too large for k)"
+        )
 
 
 class JilesAtherton(Duhem):
@@ -67,116 +74,142 @@ class JilesAtherton(Duhem):
 
     Parameters
     ----------
-    Ms:
+    ms:
         Saturation magnetisation (> 0).
     a:
         Anhysteretic shape parameter, a field (> 0).
-    alpha:
-        Mean-field coupling (>= 0, with ``alpha·Ms/(3a) < 1``).
     k:
-        Pinning, a field (> 0).
+        Pinning, a field (> 0; about the coercivity).
     c:
-        Reversible fraction, ``0 <= c < 1``.
+        Reversible fraction, ``0 <= c <= 1``.
+    alpha:
+        Mean-field coupling (>= 0, with ``alpha·c·ms/(3a) < 1``).
     """
 
-    def __init__(self, Ms: float, a: float, alpha: float, k: float, c: float) -> None:
-        self.Ms = positive_scalar(Ms, "Ms", MAX_MAGNITUDE)
+    def __init__(self, ms: float, a: float, k: float, c: float, alpha: float) -> None:
+        self.ms = positive_scalar(ms, "ms", MAX_MAGNITUDE)
         self.a = positive_scalar(a, "a", MAX_MAGNITUDE)
-        self.alpha = finite_scalar(alpha, "alpha", MAX_MAGNITUDE)
         self.k = positive_scalar(k, "k", MAX_MAGNITUDE)
         self.c = finite_scalar(c, "c")
+        self.alpha = finite_scalar(alpha, "alpha", MAX_MAGNITUDE)
+        if not 0.0 <= self.c <= 1.0:
+            raise ValueError(f"c must lie in [0, 1], got {self.c!r}")
         if self.alpha < 0.0:
-            raise ValueError(f"alpha must be >= 0, got {self.alpha}")
-        if not 0.0 <= self.c < 1.0:
-            raise ValueError(f"c must lie in [0, 1), got {self.c}")
-        if not self.alpha * self.Ms / (3.0 * self.a) < 1.0:
+            raise ValueError(f"alpha must be >= 0, got {self.alpha!r}")
+        if not self.alpha * self.c * self.ms / (3.0 * self.a) < 1.0:
             raise ValueError(
-                f"alpha·Ms/(3a) must be < 1 (a single-valued anhysteretic curve), got "
-                f"{self.alpha * self.Ms / (3.0 * self.a)!r}"
+                "alpha·c·ms/(3a) must be < 1 (a unique magnetisation M at every H), got "
+                f"{self.alpha * self.c * self.ms / (3.0 * self.a)!r}"
             )
         self._h = None
         self._dh = None
         self._set_common((0.0, 0.0), ())
 
     # -- the model -----------------------------------------------------------------------------
-    def _rhs(self, h: float, m: complex, direction: int) -> complex:
-        """``dM/dH`` at ``(H, M)`` moving in ``direction`` (complex ``M`` for the complex step;
-        ``δ_M`` decided on the real part)."""
-        he = h + self.alpha * m
-        x = he / self.a
-        m_an = self.Ms * _langevin(x)
-        dm_an = self.Ms / self.a * _langevin_slope(x)
-        gap = m_an - m
-        irreversible = 0.0
-        if direction * gap.real > 0.0:
-            den = direction * self.k - self.alpha * gap
-            # past the formulation's pole (α·|M_an − M| >= k) the irreversible susceptibility
-            # would be negative or infinite: it is taken as 0 there (module docstring)
-            if direction * den.real > 0.0:
-                irreversible = gap / den
-        return ((1.0 - self.c) * irreversible + self.c * dm_an) / (
-            1.0 - self.alpha * self.c * dm_an
+    def _slope(self, u: float, z: float, direction: int) -> tuple[float, float, float]:
+        g, g_h, g_i, ok = kern.jiles_atherton_slope(
+            float(u), float(z), float(direction), self.ms, self.a, self.k, self.c, self.alpha
         )
+        if not ok:
+            raise JilesAthertonInstability(self, u, z, direction)
+        return g, g_h, g_i
 
     def slope(self, u: float, z: float, direction: int) -> float:
-        """``dM/dH`` (module docstring)."""
-        return float(self._rhs(float(u), complex(z), direction).real)
+        """``dM_irr/dH = χ_irr/(1 − αχ)`` at ``(H, M_irr) = (u, z)`` (module docstring); raises
+        :class:`JilesAthertonInstability` where ``1 − αχ <= 0``."""
+        return self._slope(u, z, direction)[0]
 
     def slope_partials(self, u: float, z: float, direction: int) -> tuple[float, float]:
-        """``(0, ∂g/∂M)``: the complex-step derivative in ``M`` (the engines use ``∂g/∂M``
-        only)."""
-        step = _COMPLEX_STEP * self.Ms
-        value = self._rhs(float(u), complex(z, step), direction)
-        return 0.0, float(value.imag / step)
+        """``(∂g/∂H, ∂g/∂M_irr)``, analytic (:mod:`hysteresis._duhem_kernels`)."""
+        _, g_h, g_i = self._slope(u, z, direction)
+        return g_h, g_i
+
+    def map_output(self, u: float, z: float) -> float:
+        """``M(H, M_irr)``, the root of ``M = (1 − c)M_irr + c·M_an(H + αM)``."""
+        return kern.jiles_atherton_magnetization(
+            float(u), float(z), self.ms, self.a, self.c, self.alpha
+        )[0]
+
+    def map_output_partials(self, u: float, z: float) -> tuple[float, float]:
+        """``(∂M/∂H, ∂M/∂M_irr) = (c·M_an', 1 − c)/(1 − αc·M_an')``."""
+        _, m_h, m_i = kern.jiles_atherton_magnetization(
+            float(u), float(z), self.ms, self.a, self.c, self.alpha
+        )
+        return m_h, m_i
+
+    def _outputs(self, inputs: np.ndarray, z: np.ndarray) -> np.ndarray:
+        out = np.empty(inputs.size)
+        kern.jiles_atherton_outputs(
+            np.ascontiguousarray(inputs, dtype=np.float64),
+            np.ascontiguousarray(z, dtype=np.float64),
+            self.ms,
+            self.a,
+            self.c,
+            self.alpha,
+            out,
+        )
+        return out
 
     def anhysteretic(self, h: float) -> float:
-        """``M_an`` at field ``h``: the root of ``f(M) = M − M_s·L((h + αM)/a)``, unique since
-        ``f' >= 1 − α·M_s/(3a) > 0``, in ``[−M_s, M_s]`` (``f(±M_s)`` has the sign of ``±1``).
-        Newton safeguarded by that bracket, stopped when the bracket or the step is below
-        ``1e-14·M_s`` (a few ulps of ``M_s``: the rounding of ``L`` sets the floor)."""
+        """``M_an`` at field ``h``: the root of ``M = ms·L((h + αM)/a)`` (the output map with
+        ``c = 1``), unique when ``α·ms/(3a) < 1`` (else a one-line ``ValueError``)."""
         h = finite_scalar(h, "h", MAX_MAGNITUDE)
-        lo, hi, m = -self.Ms, self.Ms, 0.0
-        tol = 1e-14 * self.Ms
-        for _ in range(200):
-            x = (h + self.alpha * m) / self.a
-            f = m - self.Ms * _langevin(complex(x)).real
-            if f > 0.0:
-                hi = m
-            else:
-                lo = m
-            df = 1.0 - self.alpha * self.Ms / self.a * _langevin_slope(complex(x)).real
-            nxt = m - f / df
-            if not lo < nxt < hi:  # outside the bracket: bisect
-                nxt = 0.5 * (lo + hi)
-            if abs(nxt - m) <= tol or hi - lo <= tol:
-                return nxt
-            m = nxt
-        raise ValueError(f"anhysteretic(h = {h!r}): no convergence in 200 iterations")
+        if not self.alpha * self.ms / (3.0 * self.a) < 1.0:
+            raise ValueError(
+                "anhysteretic(h) needs alpha·ms/(3a) < 1 (else M = M_an(H + αM) has several "
+                f"roots), got {self.alpha * self.ms / (3.0 * self.a)!r}"
+            )
+        return kern.jiles_atherton_magnetization(h, 0.0, self.ms, self.a, 1.0, self.alpha)[0]
 
     @property
     def output_range(self) -> tuple[float, float]:
-        """``(−Ms, Ms)``."""
-        return (-self.Ms, self.Ms)
+        """``(−ms, ms)``."""
+        return (-self.ms, self.ms)
 
-    def state(self, z: float, input: float, direction: int = 0) -> DuhemState:
-        """The state with magnetisation ``z`` (``|z| < Ms``) at field ``input``."""
-        z = finite_scalar(z, "z")
-        if not abs(z) < self.Ms:
+    def state(self, irreversible: float, input: float, direction: int = 0) -> DuhemState:
+        """The state with irreversible magnetisation ``irreversible`` (``|M_irr| < ms``) at
+        field ``input``; ``state(0.0, 0.0)`` is the demagnetised state."""
+        irreversible = finite_scalar(irreversible, "irreversible")
+        if not abs(irreversible) < self.ms:
             raise ValueError(
-                f"z (the magnetisation) must lie in (-Ms, Ms) = ±{self.Ms!r}, got {z!r}"
+                f"irreversible (M_irr) must lie in (-ms, ms) = ±{self.ms!r}, got {irreversible!r}"
             )
-        return super().state(z, input, direction)
+        return super().state(irreversible, input, direction)
+
+    def _check_state(self, state: Any) -> DuhemState:
+        state = super()._check_state(state)
+        if not abs(state.z) < self.ms:
+            raise ValueError(
+                f"the state's M_irr must lie in (-ms, ms) = ±{self.ms!r}, got {state.z!r}"
+            )
+        return state
 
     def initial_state(self, u0: float) -> DuhemState:
         """Rising from negative saturation: from the anhysteretic curve at ``H = −H_far``
         (module docstring) along the rising branch to ``u0``."""
         u0 = finite_scalar(u0, "u0", MAX_MAGNITUDE)
-        far = min(-40.0 * (self.a + self.k + self.alpha * self.Ms), u0)
-        _, state = self.apply([u0], DuhemState(self.anhysteretic(far), far, 1))
+        far = min(-40.0 * (self.a + self.k + self.alpha * self.ms), u0)
+        # c = 1 output map from M_irr = −ms: Newton from next to the root, unique at |He| >= 40a
+        m_far = kern.jiles_atherton_magnetization(far, -self.ms, self.ms, self.a, 1.0, self.alpha)
+        _, state = self.apply([u0], DuhemState(m_far[0], far, 1))
         return state
+
+    def apply(self, inputs: Any, state: DuhemState | None = None) -> tuple[np.ndarray, DuhemState]:
+        """``M`` along ``inputs`` by the compiled kernel (adaptive Dormand–Prince 5(4) at
+        ``1e-12``); a returned state continues the record. Raises
+        :class:`JilesAthertonInstability` where the model becomes ill-posed."""
+        params = np.array([self.ms, self.a, self.k, self.c, self.alpha])
+        return self._compiled_apply(
+            inputs, state, kern.MODEL_JILES_ATHERTON, params, self.ms, self.a
+        )
+
+    def _domain_error(
+        self, u: float, z: float, direction: int, reason: str = ""
+    ) -> JilesAthertonInstability:
+        return JilesAthertonInstability(self, u, z, direction)
 
     def __repr__(self) -> str:
         return (
-            f"JilesAtherton(Ms={self.Ms!r}, a={self.a!r}, alpha={self.alpha!r}, k={self.k!r}, "
-            f"c={self.c!r})"
+            f"JilesAtherton(ms={self.ms!r}, a={self.a!r}, k={self.k!r}, c={self.c!r}, "
+            f"alpha={self.alpha!r})"
         )

@@ -138,7 +138,7 @@ def _continuous_operators():
         Cascade(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5]), StaticMap(np.tanh, _tanh_slope)),
         InverseOperator(PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5])),
         BoucWen(1.0, 0.5, 0.5, 1.5),  # a Duhem operator
-        JilesAtherton(Ms=1.0, a=0.5, alpha=0.3, k=0.4, c=0.2),
+        JilesAtherton(ms=1.0, a=0.5, k=0.4, c=0.2, alpha=0.3),
         relaxing_duhem(),
     ]
 

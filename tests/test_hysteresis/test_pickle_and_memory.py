@@ -71,7 +71,7 @@ def _operators() -> dict[str, Hysteron]:
         ),
         "inverse": InverseOperator(PrandtlIshlinskii([0.0, 1.0], [0.5, 0.5])),
         "bouc-wen": BoucWen(1.0, 0.5, 0.5, 1.5),
-        "jiles-atherton": JilesAtherton(Ms=1.0, a=0.5, alpha=0.3, k=0.4, c=0.2),
+        "jiles-atherton": JilesAtherton(ms=1.0, a=0.5, k=0.4, c=0.2, alpha=0.3),
         "duhem": relaxing_duhem(),
         "rfim": RandomFieldIsing.lattice((4, 4), disorder=1.5, seed=0),
         "switching-sum": RandomFieldIsing.lattice((6,), disorder=1.0, seed=1) + Relay(1.0, 0.0),
