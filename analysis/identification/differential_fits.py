@@ -44,14 +44,17 @@ linear)`` and ``z_max`` are reported. The first sample fixes the initial state:
 Jiles–Atherton (:func:`fit_jiles_atherton`). Output ``M`` of
 ``JilesAtherton(ms, a, k, c, alpha)`` for the field ``H``; fitted coordinates ``log ms``,
 ``log a``, ``log k``, ``logit c`` and ``logit ρ`` with ``ρ = α·ms/(3a) ∈ (0, 1)`` (the
-condition of a single-valued anhysteretic curve). The first ``(H, M)`` fixes the initial
+condition of a single-valued anhysteretic curve, stricter than the model's
+``α·c·ms/(3a) < 1``). Where the model is ill-posed along the record (``1 − αχ <= 0``,
+:class:`~hysteresis.jiles_atherton.JilesAthertonInstability`) the residuals are a large
+constant, so the fit steers away from such parameters. The first ``(H, M)`` fixes the initial
 memory ``M_irr``: the root of ``M(H_0, M_irr) = M_0`` (the output map is increasing in
 ``M_irr``; bisection on ``(−ms, ms)``).
 
 Initial guesses and several starts: the guess comes from features of the loop (below, per
 model), and the fit runs from several starts (the guess combined with a few values of the
 parameter the features do not fix), each for a few iterations; the best is then iterated to
-convergence. A user's ``initial`` guess is tried first.
+convergence. A user's ``initial`` guess is the first start.
 """
 
 from __future__ import annotations
@@ -347,8 +350,8 @@ def fit_bouc_wen(
     linear:
         Fit the linear term (else ``linear = 0``).
     initial:
-        An extra first start ``{"A", "beta", "gamma", "n"[, "offset", "linear"]}`` in the
-        record's units.
+        A guess ``{"A", "beta", "gamma", "n"[, "offset", "linear"]}`` in the record's units,
+        the first of the ``n_starts`` (``n_starts=1``: the only one).
 
     Returns
     -------
@@ -411,8 +414,8 @@ def fit_bouc_wen(
         np.array([math.log(a0), math.log(zm0), w0, math.log(n), o0] + ([d0] if linear else []))
         for n in (exponents * 5)[:n_starts]
     ]
-    if initial is not None:
-        starts.insert(0, _bw_theta(initial, su, sy, cy, linear))
+    if initial is not None:  # the user's guess first, within the n_starts
+        starts = [_bw_theta(initial, su, sy, cy, linear), *starts][:n_starts]
     guess = {
         "A": a0 * sy / su,
         "z_max": zm0 * sy,
@@ -532,7 +535,8 @@ def fit_jiles_atherton(
         that the anhysteretic curve reaches the loop's tip; ``(c, ρ)`` taking the values
         (0.2, 0.3), (0.5, 0.1), (0.1, 0.6), (0.5, 0.5), ... in turn.
     initial:
-        An extra first start ``{"ms", "a", "k", "c", "alpha"}`` in the record's units.
+        A guess ``{"ms", "a", "k", "c", "alpha"}`` in the record's units, the first of the
+        ``n_starts`` (``n_starts=1``: the only one).
 
     Returns
     -------
@@ -572,8 +576,8 @@ def fit_jiles_atherton(
         starts.append(
             np.array([math.log(ms0), math.log(a0), math.log(k0), _logit(c0), _logit(rho0)])
         )
-    if initial is not None:
-        starts.insert(0, _ja_theta(initial, sh, sm))
+    if initial is not None:  # the user's guess first, within the n_starts
+        starts = [_ja_theta(initial, sh, sm), *starts][:n_starts]
     guess = {"ms": ms0 * sm, "k": k0 * sh, "coercivity": feats["coercivity"] * sh}
     res, costs = _least_squares(problem, starts, hn[:n_train], mn[:n_train])
 
