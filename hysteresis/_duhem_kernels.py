@@ -272,6 +272,34 @@ def _kink_step(model, p, u, z, d, h, k1, z_end):
 
 
 @njit(cache=True)
+def _ja_gap(p, h, m_irr, d):
+    """``d·(M_an(He) − M_irr)`` of Jiles–Atherton: δ_M = 1 where it is positive."""
+    m, _, x = _magnetization(h, m_irr, p[0], p[1], p[3], p[4])
+    return d * (p[0] * langevin(x)[0] - m_irr)
+
+
+@njit(cache=True)
+def _switch_point(p, u, m_irr, d, u_end):
+    """The input in ``[u, u_end]`` where Jiles–Atherton's ``δ_M`` switches on at frozen
+    ``M_irr`` (the last input with a non-positive gap; bisection to a few ulps). ``u`` itself
+    if the gap is positive at ``u`` already."""
+    if _ja_gap(p, u, m_irr, d) > 0.0:
+        return u
+    if _ja_gap(p, u_end, m_irr, d) <= 0.0:
+        return u_end
+    lo, hi = u, u_end
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid == lo or mid == hi:
+            break
+        if _ja_gap(p, mid, m_irr, d) > 0.0:
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
+@njit(cache=True)
 def integrate_record(model, p, z_scale, u_scale, inputs, u0, z0, out):
     """Integrate ``dz/du = g_d(u, z)`` from ``(u0, z0)`` through the samples ``inputs`` (each
     increment a monotone piece, ``d`` its sign), writing ``z`` at every sample into ``out``.
@@ -319,6 +347,15 @@ def integrate_record(model, p, z_scale, u_scale, inputs, u0, z0, out):
                 za = 0.0
                 k1 = _rhs(model, p, ua, za, d)[0]
                 continue
+            if model == MODEL_JILES_ATHERTON and k1 == 0.0 and k7 != 0.0:
+                # δ_M switched on inside the step (g is continuous there, g' is not): M_irr
+                # is frozen up to the switch, the root of the gap at fixed M_irr; restart
+                # there so that no step straddles the kink (one ulp away: accept the step)
+                u_switch = _switch_point(p, ua, za, d, target if last else ua + d * step)
+                if u_switch != ua:
+                    ua = u_switch
+                    k1 = _rhs(model, p, ua, za, d)[0]
+                    continue
             ua = target if last else ua + d * step
             za = z_new
             k1 = k7

@@ -33,10 +33,20 @@ state is ``state(0.0, u0)``.
 Closed form for ``n = 1`` (the tests' truth): while ``sign(z) = s`` and ``d`` are fixed,
 ``dz/du = A − λz`` with ``λ = β·d + γ·s``, so
 ``z = A/λ + (z0 − A/λ)·exp(−λ(u − u0))`` (``z = z0 + A(u − u0)`` at ``λ = 0``).
+
+Numerics: the slope is :func:`hysteresis._duhem_kernels.bouc_wen_slope` (compiled, the one
+home of the formula); :meth:`BoucWen.apply` runs the compiled adaptive Dormand–Prince 5(4)
+kernel of that module (``1e-12`` per step, restarted exactly at ``z = 0``); the branch flow of
+the generic engine and ``Duhem.apply(bw, ...)`` keep the ``solve_ivp`` path.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
+
+from hysteresis import _duhem_kernels as kern
 from hysteresis._validation import MAX_MAGNITUDE, finite_scalar, positive_scalar
 from hysteresis.duhem import Duhem, DuhemState
 
@@ -75,14 +85,25 @@ class BoucWen(Duhem):
         self.z_max = (self.A / (self.beta + self.gamma)) ** (1.0 / self.n)
 
     def slope(self, u: float, z: float, direction: int) -> float:
-        """``A − |z|ⁿ·(β·d·sign(z) + γ)``."""
-        s = 1.0 if z > 0.0 else (-1.0 if z < 0.0 else 0.0)
-        return self.A - abs(z) ** self.n * (self.beta * direction * s + self.gamma)
+        """``A − |z|ⁿ·(β·d·sign(z) + γ)`` (:func:`hysteresis._duhem_kernels.bouc_wen_slope`)."""
+        return self._slope(z, direction)[0]
 
     def slope_partials(self, u: float, z: float, direction: int) -> tuple[float, float]:
         """``(0, −n|z|ⁿ⁻¹(β·d + γ·sign z))`` (one-sided at ``z = 0``, a kink)."""
-        s = 1.0 if z > 0.0 else (-1.0 if z < 0.0 else float(direction))
-        return 0.0, -self.n * abs(z) ** (self.n - 1.0) * (self.beta * direction + self.gamma * s)
+        return 0.0, self._slope(z, direction)[1]
+
+    def _slope(self, z: float, direction: int) -> tuple[float, float]:
+        return kern.bouc_wen_slope(
+            float(z), float(direction), self.A, self.beta, self.gamma, self.n
+        )
+
+    def apply(self, inputs: Any, state: DuhemState | None = None) -> tuple[np.ndarray, DuhemState]:
+        """``z`` along ``inputs`` by the compiled kernel (adaptive Dormand–Prince 5(4) at
+        ``1e-12`` per step, restarted at the kink ``z = 0``); a returned state continues."""
+        params = np.array([self.A, self.beta, self.gamma, self.n])
+        return self._compiled_apply(
+            inputs, state, kern.MODEL_BOUC_WEN, params, self.z_max, self.z_max / self.A
+        )
 
     @property
     def output_range(self) -> tuple[float, float]:
