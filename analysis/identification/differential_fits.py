@@ -18,7 +18,10 @@ the record's units.
 Standard errors. With ``J`` the Jacobian of the residuals at the optimum (in the fitted
 coordinates θ), ``s² = Σ r²/(m − p)`` (``m`` training samples, ``p`` parameters) and
 ``cov(θ) = s²·(JᵀJ)⁻¹``, the usual asymptotic covariance of least squares under white noise;
-the named parameters' errors follow by the delta method, ``cov = G·cov(θ)·Gᵀ`` with ``G`` the
+the first sample's noise, which moves the initial state and with it the optimum by
+``−(JᵀJ)⁻¹Jᵀ·∂(model)/∂y₀·δy₀``, adds its variance (``s²`` times that vector's outer
+product); the named parameters' errors follow by the delta method,
+``cov = G·cov(θ)·Gᵀ`` with ``G`` the
 Jacobian of the map θ -> parameters (central differences). A correlated noise makes them too
 small; a parameter at a bound (listed in ``info["at_bounds"]``) has no meaningful error.
 
@@ -123,6 +126,8 @@ def _least_squares(
             diff_step=_DIFF_STEP,
             max_nfev=nfev,
             x_scale=1.0,
+            ftol=1e-12,
+            xtol=1e-12,
         )
 
     tried = [run(np.asarray(x, dtype=float), _START_NFEV) for x in starts]
@@ -133,17 +138,24 @@ def _least_squares(
     return best, costs
 
 
-def _errors(problem: _Problem, res: Any) -> tuple[np.ndarray, np.ndarray]:
-    """``(parameters, standard errors)``: ``s²(JᵀJ)⁻¹`` in θ, carried by the delta method."""
+def _errors(problem: _Problem, res: Any, u: np.ndarray, y0: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(parameters, standard errors)``: ``s²(JᵀJ)⁻¹`` in θ, plus the noise of the first
+    sample (which fixes the initial state), carried by the delta method."""
     jac = np.asarray(res.jac, dtype=float)
     m, p = jac.shape
     dof = max(m - p, 1)
     s2 = 2.0 * float(res.cost) / dof
-    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    us, sv, vt = np.linalg.svd(jac, full_matrices=False)
     # a direction the data do not constrain gets a huge (not an infinite) variance
     sv = np.maximum(sv, 1e-300 + 1e-13 * (sv[0] if sv.size else 1.0))
     cov = (vt.T / sv**2) @ vt * s2
     theta = res.x
+    # the first sample's noise moves the initial state, hence the optimum by
+    # δθ = −(JᵀJ)⁻¹Jᵀ·(∂pred/∂y0)·δy0 with var(δy0) = s²
+    h = 1e-6
+    dpred = (problem.simulate(theta, u, y0 + h) - problem.simulate(theta, u, y0 - h)) / (2 * h)
+    shift = -(vt.T / sv) @ (us.T @ dpred)
+    cov = cov + s2 * np.outer(shift, shift)
     g = np.empty((len(problem.names), p))
     for j in range(p):
         h = 1e-6 * max(1.0, abs(theta[j]))
@@ -248,10 +260,11 @@ def _finish(
     u: np.ndarray,
     y: np.ndarray,
     n_train: int,
+    train: tuple[np.ndarray, np.ndarray],
 ) -> RecordFit:
-    """The :class:`RecordFit`: parameters and errors, the model and its initial state
-    (``build``), predictions of the whole record."""
-    values, errors = _errors(problem, res)
+    """The :class:`RecordFit`: parameters and errors (``train`` the dimensionless training
+    record), the model and its initial state (``build``), predictions of the whole record."""
+    values, errors = _errors(problem, res, train[0], float(train[1][0]))
     params = {n: float(v) for n, v in zip(problem.names, values, strict=True)}
     model, state, offset = build(params)
     pred, _ = model.apply(u, state)
@@ -441,7 +454,8 @@ def fit_bouc_wen(
         states = (ident.initial_state(u0), state) if linear else (state,)
         return model, model.state(*states), p["offset"]
 
-    fit = _finish(problem, res, costs, guess, t0, build, u, y, n_train)
+    train = (un[:n_train], yn[:n_train])
+    fit = _finish(problem, res, costs, guess, t0, build, u, y, n_train, train)
     return replace(fit, info={**dict(fit.info or {}), "orientation": sign})
 
 
@@ -585,7 +599,8 @@ def fit_jiles_atherton(
         model = JilesAtherton(p["ms"], p["a"], p["k"], p["c"], p["alpha"])
         return model, _initial_memory(model, float(h[0]), float(m[0])), 0.0
 
-    return _finish(problem, res, costs, guess, t0, build, h, m, n_train)
+    train = (hn[:n_train], mn[:n_train])
+    return _finish(problem, res, costs, guess, t0, build, h, m, n_train, train)
 
 
 def _ja_theta(initial: Mapping[str, float], sh: float, sm: float) -> np.ndarray:
