@@ -60,6 +60,8 @@ MODEL_OPTIONS = {
     "alpha": "--alpha",
     "beta": "--beta",
     "plays": "--plays",
+    **{f"bw_{n}": f"--bw-{n}" for n in ("a", "beta", "gamma", "n")},
+    **{f"ja_{n}": f"--ja-{n}" for n in ("ms", "a", "k", "c", "alpha")},
 }
 #: library parameter name -> option, for the oscillator and its initial condition
 OSCILLATOR_OPTIONS = {
@@ -91,6 +93,7 @@ def model_parameters(args: argparse.Namespace, half_extent: float | None = None)
     (``half_extent``: the ``preisach-uniform`` triangle of a command that gives it one, e.g.
     ``hyst identify --saturation``)."""
     spins = args.spins[0] if isinstance(args.spins, list) else args.spins
+    defaults = ModelParameters()
     fields = None
     if getattr(args, "fields", None) is not None:
         fields = tuple(zip(args.fields[0::2], args.fields[1::2], strict=True))
@@ -106,6 +109,7 @@ def model_parameters(args: argparse.Namespace, half_extent: float | None = None)
         beta=args.beta,
         plays=args.plays,
         half_extent=half_extent,
+        **{f: getattr(args, f, getattr(defaults, f)) for f in DUHEM_FIELDS},
     )
 
 
@@ -125,7 +129,12 @@ def play_type(args: argparse.Namespace) -> bool:
 
 #: model options (their ``dest``) that select one model's feature: given to a model without
 #: it, the user meant another model, and the command refuses
-MODEL_SPECIFIC = ("width_spread", "plays", "fields", "alpha", "beta")
+#: the Duhem models' parameters (``bouc-wen``, ``jiles-atherton``)
+DUHEM_FIELDS = (
+    *("bw_a", "bw_beta", "bw_gamma", "bw_n"),
+    *("ja_ms", "ja_a", "ja_k", "ja_c", "ja_alpha"),
+)
+MODEL_SPECIFIC = ("width_spread", "plays", "fields", "alpha", "beta", *DUHEM_FIELDS)
 #: model options the paper's models share: given to a model that does not read them (a script
 #: running several models with one set of options), the command warns and goes on
 MODEL_SHARED = ("spins", "seed", "width", "spread", "spin_coupling")

@@ -2,9 +2,11 @@
 
 * **Options.** Model options (``--model``, ``--spins``, ``--seed``, ``--width``, ``--spread``,
   ``--spin-coupling``, ``--width-spread`` and the model-specific ``--fields``, ``--alpha``,
-  ``--beta``, ``--plays``), oscillator options (``--coupling``, ``--damping-ratio``,
-  ``--frequency``), the initial condition (``--q0``, ``--v0``, ``--w0``) and the output options
-  (``--out``, ``--json``, ``--quiet``) are defined here and added to each subcommand from here;
+  ``--beta``, ``--plays``, Bouc–Wen's ``--bw-a``, ``--bw-beta``, ``--bw-gamma``, ``--bw-n`` and
+  Jiles–Atherton's ``--ja-ms``, ``--ja-a``, ``--ja-k``, ``--ja-c``, ``--ja-alpha``), oscillator
+  options (``--coupling``, ``--damping-ratio``, ``--frequency``), the initial condition
+  (``--q0``, ``--v0``, ``--w0``) and the output options (``--out``, ``--json``, ``--quiet``)
+  are defined here and added to each subcommand from here;
   their defaults are the paper's (:mod:`analysis.experiments.parameters`), their bounds the
   library's (a value out of range is reported with the library's message, naming the option).
 * **Units.** Times (``--t-end``) are in the oscillator's time unit (undamped natural period
@@ -169,6 +171,24 @@ def add_model_options(
     add("--alpha", None, "relay: upper threshold (default p/2)", type=finite_float)
     add("--beta", None, "relay: lower threshold (default -p/2)", type=finite_float)
     add("--plays", d.plays, "pi: number K of plays", type=int_at_least(1, 10**5))
+    add("--bw-a", d.bw_a, "Bouc-Wen A, the initial slope (> 0)", type=positive_float)
+    add("--bw-beta", d.bw_beta, "Bouc-Wen beta (>= 0, beta + gamma > 0)", type=nonnegative_float)
+    add("--bw-gamma", d.bw_gamma, "Bouc-Wen gamma (beta + gamma > 0)", type=finite_float)
+    add("--bw-n", d.bw_n, "Bouc-Wen n, sharpness of saturation (>= 1)", type=finite_float)
+    add(
+        "--ja-ms", d.ja_ms, "Jiles-Atherton ms, saturation magnetisation (> 0)", type=positive_float
+    )
+    add(
+        "--ja-a", d.ja_a, "Jiles-Atherton a, anhysteretic shape, a field (> 0)", type=positive_float
+    )
+    add("--ja-k", d.ja_k, "Jiles-Atherton k, pinning, a field (> 0)", type=positive_float)
+    add("--ja-c", d.ja_c, "Jiles-Atherton c, reversible fraction in [0, 1)", type=nonnegative_float)
+    add(
+        "--ja-alpha",
+        d.ja_alpha,
+        "Jiles-Atherton alpha, mean-field coupling (>= 0, alpha ms/(3a) < 1)",
+        type=nonnegative_float,
+    )
 
 
 def _model_name(names: Sequence[str], sums: bool) -> Callable[[str], str]:

@@ -26,7 +26,18 @@ name                      operator
 ``preisach-uniform``      continuous Preisach model, uniform density on the triangle
                           ``-H <= β <= α <= H``, ``H = 5R + p/2`` unless given (a reference
                           density for the identification)
+``bouc-wen``              ``BoucWen(A, beta, gamma, n)`` (fields ``bw_a``, ``bw_beta``,
+                          ``bw_gamma``, ``bw_n``; default ``(1, 0.75, 0.25, 1)``: saturation
+                          ``z_max = 1``)
+``jiles-atherton``        ``JilesAtherton(ms, a, k, c, alpha)`` (fields ``ja_ms``, ``ja_a``,
+                          ``ja_k``, ``ja_c``, ``ja_alpha``; default ``(1, 0.2, 0.3, 0.2, 0.1)``:
+                          a loop of half-width about ``k`` in the oscillator's units)
 ========================  =====================================================================
+
+The Duhem models' fields carry a prefix (``bw_``, ``ja_``): their parameters' usual names
+(``alpha``, ``beta``, ``c``) are taken by the relay's thresholds and, on the command line, by
+the oscillator's coupling ``C``. A library error about one of them is reported under the
+field's name (``bw_beta must be >= 0 ...``).
 
 Here ``s = (α + β)/2`` is a relay's centre and ``r = (α − β)/2`` its half-width, so the paper's
 ridge ``δ(r − p/2)`` is the limit ``σ_r -> 0``. The old spelling ``erf_play`` is accepted with a
@@ -43,6 +54,7 @@ A single name, or ``1*name``, is that model itself, exactly as before.
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
@@ -65,8 +77,10 @@ from analysis.experiments.parameters import (
     WIDTH_SPREAD,
 )
 from hysteresis import (
+    BoucWen,
     ContinuousPreisachModel,
     GeneralizedPlay,
+    JilesAtherton,
     PlayOperator,
     PrandtlIshlinskii,
     PreisachModel,
@@ -124,6 +138,12 @@ class ModelParameters:
         Everett-table resolution of ``preisach-uniform`` (grid points per axis).
     half_extent:
         H, half-extent of the ``preisach-uniform`` triangle, > 0 (default ``5R + p/2``).
+    bw_a, bw_beta, bw_gamma, bw_n:
+        ``bouc-wen``: ``A > 0``, ``beta >= 0``, ``gamma`` with ``beta + gamma > 0``, ``n >= 1``
+        (:class:`~hysteresis.BoucWen`).
+    ja_ms, ja_a, ja_k, ja_c, ja_alpha:
+        ``jiles-atherton``: ``ms, a, k > 0``, ``0 <= c < 1``, ``alpha >= 0`` with
+        ``alpha·ms/(3a) < 1`` (:class:`~hysteresis.JilesAtherton`).
     """
 
     spins: int = SPINS
@@ -138,6 +158,15 @@ class ModelParameters:
     plays: int = PLAYS
     resolution: int = 512
     half_extent: float | None = None
+    bw_a: float = 1.0
+    bw_beta: float = 0.75
+    bw_gamma: float = 0.25
+    bw_n: float = 1.0
+    ja_ms: float = 1.0
+    ja_a: float = 0.2
+    ja_k: float = 0.3
+    ja_c: float = 0.2
+    ja_alpha: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -276,6 +305,32 @@ def _preisach_uniform(p: ModelParameters) -> Any:
     return PreisachModel.from_density(_UniformTriangleDensity(h), -h, h, int(p.resolution))
 
 
+def _renamed(build: Callable[[], Any], fields: Mapping[str, str]) -> Any:
+    """``build()``, with a library error's parameter names (the words before ``must``) replaced
+    by the :class:`ModelParameters` fields that carry them (``beta`` -> ``bw_beta``)."""
+    try:
+        return build()
+    except (ValueError, TypeError) as exc:
+        text = str(exc)
+        head, sep, tail = text.partition(" must ")
+        if not sep:
+            raise
+        head = re.sub(r"\b\w+\b", lambda m: fields.get(m.group(), m.group()), head)
+        raise type(exc)(head + sep + tail) from None
+
+
+_BW_FIELDS = {"A": "bw_a", "beta": "bw_beta", "gamma": "bw_gamma", "n": "bw_n"}
+_JA_FIELDS = {"ms": "ja_ms", "a": "ja_a", "k": "ja_k", "c": "ja_c", "alpha": "ja_alpha"}
+
+
+def _bouc_wen(p: ModelParameters) -> Any:
+    return _renamed(lambda: BoucWen(p.bw_a, p.bw_beta, p.bw_gamma, p.bw_n), _BW_FIELDS)
+
+
+def _jiles_atherton(p: ModelParameters) -> Any:
+    return _renamed(lambda: JilesAtherton(p.ja_ms, p.ja_a, p.ja_k, p.ja_c, p.ja_alpha), _JA_FIELDS)
+
+
 _SPECS = (
     ModelSpec(
         "dimers",
@@ -320,6 +375,18 @@ _SPECS = (
         "(H = 5R + p/2 unless given)",
         ("width", "spread", "half_extent"),
         _preisach_uniform,
+    ),
+    ModelSpec(
+        "bouc-wen",
+        "Bouc-Wen dz/du = A - |z|^n (beta sign(du) sign(z) + gamma), a Duhem operator",
+        tuple(_BW_FIELDS.values()),
+        _bouc_wen,
+    ),
+    ModelSpec(
+        "jiles-atherton",
+        "Jiles-Atherton magnetisation M[H] (ms, a, k, c, alpha), a Duhem operator in M_irr",
+        tuple(_JA_FIELDS.values()),
+        _jiles_atherton,
     ),
 )
 
@@ -525,6 +592,15 @@ _SYMBOLS = {
     "beta": "β",
     "fields": "b",
     "half_extent": "H",
+    "bw_a": "A",
+    "bw_beta": "β",
+    "bw_gamma": "γ",
+    "bw_n": "n",
+    "ja_ms": "Ms",
+    "ja_a": "a",
+    "ja_k": "k",
+    "ja_c": "c",
+    "ja_alpha": "α",
 }
 
 

@@ -8,6 +8,8 @@ input record is fixed, so the identification is a constrained linear least-squar
   cell (the corner relays of :mod:`hysteresis.preisach.projection`),
   ``y_t ≈ c + Σ_k m_k r_k(t)`` with the relay outputs ``r_k(t) ∈ {−1, +1}`` computed from the
   input record and ``m_k >= 0``.
+* :func:`fit_bouc_wen`, :func:`fit_jiles_atherton` — the differential models, nonlinear in their
+  parameters (:mod:`analysis.identification.differential_fits`, re-exported here).
 * :func:`fit_prandtl_ishlinskii` — a Prandtl–Ishlinskii operator,
   ``y_t ≈ c + Σ_i a_i F_{p_i}[u]_t`` with plays of given widths (width 0 = the linear term).
   The weights may be negative (a saturating actuator needs them: its loading curve is
@@ -28,69 +30,24 @@ start a record with a saturating excursion, or discard its beginning, if that is
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from analysis.identification._record_fit import RecordFit, check_record, fit_result
+from analysis.identification.differential_fits import fit_bouc_wen, fit_jiles_atherton
 from hysteresis._validation import real_array
 from hysteresis.prandtl_ishlinskii import PrandtlIshlinskii
 from hysteresis.preisach import DiscretePreisachModel
 
 __all__ = [
     "RecordFit",
+    "fit_bouc_wen",
+    "fit_jiles_atherton",
     "relay_outputs",
     "fit_preisach_record",
     "fit_prandtl_ishlinskii",
 ]
-
-
-@dataclass(frozen=True, eq=False)
-class RecordFit:
-    """A model fitted to an input/output record.
-
-    Attributes
-    ----------
-    model:
-        The fitted operator (:class:`~hysteresis.DiscretePreisachModel`, normalised, or
-        :class:`~hysteresis.PrandtlIshlinskii`).
-    offset, scale:
-        Output model ``y ≈ offset + scale · model(u)`` (``scale = 1`` for Prandtl–Ishlinskii,
-        whose weights carry the amplitude).
-    train_rms, validation_rms:
-        Root-mean-square error on the training and validation samples (NaN without
-        validation samples).
-    n_train, n_validation:
-        Sample counts.
-    """
-
-    model: Any
-    offset: float
-    scale: float
-    train_rms: float
-    validation_rms: float
-    n_train: int
-    n_validation: int
-
-    def predict(self, inputs: Any) -> np.ndarray:
-        """``offset + scale · model(inputs)`` from the model's default initial state."""
-        y, _ = self.model.apply(np.asarray(inputs, dtype=float))
-        return self.offset + self.scale * y
-
-
-def _record(u: Any, y: Any, train_fraction: float) -> tuple[np.ndarray, np.ndarray, int]:
-    u = real_array(u, "u")
-    y = real_array(y, "y")
-    if u.ndim != 1 or y.shape != u.shape or u.size < 2:
-        raise ValueError("u and y must be 1-D arrays of the same length (>= 2)")
-    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(y))):
-        raise ValueError("u and y must be finite (no NaN/inf)")
-    if not (isinstance(train_fraction, (int, float)) and 0.0 < train_fraction <= 1.0):
-        raise ValueError(f"train_fraction must be in (0, 1], got {train_fraction!r}")
-    n_train = int(math.floor(train_fraction * u.size))
-    if n_train < 2:
-        raise ValueError("train_fraction leaves fewer than 2 training samples")
-    return u, y, n_train
 
 
 def relay_outputs(u: Any, alpha: Any, beta: Any, initial: int = -1) -> np.ndarray:
@@ -138,7 +95,7 @@ def fit_preisach_record(
     RecordFit
         ``model`` normalised (weights sum 1), ``y ≈ offset + scale · model(u)``.
     """
-    u, y, n_train = _record(u, y, train_fraction)
+    u, y, n_train = check_record(u, y, train_fraction)
     x = np.asarray(nodes, dtype=float)
     if x.ndim != 1 or x.size < 2 or np.any(np.diff(x) <= 0) or not np.all(np.isfinite(x)):
         raise ValueError("nodes must be a strictly increasing 1-D array of >= 2 finite values")
@@ -158,7 +115,7 @@ def fit_preisach_record(
     w = masses[keep] / total
     model = DiscretePreisachModel(alpha[keep], beta[keep], w / w.sum())
     pred = design @ np.concatenate([[coef[0]], masses])
-    return _fit_result(model, float(coef[0]), total, pred, y, n_train)
+    return fit_result(model, float(coef[0]), total, pred, y, n_train)
 
 
 def fit_prandtl_ishlinskii(
@@ -187,9 +144,12 @@ def fit_prandtl_ishlinskii(
     Returns
     -------
     RecordFit
-        ``model`` a :class:`~hysteresis.PrandtlIshlinskii`, ``y ≈ offset + model(u)``.
+        ``model`` a :class:`~hysteresis.PrandtlIshlinskii`, ``y ≈ offset + model(u)``;
+        ``parameters`` the offset and the weights ``a_i`` of the widths ``model.widths``, with
+        their ``standard_errors`` (``s²(XᵀX)⁻¹`` of the linear regression, conditional on the
+        partial sums held at their bound).
     """
-    u, y, n_train = _record(u, y, train_fraction)
+    u, y, n_train = check_record(u, y, train_fraction)
     p = np.asarray(widths, dtype=float).ravel()
     if p.size == 0 or not np.all(np.isfinite(p)) or np.any(p < 0):
         raise ValueError("widths must be a non-empty sequence of finite values >= 0")
@@ -212,7 +172,40 @@ def fit_prandtl_ishlinskii(
     weights = np.diff(np.concatenate([[0.0], partial]))
     model = PrandtlIshlinskii(p, weights)
     pred = design @ np.concatenate([[coef[0]], partial])
-    return _fit_result(model, float(coef[0]), 1.0, pred, y, n_train)
+    errors = _linear_errors(
+        design[:n_train], y[:n_train] - pred[:n_train], partial, min_partial_sum
+    )
+    names = ["offset", *(f"a_{i}" for i in range(p.size))]
+    return fit_result(
+        model,
+        float(coef[0]),
+        1.0,
+        pred,
+        y,
+        n_train,
+        parameters=dict(zip(names, [float(coef[0]), *weights.tolist()], strict=True)),
+        standard_errors=dict(zip(names, errors.tolist(), strict=True)),
+    )
+
+
+def _linear_errors(
+    design: np.ndarray, residuals: np.ndarray, partial: np.ndarray, lower: float
+) -> np.ndarray:
+    """Standard errors of ``(offset, a_0, …, a_K)`` of the partial-sum regression
+    ``y ≈ c + Σ A_i D_i``: ``s²(XᵀX)⁻¹`` over the offset and the partial sums off their bound
+    (those at the bound held fixed: the errors are conditional on the active set), carried to
+    the weights ``a_i = A_i − A_{i−1}`` linearly."""
+    free = np.concatenate([[True], partial > lower * (1.0 + 1e-9)])
+    x = design[:, free]
+    dof = max(design.shape[0] - x.shape[1], 1)
+    s2 = float(residuals @ residuals) / dof
+    cov_free = s2 * np.linalg.pinv(x.T @ x)
+    cov = np.zeros((free.size, free.size))
+    cov[np.ix_(free, free)] = cov_free
+    # (c, A_0..A_K) -> (c, a_0..a_K): a_i = A_i − A_{i−1}
+    t = np.eye(free.size)
+    t[np.arange(2, free.size), np.arange(1, free.size - 1)] = -1.0
+    return np.sqrt(np.maximum(np.diag(t @ cov @ t.T), 0.0))
 
 
 def _bounded_lstsq(design: np.ndarray, y: np.ndarray, lower: np.ndarray) -> np.ndarray:
@@ -227,13 +220,3 @@ def _bounded_lstsq(design: np.ndarray, y: np.ndarray, lower: np.ndarray) -> np.n
 
     z, _ = nnls(aug, shifted, maxiter=50 * aug.shape[1])
     return np.concatenate([[z[0] - z[1]], lower + z[2:]])
-
-
-def _fit_result(
-    model: Any, offset: float, scale: float, pred: np.ndarray, y: np.ndarray, n_train: int
-) -> RecordFit:
-    err = pred - y
-    train = float(np.sqrt(np.mean(err[:n_train] ** 2)))
-    n_val = y.size - n_train
-    val = float(np.sqrt(np.mean(err[n_train:] ** 2))) if n_val else float("nan")
-    return RecordFit(model, offset, scale, train, val, n_train, n_val)

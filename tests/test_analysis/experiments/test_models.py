@@ -27,7 +27,7 @@ from analysis.experiments.models import (
 def test_registry_names_are_canonical_and_complete():
     assert set(MODELS) == {
         "dimers", "erf-play", "play", "relay", "n2", "n4", "preisach", "preisach-gauss", "pi",
-        "preisach-uniform",
+        "preisach-uniform", "bouc-wen", "jiles-atherton",
     }  # fmt: skip
     for name in MODELS:  # one spelling: lower case, words joined by '-'
         assert name == name.lower() and "_" not in name
@@ -157,3 +157,22 @@ def test_preisach_uniform_follows_the_closed_form_of_the_uniform_triangle():
     }
     with pytest.raises(ValueError, match="half_extent"):
         build_operator("preisach-uniform", half_extent=-1.0)
+
+
+def test_duhem_models_build_from_their_fields_and_name_them_in_errors():
+    """bouc-wen and jiles-atherton read their prefixed fields; a library error names the
+    field (the CLI maps it to its option)."""
+    from hysteresis import BoucWen, JilesAtherton
+
+    bw = build_operator("bouc-wen", bw_a=2.0, bw_beta=0.5, bw_gamma=0.5, bw_n=2.0)
+    assert isinstance(bw, BoucWen) and (bw.A, bw.beta, bw.gamma, bw.n) == (2.0, 0.5, 0.5, 2.0)
+    ja = build_operator("jiles-atherton", ja_ms=2.0, ja_a=0.3, ja_k=0.4, ja_c=0.1, ja_alpha=0.2)
+    assert isinstance(ja, JilesAtherton)
+    assert (ja.ms, ja.a, ja.k, ja.c, ja.alpha) == (2.0, 0.3, 0.4, 0.1, 0.2)
+    with pytest.raises(ValueError, match=r"^bw_beta \+ bw_gamma must be > 0"):
+        build_operator("bouc-wen", bw_beta=0.0, bw_gamma=0.0)
+    with pytest.raises(ValueError, match=r"^ja_c must lie in \[0, 1\]"):
+        build_operator("jiles-atherton", ja_c=1.5)
+    rec = model_record("bouc-wen")
+    assert rec == {"model": "bouc-wen", "bw_a": 1.0, "bw_beta": 0.75, "bw_gamma": 0.25, "bw_n": 1.0}
+    assert describe_model(rec) == "bouc-wen A=1 β=0.75 γ=0.25 n=1"
