@@ -6,6 +6,7 @@ from hysteresis._version import __version__
 # fail early, naming the culprit, if an unrelated distribution also installs "hysteresis"
 _check_import_name("hysteresis")
 
+from hysteresis import duhem_memory as _duhem_memory  # noqa: F401  (Duhem.with_memory)
 from hysteresis.algebra import (
     BranchSum,
     RelaySum,
