@@ -511,22 +511,21 @@ class ContinuousHysteron(Hysteron[StateT]):
     def memory_restart(self, state: StateT, direction: int, u: float) -> tuple:
         """``(values (n,), d_du (n,), d_dm (n, n))``: the memory that the branch of the state
         reached at input ``u`` on the branch of ``state`` in ``direction`` reports (the branch
-        restarted there), and its gradient with respect to ``u`` and to the memory of the
-        branch of ``state`` (at fixed ``u``).
+        restarted there), and how its perturbation follows from the tangent rows of the branch
+        of ``state``: ``δm_restarted = d_du·δu + d_dm @ δm`` (``δm`` the rows an integrator
+        carries, :mod:`hysteresis.flow`: a slaved variable's row is ``δu`` already).
 
         It converts the oscillator's tangent rows, which are the perturbations of the memory
-        of the branch the motion is on (:class:`hysteresis.flow.BranchFlow`), into those of
-        the memory a state reports. The default is exact for memory that is the state's own:
-        frozen variables keep their value (``d_dm = I``), slaved ones move with the input
-        (``d_du = 1``, a zero row of ``d_dm``: the engine's row of a slaved variable is ``δq``
-        already), :meth:`BranchFlow.memory_at`. A variable that is the value *at the
-        branch start* of something that keeps changing along the branch (a Duhem operator's
-        ``z0``: the state's ``z`` is ``Z(u; z0)``) overrides it."""
+        of the branch the motion is on, into those of the memory a state reports. The default
+        is exact for memory that is the state's own, frozen variables keeping their value and
+        slaved ones moving with the input (:meth:`BranchFlow.memory_at`): ``d_du = 0``,
+        ``d_dm = I``. A variable that is the value *at the branch start* of something that
+        keeps changing along the branch (a Duhem operator's ``z0``: the state's ``z`` is
+        ``Z(u; z0)``) overrides it."""
         flow = checked_branch_flow(self, state, direction)
         n = flow.n_memory
         values = np.asarray(flow.memory_at(float(u)), dtype=np.float64).reshape(n)
-        slaved = np.asarray(flow.slaved, dtype=bool)
-        return values, slaved.astype(np.float64), np.diag((~slaved).astype(np.float64))
+        return values, np.zeros(n), np.eye(n)
 
     def compiled_play(self) -> Any:
         """A description for the compiled play-limit kernel
