@@ -142,10 +142,11 @@ class StateCoordinates:
         return t
 
     def chart_jacobian(
-        self, start: OscillatorState, shot: Any, engine_options: dict | None = None
+        self, start: OscillatorState, shot: Any, engine_options: dict | None = None, system=None
     ) -> np.ndarray:
         """``D P^k`` in these coordinates from the engine's ``J`` (``shot``: its ``states``
-        after each period, ``events`` and ``jacobian``): ``T_end · J · T_start⁻¹``.
+        after each period, ``events`` and ``jacobian``; ``system``: the one it was integrated
+        with, default :attr:`system`): ``T_end · J · T_start⁻¹``.
 
         The engine's rows are the memory of the branch it is on: at the start the branch of
         the start state, at the end the branch that began at the last event (a reversal). The
@@ -157,7 +158,8 @@ class StateCoordinates:
         states, events, jacobian = shot.states, shot.events, shot.jacobian
         if self.kind != "memory":
             return jacobian
-        period = self.system.period
+        system = self.system if system is None else system
+        period = system.period
         t_start = self.restart_rows(start.operator_state, self.direction, float(start.q))
         end = states[-1]
         times = np.asarray(events["time"], dtype=np.float64) if events.size else np.zeros(0)
@@ -167,16 +169,16 @@ class StateCoordinates:
             t_ev = float(times[-1])
             whole = min(int((t_ev - start.t) // period), len(states) - 1)
             base = start if whole <= 0 else states[whole - 1]
-            eng = self.system.engine(base, **(engine_options or {}))
-            eng.advance(np.array([t_ev - base.t + RESTART_DELAY]))
-            if eng.n_events != int(np.count_nonzero(times > base.t)):
+            eng = system.engine(base, **(engine_options or {}))
+            eng.advance(np.array([t_ev - base.t + RESTART_DELAY]), None, True)
+            met = np.asarray(eng.records().get("events", np.zeros(0, [("time", "f8")]))["time"])
+            if met.size == 0 or abs(met[-1] - t_ev) > 1e-6 * period:
                 raise ValueError(
-                    f"the replay of the orbit's last period met {eng.n_events} events, the "
-                    f"orbit {int(np.count_nonzero(times > base.t))}: the tangent rows at its end "
-                    "cannot be matched to a branch"
+                    f"the replay of the orbit's last period did not meet its last event at t = "
+                    f"{t_ev:.9g}: the tangent rows at its end cannot be matched to a branch"
                 )
             after = eng.state()
-            d = section_direction(self.system, after, after.operator_state)
+            d = section_direction(system, after, after.operator_state)
             t_end = self.restart_rows(after.operator_state, d, float(end.q))
         return t_end @ jacobian @ np.linalg.inv(t_start)
 

@@ -316,7 +316,7 @@ def orbit_shooter(system: Any, coords: StateCoordinates, k: int, engine_options:
         def run_shot(state: OscillatorState, record: bool = False) -> _Shot:
             record = record or coords.kind == "memory"
             shot = shoot(system, state, k, record=record, engine_options=engine_options)
-            shot.jacobian = coords.chart_jacobian(state, shot, engine_options)
+            shot.jacobian = coords.chart_jacobian(state, shot, engine_options, system)
             return shot
 
         return run_shot
