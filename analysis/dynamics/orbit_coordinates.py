@@ -26,6 +26,15 @@ engine's memory labels (never by class):
   staircase would wipe out entries (not alternating, not nested, or ``q`` beyond the last
   extremum of its kind) raises ``ValueError``, as does a state with another number of extrema.
 
+* **any other continuous operator that sets its memory** (the contract's ``with_memory`` and
+  ``memory_restart``, :class:`hysteresis.base.ContinuousHysteron`: Duhem and Bouc–Wen
+  operators, sums of them with plays, static maps and relays): ``x = (q, v, *memory)`` with the
+  memory its branch in the section's direction reports (a Duhem operator's ``z``), rebuilt by
+  ``with_memory``. The engine's rows are the memory of the branch it is on, which for a
+  Duhem operator is ``z0`` at the branch start, not the state's ``z``; the Jacobian is mapped
+  by ``memory_restart`` at both ends (:meth:`StateCoordinates.chart_jacobian`). Cascades and
+  inverses do not implement ``with_memory`` yet and are refused.
+
 A wagon position that a Newton step places beyond its wall (``|q − w| > p/2``) is put back on
 the wall (the state space is the closed strip). Operators whose memory has none of these forms
 are refused with a ``ValueError`` naming the operator.
