@@ -53,7 +53,12 @@ from hysteresis.base import (
 from hysteresis.flow import BranchFlow, CompiledFlow
 from hysteresis.inverse import InverseOperator
 from hysteresis.relay_table import RelayTable
-from hysteresis.seam import check_state, checked_relay_outputs, checked_relay_table
+from hysteresis.seam import (
+    check_state,
+    checked_branch_flow,
+    checked_relay_outputs,
+    checked_relay_table,
+)
 from hysteresis.sum_flows import compiled_sum_flow, composed_fields, play_parts
 from hysteresis.sum_state import SumState
 
@@ -411,6 +416,58 @@ class BranchSum(WeightedSum, ContinuousHysteron):
             constant_partials=all(f.constant_partials for f in parts),
             **extra,
         )
+
+    # -- the memory as coordinates (hysteresis.base.ContinuousHysteron.with_memory) --------------
+    def _memory_parts(self, state: SumState, direction: int) -> list[int]:
+        """The number of memory variables of each part's branch (0 for relay-type parts)."""
+        return [
+            0 if p.piecewise_constant else checked_branch_flow(p, s, direction).n_memory
+            for p, s in zip(self._parts, state, strict=True)
+        ]
+
+    def with_memory(self, state: SumState, values: Any, input: float, direction: int) -> SumState:
+        """Each continuous part's ``with_memory`` with its slice of ``values`` (the labels
+        ``"k:label"`` in the order of the parts); relay-type parts keep the outputs ``state``
+        gives them (they switch nothing while the input stays between their thresholds)."""
+        state = self._check_state(state)
+        d = direction_sign(direction)
+        values = np.asarray(values, dtype=np.float64).reshape(-1)
+        sizes = self._memory_parts(state, d)
+        if sum(sizes) != values.size:
+            raise ValueError(f"values must hold {sum(sizes)} memory values, got {values.size}")
+        parts, pos = [], 0
+        for p, s, n in zip(self._parts, state, sizes, strict=True):
+            if p.piecewise_constant:
+                if not p.has_relay_table:
+                    raise ValueError(
+                        f"{type(p).__name__} cannot set its memory from a vector (interacting "
+                        "units, no relay table)"
+                    )
+                parts.append(p.state_from_relay_outputs(p.relay_outputs(s), input))
+            else:
+                parts.append(p.with_memory(s, values[pos : pos + n], input, d))
+            pos += n
+        return SumState(parts)
+
+    def memory_restart(self, state: SumState, direction: int, u: float) -> tuple:
+        """The parts' ``memory_restart`` side by side (block-diagonal ``d_dm``)."""
+        state = self._check_state(state)
+        d = direction_sign(direction)
+        rows = [
+            p.memory_restart(s, d, u)
+            for p, s in zip(self._parts, state, strict=True)
+            if not p.piecewise_constant
+        ]
+        sizes = [np.asarray(r[0]).size for r in rows]
+        n = sum(sizes)
+        values, d_du, d_dm = np.zeros(n), np.zeros(n), np.zeros((n, n))
+        pos = 0
+        for (v, a, A), k in zip(rows, sizes, strict=True):
+            values[pos : pos + k] = v
+            d_du[pos : pos + k] = a
+            d_dm[pos : pos + k, pos : pos + k] = np.asarray(A, dtype=np.float64).reshape(k, k)
+            pos += k
+        return values, d_du, d_dm
 
     # -- the compiled fast path: a sum of plays and relays (hysteresis/sum_flows.py) --------------
     def compiled_flow(self) -> CompiledFlow | None:

@@ -511,6 +511,40 @@ class ContinuousHysteron(Hysteron[StateT]):
         (:class:`hysteresis.flow.BranchFlow`). The generic continuous engine of the oscillator
         integrates any operator that provides it."""
 
+    # -- the memory as coordinates (periodic orbits, continuation) --------------------------
+    def with_memory(self, state: StateT, values: Any, input: float, direction: int) -> StateT:
+        """The state at ``input`` whose branch in ``direction`` reports the memory ``values``
+        (in the order of ``branch_flow(state, direction).labels``); ``state`` is the template
+        that supplies what the values do not say (a composite's relay outputs, the parts'
+        structure). A value beyond what a state can hold is put on the nearest state (a wagon
+        beyond its wall is put on the wall). Optional: the periodic-orbit coordinates
+        (:class:`analysis.dynamics.orbit_coordinates.StateCoordinates`) ask for it for
+        operators whose memory they do not know otherwise; the default refuses in one
+        sentence."""
+        raise ValueError(
+            f"{type(self).__name__} cannot set its memory from a vector of values "
+            "(ContinuousHysteron.with_memory is not implemented for it)"
+        )
+
+    def memory_restart(self, state: StateT, direction: int, u: float) -> tuple:
+        """``(values (n,), d_du (n,), d_dm (n, n))``: the memory that the branch of the state
+        reached at input ``u`` on the branch of ``state`` in ``direction`` reports (the branch
+        restarted there), and how its perturbation follows from the tangent rows of the branch
+        of ``state``: ``δm_restarted = d_du·δu + d_dm @ δm`` (``δm`` the rows an integrator
+        carries, :mod:`hysteresis.flow`: a slaved variable's row is ``δu`` already).
+
+        It converts the oscillator's tangent rows, which are the perturbations of the memory
+        of the branch the motion is on, into those of the memory a state reports. The default
+        is exact for memory that is the state's own, frozen variables keeping their value and
+        slaved ones moving with the input (:meth:`BranchFlow.memory_at`): ``d_du = 0``,
+        ``d_dm = I``. A variable that is the value *at the branch start* of something that
+        keeps changing along the branch (a Duhem operator's ``z0``: the state's ``z`` is
+        ``Z(u; z0)``) overrides it."""
+        flow = checked_branch_flow(self, state, direction)
+        n = flow.n_memory
+        values = np.asarray(flow.memory_at(float(u)), dtype=np.float64).reshape(n)
+        return values, np.zeros(n), np.eye(n)
+
     def compiled_play(self) -> Any:
         """A description for the compiled play-limit kernel
         (:class:`hysteresis.play.CompiledPlay`) if this operator is a play with a shape the

@@ -529,5 +529,37 @@ class Duhem(ContinuousHysteron[DuhemState]):
             driven=driven,
         )
 
+    # -- memory as coordinates (periodic orbits, continuation) ---------------------------------
+    def with_memory(
+        self, state: DuhemState, values: Any, input: float, direction: int
+    ) -> DuhemState:
+        """The state ``(z0, input)`` (contract, :meth:`ContinuousHysteron.with_memory`): the
+        branch that starts there reports ``z0`` (``values``, one number; put back into the
+        output range where a Newton step left it, Bouc–Wen's ``[−z_max, z_max]``).
+
+        The branch memory of a Duhem operator is ``z0``, the internal variable at the branch
+        start; a state's own memory is its current ``z`` (the ``z0`` of the branch that starts
+        at it)."""
+        check_state_type(state, DuhemState, self)
+        d = direction_sign(direction)
+        z = np.asarray(values, dtype=np.float64).reshape(-1)
+        if z.size != 1:
+            raise ValueError(f"values must hold the one memory value z0, got {z.size} values")
+        lo, hi = self.output_range
+        return self.state(float(np.clip(z[0], lo, hi)), input, d)
+
+    def memory_restart(self, state: DuhemState, direction: int, u: float) -> tuple:
+        """``([Z(u)], [g_d(u, Z)], [[Φ(u)]])`` on the branch of ``state`` in ``direction``
+        (contract, :meth:`ContinuousHysteron.memory_restart`): along a branch
+        ``z = Z(u; z0)``, so the memory of the branch restarted at ``u`` is ``Z(u; z0)`` with
+        gradient ``∂Z/∂u = g_d(u, Z)`` and ``∂Z/∂z0 = Φ(u)`` (the variational solution the
+        branch flow carries: the ``d_dm`` of its driven variable)."""
+        d = direction_sign(direction)
+        flow = self.branch_flow(state, d)
+        values, _, d_dm = flow.driven(float(u))
+        z = float(np.asarray(values).reshape(-1)[0])
+        phi = float(np.asarray(d_dm).reshape(-1)[0])
+        return np.array([z]), np.array([self.slope(float(u), z, d)]), np.array([[phi]])
+
     def __repr__(self) -> str:
         return f"Duhem({self._g[1]!r}, {self._g[-1]!r})"

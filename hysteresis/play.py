@@ -25,6 +25,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from numbers import Real
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -172,6 +173,18 @@ class _PlayBase(ContinuousHysteron[PlayState]):
                 f"(got position={position}, input={input})"
             )
         return PlayState(position, input)
+
+    def with_memory(self, state: PlayState, values: Any, input: float, direction: int) -> PlayState:
+        """The wagon at ``values[0]`` with the input at ``input``; a position beyond a wall is
+        put on the wall (the state space is the closed strip ``|input − w| <= p/2``)."""
+        self._check_state(state)
+        direction_sign(direction)
+        w = np.asarray(values, dtype=np.float64).reshape(-1)
+        if w.size != 1:
+            raise ValueError(f"values must hold the one wagon position, got {w.size} values")
+        u = finite_scalar(input, "input", MAX_MAGNITUDE)
+        half = self.half_width
+        return self.state(float(np.clip(w[0], u - half, u + half)), u)
 
     def _check_state(self, state: object) -> None:
         """Type and consistency of a state (O(1)): finite position within p/2 of its input."""

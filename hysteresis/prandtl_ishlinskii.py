@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from numbers import Real
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -207,6 +208,17 @@ class PrandtlIshlinskii(ContinuousHysteron[PIState]):
                     f"(position {w} with half-width {r} at input {input})"
                 )
         return PIState(readonly_array(positions), input)
+
+    def with_memory(self, state: PIState, values: Any, input: float, direction: int) -> PIState:
+        """The wagons at ``values`` (one per play, in the order of the labels ``w0, w1, ..``)
+        with the input at ``input``; a position beyond its wall is put on the wall."""
+        self._check_state(state)
+        direction_sign(direction)
+        u = finite_scalar(input, "input", MAX_MAGNITUDE)
+        w = np.asarray(values, dtype=np.float64).reshape(-1)
+        if w.shape != self._half.shape:
+            raise ValueError(f"values must hold {self._half.size} wagon positions, got {w.size}")
+        return self.state(np.clip(w, u - self._half, u + self._half), u)
 
     def _check_state(self, state: object) -> np.ndarray:
         """Type, size and consistency of a state (O(n_plays)); returns the positions."""

@@ -277,6 +277,16 @@ class StaticMap(ContinuousHysteron[StaticMapState]):
         check_state_type(state, StaticMapState, self)
         return float(_values(self._f, np.array([float(state.input)]), "f")[0])
 
+    def with_memory(
+        self, state: StaticMapState, values: Any, input: float, direction: int
+    ) -> StaticMapState:
+        """No memory: the state at ``input`` (``values`` empty)."""
+        check_state_type(state, StaticMapState, self)
+        direction_sign(direction)
+        if np.asarray(values).size:
+            raise ValueError(f"values must be empty (a static map has no memory), got {values!r}")
+        return StaticMapState(finite_scalar(input, "input", MAX_MAGNITUDE))
+
     def branch_flow(self, state: StaticMapState, direction: int) -> BranchFlow:
         """No memory, ``y(u) = f(u)``, partials ``(f'(u), ())``, no breakpoint."""
         direction = direction_sign(direction)

@@ -240,7 +240,10 @@ def basins(
         a start without a period goes on ``periods`` at a time up to ``max_periods`` in all
         (default ``transient + periods``: no extension), so long transients get resolved while
         a start that settles early stops early. ``recurrences``: a start skips ``transient``
-        periods, then runs at most ``max_periods − transient`` (its ``max_steps``); ``periods``
+        periods, then runs at most ``max_periods − transient`` (its ``max_steps``; default
+        ``max(periods, mx_chk_fnd_att + mx_chk_loc_att)``, the budget in which a start can
+        declare and locate an attractor — the starts that meet known cells stop in a few
+        periods, so it costs only the ones that find attractors); ``periods``
         and ``max_periods`` are also the section run that classifies each attractor found.
     tolerance:
         Absolute tolerance of the section period (every section coordinate).
@@ -287,11 +290,16 @@ def basins(
     chunk = positive_integer(chunk, "chunk")
     if not isinstance(system_key, str):
         raise TypeError(f"system_key must be a string, got {type(system_key).__name__}")
-    max_periods = transient + periods if max_periods is None else max_periods
-    max_periods = positive_integer(max_periods, "max_periods", minimum=transient + periods)
     recurrence = RecurrenceSettings() if recurrence is None else recurrence
     if not isinstance(recurrence, RecurrenceSettings):
         raise TypeError(f"recurrence must be a RecurrenceSettings, got {type(recurrence).__name__}")
+    if max_periods is None:
+        # recurrences: a start must be able to declare an attractor (mx_chk_fnd_att
+        # recurrences after its first revisit) and locate it; with the sections' default
+        # (periods = 100 = mx_chk_fnd_att) no start ever could, and every one was undecided
+        find = recurrence.mx_chk_fnd_att + recurrence.mx_chk_loc_att
+        max_periods = transient + (max(periods, find) if method == "recurrences" else periods)
+    max_periods = positive_integer(max_periods, "max_periods", minimum=transient + periods)
     valid = _valid_starts(system, pts, grid)
     settings = dict(
         transient=transient,

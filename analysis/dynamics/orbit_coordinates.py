@@ -33,6 +33,15 @@ engine's memory labels (never by class):
   staircase would wipe out entries (not alternating, not nested, or ``q`` beyond the last
   extremum of its kind) raises ``ValueError``, as does a state with another number of extrema.
 
+* **any other continuous operator that sets its memory** (the contract's ``with_memory`` and
+  ``memory_restart``, :class:`hysteresis.base.ContinuousHysteron`: Duhem and Bouc–Wen
+  operators, sums of them with plays, static maps and relays): ``x = (q, v, *memory)`` with the
+  memory its branch in the section's direction reports (a Duhem operator's ``z``), rebuilt by
+  ``with_memory``. The engine's rows are the memory of the branch it is on, which for a
+  Duhem operator is ``z0`` at the branch start, not the state's ``z``; the Jacobian is mapped
+  by ``memory_restart`` at both ends (:meth:`StateCoordinates.chart_jacobian`). Cascades and
+  inverses do not implement ``with_memory`` yet and are refused.
+
 A wagon position that a Newton step places beyond its wall (``|q − w| > p/2``) is put back on
 the wall (the state space is the closed strip). Operators whose memory has none of these forms
 are refused with a ``ValueError`` naming the operator.
@@ -40,6 +49,7 @@ are refused with a ``ValueError`` naming the operator.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import replace
 from typing import Any
@@ -48,8 +58,10 @@ import numpy as np
 
 from oscillators import OscillatorState
 
-__all__ = ["StateCoordinates"]
+__all__ = ["StateCoordinates", "section_direction"]
 
+#: how long after the orbit's last event the replay stops to read the branch that began there
+RESTART_DELAY = 1e-9
 _WAGON = re.compile(r"^w\d+$")
 _EXTREMUM = re.compile(r"^[Mm]\d+$")
 
@@ -117,16 +129,83 @@ class StateCoordinates:
                     f"{memory} {len(memory) + 1} (the state is at a reversal: v = 0)"
                 )
         else:
-            raise ValueError(
-                f"the memory of {op!r} (tangent rows {memory}) cannot be set from a vector of "
-                "fixed size; periodic orbits are computed for relay-type operators, plays, "
-                "Prandtl–Ishlinskii operators, continuous Preisach models, sums of plays "
-                "and relays, and Bouc–Wen and Jiles–Atherton on the compiled Duhem engine"
-            )
+            self.kind = "memory"
+            self._set_memory_chart(op, state, memory)
         wagons = self.kind in ("wagon", "wagons")
         self.half_widths = self._half_widths(op) if wagons else np.zeros(0)
         if self.kind == "composite":
             self.half_widths = np.asarray(spec.half_widths, dtype=np.float64)
+
+    def _set_memory_chart(self, op: Any, state: OscillatorState, memory: tuple) -> None:
+        """The operator's own chart (``with_memory``/``memory_restart``), probed once on the
+        state: refused in one sentence where the operator cannot set its memory."""
+        op_state = state.operator_state
+        if op_state is None:
+            op_state = op.initial_state(float(state.q))
+        self.direction = section_direction(self.system, state, op_state)
+        try:
+            flow = op.branch_flow(op_state, self.direction)
+            if tuple(flow.labels) != memory:
+                raise ValueError(f"its branch reports the memory {flow.labels}")
+            op.with_memory(op_state, flow.memory, float(state.q), self.direction)
+        except ValueError as exc:
+            raise ValueError(
+                f"the memory of {op!r} (tangent rows {memory}) cannot be set from a vector of "
+                f"fixed size: {exc}"
+            ) from None
+
+    def restart_rows(self, op_state: Any, direction: int, u: float) -> np.ndarray:
+        """``T``: the coordinates' perturbations from the engine's tangent rows on the branch
+        of ``op_state`` in ``direction`` at input ``u`` (``δm = d_du·δq + d_dm @ δm_branch``,
+        the operator's ``memory_restart``; ``(δq, δv)`` pass). The identity for memory that
+        is the state's own (frozen or slaved); a Duhem operator's ``z0`` is not."""
+        values, d_du, d_dm = self.system.operator.memory_restart(op_state, direction, u)
+        n = self.dimension - 2
+        t = np.eye(self.dimension)
+        t[2:, 0] = np.asarray(d_du, dtype=np.float64).reshape(n)
+        t[2:, 2:] = np.asarray(d_dm, dtype=np.float64).reshape(n, n)
+        return t
+
+    def chart_jacobian(
+        self, start: OscillatorState, shot: Any, engine_options: dict | None = None, system=None
+    ) -> np.ndarray:
+        """``D P^k`` in these coordinates from the engine's ``J`` (``shot``: its ``states``
+        after each period, ``events`` and ``jacobian``; ``system``: the one it was integrated
+        with, default :attr:`system`): ``T_end · J · T_start⁻¹``.
+
+        The engine's rows are the memory of the branch it is on: at the start the branch of
+        the start state, at the end the branch that began at the last event (a reversal). The
+        operator's ``memory_restart`` turns each into the memory the state reports there
+        (:meth:`restart_rows`). The state after the last event comes from a replay of the
+        period that holds it, stopped ``RESTART_DELAY`` after the event (the branch memory of
+        a later start on the same branch differs by the motion in that time: ``O(δ²)`` after
+        a reversal, ``O(δ)`` after a breakpoint, where frozen and slaved memory do not move)."""
+        states, events, jacobian = shot.states, shot.events, shot.jacobian
+        if self.kind != "memory":
+            return jacobian
+        system = self.system if system is None else system
+        period = system.period
+        t_start = self.restart_rows(start.operator_state, self.direction, float(start.q))
+        end = states[-1]
+        times = np.asarray(events["time"], dtype=np.float64) if events.size else np.zeros(0)
+        if times.size == 0:
+            t_end = self.restart_rows(start.operator_state, self.direction, float(end.q))
+        else:
+            t_ev = float(times[-1])
+            whole = min(int((t_ev - start.t) // period), len(states) - 1)
+            base = start if whole <= 0 else states[whole - 1]
+            eng = system.engine(base, **(engine_options or {}))
+            eng.advance(np.array([t_ev - base.t + RESTART_DELAY]), None, True)
+            met = np.asarray(eng.records().get("events", np.zeros(0, [("time", "f8")]))["time"])
+            if met.size == 0 or abs(met[-1] - t_ev) > 1e-6 * period:
+                raise ValueError(
+                    f"the replay of the orbit's last period did not meet its last event at t = "
+                    f"{t_ev:.9g}: the tangent rows at its end cannot be matched to a branch"
+                )
+            after = eng.state()
+            d = section_direction(system, after, after.operator_state)
+            t_end = self.restart_rows(after.operator_state, d, float(end.q))
+        return t_end @ jacobian @ np.linalg.inv(t_start)
 
     @property
     def dimension(self) -> int:
@@ -151,6 +230,9 @@ class StateCoordinates:
             return np.array([*head, float(op_state.position)])
         if self.kind == "composite":
             return np.concatenate([head, np.asarray(self._spec.positions(op_state), float)])
+        if self.kind == "memory":
+            flow = self.system.operator.branch_flow(op_state, self.direction)
+            return np.concatenate([head, np.asarray(flow.memory, dtype=np.float64)])
         if self.kind == "staircase":
             extrema = np.asarray(op_state.extrema, dtype=np.float64)
             if extrema.size != self.dimension - 1:
@@ -187,6 +269,8 @@ class StateCoordinates:
                 op_state = spec.make_state(w, q, spec.relay_outputs(template.operator_state))
         elif self.kind == "staircase":
             op_state = self._staircase(x)
+        elif self.kind == "memory":
+            op_state = op.with_memory(template.operator_state, x[2:], q, self.direction)
         else:
             w = np.clip(x[2:], q - self.half_widths, q + self.half_widths)
             if self.kind == "wagon":
@@ -247,3 +331,16 @@ class StateCoordinates:
 
     def __repr__(self) -> str:
         return f"StateCoordinates({self.labels}, kind={self.kind!r}, phi={self.phi:.6g})"
+
+
+def section_direction(system: Any, state: OscillatorState, op_state: Any) -> int:
+    """The direction of the input's motion at ``state``, the branch an engine started there
+    follows: the sign of ``v``, at rest the sign of the acceleration (the engines' rule)."""
+    if state.v != 0.0:
+        return 1 if state.v > 0.0 else -1
+    acc = (
+        -float(state.q)
+        + math.cos(float(state.phi))
+        + system.coupling * float(system.operator.output(op_state))
+    )
+    return 1 if acc >= 0.0 else -1

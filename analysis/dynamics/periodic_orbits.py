@@ -311,10 +311,15 @@ def orbit_shooter(system: Any, coords: StateCoordinates, k: int, engine_options:
     """``state, record -> _Shot`` in ``coords``: :func:`shoot`, or for a continuous Preisach
     staircase the closed-loop map of :mod:`analysis.dynamics.staircase_orbits` (its own extrema
     are the reset directions)."""
-    if coords.kind != "staircase":
-        return lambda state, record=False: shoot(
-            system, state, k, record=record, engine_options=engine_options
-        )
+    if coords.kind != "staircase":  # (a "memory" chart maps the engine's branch memory)
+
+        def run_shot(state: OscillatorState, record: bool = False) -> _Shot:
+            record = record or coords.kind == "memory"
+            shot = shoot(system, state, k, record=record, engine_options=engine_options)
+            shot.jacobian = coords.chart_jacobian(state, shot, engine_options, system)
+            return shot
+
+        return run_shot
 
     def run(state: OscillatorState, record: bool = False) -> _Shot:
         got = closed_loop_shot(system, state, k, coords.prefix, engine_options)

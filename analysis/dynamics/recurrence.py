@@ -106,7 +106,10 @@ class RecurrenceSettings:
         Edge of the cubic cells over the section coordinates (absolute, in the units of q, v
         and w). Cells must be small against the distance between attractors and the basins'
         structure, and large enough that a chaotic attractor is covered in a few hundred
-        periods: 0.05 for the erf play (attractors of extent ~3).
+        periods: 0.05 for the erf play (attractors of extent ~3). Coexisting attractors
+        closer than a cell are merged: at C = 1, ζ = 0.1 the sum ``0.7*erf-play +
+        0.3*preisach`` (100 relays) has a period-1 and a period-2 orbit 0.003–0.009 apart,
+        which need cells of 0.002 (tests/test_analysis/dynamics/test_basins_recurrence_c1.py).
     mx_chk_fnd_att:
         Recurrences in a row on the start's own cells that declare a new attractor (100;
         ``consecutive_recurrences``).
