@@ -113,7 +113,9 @@ class StateCoordinates:
         elif spec is not None and spec.kind == "duhem" and memory == (spec.label(0),):
             self.kind = "duhem"
             self._spec = spec
-        elif spec is not None and getattr(spec, "make_state", None) is not None:
+        elif (
+            spec is not None and spec.kind != "duhem" and getattr(spec, "make_state", None)
+        ):  # a Duhem operator on the generic engine (rows "z±") takes the memory chart below
             self.kind = "composite"
             self._spec = spec
         elif memory == ("w",) and hasattr(op, "state"):

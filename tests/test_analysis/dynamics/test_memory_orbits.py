@@ -27,45 +27,65 @@ def _sech2(u):
     return 1.0 / np.cosh(u) ** 2
 
 
-def _settled(system, periods: int, q0: float = 0.3, v0: float = 0.1):
-    eng = system.engine(system.initial_state(q0=q0, v0=v0))
+def _settled(system, periods: int, q0: float = 0.3, v0: float = 0.1, options=None):
+    eng = system.engine(system.initial_state(q0=q0, v0=v0), **(options or {}))
     eng.advance(np.array([periods * system.period]))
     return eng.state()
 
 
-def _map(system, coords, template, x):
-    eng = system.engine(coords.state(x, template))
+def _map(system, coords, template, x, options=None):
+    eng = system.engine(coords.state(x, template), **(options or {}))
     eng.advance(np.array([system.period]))
     return coords.vector(eng.state())
 
 
-def _fd_jacobian(system, coords, template, x, h):
+def _fd_jacobian(system, coords, template, x, h, options=None):
     cols = []
     for j in range(x.size):
         e = np.zeros(x.size)
         e[j] = h
         cols.append(
-            (_map(system, coords, template, x + e) - _map(system, coords, template, x - e))
+            (
+                _map(system, coords, template, x + e, options)
+                - _map(system, coords, template, x - e, options)
+            )
             / (2 * h)
         )
     return np.array(cols).T
 
 
 @pytest.mark.parametrize(
-    "operator",
-    [BOUC_WEN, 0.5 * BOUC_WEN + 0.3 * relaxing_duhem() + 0.2 * StaticMap(np.tanh, _sech2)],
-    ids=["bouc-wen", "two-duhem-sum"],
+    ("operator", "method", "kind"),
+    [
+        # the generic engine's rows are the branch-start z0: the contract's memory chart
+        (BOUC_WEN, "generic", "memory"),
+        # the compiled Duhem engine's row is the current z: the chart is the identity
+        (BOUC_WEN, "auto", "duhem"),
+        (
+            0.5 * BOUC_WEN + 0.3 * relaxing_duhem() + 0.2 * StaticMap(np.tanh, _sech2),
+            "auto",
+            "memory",
+        ),
+    ],
+    ids=["bouc-wen-generic", "bouc-wen-compiled", "two-duhem-sum"],
 )
-def test_multipliers_match_finite_difference_jacobian(operator):
+def test_multipliers_match_finite_difference_jacobian(operator, method, kind):
+    options = {"method": method}
     system = ForcedOscillator(operator, coupling=-0.5, damping_ratio=0.1, frequency=1.0)
-    orbit = find_periodic_orbit(system, _settled(system, 15), transient=0, max_period=2)
+    orbit = find_periodic_orbit(
+        system,
+        _settled(system, 15, options=options),
+        transient=0,
+        max_period=2,
+        engine_options=options,
+    )
     assert orbit.period == 1
-    coords = StateCoordinates(system, orbit.start)
-    assert coords.kind == "memory"
+    coords = StateCoordinates(system, orbit.start, engine_options=options)
+    assert coords.kind == kind
     x = coords.vector(orbit.start)
     # h = 1e-4: truncation h²/6·|P'''| ~ 1e-9, the integration's noise (rtol 1e-11, Duhem
     # 1e-12) / h ~ 1e-7; measured differences 4e-6 (the third derivative of the events)
-    jac = _fd_jacobian(system, coords, orbit.start, x, 1e-4)
+    jac = _fd_jacobian(system, coords, orbit.start, x, 1e-4, options)
     np.testing.assert_allclose(orbit.monodromy, jac, atol=5e-5)
     fd = np.sort_complex(np.linalg.eigvals(jac))
     np.testing.assert_allclose(np.sort_complex(orbit.multipliers), fd, atol=5e-5)
