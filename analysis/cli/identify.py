@@ -557,9 +557,10 @@ def _identify_measured(
         "smoothing_choice": ident.smoothing_choice,
         "window": request.window,
         "reversible_ridge": request.reversible_ridge,
-        "peak_bc_mT": bc,
-        "peak_bu_mT": bu,
-        "peak_rho": rho * rho_factor,
+        # no peak (a density exactly 0): null, a value that is missing, not a measured NaN
+        "peak_bc_mT": _present(bc),
+        "peak_bu_mT": _present(bu),
+        "peak_rho": _present(rho * rho_factor),
         "rho_unit": rho_name,
         "irreversible_mass": ident.irreversible_mass / amount,
         "irreversible_mass_definition": "sum of cell masses off the B_c = 0 ridge = "
@@ -579,17 +580,21 @@ def _identify_measured(
     if request.uncertainty:
         u = summarize_uncertainty(ident, n_boot=request.bootstrap, seed=request.bootstrap_seed)
         report.update(
-            peak_rho_se=u.peak_rho_se * rho_factor,
-            peak_bc_interval_mT=list(u.peak_bc_interval),
-            peak_bu_interval_mT=list(u.peak_bu_interval),
+            peak_rho_se=_present(u.peak_rho_se * rho_factor),
+            peak_bc_interval_mT=[_present(x) for x in u.peak_bc_interval],
+            peak_bu_interval_mT=[_present(x) for x in u.peak_bu_interval],
             peak_interval_method=f"parametric bootstrap, {request.bootstrap} replicates, 95 %",
             irreversible_mass_se=u.irreversible_mass_se / amount,
             significant_fraction=u.significant_fraction,
             noise_sigma=u.noise_sigma,
         )
         interval = (
-            f" (Bc in [{u.peak_bc_interval[0]:.4g}, {u.peak_bc_interval[1]:.4g}], Bu in "
-            f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
+            ""
+            if math.isnan(bc)
+            else (
+                f" (Bc in [{u.peak_bc_interval[0]:.4g}, {u.peak_bc_interval[1]:.4g}], Bu in "
+                f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
+            )
         )
     stem = "identify_" + path.stem.replace(".", "_")
     # measured data: the title names the file and the identification's parameters (there is
@@ -620,12 +625,24 @@ def _identify_measured(
     mass = f"{report['irreversible_mass']:.4g}"
     if request.uncertainty:
         mass += f" ± {report['irreversible_mass_se']:.2g}"
+    peak = (
+        "no FORC peak (the density is zero)"
+        if math.isnan(bc)
+        else f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}"
+    )
     lines = [
         f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
-        f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}; irreversible mass {mass}",
+        f"{peak}; irreversible mass {mass}",
         f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}",
     ]
     return report, lines
+
+
+def _present(x: float) -> float | None:
+    """``x``, or ``None`` (JSON ``null``) where it is missing: the peak's values and interval
+    when there is no peak (NaN from :meth:`density_peak`). Measured non-finite values elsewhere
+    keep the strict-JSON strings of :mod:`analysis._json`."""
+    return None if math.isnan(x) else x
 
 
 # -- batches (the loop and the summary: analysis/cli/_identify_batch.py) ------------------

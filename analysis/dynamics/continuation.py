@@ -599,8 +599,10 @@ def period_doubled_orbit(
         sys_l = factory(lam)
         coords = StateCoordinates(sys_l, bp.state, engine_options)
         for sign in (1.0, -1.0):
-            guess = coords.state(bp.point + sign * amplitude * e, bp.state)
             try:
+                # a staircase perturbed along e may not be one (its extrema must stay nested):
+                # that start is skipped
+                guess = coords.state(bp.point + sign * amplitude * e, bp.state)
                 orb = refine_periodic_orbit(
                     sys_l,
                     guess,
