@@ -532,6 +532,7 @@ def _identify_measured(
         option = "--grid-step" if str(exc).startswith("step") else "--input"
         raise CliError(f"argument {option}: {path}: {exc}") from exc
     bc, bu, rho = ident.density_peak()
+    edge = ident.peak_at_exclusion_edge()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
     # ρ in the field's unit: moment per T² (the readers give fields in mT: 1/mT² = 10⁶/T²)
     rho_factor, rho_name = rho_unit(data, request.normalize)
@@ -569,6 +570,8 @@ def _identify_measured(
         "irreversible_mass_bcbu_definition": "∬ρ dB_c dB_u over the FORC diagram = half of "
         "irreversible_mass (Jacobian 1/2; PmagPy's convention)",
         "peak_excludes_bc_below_mT": RIDGE_EXCLUSION_STEPS * step,
+        # the density rises across the exclusion's edge: the peak is not resolved above it
+        "peak_at_exclusion_edge": edge,
         "hysteresis": hysteresis_report(data.curves, amount),
         "reversible_mass": ident.reversible_mass / amount,
         "mass_unit": normalized_unit(data.moment_unit, request.normalize),
@@ -581,18 +584,23 @@ def _identify_measured(
         u = summarize_uncertainty(ident, n_boot=request.bootstrap, seed=request.bootstrap_seed)
         report.update(
             peak_rho_se=_present(u.peak_rho_se * rho_factor),
-            peak_bc_interval_mT=[_present(x) for x in u.peak_bc_interval],
+            # at the exclusion's edge the replicates' peaks pile up on it: the peak lies at
+            # or below the edge, the honest interval starts at B_c = 0
+            peak_bc_interval_mT=[
+                0.0 if edge and k == 0 else _present(x) for k, x in enumerate(u.peak_bc_interval)
+            ],
             peak_bu_interval_mT=[_present(x) for x in u.peak_bu_interval],
             peak_interval_method=f"parametric bootstrap, {request.bootstrap} replicates, 95 %",
             irreversible_mass_se=u.irreversible_mass_se / amount,
             significant_fraction=u.significant_fraction,
             noise_sigma=u.noise_sigma,
         )
+        lo_bc, hi_bc = report["peak_bc_interval_mT"]
         interval = (
             ""
             if math.isnan(bc)
             else (
-                f" (Bc in [{u.peak_bc_interval[0]:.4g}, {u.peak_bc_interval[1]:.4g}], Bu in "
+                f" (Bc in [{lo_bc:.4g}, {hi_bc:.4g}], Bu in "
                 f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
             )
         )
@@ -628,7 +636,8 @@ def _identify_measured(
     peak = (
         "no FORC peak (the density is zero)"
         if math.isnan(bc)
-        else f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}"
+        else f"FORC peak{' at the exclusion edge' if edge else ''} at Bc = {bc:.4g} mT, "
+        f"Bu = {bu:.4g} mT{interval}"
     )
     lines = [
         f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
