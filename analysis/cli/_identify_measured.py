@@ -18,6 +18,7 @@ from analysis.identification.curves import KIND_NAMES
 from analysis.identification.major_loop import hysteresis_parameters
 from analysis.identification.normalization import normalized_unit
 from analysis.identification.plots import colormap_name
+from analysis.identification.result import RIDGE_EXCLUSION_STEPS
 
 __all__ = [
     "smoothing_words",
@@ -74,7 +75,8 @@ def diagram_name(data: Any) -> str:
 
 def data_warnings(data: Any, ident: Any) -> list[str]:
     """What the result cannot say because of the data, one sentence each: an aborted run (the
-    region its masses and diagram cover) and a negative irreversible mass."""
+    region its masses and diagram cover), a peak at the ridge exclusion's edge (unresolved on
+    a coarse grid) and a negative irreversible mass."""
     out = []
     curves = data.curves
     if not data.complete and curves.convention == "pike":
@@ -89,6 +91,14 @@ def data_warnings(data: Any, ident: Any) -> list[str]:
             f"aborted measurement ({'; '.join(data.notes)}){stop}: the diagram and the masses "
             f"cover reversal fields >= {curves.reversal_field[last]:.4g} mT only, the "
             "irreversible mass misses the relays switching below"
+        )
+    if ident.density_alpha_beta is not None and ident.peak_at_exclusion_edge():
+        edge = RIDGE_EXCLUSION_STEPS * ident.grid_step
+        out.append(
+            f"the FORC density rises toward the B_c = 0 ridge up to the peak search's exclusion "
+            f"edge (B_c = {edge:.4g} mT, {RIDGE_EXCLUSION_STEPS} grid steps of "
+            f"{ident.grid_step:.4g} mT): no coercivity peak is resolved above it; the reported "
+            "peak is the edge's largest value and its B_c interval starts at 0"
         )
     if ident.irreversible_mass < 0:
         out.append(

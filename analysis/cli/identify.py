@@ -532,6 +532,7 @@ def _identify_measured(
         option = "--grid-step" if str(exc).startswith("step") else "--input"
         raise CliError(f"argument {option}: {path}: {exc}") from exc
     bc, bu, rho = ident.density_peak()
+    edge = ident.peak_at_exclusion_edge()
     step = ident.step if ident.step is not None else float(np.median(np.diff(ident.alpha)))
     # ρ in the field's unit: moment per T² (the readers give fields in mT: 1/mT² = 10⁶/T²)
     rho_factor, rho_name = rho_unit(data, request.normalize)
@@ -557,9 +558,10 @@ def _identify_measured(
         "smoothing_choice": ident.smoothing_choice,
         "window": request.window,
         "reversible_ridge": request.reversible_ridge,
-        "peak_bc_mT": bc,
-        "peak_bu_mT": bu,
-        "peak_rho": rho * rho_factor,
+        # no peak (a density exactly 0): null, a value that is missing, not a measured NaN
+        "peak_bc_mT": _present(bc),
+        "peak_bu_mT": _present(bu),
+        "peak_rho": _present(rho * rho_factor),
         "rho_unit": rho_name,
         "irreversible_mass": ident.irreversible_mass / amount,
         "irreversible_mass_definition": "sum of cell masses off the B_c = 0 ridge = "
@@ -568,6 +570,8 @@ def _identify_measured(
         "irreversible_mass_bcbu_definition": "∬ρ dB_c dB_u over the FORC diagram = half of "
         "irreversible_mass (Jacobian 1/2; PmagPy's convention)",
         "peak_excludes_bc_below_mT": RIDGE_EXCLUSION_STEPS * step,
+        # the density rises across the exclusion's edge: the peak is not resolved above it
+        "peak_at_exclusion_edge": edge,
         "hysteresis": hysteresis_report(data.curves, amount),
         "reversible_mass": ident.reversible_mass / amount,
         "mass_unit": normalized_unit(data.moment_unit, request.normalize),
@@ -579,17 +583,26 @@ def _identify_measured(
     if request.uncertainty:
         u = summarize_uncertainty(ident, n_boot=request.bootstrap, seed=request.bootstrap_seed)
         report.update(
-            peak_rho_se=u.peak_rho_se * rho_factor,
-            peak_bc_interval_mT=list(u.peak_bc_interval),
-            peak_bu_interval_mT=list(u.peak_bu_interval),
+            peak_rho_se=_present(u.peak_rho_se * rho_factor),
+            # at the exclusion's edge the replicates' peaks pile up on it: the peak lies at
+            # or below the edge, the honest interval starts at B_c = 0
+            peak_bc_interval_mT=[
+                0.0 if edge and k == 0 else _present(x) for k, x in enumerate(u.peak_bc_interval)
+            ],
+            peak_bu_interval_mT=[_present(x) for x in u.peak_bu_interval],
             peak_interval_method=f"parametric bootstrap, {request.bootstrap} replicates, 95 %",
             irreversible_mass_se=u.irreversible_mass_se / amount,
             significant_fraction=u.significant_fraction,
             noise_sigma=u.noise_sigma,
         )
+        lo_bc, hi_bc = report["peak_bc_interval_mT"]
         interval = (
-            f" (Bc in [{u.peak_bc_interval[0]:.4g}, {u.peak_bc_interval[1]:.4g}], Bu in "
-            f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
+            ""
+            if math.isnan(bc)
+            else (
+                f" (Bc in [{lo_bc:.4g}, {hi_bc:.4g}], Bu in "
+                f"[{u.peak_bu_interval[0]:.4g}, {u.peak_bu_interval[1]:.4g}])"
+            )
         )
     stem = "identify_" + path.stem.replace(".", "_")
     # measured data: the title names the file and the identification's parameters (there is
@@ -620,12 +633,25 @@ def _identify_measured(
     mass = f"{report['irreversible_mass']:.4g}"
     if request.uncertainty:
         mass += f" ± {report['irreversible_mass_se']:.2g}"
+    peak = (
+        "no FORC peak (the density is zero)"
+        if math.isnan(bc)
+        else f"FORC peak{' at the exclusion edge' if edge else ''} at Bc = {bc:.4g} mT, "
+        f"Bu = {bu:.4g} mT{interval}"
+    )
     lines = [
         f"{report['n_curves']} curves, {report['n_points']} points, grid step {step:.4g} mT; "
-        f"FORC peak at Bc = {bc:.4g} mT, Bu = {bu:.4g} mT{interval}; irreversible mass {mass}",
+        f"{peak}; irreversible mass {mass}",
         f"wrote {out / 'identify.json'} and {', '.join(str(p) for p in paths)}",
     ]
     return report, lines
+
+
+def _present(x: float) -> float | None:
+    """``x``, or ``None`` (JSON ``null``) where it is missing: the peak's values and interval
+    when there is no peak (NaN from :meth:`density_peak`). Measured non-finite values elsewhere
+    keep the strict-JSON strings of :mod:`analysis._json`."""
+    return None if math.isnan(x) else x
 
 
 # -- batches (the loop and the summary: analysis/cli/_identify_batch.py) ------------------

@@ -374,73 +374,123 @@ def smooth_events(
     direction: float,
     tol: float,
 ) -> list[ContinuationEvent]:
-    """Sign changes of the test functions between ``a`` and ``b``, located by secant/bisection
-    on the step from ``a`` (λ for natural continuation, arclength otherwise). With
+    """Sign changes of the test functions between ``a`` and ``b``, located on the branch arc
+    between them (:func:`_locate`; ``bracket`` the λ of its last two ends). With
     pseudo-arclength the fold's test function is the parameter component of the tangent (it
     changes sign where the branch turns back), which also catches a fold whose multiplier
     touches +1 without crossing it."""
     arclength = tangent_a is not None
     d = prob.coords.dimension
 
-    def tests(bp: BranchPoint, tangent: np.ndarray | None) -> dict[str, float]:
+    def tests(bp: BranchPoint, tangent: np.ndarray | None) -> tuple[dict[str, float], Any]:
         t = _tests(bp.active_multipliers)
         if arclength:
             if tangent is None:
                 tangent = prob.tangent(bp, tangent_a, direction)
             t["fold"] = float(tangent[d])
-        return t
+        return t, tangent
 
-    ta, tb = tests(a, tangent_a), tests(b, tangent_b)
+    (ta, _), (tb, _) = tests(a, tangent_a), tests(b, tangent_b)
     out = []
-    z_a = np.append(a.point, a.parameter)
-    z_b = np.append(b.point, b.parameter)
     for kind in ("fold", "period-doubling", "torus"):
         if not ta[kind] * tb[kind] < 0.0:
             continue
-        if arclength:
-            c = tangent_a
-            s_hi = float(tangent_a @ (z_b - z_a))
-        else:
-            c = np.append(np.zeros(d), 1.0)
-            s_hi = b.parameter - a.parameter
-        s_lo, g_lo, lam_lo = 0.0, ta[kind], a.parameter
-        g_hi, lam_hi = tb[kind], b.parameter
-        at = b
-        for _ in range(100):
-            if abs(lam_hi - lam_lo) <= tol or abs(s_hi - s_lo) <= 1e-3 * tol:
-                break
-            s = s_lo - g_lo * (s_hi - s_lo) / (g_hi - g_lo)
-            width = abs(s_hi - s_lo)
-            if not min(abs(s - s_lo), abs(s - s_hi)) > 1e-3 * width:
-                s = 0.5 * (s_lo + s_hi)  # secant outside or at an end: bisect
-            if arclength:
-                z_pred = z_a + s * c
-            else:
-                z_pred = np.append(a.point + (b.point - a.point) * (s / s_hi), a.parameter + s)
-            got = prob.correct(z_pred, c, a.state, arclength)
-            if got is None:
-                break
-            try:
-                at_s = prob.point(got[0][:d], float(got[0][d]), got[1])
-                g = tests(at_s, None)[kind]
-            except StaircaseChangedError:  # no tangent there (both sides change): stop here
-                break
-            at = at_s
-            if g * g_lo > 0.0:
-                s_lo, g_lo, lam_lo = s, g, at.parameter
-            else:
-                s_hi, g_hi, lam_hi = s, g, at.parameter
+        ends = (a, ta[kind], tangent_a), (b, tb[kind], tangent_b)
+        at, lo, hi = _locate(prob, kind, *ends, tests, tol)
         if kind == "torus" and not _is_torus(at.active_multipliers):
             continue
-        bracket = (min(lam_lo, lam_hi), max(lam_lo, lam_hi))
         out.append(
             ContinuationEvent(
                 kind=kind,
                 parameter=at.parameter,
-                bracket=bracket,
+                bracket=(min(lo.parameter, hi.parameter), max(lo.parameter, hi.parameter)),
                 period=a.period,
                 multipliers=at.multipliers,
                 point=at,
             )
         )
     return out
+
+
+#: most corrector solves when locating one smooth event (the Illinois iteration converges
+#: superlinearly: about ten suffice from a continuation step)
+LOCATE_ITERATIONS = 60
+
+
+def _locate(prob, kind, end_lo, end_hi, tests, tol: float):
+    """The zero of the test function ``kind`` on the branch arc between two points where it
+    has opposite signs (each end ``(point, value, tangent)``, ``lo`` the first along the arc):
+    ``(at, lo, hi)``, the last point computed and the bracket's final ends.
+
+    Each trial point is ``p(θ)`` on the cubic Hermite curve through the bracket's ends with
+    their tangents (pseudo-arclength; the chord for natural continuation, whose points have no
+    tangent), corrected on the hyperplane through it normal to ``p′(θ)`` (λ fixed for natural
+    continuation); ``θ`` by the Illinois variant of regula falsi (the value of an end kept
+    twice is halved: no creeping of one end, which cost a hundred solves per fold). The curve
+    follows the arc through a fold, where a hyperplane fixed normal to the first point's
+    tangent cuts both sheets: a corrected point farther than a quarter of the chord from its
+    prediction is on another sheet (or branch) and refused; the bracket is bisected instead,
+    and the location stops if that is refused too. It ends when the bracket is within ``tol``
+    in λ and (a fold, where λ is extremal: its error is the curvature times the square of the
+    chord) its chord within ``sqrt(tol)·max(1, |x|_∞)``, or when a corrector fails."""
+    d = prob.coords.dimension
+    (lo, g_lo, t_lo), (hi, g_hi, t_hi) = end_lo, end_hi
+    arclength = t_lo is not None
+    at = hi
+    kept = 0  # -1: lo replaced by the last step (hi kept), +1: hi replaced
+    bisect = False
+    for _ in range(LOCATE_ITERATIONS):
+        z_lo = np.append(lo.point, lo.parameter)
+        z_hi = np.append(hi.point, hi.parameter)
+        chord = z_hi - z_lo
+        length = float(np.linalg.norm(chord))
+        scale = max(1.0, float(np.max(np.abs(z_hi[:d]))))
+        if abs(hi.parameter - lo.parameter) <= tol and (
+            kind != "fold" or float(np.max(np.abs(chord))) <= np.sqrt(tol) * scale
+        ):
+            break
+        theta = 0.5 if bisect else g_lo / (g_lo - g_hi)
+        if not 1e-3 < theta < 1.0 - 1e-3:
+            theta = 0.5
+        if arclength:
+            z_pred, c = _hermite(z_lo, z_hi, length * t_lo, length * t_hi, theta)
+        else:
+            z_pred, c = z_lo + theta * chord, np.append(np.zeros(d), 1.0)
+        got = prob.correct(z_pred, c, lo.state, arclength)
+        if got is None:
+            break
+        z = got[0]
+        if float(np.linalg.norm(z - z_pred)) > 0.25 * length:
+            if bisect:
+                break  # not even the bisection stays on this arc: stop here
+            bisect = True
+            continue
+        bisect = False
+        try:
+            at_s = prob.point(z[:d], float(z[d]), got[1])
+            values, tangent = tests(at_s, None)
+        except StaircaseChangedError:  # no tangent there (both sides change): stop here
+            break
+        at, g = at_s, values[kind]
+        if g * g_lo > 0.0:
+            lo, g_lo, t_lo = at, g, tangent
+            if kept == -1:
+                g_hi *= 0.5
+            kept = -1
+        else:
+            hi, g_hi, t_hi = at, g, tangent
+            if kept == 1:
+                g_lo *= 0.5
+            kept = 1
+    return at, lo, hi
+
+
+def _hermite(z0, z1, m0, m1, theta: float) -> tuple[np.ndarray, np.ndarray]:
+    """The cubic Hermite curve with ends ``z0, z1`` and end derivatives ``m0, m1`` at
+    ``theta`` in [0, 1]: the point and its unit tangent."""
+    t, t2, t3 = theta, theta**2, theta**3
+    p = (2 * t3 - 3 * t2 + 1) * z0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * z1
+    p = p + (t3 - t2) * m1
+    dp = (6 * t2 - 6 * t) * z0 + (3 * t2 - 4 * t + 1) * m0 + (-6 * t2 + 6 * t) * z1
+    dp = dp + (3 * t2 - 2 * t) * m1
+    return p, dp / np.linalg.norm(dp)

@@ -46,9 +46,14 @@ continues the last orbit's ``(q, v)`` within
 orbit heading toward ``stop`` — by re-detecting the orbit (and period) the motion settles on
 with :func:`~analysis.dynamics.periodic_orbits.find_periodic_orbit`. Past a fold or from an
 unstable orbit a transient would find another attractor, a jump to another branch: the
-continuation stops instead, ``stop_reason`` saying why. A branch that comes round to an event
-already found (a grazing, or a fold of a closed loop: the same kind, period, dimension and
-parameter to ``10·locate_tolerance``) stops there, ``stop_reason`` saying so.
+continuation stops instead, ``stop_reason`` saying why.
+
+A closed branch (an isola, or a loop between folds) stops on its first return
+(:mod:`~analysis.dynamics.branch_loops`): where it passes its start, or a piece's first point
+after a grazing, again in the same direction at the same orbit (Newton at that parameter from
+the branch), or where it comes round to an event already found (the same kind, period,
+dimension and orbit, at the parameter to ``10·locate_tolerance``), which is not reported a
+second time; ``stop_reason`` says which.
 
 Frozen memory (a wagon strictly inside its play along the whole orbit; see
 :mod:`analysis.dynamics.periodic_orbits`) is held at its value along the branch: the corrector
@@ -87,7 +92,7 @@ from analysis.dynamics.branch import (
     same_sequence,
     smooth_events,
 )
-from analysis.dynamics.branch_loops import loop_closed, within
+from analysis.dynamics.branch_loops import Mark, loop_closed, returned_to, within
 from analysis.dynamics.floquet import floquet_multipliers
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import (
@@ -316,6 +321,9 @@ def continue_orbit(
     except StaircaseChangedError:
         tangent, reason = None, _no_tangent(parameter, first)
     d = coords.dimension
+    # the points a closed branch comes back to (pseudo-arclength: natural continuation moves
+    # monotonically in λ and cannot come back)
+    marks = [Mark(first, math.copysign(1.0, tangent[d]))] if tangent is not None else []
     try:  # a failure part-way returns the branch computed so far, with the reason
         while tangent is not None or not arclength:
             a = points[-1]
@@ -395,7 +403,9 @@ def continue_orbit(
                     d = prob.coords.dimension  # a re-detected staircase may have another length
                 closed = loop_closed(prob, [event], events[:-1], locate_tolerance, symmetric)
                 if closed:
-                    reason = closed.format("a grazing")
+                    if closed[1]:  # the grazing found again: reported once
+                        events.pop()
+                    reason = closed[0].format(parameter)
                     break
                 points.append(resumed)
                 # the new piece continues the old one's orientation (after a fold: backwards); a
@@ -406,6 +416,7 @@ def continue_orbit(
                     except StaircaseChangedError:
                         reason = _no_tangent(parameter, resumed)
                         break
+                    marks.append(Mark(resumed, math.copysign(1.0, tangent[d])))
                 ds = step
                 continue
             try:
@@ -415,10 +426,21 @@ def continue_orbit(
                 break
             found = smooth_events(prob, a, new, tangent, new_tangent, direction, locate_tolerance)
             closed = loop_closed(prob, found, events, locate_tolerance, symmetric)
-            events.extend(replace(e, index=len(points)) for e in found)
+            repeats = closed[1] if closed else []
+            events.extend(
+                replace(e, index=len(points)) for e in found if not any(e is r for r in repeats)
+            )
+            back = None if closed or not arclength else returned_to(prob, marks, a, new)
+            if back is not None:  # the branch passed a point of its own again
+                points.append(back)
+                reason = (
+                    f"the branch came back to its orbit at {parameter} = {back.parameter:.10g} "
+                    "(a closed loop)"
+                )
+                break
             points.append(new)
             if closed:  # the branch came round to a fold (or other event) already found
-                reason = closed.format("an event")
+                reason = closed[0].format(parameter)
                 break
             tangent = new_tangent
             ds = min(step, ds * 1.5)
@@ -577,8 +599,10 @@ def period_doubled_orbit(
         sys_l = factory(lam)
         coords = StateCoordinates(sys_l, bp.state, engine_options)
         for sign in (1.0, -1.0):
-            guess = coords.state(bp.point + sign * amplitude * e, bp.state)
             try:
+                # a staircase perturbed along e may not be one (its extrema must stay nested):
+                # that start is skipped
+                guess = coords.state(bp.point + sign * amplitude * e, bp.state)
                 orb = refine_periodic_orbit(
                     sys_l,
                     guess,

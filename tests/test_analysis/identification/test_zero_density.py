@@ -5,6 +5,7 @@ with a bootstrap interval."""
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import warnings
@@ -75,9 +76,28 @@ def test_cli_reports_no_peak(tmp_path, capsys, extra):
     assert main(argv) == 0
     captured = capsys.readouterr()
     rep = json.loads(captured.out)
-    # not a number (null once the command maps NaN to null; "nan" is the strict-JSON NaN)
-    assert rep["peak_bc_mT"] in (None, "nan") and rep["peak_bu_mT"] in (None, "nan")
-    if "--uncertainty" in extra:
-        assert rep["peak_bc_interval_mT"] in ([None, None], ["nan", "nan"])
+    # a missing value is null (not the strict-JSON NaN string "nan"), on stdout and on disk
+    written = json.loads((tmp_path / "o" / "identify.json").read_text())
+    for r in (rep, written):
+        assert r["peak_bc_mT"] is None and r["peak_bu_mT"] is None and r["peak_rho"] is None
+        if "--uncertainty" in extra:
+            assert r["peak_bc_interval_mT"] == [None, None]
+            assert r["peak_bu_interval_mT"] == [None, None]
+            assert r["peak_rho_se"] is None
+    assert r["irreversible_mass"] == 0.0  # measured values stay numbers
     notes = [line for line in captured.err.splitlines() if "no peak" in line]
     assert len(notes) == 1
+
+
+def test_cli_batch_summary_leaves_a_missing_peak_blank(tmp_path, capsys):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    path = _constant_file(folder)
+    assert main(["identify", "--input", str(path), "--out", str(tmp_path / "one")]) == 0
+    assert "; no FORC peak (the density is zero);" in capsys.readouterr().out
+    out = tmp_path / "out"
+    assert main(["identify", "--input", str(folder), "--uncertainty", "--out", str(out)]) == 0
+    (row,) = list(csv.DictReader(open(out / "summary.csv", encoding="utf-8")))
+    assert row["status"] == "ok"
+    for key in ("peak_bc_mT", "peak_bu_mT", "peak_bc_lo_mT", "peak_bu_hi_mT", "peak_rho"):
+        assert row[key] == "", (key, row[key])
