@@ -119,9 +119,16 @@ def test_shipped_aborted_file_has_a_positive_irreversible_mass_and_a_warning(tmp
 
 def test_warnings_name_their_cause():
     complete = read_forc_file(COMPLETE)
-    assert data_warnings(complete, SimpleNamespace(irreversible_mass=4e-6)) == []
-    (negative,) = data_warnings(complete, SimpleNamespace(irreversible_mass=-2e-9))
+    assert (
+        data_warnings(complete, SimpleNamespace(irreversible_mass=4e-6, density_alpha_beta=None))
+        == []
+    )
+    (negative,) = data_warnings(
+        complete, SimpleNamespace(irreversible_mass=-2e-9, density_alpha_beta=None)
+    )
     assert negative.startswith("the irreversible mass is negative (-2e-09): the measured curves")
     aborted = read_forc_file(ABORTED)
-    (warning,) = data_warnings(aborted, SimpleNamespace(irreversible_mass=3e-6))
+    (warning,) = data_warnings(
+        aborted, SimpleNamespace(irreversible_mass=3e-6, density_alpha_beta=None)
+    )
     assert "cover reversal fields >= -38.06 mT only" in warning
