@@ -78,6 +78,7 @@ from hysteresis._validation import (
     direction_sign,
 )
 from hysteresis.base import ContinuousHysteron, Hysteron
+from hysteresis.composite_memory import cascade_memory_restart, cascade_with_memory
 from hysteresis.flow import BranchFlow
 from hysteresis.seam import checked_branch_flow
 from hysteresis.static_map import StaticMap
@@ -401,12 +402,35 @@ class Cascade(ContinuousHysteron[CascadeState]):
 
     def branch_flow(self, state: CascadeState, direction: int) -> BranchFlow:
         """The composite branch in ``direction`` (module docstring)."""
+        inner, outer, dx = self._part_flows(state, direction)
+        return self._compose(state, inner, outer, dx)
+
+    # -- the memory as coordinates (periodic orbits; hysteresis.composite_memory) ---------------
+    def _part_flows(self, state: CascadeState, direction: int) -> tuple:
         d = direction_sign(direction)
         check_state_type(state, CascadeState, self)
         inner = _part_flow(self._inner, state.inner, d)
         dx = d * self._sense(inner)
-        outer = _part_flow(self._outer, state.outer, dx)
-        return self._compose(state, inner, outer, dx)
+        return inner, _part_flow(self._outer, state.outer, dx), dx
+
+    def with_memory(
+        self, state: CascadeState, values: Any, input: float, direction: int
+    ) -> CascadeState:
+        """The inner's memory (labels ``"in:"``) and the outer's frozen memory (``"out:"``)
+        set from ``values`` at ``input``; the outer's dragged variables stay dragged at the new
+        inner output (:func:`hysteresis.composite_memory.cascade_with_memory`)."""
+        flows = self._part_flows(state, direction)
+        values = np.asarray(values, dtype=np.float64)
+        parts = cascade_with_memory(
+            self._inner, self._outer, state, flows, values, input, self._x_at
+        )
+        return CascadeState(*parts)
+
+    def memory_restart(self, state: CascadeState, direction: int, u: float) -> tuple:
+        """The parts' restarts, the outer's at the inner output ``x(u)`` with ``δx`` by the
+        chain rule (:func:`hysteresis.composite_memory.cascade_memory_restart`)."""
+        flows = self._part_flows(state, direction)
+        return cascade_memory_restart(self._inner, self._outer, state, flows, u)
 
     def _compose(self, state: CascadeState, I: BranchFlow, O: BranchFlow, dx: int) -> BranchFlow:
         d, u0 = I.direction, I.input

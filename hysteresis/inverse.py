@@ -76,6 +76,7 @@ from hysteresis._validation import (
     finite_scalar,
 )
 from hysteresis.base import ContinuousHysteron, Hysteron
+from hysteresis.composite_memory import inverse_memory_restart, inverse_with_memory
 from hysteresis.flow import BranchFlow
 from hysteresis.seam import checked_branch_flow
 
@@ -429,12 +430,7 @@ class InverseOperator(ContinuousHysteron[InverseState]):
         keep = np.flatnonzero(~flow.slaved)
         moved = np.flatnonzero(flow.slaved)
         labels = tuple(flow.labels[i] for i in keep)
-        bp = float(flow.breakpoint)
-        y_bp = d * math.inf
-        if math.isfinite(bp):
-            y_bp = float(flow.output(bp))
-            if (y_bp - y0) * d < 0.0:  # the forward output at u0 differs from y0 by rounding
-                y_bp = y0
+        y_bp = _breakpoint_output(flow, y0)
         solve = self._branch_solver(flow, y0, y_bp)
 
         def gradient(u: float) -> tuple[float, np.ndarray]:
@@ -479,6 +475,39 @@ class InverseOperator(ContinuousHysteron[InverseState]):
             **extra,
         )
 
+    # -- the memory as coordinates (periodic orbits; hysteresis.composite_memory) ---------------
+    def with_memory(
+        self, state: InverseState, values: Any, input: float, direction: int
+    ) -> InverseState:
+        """The state at ``input`` (a forward output ``y``) whose branch reports the forward
+        frozen memory ``values``: the forward input solves ``G(u) = y`` with that memory held
+        (:func:`hysteresis.composite_memory.inverse_with_memory`); refused where the forward
+        branch memory does not determine the forward input (a Duhem operator's ``z0``)."""
+        d = direction_sign(direction)
+        self._check_state(state)
+        y = finite_scalar(input, "input", MAX_MAGNITUDE)
+        self._check_target(y, "input")
+        flow = checked_branch_flow(self._operator, state.forward, d)
+        forward = inverse_with_memory(self._operator, state.forward, flow, values, y, self._solve)
+        return InverseState(forward, y)
+
+    def memory_restart(self, state: InverseState, direction: int, u: float) -> tuple:
+        """The forward's restart at ``u(y)`` (``u`` here is the inverse's input ``y``), its
+        slaved columns following ``δu = ∂u/∂y δy + ∂u/∂m δm``
+        (:func:`hysteresis.composite_memory.inverse_memory_restart`)."""
+        d = direction_sign(direction)
+        self._check_state(state)
+        flow = checked_branch_flow(self._operator, state.forward, d)
+        keep = np.flatnonzero(~flow.slaved)
+        moved = np.flatnonzero(flow.slaved)
+        y0 = float(state.input)
+        x = self._branch_solver(flow, y0, _breakpoint_output(flow, y0))(float(u))
+
+        def gradient(at: float) -> tuple[float, np.ndarray]:
+            return _inverse_gradient(flow, at, keep, moved)
+
+        return inverse_memory_restart(self._operator, state.forward, flow, x, gradient)
+
     def _branch_solver(self, flow: BranchFlow, y0: float, y_bp: float):
         """``y -> u(y)`` on ``flow`` from ``(flow.input, y0)`` (one value remembered: the
         engine asks for the output and the partials at the same ``y``)."""
@@ -500,6 +529,16 @@ class InverseOperator(ContinuousHysteron[InverseState]):
             return u
 
         return solve
+
+
+def _breakpoint_output(flow: BranchFlow, y0: float) -> float:
+    """The forward output at the breakpoint of ``flow`` (``±inf`` without one), not behind
+    ``y0`` (the forward output at the branch start differs from ``y0`` by rounding)."""
+    d, bp = flow.direction, float(flow.breakpoint)
+    if not math.isfinite(bp):
+        return d * math.inf
+    y_bp = float(flow.output(bp))
+    return y0 if (y_bp - y0) * d < 0.0 else y_bp
 
 
 def _inverse_gradient(

@@ -40,7 +40,8 @@ engine's memory labels (never by class):
   ``with_memory``. The engine's rows are the memory of the branch it is on, which for a
   Duhem operator is ``z0`` at the branch start, not the state's ``z``; the Jacobian is mapped
   by ``memory_restart`` at both ends (:meth:`StateCoordinates.chart_jacobian`). Cascades and
-  inverses do not implement ``with_memory`` yet and are refused.
+  numeric inverses take this chart too (:mod:`hysteresis.composite_memory`); the inverse of
+  an operator whose branch memory does not determine its input (a Duhem operator) is refused.
 
 A wagon position that a Newton step places beyond its wall (``|q − w| > p/2``) is put back on
 the wall (the state space is the closed strip). Operators whose memory has none of these forms

@@ -15,7 +15,7 @@ from analysis.dynamics.continuation import continue_orbit
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import find_periodic_orbit
-from hysteresis import BoucWen, Cascade, PlayOperator, StaticMap
+from hysteresis import BoucWen, StaticMap
 from oscillators import ForcedOscillator
 from tests.duhem_support import relaxing_duhem
 
@@ -120,14 +120,6 @@ def test_bouc_wen_continuation_in_coupling_matches_settled_orbits():
         got = np.array([end.q, end.v, end.operator_state.z])
         np.testing.assert_allclose(got, point.point, atol=1e-8)
         assert np.max(np.abs(point.multipliers)) < 1.0
-
-
-def test_cascade_memory_is_refused_in_one_sentence():
-    system = ForcedOscillator(
-        Cascade(PlayOperator(1.0), PlayOperator(0.5)), coupling=0.3, damping_ratio=0.1
-    )
-    with pytest.raises(ValueError, match="cannot be set from a vector of fixed size"):
-        StateCoordinates(system, system.initial_state(q0=0.3, v0=0.1))
 
 
 def test_bouc_wen_with_memory_round_trip_and_clip():
