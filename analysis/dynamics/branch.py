@@ -22,18 +22,50 @@ from analysis.dynamics.newton import Border, Linearization, NewtonError, newton
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import OrbitNotFoundError, event_sequence, orbit_shooter
 from analysis.dynamics.staircase_orbits import StaircaseChangedError
-from oscillators import DivergenceError, GrazingError, OscillatorState
+from oscillators import DivergenceError, ForcedOscillator, GrazingError, OscillatorState
 
 __all__ = [
     "BranchPoint",
     "BranchProblem",
     "ContinuationEvent",
     "FAILURES",
+    "PARAMETERS",
     "locate_grazing",
     "natural_point",
     "same_sequence",
     "smooth_events",
+    "system_factory",
 ]
+
+#: continuation parameters and their aliases -> the ForcedOscillator argument
+PARAMETERS = {
+    "coupling": "coupling",
+    "C": "coupling",
+    "damping_ratio": "damping_ratio",
+    "zeta": "damping_ratio",
+    "frequency": "frequency",
+    "omega": "frequency",
+}
+
+
+def system_factory(system: ForcedOscillator, parameter: str = "coupling") -> Callable:
+    """``value -> ForcedOscillator`` with ``parameter`` (``coupling``/``C``,
+    ``damping_ratio``/``zeta``, ``frequency``/``omega``) set and everything else from
+    ``system``."""
+    if parameter not in PARAMETERS:
+        raise ValueError(f"parameter must be one of {sorted(PARAMETERS)}, got {parameter!r}")
+    name = PARAMETERS[parameter]
+    base = {
+        "coupling": system.coupling,
+        "damping_ratio": system.damping_ratio,
+        "frequency": system.frequency,
+    }
+
+    def make(value: float) -> ForcedOscillator:
+        return ForcedOscillator(system.operator, **{**base, name: float(value)})
+
+    return make
+
 
 #: failures the engines raise for a state where no orbit with this sequence exists
 FAILURES = (OrbitNotFoundError, GrazingError, DivergenceError, ValueError, np.linalg.LinAlgError)

@@ -70,8 +70,9 @@ orbit re-detected past the event (its transient's remnants settled anew). A stai
 sequence is its reversals (:meth:`~analysis.dynamics.branch.BranchProblem.sequence`): the
 orbit's own wipe-out at its reversal is the border itself, recorded or not at round-off.
 
-Branch switching at a period doubling: :func:`period_doubled_orbit` starts the period-2k orbit
-from the located point plus a perturbation along the eigenvector of ``μ = −1``.
+Branch switching at a period doubling: :func:`period_doubled_orbit` (from
+:mod:`~analysis.dynamics.branch_switching`) starts the period-2k orbit from the located point
+plus a perturbation along the eigenvector of ``μ = −1``.
 """
 
 from __future__ import annotations
@@ -85,18 +86,19 @@ import numpy as np
 
 from analysis.dynamics.branch import (
     FAILURES,
+    PARAMETERS,
     BranchPoint,
     BranchProblem,
     ContinuationEvent,
     locate_grazing,
     same_sequence,
     smooth_events,
+    system_factory,
 )
 from analysis.dynamics.branch_loops import Mark, loop_closed, returned_to, within
-from analysis.dynamics.floquet import floquet_multipliers
+from analysis.dynamics.branch_switching import period_doubled_orbit
 from analysis.dynamics.orbit_coordinates import StateCoordinates
 from analysis.dynamics.periodic_orbits import (
-    OrbitNotFoundError,
     PeriodicOrbit,
     find_periodic_orbit,
     refine_periodic_orbit,
@@ -122,15 +124,6 @@ __all__ = [
     "system_factory",
 ]
 
-#: continuation parameters and their aliases -> the ForcedOscillator argument
-PARAMETERS = {
-    "coupling": "coupling",
-    "C": "coupling",
-    "damping_ratio": "damping_ratio",
-    "zeta": "damping_ratio",
-    "frequency": "frequency",
-    "omega": "frequency",
-}
 #: continuation methods (``auto``: natural for relay-type operators, pseudo-arclength otherwise)
 METHODS = ("auto", "natural", "pseudo-arclength")
 #: event kinds
@@ -148,6 +141,13 @@ NUMERICAL_FAILURES = (
 )
 #: most accepted branch points of one call
 MAX_POINTS = 100_000
+#: largest distance of a pseudo-arclength corrector's result from its prediction, in units of
+#: the predictor step ``h``. On a branch of curvature ``κ`` the corrector moves ``≈ κh²/2`` (the
+#: chord's angle to the tangent ``≈ κh/2``): this allows steps up to the radius of curvature.
+#: A corrector that lands farther (on the Gaussian Preisach loop's outer sheet, 1.5–3 step
+#: lengths away, past the fold it should have turned at) found another branch: the step is
+#: halved. Steps that stay on the branch measured 0.26 at most
+REACH = 0.5
 
 
 @dataclass(frozen=True)
@@ -168,25 +168,6 @@ class Continuation:
             "events": [e.to_dict() for e in self.events],
             "stop_reason": self.stop_reason,
         }
-
-
-def system_factory(system: ForcedOscillator, parameter: str = "coupling") -> Callable:
-    """``value -> ForcedOscillator`` with ``parameter`` (``coupling``/``C``,
-    ``damping_ratio``/``zeta``, ``frequency``/``omega``) set and everything else from
-    ``system``."""
-    if parameter not in PARAMETERS:
-        raise ValueError(f"parameter must be one of {sorted(PARAMETERS)}, got {parameter!r}")
-    name = PARAMETERS[parameter]
-    base = {
-        "coupling": system.coupling,
-        "damping_ratio": system.damping_ratio,
-        "frequency": system.frequency,
-    }
-
-    def make(value: float) -> ForcedOscillator:
-        return ForcedOscillator(system.operator, **{**base, name: float(value)})
-
-    return make
 
 
 #: largest relative residual ``|P^k(x) − x|`` of the orbit handed to :func:`continue_orbit`
@@ -351,11 +332,13 @@ def continue_orbit(
                     got = prob.correct(z_pred, np.append(np.zeros(d), 1.0), a.state, False)
                 else:
                     got = prob.correct(z_pred, c, a.state, arclength)
-                # a corrected point farther than 10 steps in the parameter, or beyond stop, jumped
+                # a corrected point farther than 10 steps in the parameter, beyond stop, or (arc
+                # length) farther from its prediction than REACH times the predictor step jumped
                 # to another branch: a failed step
                 if got is not None and (
                     abs(got[0][d] - a.parameter) <= 10.0 * ds + locate_tolerance
                     and direction * (got[0][d] - stop) <= locate_tolerance
+                    and (not arclength or _near(got[0], z_pred, z_a))
                 ):
                     z, image = got
                     new = prob.point(z[:d], float(z[d]), image)
@@ -457,6 +440,12 @@ def continue_orbit(
         events=tuple(events),
         stop_reason=reason,
     )
+
+
+def _near(z: np.ndarray, z_pred: np.ndarray, z_a: np.ndarray) -> bool:
+    """The corrected point ``z`` is within :data:`REACH` times the predictor step
+    ``|z_pred − z_a|`` of its prediction ``z_pred`` (Euclidean norm in ``(x, λ)``)."""
+    return float(np.linalg.norm(z - z_pred)) <= REACH * float(np.linalg.norm(z_pred - z_a))
 
 
 def _no_tangent(parameter: str, bp: BranchPoint) -> str:
@@ -562,63 +551,3 @@ def _resume(prob, system, orbit, lam):
     coords = _orbit_coordinates(system, orbit, prob.eo)
     new = BranchProblem(prob.factory, coords, orbit.period, prob.tol, prob.iters, prob.eo)
     return new, new.point(coords.vector(orbit.start), lam, orbit.start)
-
-
-def period_doubled_orbit(
-    system: ForcedOscillator | Callable[[float], Any],
-    event: ContinuationEvent,
-    *,
-    parameter: str = "coupling",
-    offset: float | None = None,
-    amplitude: float = 1e-3,
-    tolerance: float = 1e-10,
-    max_iterations: int = 30,
-    engine_options: dict | None = None,
-) -> tuple[float, PeriodicOrbit]:
-    """Branch switching at a period doubling: the period-2k orbit near ``event``.
-
-    Starts Newton (period 2k) at ``event.parameter ± offset`` (default ``1e3·|bracket|`` and at
-    least ``1e-6·max(1, |λ|)``) from the orbit point plus ``± amplitude`` times the eigenvector of
-    the multiplier closest to −1, and returns ``(parameter, orbit)`` for the first start that
-    converges to an orbit of minimal period 2k (the two halves distinct beyond ``1e3·tolerance``).
-    """
-    if event.kind != "period-doubling" or event.point is None:
-        raise ValueError(f"event must be a located period-doubling event, got {event.kind!r}")
-    factory = system_factory(system, parameter) if isinstance(system, ForcedOscillator) else system
-    bp = event.point
-    lam0 = bp.parameter
-    if offset is None:
-        offset = max(1e3 * abs(event.bracket[1] - event.bracket[0]), 1e-6 * max(1.0, abs(lam0)))
-    offset = positive_scalar(offset, "offset")
-    amplitude = positive_scalar(amplitude, "amplitude")
-    mu, vec, _ = floquet_multipliers(bp.monodromy)
-    e = np.real(vec[:, int(np.argmin(np.abs(mu + 1.0)))])
-    e = e / np.max(np.abs(e))
-    k2 = 2 * bp.period
-    for lam in (lam0 + offset, lam0 - offset):
-        sys_l = factory(lam)
-        coords = StateCoordinates(sys_l, bp.state, engine_options)
-        for sign in (1.0, -1.0):
-            try:
-                # a staircase perturbed along e may not be one (its extrema must stay nested):
-                # that start is skipped
-                guess = coords.state(bp.point + sign * amplitude * e, bp.state)
-                orb = refine_periodic_orbit(
-                    sys_l,
-                    guess,
-                    k2,
-                    tolerance=tolerance,
-                    max_iterations=max_iterations,
-                    engine_options=engine_options,
-                )
-            except FAILURES:
-                continue
-            half = orb.points[: bp.period] - orb.points[bp.period :]
-            if float(np.max(np.abs(half))) > 1e3 * tolerance * max(
-                1.0, float(np.max(np.abs(orb.points)))
-            ):
-                return lam, orb
-    raise OrbitNotFoundError(
-        f"no period-{k2} orbit found next to the period doubling at {lam0:.10g} (offset "
-        f"{offset:g}, amplitude {amplitude:g})"
-    )

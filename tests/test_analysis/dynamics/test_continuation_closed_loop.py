@@ -90,3 +90,38 @@ def test_from_density_preisach_loop_closes_once_both_ways(stop):
     _check_closed_once(branch, model)
     first_fold = next(e for e in branch.events if e.kind == "fold")
     assert (first_fold.parameter > 3.0) == (stop > 3.0)
+
+
+def _no_jumps(branch, step):
+    # a step moves about ``step`` in C (the predictor's λ-move is ds, the corrector's a fraction
+    # of it); the jump to the outer branch went on to C = 3.777, every point outside the loop
+    for a, b in zip(branch.points, branch.points[1:], strict=False):
+        assert abs(b.parameter - a.parameter) <= 2.0 * step, (a.parameter, b.parameter)
+    assert max(p.parameter for p in branch.points) < 3.19
+
+
+def test_long_step_does_not_jump_over_the_upper_fold():
+    # step 0.06: the corrector from the predictor just below the fold (C = 3.155) used to land
+    # on the outer branch at C = 3.2195, 2.9 predictor steps from its prediction, and the
+    # branch ran on to C = 3.777; such a step is now refused and halved
+    model = ContinuousPreisachModel.gaussian(P, R, SIGMA_R)
+    system, orbit = _orbit_at_3(model)
+    branch = continue_orbit(system, orbit, 3.0, 4.5, symmetric=True, step=0.06)
+    print(branch.stop_reason, [(e.kind, e.parameter) for e in branch.events])
+    _check_closed_once(branch, model)
+    _no_jumps(branch, 0.06)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("step", [0.02, 0.04, 0.08, 0.1])
+def test_upper_fold_found_at_any_reasonable_step(step):
+    model = ContinuousPreisachModel.gaussian(P, R, SIGMA_R)
+    system, orbit = _orbit_at_3(model)
+    reference = continue_orbit(system, orbit, 3.0, 4.5, symmetric=True, step=0.03)
+    branch = continue_orbit(system, orbit, 3.0, 4.5, symmetric=True, step=step)
+    _check_closed_once(branch, model)
+    _no_jumps(branch, step)
+    # the folds do not depend on the step: located to LOCATE in λ, the same to 10·LOCATE
+    ref = sorted(e.parameter for e in reference.events if e.kind == "fold")
+    got = sorted(e.parameter for e in branch.events if e.kind == "fold")
+    assert np.allclose(got, ref, rtol=0.0, atol=1e-6), (got, ref)

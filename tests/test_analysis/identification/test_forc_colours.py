@@ -11,6 +11,8 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from forc_synthetic import noisy_curves  # noqa: E402
 from matplotlib.colors import TwoSlopeNorm  # noqa: E402
+from matplotlib.contour import ContourSet  # noqa: E402
+from scipy.stats import norm as normal  # noqa: E402
 
 from analysis.identification import identify_from_curves  # noqa: E402
 from analysis.identification.plots import (  # noqa: E402
@@ -68,3 +70,30 @@ def test_colormap_names():
     assert colormap_name("forcinel") == "forcinel" and colormap_name("magma") == "magma"
     with pytest.raises(ValueError, match="not a matplotlib colour map"):
         colormap_name("no-such-map")
+
+
+def test_significance_is_one_dashed_contour_line_not_hatching():
+    # issue 32: significance as a contour line (FORCinel / FORCsensei), not hatching over the
+    # noise. The level is the two-sided 95 % normal quantile |ρ|/se = 1.96
+    ident = identify_from_curves(
+        noisy_curves(np.random.default_rng(1), 5e-2, np.arange(-20.0, 21.0, 1.0)),
+        smoothing=3.0,
+        extend=False,
+        uncertainty=True,
+    )
+    assert ident.density_se is not None
+    fig, ax = plt.subplots()
+    try:
+        plot_forc_diagram(ax, ident)
+        sets = [c for c in ax.get_children() if isinstance(c, ContourSet)]
+        sig = [c for c in sets if len(c.levels) == 1 and c.levels[0] > 1.0]
+        assert len(sig) == 1, [list(c.levels) for c in sets]
+        assert sig[0].levels[0] == pytest.approx(normal.ppf(0.975), rel=1e-12)
+        assert sig[0].get_linestyle()[0][1] is not None  # dashed, not solid
+        assert sig[0].get_paths() and any(len(p.vertices) for p in sig[0].get_paths())
+        # nothing hatched anywhere on the axes
+        assert not any(getattr(c, "get_hatch", lambda: None)() for c in ax.get_children())
+        legend = ax.get_legend()
+        assert [t.get_text() for t in legend.get_texts()] == ["95 % significance"]
+    finally:
+        plt.close(fig)
