@@ -1,4 +1,4 @@
-"""The lattice study: the random-field Ising model coupled to the oscillator, and its Preisach model.
+"""The lattice study: the random-field Ising model coupled to the oscillator; its Preisach model.
 
 The paper's ensemble of independent spin dimers is a Preisach model; the zero-temperature
 random-field Ising model (:class:`hysteresis.RandomFieldIsing`, ``J = 1``, fields

@@ -58,8 +58,9 @@ def plot_study(record: dict, path: str | os.PathLike) -> None:
                 ("operator_error_on_nodes_rms", ":", "none"),
             ):
                 m = np.array([_pair(p, None, key) for p in sel])
+                short = key.replace("operator_error_", "")
                 ax_e.errorbar(x, m[:, 0], yerr=m[:, 1], fmt=mk + ls, color=col, mfc=fill,
-                              capsize=2, label=f"{key.replace('operator_error_', '')}, {lab}")  # fmt: skip
+                              capsize=2, label=f"{short}, {lab}")  # fmt: skip
             if c == min(p["coupling"] for p in pts):
                 m = np.array([_pair(p, None, "major_largest_fraction") for p in sel])
                 ax_m.errorbar(x, m[:, 0], yerr=m[:, 1], fmt=mk + "-", color="k", capsize=2,
