@@ -62,6 +62,9 @@ MODEL_OPTIONS = {
     "plays": "--plays",
     **{f"bw_{n}": f"--bw-{n}" for n in ("a", "beta", "gamma", "n")},
     **{f"ja_{n}": f"--ja-{n}" for n in ("ms", "a", "k", "c", "alpha")},
+    "lattice": "--lattice",
+    "shape": "--lattice",
+    "disorder": "--disorder",
 }
 #: library parameter name -> option, for the oscillator and its initial condition
 OSCILLATOR_OPTIONS = {
@@ -110,6 +113,8 @@ def model_parameters(args: argparse.Namespace, half_extent: float | None = None)
         plays=args.plays,
         half_extent=half_extent,
         **{f: getattr(args, f, getattr(defaults, f)) for f in DUHEM_FIELDS},
+        lattice=tuple(getattr(args, "lattice", defaults.lattice)),
+        disorder=getattr(args, "disorder", defaults.disorder),
     )
 
 
@@ -134,7 +139,11 @@ DUHEM_FIELDS = (
     *("bw_a", "bw_beta", "bw_gamma", "bw_n"),
     *("ja_ms", "ja_a", "ja_k", "ja_c", "ja_alpha"),
 )
-MODEL_SPECIFIC = ("width_spread", "plays", "fields", "alpha", "beta", *DUHEM_FIELDS)
+MODEL_SPECIFIC = (
+    *("width_spread", "plays", "fields", "alpha", "beta"),
+    *DUHEM_FIELDS,
+    *("lattice", "disorder"),
+)
 #: model options the paper's models share: given to a model that does not read them (a script
 #: running several models with one set of options), the command warns and goes on
 MODEL_SHARED = ("spins", "seed", "width", "spread", "spin_coupling")

@@ -189,6 +189,19 @@ def add_model_options(
         "Jiles-Atherton alpha, mean-field coupling (>= 0, alpha ms/(3a) < 1)",
         type=nonnegative_float,
     )
+    add(
+        "--lattice",
+        d.lattice,
+        "side lengths L [L [L]] of the periodic random-field Ising lattice (1 to 3 values >= 3)",
+        type=int_at_least(3, 10**6),
+        nargs="+",
+    )
+    add(
+        "--disorder",
+        d.disorder,
+        "R, standard deviation of the random fields in units of J (>= 0; 3-D R_c ~ 2.16)",
+        type=nonnegative_float,
+    )
 
 
 def _model_name(names: Sequence[str], sums: bool) -> Callable[[str], str]:

@@ -32,6 +32,8 @@ name                      operator
 ``jiles-atherton``        ``JilesAtherton(ms, a, k, c, alpha)`` (fields ``ja_ms``, ``ja_a``,
                           ``ja_k``, ``ja_c``, ``ja_alpha``; default ``(1, 0.2, 0.3, 0.2, 0.1)``:
                           a loop of half-width about ``k`` in the oscillator's units)
+``rfim``                  ``RandomFieldIsing.lattice(lattice, disorder, 1, seed)``: periodic
+                          lattice, fields ``N(0, disorder²)``, spin coupling 1 (R in units of J)
 ========================  =====================================================================
 
 The Duhem models' fields carry a prefix (``bw_``, ``ja_``): their parameters' usual names
@@ -84,6 +86,7 @@ from hysteresis import (
     PlayOperator,
     PrandtlIshlinskii,
     PreisachModel,
+    RandomFieldIsing,
     Relay,
     SpinDimerEnsemble,
     weighted_sum,
@@ -144,6 +147,9 @@ class ModelParameters:
     ja_ms, ja_a, ja_k, ja_c, ja_alpha:
         ``jiles-atherton``: ``ms, a, k > 0``, ``0 <= c < 1``, ``alpha >= 0`` with
         ``alpha·ms/(3a) < 1`` (:class:`~hysteresis.JilesAtherton`).
+    lattice, disorder:
+        ``rfim``: the side lengths (1 to 3 integers >= 3) and R >= 0 (the fields' standard
+        deviation; the spin coupling is 1, the critical disorder in 3-D ``R_c ≈ 2.16``).
     """
 
     spins: int = SPINS
@@ -167,6 +173,8 @@ class ModelParameters:
     ja_k: float = 0.3
     ja_c: float = 0.2
     ja_alpha: float = 0.1
+    lattice: tuple[int, ...] = (20, 20, 20)
+    disorder: float = 2.6
 
 
 @dataclass(frozen=True)
@@ -331,6 +339,11 @@ def _jiles_atherton(p: ModelParameters) -> Any:
     return _renamed(lambda: JilesAtherton(p.ja_ms, p.ja_a, p.ja_k, p.ja_c, p.ja_alpha), _JA_FIELDS)
 
 
+def _rfim(p: ModelParameters) -> Any:
+    build = lambda: RandomFieldIsing.lattice(p.lattice, p.disorder, 1.0, seed=p.seed)  # noqa: E731
+    return _renamed(build, {"shape": "lattice"})
+
+
 _SPECS = (
     ModelSpec(
         "dimers",
@@ -387,6 +400,12 @@ _SPECS = (
         "Jiles-Atherton magnetisation M[H] (ms, a, k, c, alpha), a Duhem operator in M_irr",
         tuple(_JA_FIELDS.values()),
         _jiles_atherton,
+    ),
+    ModelSpec(
+        "rfim",
+        "random-field Ising lattice, fields N(0, R^2) (--disorder), J = 1, periodic (--lattice)",
+        ("lattice", "disorder", "seed"),
+        _rfim,
     ),
 )
 
@@ -601,6 +620,8 @@ _SYMBOLS = {
     "ja_k": "k",
     "ja_c": "c",
     "ja_alpha": "α",
+    "lattice": "L",
+    "disorder": "R",
 }
 
 
@@ -615,6 +636,8 @@ def describe_model(record: Mapping[str, Any], extra: Sequence[tuple[str, Any]] =
         sym = _SYMBOLS.get(key, key)
         if key == "fields":
             value = ",".join(f"({a:g},{b:g})" for a, b in value)
+        elif key == "lattice":
+            value = "x".join(str(n) for n in value)
         elif isinstance(value, float):
             value = f"{value:g}"
         parts.append(f"{sym}={value}")

@@ -52,6 +52,7 @@ def test_parameters_read_are_those_that_change_the_operator(name):
         "spins": 42, "seed": 5, "width": 2.6, "spread": 1.3, "spin_coupling": 2.5,
         "width_spread": 0.4, "plays": 4, "bw_a": 1.3, "bw_beta": 0.6, "bw_gamma": 0.3,
         "bw_n": 1.5, "ja_ms": 1.1, "ja_a": 0.25, "ja_k": 0.35, "ja_c": 0.3, "ja_alpha": 0.05,
+        "lattice": (4, 4, 4), "disorder": 1.0,
     }  # fmt: skip
     ref = outputs(base)
     for field, value in changes.items():
@@ -136,5 +137,5 @@ def test_every_model_option_is_classified():
     assert set(MODEL_SHARED) | set(MODEL_SPECIFIC) == {
         "spins", "seed", "width", "spread", "spin_coupling", "width_spread", "plays",
         "fields", "alpha", "beta", "bw_a", "bw_beta", "bw_gamma", "bw_n", "ja_ms", "ja_a",
-        "ja_k", "ja_c", "ja_alpha",
+        "ja_k", "ja_c", "ja_alpha", "lattice", "disorder",
     }  # fmt: skip

@@ -27,7 +27,7 @@ from analysis.experiments.models import (
 def test_registry_names_are_canonical_and_complete():
     assert set(MODELS) == {
         "dimers", "erf-play", "play", "relay", "n2", "n4", "preisach", "preisach-gauss", "pi",
-        "preisach-uniform", "bouc-wen", "jiles-atherton",
+        "preisach-uniform", "bouc-wen", "jiles-atherton", "rfim",
     }  # fmt: skip
     for name in MODELS:  # one spelling: lower case, words joined by '-'
         assert name == name.lower() and "_" not in name
