@@ -91,7 +91,9 @@ from numba import njit
 
 from hysteresis.preisach._everett_kernels import everett_eval
 from oscillators.engines import _dop853_kernel as _dop
+from oscillators.engines import _frozen_hops as _fh
 from oscillators.engines._play_kernels import _hermite_extrema
+from oscillators.engines._relay_kernels import hop_coefficients
 from oscillators.engines._roots import find_root, secant_start
 
 _N_STAGES = _dop.N_STAGES
@@ -121,6 +123,9 @@ EVENTS_FULL = 2
 DIVERGED = 3
 STUCK = 4
 GRAZING = 5
+#: internal (:func:`_frozen_stretch`): a degenerate turning point the closed-form hop leaves
+#: to one RK8 step
+_UNDECIDED = 6
 
 _EPS = 2.220446049250313e-16
 #: d/dz erf(z) = (2/√π) exp(−z²)
@@ -765,9 +770,89 @@ def _sync(ist, st, hw, pos, slv, Y):
 
 
 @njit(cache=True)
+def _frozen(slv):
+    """No wagon dragged: every play's output is constant (PI with relays)."""
+    for i in range(slv.size):
+        if slv[i]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _frozen_stretch(
+    par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev,
+    rel, rord, fpar, fmp, fe,
+):  # fmt: skip
+    """While every play is frozen (a composite with relays): closed-form hops from event to
+    event (:mod:`oscillators.engines._frozen_hops`), each event applied by :func:`_event` as
+    on the RK8 path, until the target (period nt, time taut) or a branch that drags a wagon
+    (a wall hit). Works on ``st``/``Y``; returns a status code (``DONE`` for both ends, or
+    ``_UNDECIDED``: take one RK8 step)."""
+    k = ist[I_K]
+    period = par[P_PERIOD]
+    bound = par[P_BOUND]
+    coefs = hop_coefficients(fmp)
+    tau = st[S_TAU]
+    ph = par[P_PHI0] + par[P_OMEGA] * tau
+    c = math.cos(ph)
+    s = math.sin(ph)
+    while True:
+        n = ist[I_PERIOD]
+        if n > nt or (n == nt and tau >= taut) or not _frozen(slv):
+            return DONE
+        if ist[I_RECORD] and ist[I_NEV] >= ev.shape[0]:
+            return EVENTS_FULL
+        d = ist[I_DIR]
+        q = st[S_Q]
+        if d * (st[S_BP] - q) <= 0.0:
+            code = _fh.CROSSED  # a threshold at zero distance (the RK8 path: τ = 0)
+            ist[I_STUCK] += 1
+            if ist[I_STUCK] > _MAX_STUCK:
+                return STUCK
+        else:
+            tau_stop = taut if n == nt else period
+            mv = st[S_Y0] + (st[S_RELAY] + st[S_RCOMP])  # _operator's output, slope 0
+            code, q1, v1, tau1, c1, s1 = _fh.frozen_hop(
+                fpar, coefs, fmp, fe, d, q, st[S_V], tau, c, s, st[S_BP], mv, tau_stop
+            )
+            if code == _fh.UNDECIDED:
+                return _UNDECIDED
+            if not (abs(q1) <= bound and abs(v1) <= bound):
+                st[S_Q] = q1
+                st[S_V] = v1
+                return DIVERGED
+            if k > 0:
+                _fh.frozen_tangent(fpar, tau1 - tau, c, s, c1, s1, Y, F, k)
+            st[S_Q] = q1
+            st[S_V] = v1
+            tau = tau1
+            c = c1
+            s = s1
+            ist[I_STUCK] = 0
+            if code == _fh.STOPPED and tau_stop == period and not n == nt:
+                # the period's end (the relay kernel's clock): the phase restarts exactly
+                ist[I_PERIOD] = n + 1
+                tau = 0.0
+                c = math.cos(par[P_PHI0])
+                s = math.sin(par[P_PHI0])
+            elif tau >= period:  # rounding past the period's end
+                ist[I_PERIOD] = n + 1
+                tau -= period
+            st[S_TAU] = tau
+            if code == _fh.STOPPED:
+                continue
+        # an event: q = bp or v = 0 exactly (frozen_hop), applied as on the RK8 path
+        if not _event(
+            par, ist, st, code, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F,
+            ev, rel, rord,
+        ):  # fmt: skip
+            return GRAZING
+
+
+@njit(cache=True)
 def _to_target(
     par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev, work,
-    rel, rord,
+    rel, rord, fpar, fmp, fe,
 ):  # fmt: skip
     """Integrate to (period nt, time taut), handling every event on the way."""
     k = ist[I_K]
@@ -780,6 +865,9 @@ def _to_target(
     loc = work[4 + _N_STAGES :, :]
     h_step = par[P_H]
     bound = par[P_BOUND]
+    # closed-form hops while the plays are frozen (a composite with relays; module docstring)
+    hops = ist[I_OP] == OP_PI and rel.shape[0] > 0 and fpar.size > 0
+    rk8_once = False  # a degenerate turning point left to one RK8 step
     _load(st, Y, y, k)
     while True:
         rem = (nt - ist[I_PERIOD]) * par[P_PERIOD] + (taut - st[S_TAU])
@@ -791,6 +879,19 @@ def _to_target(
         if ist[I_RECORD] and ist[I_NEV] >= ev.shape[0]:
             _store(st, Y, y, k)
             return EVENTS_FULL
+        if hops and not rk8_once and _frozen(slv):
+            _store(st, Y, y, k)
+            status = _frozen_stretch(
+                par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et,
+                Y, F, ev, rel, rord, fpar, fmp, fe,
+            )  # fmt: skip
+            if status == _UNDECIDED:
+                rk8_once = True
+            elif status != DONE:
+                return status
+            _load(st, Y, y, k)
+            continue
+        rk8_once = False
         last = rem <= h_step
         h = rem if last else h_step
         t = st[S_TAU]
@@ -912,7 +1013,7 @@ def _to_target(
 @njit(cache=True)
 def run(
     par, ist, st, nts, tauts, out, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F,
-    ev, work, rel, rord,
+    ev, work, rel, rord, fpar, fmp, fe,
 ):  # fmt: skip
     """Advance through the targets ``(nts[i], tauts[i])`` from sample ``ist[I_SAMPLE]`` on, writing
     ``(q, v, M)`` into ``out[i]``; returns a status code (module docstring)."""
@@ -920,7 +1021,7 @@ def run(
     while i < nts.size:
         status = _to_target(
             par, ist, st, nts[i], tauts[i], hw, wt, pos, slv, free, stack, prefix, dlo, dhi,
-            ep, et, Y, F, ev, work, rel, rord,
+            ep, et, Y, F, ev, work, rel, rord, fpar, fmp, fe,
         )  # fmt: skip
         if status != DONE:
             return status

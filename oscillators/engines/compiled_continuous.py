@@ -54,6 +54,7 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar, positive_scalar
 from oscillators.engines import _continuous_kernels as _k
+from oscillators.engines import _frozen_hops as _fh
 from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
@@ -257,10 +258,17 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         """The relays of a composite (``rel``: α, β, weight, output per relay; ``rord``: the
         orders of α and of β), none otherwise."""
         self._ist[_k.I_RPTR] = -1
+        # the closed-form hops of the frozen stretches (PI with relays): the relay kernel's
+        # parameters and tables (off without relays: fpar empty)
+        self._fpar, self._fmp, self._fe = _fh.hop_tables(0.0, 1.0, 0.0, 0.0)
         if getattr(spec, "relay_alpha", None) is None:
             self._rel = np.zeros((0, 4))
             self._rord = np.zeros((2, 0), dtype=np.int64)
             return
+        par = self._par
+        self._fpar, self._fmp, self._fe = _fh.hop_tables(
+            par[_k.P_ZETA], par[_k.P_OMEGA], par[_k.P_C], par[_k.P_PHI0]
+        )
         self._rel = np.column_stack(
             [spec.relay_alpha, spec.relay_beta, spec.relay_weights,
              np.asarray(spec.relay_outputs(op_state), dtype=np.float64)]
@@ -326,6 +334,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
                 self._par, ist, self._st, n_t, tau_t, buf, self._hw, self._wt, self._pos,
                 self._slv, self._free, self._stack, self._prefix, self._dlo, self._dhi, self._ep,
                 self._et, self._Y, self._F, self._ev, self._work, self._rel, self._rord,
+                self._fpar, self._fmp, self._fe,
             )  # fmt: skip
             if record and ist[6] > 0:
                 self._events.append(self._ev[: ist[6]].copy())
