@@ -770,6 +770,32 @@ def _sync(ist, st, hw, pos, slv, Y):
 
 
 @njit(cache=True)
+def _branch_taylor(st, ep, q):
+    """The PI branch's output (relays included) and its first four derivatives in ``q``: the
+    dragged plain plays contribute the slope, each dragged erf play ``a·erf(z)``,
+    ``z = κ(q − d r)``, the derivatives ``a·κⁿ·erf⁽ⁿ⁾(z)`` with ``erf⁽¹⁾ = (2/√π)e^{−z²}``,
+    ``erf⁽²⁾ = −2z·erf⁽¹⁾``, ``erf⁽³⁾ = (4z² − 2)·erf⁽¹⁾``, ``erf⁽⁴⁾ = (12z − 8z³)·erf⁽¹⁾``."""
+    y = st[S_Y0] + st[S_SLOPE] * (q - st[S_U0])
+    y1 = st[S_SLOPE]
+    y2 = 0.0
+    y3 = 0.0
+    y4 = 0.0
+    for j in range(int(ep[0])):
+        a = ep[1 + 3 * j]
+        kap = ep[3 + 3 * j]
+        z = (q - ep[2 + 3 * j]) * kap
+        y += a * math.erf(z)
+        g = a * kap * _TWO_OVER_SQRT_PI * math.exp(-z * z)
+        y1 += g
+        g *= kap
+        y2 -= 2.0 * z * g
+        g *= kap
+        y3 += (4.0 * z * z - 2.0) * g
+        y4 += (12.0 * z - 8.0 * z * z * z) * g * kap
+    return y + (st[S_RELAY] + st[S_RCOMP]), y1, y2, y3, y4
+
+
+@njit(cache=True)
 def _frozen(slv):
     """No wagon dragged: every play's output is constant (PI with relays)."""
     for i in range(slv.size):
@@ -899,11 +925,20 @@ def _to_target(
         if ist[I_OP] == OP_PI and rel.shape[0] > 0 and st[S_BP] == st[S_RBP]:
             # the next event is most likely a relay switch a short hop ahead (dense relays):
             # land on it directly instead of stepping past it and locating it (module docstring)
-            tau = _relay_hop(par, ist, st, F, ep, et, t, y, h, dy, loc)
+            tau = -1.0
+            if k == 0 and hops:
+                # without the tangent: the branch's Taylor polynomial (_frozen_hops.landing)
+                yb, g1, g2, g3, g4 = _branch_taylor(st, ep, y[0])
+                tau, v1 = _fh.landing(fpar, t, y[0], y[1], d, st[S_BP], h, yb, g1, g2, g3, g4)
+                if tau > 0.0:
+                    y[1] = v1
+            if tau < 0.0:
+                tau = _relay_hop(par, ist, st, F, ep, et, t, y, h, dy, loc)
+                if tau > 0.0:
+                    _rk8(par, ist, st, F, ep, et, t, y, tau, y1, K, tmp, k)
+                    for r in range(n):
+                        y[r] = y1[r]
             if tau > 0.0:
-                _rk8(par, ist, st, F, ep, et, t, y, tau, y1, K, tmp, k)
-                for r in range(n):
-                    y[r] = y1[r]
                 _add_time(par, ist, st, tau)
                 y[0] = st[S_BP]  # q := the threshold exactly
                 _store(st, Y, y, k)

@@ -66,7 +66,7 @@ from oscillators.engines._relay_kernels import (
 )
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
 
-__all__ = ["hop_tables", "first_turn", "frozen_hop", "frozen_tangent"]
+__all__ = ["hop_tables", "no_hops", "first_turn", "frozen_hop", "frozen_tangent", "landing"]
 
 #: ``frozen_hop`` codes: the threshold ahead reached, the stop reached, a turning point, and
 #: "undecided" (the hop and the scan disagree at a degenerate turning point: the caller takes
@@ -75,17 +75,31 @@ CROSSED, STOPPED, TURNED, UNDECIDED = 1, 0, -1, 2
 #: a sufficient test that the cubic Hermite interpolant of v stays off zero: its basis
 #: functions give ``|H(s) − linear| <= (4/27)·h·(|a0| + |a1|)``
 _HERMITE_MARGIN = 4.0 / 27.0
+#: ``fpar`` entries after the relay kernel's: the engine's ρ, the largest 1/(√2 R)
+F_RHO, F_KAPPA = 13, 14
+#: the pushed landing's limit ρ_eff·h <= LANDING_RH: its degree-6 Taylor polynomial then errs
+#: by ~(ρ_eff h)^7/7! <= 2e-18 relative
+LANDING_RH = 0.01
 
 
-def hop_tables(zeta: float, omega: float, coupling: float, phi0: float) -> tuple:
-    """(``fpar``, ``fmp``, ``fe``): the relay kernel's parameter vector and hop tables for the
-    frozen stretches, and the scratch of its Taylor path; empty ``fpar`` (frozen hops off) at
-    the undamped resonance ζ = 0, Ω = 1, which has no bounded particular solution."""
+def hop_tables(
+    zeta: float, omega: float, coupling: float, phi0: float, rho: float, kappa: float
+) -> tuple:
+    """(``fpar``, ``fmp``, ``fe``): the relay kernel's parameter vector (then ``F_RHO`` the
+    engine's rate ρ and ``F_KAPPA`` the largest ``1/(√2 R)`` of the shaped plays) and hop
+    tables for the frozen stretches, and the scratch of its Taylor path; empty ``fpar`` (hops
+    off) at the undamped resonance ζ = 0, Ω = 1, which has no bounded particular solution."""
     if zeta == 0.0 and omega == 1.0:
-        return np.zeros(0), np.zeros((ORDER + 1, 7)), np.zeros(ORDER + 1)
+        return no_hops()
     amp_a, amp_b = particular_amplitudes(zeta, omega)
     fpar = make_params(zeta, omega, coupling, phi0, amp_a, amp_b, 0.0)
+    fpar = np.concatenate([fpar, [rho, kappa]])
     return fpar, taylor_matrix_coefficients(zeta, omega), np.zeros(ORDER + 1)
+
+
+def no_hops() -> tuple:
+    """:func:`hop_tables` of an engine without hops (no relays)."""
+    return np.zeros(0), np.zeros((ORDER + 1, 7)), np.zeros(ORDER + 1)
 
 
 @njit(cache=True)
@@ -190,3 +204,70 @@ def frozen_tangent(par, h, c0, s0, c1, s1, Y, F, k):
         phi = F[2, j]
         Y[0, j] = m00 * dq + m01 * dv + pq * phi + fq * f
         Y[1, j] = m10 * dq + m11 * dv + pv * phi + fv * f
+
+
+@njit(cache=True)
+def landing(par, tau, q, v, d, theta, hmax, y, y1, y2, y3, y4):
+    """Time to the relay threshold ``theta`` ahead on a *pushed* branch (a dragged play: the
+    output ``y(q)`` is smooth, not constant) by its Taylor polynomial, or −1.
+
+    ``y, y1..y4`` are the output and its first four derivatives in ``q`` at the start. The
+    time derivatives of ``q`` follow from ``q'' = −2ζq' − q + cos φ + C·y(q)`` by the chain rule
+    (``u = y(q(t))``: ``u' = y1 q'``, ``u'' = y2 q'² + y1 q''``, ...); the degree-6 polynomial
+    is solved for ``q(h) = θ`` by Newton from the root of its quadratic. Accepted when
+    ``h <= min(hmax, LANDING_RH/ρ_eff)`` with ``ρ_eff = max(ρ, κ|v|)`` (the rate of the
+    shaped plays' argument), the Newton step has converged, and ``q`` is provably monotone on
+    [0, h] (``Σ n|e_n| h^(n−1) < |v|/2``). Returns ``(h, v(h))``."""
+    zeta = par[P_ZETA]
+    omega = par[P_OMEGA]
+    coupling = par[P_C]
+    gap = d * (theta - q)
+    av = d * v
+    if not (gap > 0.0 and av > 0.0):
+        return -1.0, 0.0
+    rate = max(par[F_RHO], par[F_KAPPA] * av)
+    hlim = min(hmax, LANDING_RH / rate)
+    if gap >= hlim * av * 2.0:
+        return -1.0, 0.0  # too far for one landing (v would have to double)
+    ph = par[P_PHI0] + omega * tau
+    cp = math.cos(ph)
+    sp = math.sin(ph)
+    o2 = omega * omega
+    a = -2.0 * zeta * v - q + cp + coupling * y
+    j = -2.0 * zeta * a - v - omega * sp + coupling * (y1 * v)
+    s4 = -2.0 * zeta * j - a - o2 * cp + coupling * (y2 * v * v + y1 * a)
+    vv = v * v
+    s5 = -2.0 * zeta * s4 - j + o2 * omega * sp
+    s5 += coupling * (y3 * vv * v + 3.0 * y2 * v * a + y1 * j)
+    s6 = -2.0 * zeta * s5 - s4 + o2 * o2 * cp
+    s6 += coupling * (y4 * vv * vv + 6.0 * y3 * vv * a + y2 * (3.0 * a * a + 4.0 * v * j) + y1 * s4)
+    e2 = 0.5 * a
+    e3 = j / 6.0
+    e4 = s4 / 24.0
+    e5 = s5 / 120.0
+    e6 = s6 / 720.0
+    disc = v * v + 4.0 * d * e2 * gap
+    if disc <= 0.0:
+        return -1.0, 0.0
+    h = 2.0 * gap / (av + math.sqrt(disc))
+    target = theta - q
+    curv = abs(e2) + abs(e3) * h
+    converged = False
+    for _ in range(6):
+        p = h * (v + h * (e2 + h * (e3 + h * (e4 + h * (e5 + h * e6)))))
+        dp = v + h * (2.0 * e2 + h * (3.0 * e3 + h * (4.0 * e4 + h * (5.0 * e5 + h * 6.0 * e6))))
+        if d * dp <= 0.0:
+            return -1.0, 0.0
+        dh = (p - target) / dp
+        h -= dh
+        if dh * dh * curv <= 1e-17 * av:  # the next Newton correction: ~|e2|/v·dh²
+            converged = True
+            break
+    if not (converged and 0.0 < h <= hlim):
+        return -1.0, 0.0
+    bound = h * (2.0 * abs(e2) + h * (3.0 * abs(e3) + h * (4.0 * abs(e4)
+                 + h * (5.0 * abs(e5) + h * 6.0 * abs(e6)))))  # fmt: skip
+    if bound >= 0.5 * av:
+        return -1.0, 0.0
+    v1 = v + h * (2.0 * e2 + h * (3.0 * e3 + h * (4.0 * e4 + h * (5.0 * e5 + h * 6.0 * e6))))
+    return h, v1

@@ -172,6 +172,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         # the RK8 step's local error scales as (ρh)^9: ρ = the largest rate of the linearised
         # motion (forcing, damping, the stiffness C·slope of the steepest branch)
         rho = max(1.0, self._omega, 2.0 * zeta, math.sqrt(abs(coupling) * _slope_bound(spec)))
+        self._rho = rho
         self._par = np.zeros(_k.N_PAR)
         self._par[_k.P_ZETA] = zeta
         self._par[_k.P_OMEGA] = self._omega
@@ -260,15 +261,11 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         self._ist[_k.I_RPTR] = -1
         # the closed-form hops of the frozen stretches (PI with relays): the relay kernel's
         # parameters and tables (off without relays: fpar empty)
-        self._fpar, self._fmp, self._fe = _fh.hop_tables(0.0, 1.0, 0.0, 0.0)
+        self._fpar, self._fmp, self._fe = _fh.no_hops()
         if getattr(spec, "relay_alpha", None) is None:
             self._rel = np.zeros((0, 4))
             self._rord = np.zeros((2, 0), dtype=np.int64)
             return
-        par = self._par
-        self._fpar, self._fmp, self._fe = _fh.hop_tables(
-            par[_k.P_ZETA], par[_k.P_OMEGA], par[_k.P_C], par[_k.P_PHI0]
-        )
         self._rel = np.column_stack(
             [spec.relay_alpha, spec.relay_beta, spec.relay_weights,
              np.asarray(spec.relay_outputs(op_state), dtype=np.float64)]
@@ -280,6 +277,12 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             ]
         ).astype(np.int64)
         self._st[_k.S_RELAY] = _k.relay_output(self._rel)
+        if self._ist[9] == _k.OP_PI:
+            par = self._par
+            kappa = float(np.max(self._et[0, 0], initial=0.0))  # the largest 1/(√2 R)
+            self._fpar, self._fmp, self._fe = _fh.hop_tables(
+                par[_k.P_ZETA], par[_k.P_OMEGA], par[_k.P_C], par[_k.P_PHI0], self._rho, kappa
+            )
 
     def _branch(self) -> None:
         """Rebuild the current branch (and the tangent force) from the kernel's state."""
