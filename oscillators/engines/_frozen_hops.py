@@ -78,8 +78,10 @@ _HERMITE_MARGIN = 4.0 / 27.0
 #: ``fpar`` entries after the relay kernel's: the engine's ρ, the largest 1/(√2 R)
 F_RHO, F_KAPPA = 13, 14
 #: the pushed landing's limit ρ_eff·h <= LANDING_RH: its degree-6 Taylor polynomial then errs
-#: by ~(ρ_eff h)^7/7! <= 2e-18 relative
-LANDING_RH = 0.01
+#: by ~(ρ_eff h)^7/7! <= 3e-16 relative, four orders below the RK8 step it replaces (local
+#: error ~(ρh)^9 at ρh = 0.05); measured at C = 2, 2000 relays: 96% of the pushed switches
+#: lie within 0.01/ρ_eff, the rest fall back to the RK8 landing
+LANDING_RH = 0.02
 
 
 def hop_tables(
