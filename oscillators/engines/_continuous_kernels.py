@@ -76,6 +76,15 @@ by the safeguarded Newton root finder (:func:`oscillators.engines._roots.find_ro
 step's own RK8 map from the step start (each iterate one RK8 step over ``τ``), so the event
 state has full RK8 accuracy; then ``q := bp`` or ``v := 0`` exactly.
 
+Composites with relays (PI branch + ``rel``): while no wagon is dragged the system is the
+relay kernel's linear one with constant forcing, and :func:`_frozen_stretch` hops in closed
+form from event to event (:mod:`oscillators.engines._frozen_hops`: the relay kernel's ``hop``,
+the play walls as thresholds, every turning point an event, the tangent columns by ``Φ(h)``);
+on a pushed branch without tangent columns the next relay threshold is landed on by the
+branch's degree-6 Taylor polynomial (:func:`_branch_taylor`,
+:func:`oscillators.engines._frozen_hops.landing`), the RK8 landing :func:`_relay_hop` being
+the fallback (hops beyond ``0.02/ρ_eff``, and always with the tangent on).
+
 Status codes of :func:`run`: ``DONE``; ``GROW`` (a Preisach push may need more room: the Python
 side enlarges ``stack``/``Y`` and calls again); ``EVENTS_FULL`` (``ev`` full: drained and called
 again); ``DIVERGED`` (``q``/``v`` non-finite or above the bound; ``st`` holds the bad values);

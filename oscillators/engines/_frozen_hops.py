@@ -37,6 +37,12 @@ over a hop of length h::
 with ``Φ`` and the phase column ``p_φ`` in closed form (:mod:`oscillators.linear`). The
 saltations at relay switches and the wall/reversal updates are the continuous engine's own
 (its ``_event``).
+
+Pushed branches (:func:`landing`): while a play is dragged the output ``y(q)`` is smooth, not
+constant; without tangent columns the next relay threshold is reached by the degree-6 Taylor
+polynomial of ``q`` (derivatives by the chain rule from ``y`` and its first four
+``q``-derivatives), solved by Newton — instead of the RK8 landing's two state-only steps, its
+Newton correction and the full step (~40 right-hand sides).
 """
 
 from __future__ import annotations

@@ -36,6 +36,11 @@ A tabulated (C¹ bicubic) Everett function has kinks on its grid lines: a step e
 line of the moving input (predicted from ``q + vτ + aτ²/2``), and exactly (Newton) on a support
 bound, where the branch slope jumps and each step takes it on the side it moves into.
 
+A composite with relays (plays + relays): while every play is frozen the motion hops in closed
+form from relay switch to switch (the relay kernel's hop; the walls are thresholds too, every
+turning point an event); while a play is pushed and no tangent is carried, each relay threshold
+is landed on by the branch's Taylor polynomial (:mod:`oscillators.engines._frozen_hops`).
+
 Tangent space and saltations: rows ``("q", "v"[, "phi"], *labels)`` with the labels of the
 generic engine (``w0 .. w{K-1}``; ``M1, m1, M2, ...``), the same saltations (a wagon that
 becomes dragged or an extremum pushed at a reversal: ``δm := δq``; a wiped-out extremum's row
