@@ -76,6 +76,15 @@ by the safeguarded Newton root finder (:func:`oscillators.engines._roots.find_ro
 step's own RK8 map from the step start (each iterate one RK8 step over ``τ``), so the event
 state has full RK8 accuracy; then ``q := bp`` or ``v := 0`` exactly.
 
+Composites with relays (PI branch + ``rel``): while no wagon is dragged the system is the
+relay kernel's linear one with constant forcing, and :func:`_frozen_stretch` hops in closed
+form from event to event (:mod:`oscillators.engines._frozen_hops`: the relay kernel's ``hop``,
+the play walls as thresholds, every turning point an event, the tangent columns by ``Φ(h)``);
+on a pushed branch without tangent columns the next relay threshold is landed on by the
+branch's degree-6 Taylor polynomial (:func:`_branch_taylor`,
+:func:`oscillators.engines._frozen_hops.landing`), the RK8 landing :func:`_relay_hop` being
+the fallback (hops beyond ``0.02/ρ_eff``, and always with the tangent on).
+
 Status codes of :func:`run`: ``DONE``; ``GROW`` (a Preisach push may need more room: the Python
 side enlarges ``stack``/``Y`` and calls again); ``EVENTS_FULL`` (``ev`` full: drained and called
 again); ``DIVERGED`` (``q``/``v`` non-finite or above the bound; ``st`` holds the bad values);
@@ -91,7 +100,9 @@ from numba import njit
 
 from hysteresis.preisach._everett_kernels import everett_eval
 from oscillators.engines import _dop853_kernel as _dop
+from oscillators.engines import _frozen_hops as _fh
 from oscillators.engines._play_kernels import _hermite_extrema
+from oscillators.engines._relay_kernels import hop_coefficients
 from oscillators.engines._roots import find_root, secant_start
 
 _N_STAGES = _dop.N_STAGES
@@ -121,6 +132,9 @@ EVENTS_FULL = 2
 DIVERGED = 3
 STUCK = 4
 GRAZING = 5
+#: internal (:func:`_frozen_stretch`): a degenerate turning point the closed-form hop leaves
+#: to one RK8 step
+_UNDECIDED = 6
 
 _EPS = 2.220446049250313e-16
 #: d/dz erf(z) = (2/√π) exp(−z²)
@@ -765,9 +779,115 @@ def _sync(ist, st, hw, pos, slv, Y):
 
 
 @njit(cache=True)
+def _branch_taylor(st, ep, q):
+    """The PI branch's output (relays included) and its first four derivatives in ``q``: the
+    dragged plain plays contribute the slope, each dragged erf play ``a·erf(z)``,
+    ``z = κ(q − d r)``, the derivatives ``a·κⁿ·erf⁽ⁿ⁾(z)`` with ``erf⁽¹⁾ = (2/√π)e^{−z²}``,
+    ``erf⁽²⁾ = −2z·erf⁽¹⁾``, ``erf⁽³⁾ = (4z² − 2)·erf⁽¹⁾``, ``erf⁽⁴⁾ = (12z − 8z³)·erf⁽¹⁾``."""
+    y = st[S_Y0] + st[S_SLOPE] * (q - st[S_U0])
+    y1 = st[S_SLOPE]
+    y2 = 0.0
+    y3 = 0.0
+    y4 = 0.0
+    for j in range(int(ep[0])):
+        a = ep[1 + 3 * j]
+        kap = ep[3 + 3 * j]
+        z = (q - ep[2 + 3 * j]) * kap
+        y += a * math.erf(z)
+        g = a * kap * _TWO_OVER_SQRT_PI * math.exp(-z * z)
+        y1 += g
+        g *= kap
+        y2 -= 2.0 * z * g
+        g *= kap
+        y3 += (4.0 * z * z - 2.0) * g
+        y4 += (12.0 * z - 8.0 * z * z * z) * g * kap
+    return y + (st[S_RELAY] + st[S_RCOMP]), y1, y2, y3, y4
+
+
+@njit(cache=True)
+def _frozen(slv):
+    """No wagon dragged: every play's output is constant (PI with relays)."""
+    for i in range(slv.size):
+        if slv[i]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _frozen_stretch(
+    par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev,
+    rel, rord, fpar, fmp, fe,
+):  # fmt: skip
+    """While every play is frozen (a composite with relays): closed-form hops from event to
+    event (:mod:`oscillators.engines._frozen_hops`), each event applied by :func:`_event` as
+    on the RK8 path, until the target (period nt, time taut) or a branch that drags a wagon
+    (a wall hit). Works on ``st``/``Y``; returns a status code (``DONE`` for both ends, or
+    ``_UNDECIDED``: take one RK8 step)."""
+    k = ist[I_K]
+    period = par[P_PERIOD]
+    bound = par[P_BOUND]
+    coefs = hop_coefficients(fmp)
+    tau = st[S_TAU]
+    ph = par[P_PHI0] + par[P_OMEGA] * tau
+    c = math.cos(ph)
+    s = math.sin(ph)
+    while True:
+        n = ist[I_PERIOD]
+        if n > nt or (n == nt and tau >= taut) or not _frozen(slv):
+            return DONE
+        if ist[I_RECORD] and ist[I_NEV] >= ev.shape[0]:
+            return EVENTS_FULL
+        d = ist[I_DIR]
+        q = st[S_Q]
+        if d * (st[S_BP] - q) <= 0.0:
+            code = _fh.CROSSED  # a threshold at zero distance (the RK8 path: τ = 0)
+            ist[I_STUCK] += 1
+            if ist[I_STUCK] > _MAX_STUCK:
+                return STUCK
+        else:
+            tau_stop = taut if n == nt else period
+            mv = st[S_Y0] + (st[S_RELAY] + st[S_RCOMP])  # _operator's output, slope 0
+            code, q1, v1, tau1, c1, s1 = _fh.frozen_hop(
+                fpar, coefs, fmp, fe, d, q, st[S_V], tau, c, s, st[S_BP], mv, tau_stop
+            )
+            if code == _fh.UNDECIDED:
+                return _UNDECIDED
+            if not (abs(q1) <= bound and abs(v1) <= bound):
+                st[S_Q] = q1
+                st[S_V] = v1
+                return DIVERGED
+            if k > 0:
+                _fh.frozen_tangent(fpar, tau1 - tau, c, s, c1, s1, Y, F, k)
+            st[S_Q] = q1
+            st[S_V] = v1
+            tau = tau1
+            c = c1
+            s = s1
+            ist[I_STUCK] = 0
+            if code == _fh.STOPPED and tau_stop == period and not n == nt:
+                # the period's end (the relay kernel's clock): the phase restarts exactly
+                ist[I_PERIOD] = n + 1
+                tau = 0.0
+                c = math.cos(par[P_PHI0])
+                s = math.sin(par[P_PHI0])
+            elif tau >= period:  # rounding past the period's end
+                ist[I_PERIOD] = n + 1
+                tau -= period
+            st[S_TAU] = tau
+            if code == _fh.STOPPED:
+                continue
+        # an event: q = bp or v = 0 exactly (frozen_hop), applied as on the RK8 path
+        if not _event(
+            par, ist, st, code, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F,
+            ev, rel, rord,
+        ):  # fmt: skip
+            return GRAZING
+
+
+@njit(cache=True)
 def _to_target(
     par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F, ev, work,
-    rel, rord,
+    rel, rord, fpar, fmp, fe,
 ):  # fmt: skip
     """Integrate to (period nt, time taut), handling every event on the way."""
     k = ist[I_K]
@@ -780,6 +900,9 @@ def _to_target(
     loc = work[4 + _N_STAGES :, :]
     h_step = par[P_H]
     bound = par[P_BOUND]
+    # closed-form hops while the plays are frozen (a composite with relays; module docstring)
+    hops = ist[I_OP] == OP_PI and rel.shape[0] > 0 and fpar.size > 0
+    rk8_once = False  # a degenerate turning point left to one RK8 step
     _load(st, Y, y, k)
     while True:
         rem = (nt - ist[I_PERIOD]) * par[P_PERIOD] + (taut - st[S_TAU])
@@ -791,6 +914,19 @@ def _to_target(
         if ist[I_RECORD] and ist[I_NEV] >= ev.shape[0]:
             _store(st, Y, y, k)
             return EVENTS_FULL
+        if hops and not rk8_once and _frozen(slv):
+            _store(st, Y, y, k)
+            status = _frozen_stretch(
+                par, ist, st, nt, taut, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et,
+                Y, F, ev, rel, rord, fpar, fmp, fe,
+            )  # fmt: skip
+            if status == _UNDECIDED:
+                rk8_once = True
+            elif status != DONE:
+                return status
+            _load(st, Y, y, k)
+            continue
+        rk8_once = False
         last = rem <= h_step
         h = rem if last else h_step
         t = st[S_TAU]
@@ -798,11 +934,20 @@ def _to_target(
         if ist[I_OP] == OP_PI and rel.shape[0] > 0 and st[S_BP] == st[S_RBP]:
             # the next event is most likely a relay switch a short hop ahead (dense relays):
             # land on it directly instead of stepping past it and locating it (module docstring)
-            tau = _relay_hop(par, ist, st, F, ep, et, t, y, h, dy, loc)
+            tau = -1.0
+            if k == 0 and hops:
+                # without the tangent: the branch's Taylor polynomial (_frozen_hops.landing)
+                yb, g1, g2, g3, g4 = _branch_taylor(st, ep, y[0])
+                tau, v1 = _fh.landing(fpar, t, y[0], y[1], d, st[S_BP], h, yb, g1, g2, g3, g4)
+                if tau > 0.0:
+                    y[1] = v1
+            if tau < 0.0:
+                tau = _relay_hop(par, ist, st, F, ep, et, t, y, h, dy, loc)
+                if tau > 0.0:
+                    _rk8(par, ist, st, F, ep, et, t, y, tau, y1, K, tmp, k)
+                    for r in range(n):
+                        y[r] = y1[r]
             if tau > 0.0:
-                _rk8(par, ist, st, F, ep, et, t, y, tau, y1, K, tmp, k)
-                for r in range(n):
-                    y[r] = y1[r]
                 _add_time(par, ist, st, tau)
                 y[0] = st[S_BP]  # q := the threshold exactly
                 _store(st, Y, y, k)
@@ -912,7 +1057,7 @@ def _to_target(
 @njit(cache=True)
 def run(
     par, ist, st, nts, tauts, out, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F,
-    ev, work, rel, rord,
+    ev, work, rel, rord, fpar, fmp, fe,
 ):  # fmt: skip
     """Advance through the targets ``(nts[i], tauts[i])`` from sample ``ist[I_SAMPLE]`` on, writing
     ``(q, v, M)`` into ``out[i]``; returns a status code (module docstring)."""
@@ -920,7 +1065,7 @@ def run(
     while i < nts.size:
         status = _to_target(
             par, ist, st, nts[i], tauts[i], hw, wt, pos, slv, free, stack, prefix, dlo, dhi,
-            ep, et, Y, F, ev, work, rel, rord,
+            ep, et, Y, F, ev, work, rel, rord, fpar, fmp, fe,
         )  # fmt: skip
         if status != DONE:
             return status

@@ -36,6 +36,11 @@ A tabulated (C¹ bicubic) Everett function has kinks on its grid lines: a step e
 line of the moving input (predicted from ``q + vτ + aτ²/2``), and exactly (Newton) on a support
 bound, where the branch slope jumps and each step takes it on the side it moves into.
 
+A composite with relays (plays + relays): while every play is frozen the motion hops in closed
+form from relay switch to switch (the relay kernel's hop; the walls are thresholds too, every
+turning point an event); while a play is pushed and no tangent is carried, each relay threshold
+is landed on by the branch's Taylor polynomial (:mod:`oscillators.engines._frozen_hops`).
+
 Tangent space and saltations: rows ``("q", "v"[, "phi"], *labels)`` with the labels of the
 generic engine (``w0 .. w{K-1}``; ``M1, m1, M2, ...``), the same saltations (a wagon that
 becomes dragged or an extremum pushed at a reversal: ``δm := δq``; a wiped-out extremum's row
@@ -54,6 +59,7 @@ import numpy as np
 
 from hysteresis._validation import finite_scalar, positive_scalar
 from oscillators.engines import _continuous_kernels as _k
+from oscillators.engines import _frozen_hops as _fh
 from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
@@ -171,6 +177,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         # the RK8 step's local error scales as (ρh)^9: ρ = the largest rate of the linearised
         # motion (forcing, damping, the stiffness C·slope of the steepest branch)
         rho = max(1.0, self._omega, 2.0 * zeta, math.sqrt(abs(coupling) * _slope_bound(spec)))
+        self._rho = rho
         self._par = np.zeros(_k.N_PAR)
         self._par[_k.P_ZETA] = zeta
         self._par[_k.P_OMEGA] = self._omega
@@ -257,6 +264,9 @@ class CompiledContinuousEngine(TangentFlow, Engine):
         """The relays of a composite (``rel``: α, β, weight, output per relay; ``rord``: the
         orders of α and of β), none otherwise."""
         self._ist[_k.I_RPTR] = -1
+        # the closed-form hops of the frozen stretches (PI with relays): the relay kernel's
+        # parameters and tables (off without relays: fpar empty)
+        self._fpar, self._fmp, self._fe = _fh.no_hops()
         if getattr(spec, "relay_alpha", None) is None:
             self._rel = np.zeros((0, 4))
             self._rord = np.zeros((2, 0), dtype=np.int64)
@@ -272,6 +282,12 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             ]
         ).astype(np.int64)
         self._st[_k.S_RELAY] = _k.relay_output(self._rel)
+        if self._ist[9] == _k.OP_PI:
+            par = self._par
+            kappa = float(np.max(self._et[0, 0], initial=0.0))  # the largest 1/(√2 R)
+            self._fpar, self._fmp, self._fe = _fh.hop_tables(
+                par[_k.P_ZETA], par[_k.P_OMEGA], par[_k.P_C], par[_k.P_PHI0], self._rho, kappa
+            )
 
     def _branch(self) -> None:
         """Rebuild the current branch (and the tangent force) from the kernel's state."""
@@ -326,6 +342,7 @@ class CompiledContinuousEngine(TangentFlow, Engine):
                 self._par, ist, self._st, n_t, tau_t, buf, self._hw, self._wt, self._pos,
                 self._slv, self._free, self._stack, self._prefix, self._dlo, self._dhi, self._ep,
                 self._et, self._Y, self._F, self._ev, self._work, self._rel, self._rord,
+                self._fpar, self._fmp, self._fe,
             )  # fmt: skip
             if record and ist[6] > 0:
                 self._events.append(self._ev[: ist[6]].copy())
