@@ -62,8 +62,8 @@ from numba import njit
 
 from hysteresis._duhem_kernels import (
     bouc_wen_slope,
-    jiles_atherton_magnetization,
-    jiles_atherton_slope,
+    jiles_atherton_margins,
+    jiles_atherton_rhs,
 )
 from oscillators.engines import _dop853_kernel as _dop
 from oscillators.engines._play_kernels import _hermite_extrema
@@ -74,8 +74,8 @@ _N_STAGES = _dop.N_STAGES
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
 N_PAR = 8
 I_DIR, I_PERIOD, I_EVENTS, I_SAMPLE, I_NEV, I_RECORD, I_K, I_MODEL = range(8)
-I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED = range(8, 13)
-N_IST = 13
+I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED, I_POLE = range(8, 14)
+N_IST = 14
 S_TAU, S_Q, S_V, S_Z, S_HNEXT = range(5)
 N_ST = 5
 
@@ -98,9 +98,15 @@ ILL_POSED = 6
 GRADE_FIRST = 2.0**-6
 #: the least subnormal number: a stage state on the step's side of the kink (see _slope)
 _TINY = 5e-324
-#: Jiles–Atherton: a stage on the side δ_M = 1 that rounding puts at δ_M = 0 is evaluated this
-#: far (relative to M_s) inside it (see _slope): its slope is then ~1e-12·M_s/k instead of ~0
-KINK_NUDGE = 1e-12
+#: Jiles–Atherton: ``mp[M_GUESS]`` (after the 5 parameters) holds the last ``M`` solved, the
+#: warm start of the next solve of the output map (a scratch slot, not a parameter)
+M_GUESS = 5
+#: Jiles–Atherton: the RK8 step times the relaxation rate ``λ = |v·∂g/∂M_irr|`` (about
+#: ``|v|/k``) stays below this (module docstring)
+RELAX_STEP = 0.25
+#: Jiles–Atherton's pole: the predicted time to it (or a step that fails on it) below
+#: ``POLE_STOP·h`` ends the run with ``ILL_POSED`` there (module docstring)
+POLE_STOP = 1e-10
 #: events at zero distance in a row before STUCK
 _MAX_STUCK = 50
 
@@ -109,67 +115,88 @@ _MAX_STUCK = 50
 # the model
 # --------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
-def _natural(ist, mp, q, z, d):
-    """``(g, ∂g/∂q, ∂g/∂z)`` of the model in direction ``d`` as its kernel gives it; a state
-    where the model is ill-posed sets ``I_BAD`` (and gives zeros)."""
-    if ist[I_MODEL] == MODEL_BOUC_WEN:
-        g, gz = bouc_wen_slope(z, d, mp[0], mp[1], mp[2], mp[3])
-        return g, 0.0, gz
-    g, gh, gi, ok = jiles_atherton_slope(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4])
+def _ja(ist, mp, q, z, d, on):
+    """Jiles–Atherton from one warm-started solve (``mp[M_GUESS]``, updated): ``(M, ∂M/∂q,
+    ∂M/∂z, g, ∂g/∂q, ∂g/∂z)`` with ``δ_M = on``; an ill-posed point sets ``I_BAD`` (and
+    gives ``g = 0``)."""
+    m, m_h, m_i, g, gh, gi, ok = jiles_atherton_rhs(
+        q, z, d, on, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_GUESS]
+    )
+    mp[M_GUESS] = m
     if not ok:
         ist[I_BAD] = 1
-        return 0.0, 0.0, 0.0
-    return g, gh, gi
+        return m, m_h, m_i, 0.0, 0.0, 0.0
+    return m, m_h, m_i, g, gh, gi
+
+
+@njit(cache=True, inline="always")
+def _model(ist, mp, q, z, d):
+    """``(y, ∂y/∂q, ∂y/∂z, g, ∂g/∂q, ∂g/∂z)``: the output and the slope in direction ``d`` on
+    the side ``ist[I_SIDE]`` of the kink that the step is on (no step straddles a kink; its
+    stage states may lie a little beyond it, and there each side's own smooth formula holds,
+    not the other side's, whose ``∂g/∂z`` differs by a finite jump: one such stage errs the
+    tangent by ``~h·b·v·jump``, measured 1e-4).
+
+    Bouc–Wen (kink ``z = 0``): a stage beyond it is evaluated at the least subnormal number of
+    the step's side (``|z|ⁿ`` is 0 there to rounding). Jiles–Atherton (kink where ``δ_M``
+    switches, ``M_an = M_irr``): the side's ``δ_M`` is imposed (0: ``g = 0``; 1: the ``δ_M =
+    1`` formula, smooth through the kink)."""
+    side = ist[I_SIDE]
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        zs = side * _TINY if side * z <= 0.0 else z
+        g, gz = bouc_wen_slope(zs, d, mp[0], mp[1], mp[2], mp[3])
+        return z, 0.0, 1.0, g, 0.0, gz
+    return _ja(ist, mp, q, z, d, 1.0 if side > 0 else 0.0)
 
 
 @njit(cache=True, inline="always")
 def _slope(ist, mp, q, z, d):
-    """``(g, ∂g/∂q, ∂g/∂z)`` on the side ``ist[I_SIDE]`` of the kink that the step is on (no
-    step straddles a kink; its stage states may lie a little beyond it, and there each side's
-    own smooth formula holds, not the other side's, whose ``∂g/∂z`` differs by a finite jump:
-    one such stage errs the tangent by ``~h·b·v·jump``, measured 1e-4).
-
-    Bouc–Wen (kink ``z = 0``): a stage beyond it is evaluated at the least subnormal number of
-    the step's side (``|z|ⁿ`` is 0 there to rounding). Jiles–Atherton (kink where ``δ_M``
-    switches, ``M_an = M_irr``): on the side ``δ_M = 0`` the slope is 0 (exactly that side's
-    formula); on the side ``δ_M = 1`` a stage the kernel puts at ``δ_M = 0`` (a rounding error
-    away) is evaluated ``KINK_NUDGE·M_s`` inside it."""
-    side = ist[I_SIDE]
-    if ist[I_MODEL] == MODEL_BOUC_WEN:
-        if side * z <= 0.0:
-            z = side * _TINY
-        return _natural(ist, mp, q, z, d)
-    if side < 0:
-        return 0.0, 0.0, 0.0
-    g, gh, gi = _natural(ist, mp, q, z, d)
-    if g == 0.0 and gi == 0.0 and gh == 0.0:
-        g, gh, gi = _natural(ist, mp, q, z - d * KINK_NUDGE * mp[0], d)
-    return g, gh, gi
+    """``(g, ∂g/∂q, ∂g/∂z)`` of :func:`_model`."""
+    r = _model(ist, mp, q, z, d)
+    return r[3], r[4], r[5]
 
 
 @njit(cache=True, inline="always")
 def _regime(ist, mp, q, z, d):
     """The function whose sign tells the side of the kink, with ``(∂/∂q, ∂/∂z)``: Bouc–Wen
-    ``z``; Jiles–Atherton ``g_d − g_{−d}`` (positive where ``δ_M = 1`` for ``d``: ``g_d > 0 =
-    g_{−d}``; negative where ``δ_M = 0``: ``g_d = 0 < g_{−d}``; continuous through the kink)."""
+    ``z``; Jiles–Atherton the switch function ``G = d·(M_an − M_irr)`` (positive where ``δ_M =
+    1`` for ``d``; smooth, and defined past the pole too)."""
     if ist[I_MODEL] == MODEL_BOUC_WEN:
         return z, 0.0, 1.0
-    g1, h1, i1 = _natural(ist, mp, q, z, d)
-    g2, h2, i2 = _natural(ist, mp, q, z, -d)
-    return g1 - g2, h1 - h2, i1 - i2
+    r = jiles_atherton_margins(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_GUESS])
+    mp[M_GUESS] = r[0]
+    return r[1], r[2], r[3]
 
 
 @njit(cache=True, inline="always")
 def _crossed(ist, mp, q, z, d, side):
     """Whether ``(q, z)`` lies beyond the kink seen from ``side`` (Bouc–Wen: ``side·z <= 0``;
-    Jiles–Atherton from ``δ_M = 0``: ``g_d != 0``; an ill-posed point there is not flagged,
-    the step to the kink decides)."""
+    Jiles–Atherton from ``δ_M = 0``: ``G > 0``)."""
     if ist[I_MODEL] == MODEL_BOUC_WEN:
         return side * z <= 0.0
-    bad = ist[I_BAD]
-    g = _natural(ist, mp, q, z, d)[0]
-    ist[I_BAD] = bad
-    return g != 0.0
+    return _regime(ist, mp, q, z, d)[0] > 0.0
+
+
+@njit(cache=True)
+def _ja_limits(mp, q, v, z, zdot, d):
+    """Jiles–Atherton's own rates at a step start, from the ``δ_M = 1`` formula (the one in
+    force, or the one a switch inside the step brings): ``(λ, t_pole)`` with ``λ = |v·∂g/∂z|``
+    the relaxation rate of ``M_irr`` toward ``M_an`` (``g = G/(k·w)``: ``∂g/∂z = G_z/(k·w) −
+    G·w_z/(k·w²)``, about ``|v|/k``) and ``t_pole`` the time to the pole ``w = 1 − αχ = 0``
+    predicted from ``w`` and ``ẇ = w_q·v + w_z·ż`` (``inf`` if ``w`` does not fall): near the
+    pole ``g ~ 1/w`` and ``w ~ (t* − t)^{1/2}`` (the branch ``H(M_irr)`` folds there), so
+    ``t* − t = w/(2|ẇ|)`` to leading order."""
+    _, big_g, _, g_z, w, w_q, w_z = jiles_atherton_margins(
+        q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_GUESS]
+    )
+    k = mp[2]
+    if not w > 0.0:
+        return math.inf, 0.0
+    rate = abs(v * (g_z / (k * w) - big_g * w_z / (k * w * w)))
+    wdot = w_q * v + w_z * zdot
+    if not wdot < 0.0:
+        return rate, math.inf
+    return rate, w / (-2.0 * wdot)
 
 
 @njit(cache=True, inline="always")
@@ -177,7 +204,8 @@ def _output(ist, mp, q, z):
     """``(y, ∂y/∂q, ∂y/∂z)``: the operator's output."""
     if ist[I_MODEL] == MODEL_BOUC_WEN:
         return z, 0.0, 1.0
-    return jiles_atherton_magnetization(q, z, mp[0], mp[1], mp[3], mp[4])
+    r = _ja(ist, mp, q, z, 1.0, 0.0)
+    return r[0], r[1], r[2]
 
 
 @njit(cache=True)
@@ -189,18 +217,20 @@ def output_now(ist, st, mp):
 @njit(cache=True)
 def side_now(ist, st, mp, d):
     """The side of the kink the current state is on (``I_SIDE``), or at the kink the side it
-    moves into (Bouc–Wen: ``z' = A·v`` at ``z = 0``; Jiles–Atherton: after a kink landed on,
-    the other side); sets ``I_BAD`` where the model is ill-posed."""
+    moves into (after a kink landed on: the other side; Bouc–Wen at ``z = 0``: ``z' = A·v``,
+    the side ``d``; Jiles–Atherton at ``G = 0``: ``δ_M = 1``, since with ``M_irr`` frozen
+    ``dG/dH·d = M_an'/D > 0``: the gap opens at once whichever way the input moves); sets
+    ``I_BAD`` where the model is ill-posed on that side."""
     r = _regime(ist, mp, st[S_Q], st[S_Z], d)[0]
     if ist[I_LANDED]:
         side = -ist[I_SIDE]
     elif r == 0.0:
-        side = d if ist[I_MODEL] == MODEL_BOUC_WEN else -1
+        side = d if ist[I_MODEL] == MODEL_BOUC_WEN else 1
     else:
         side = 1 if r > 0.0 else -1
     ist[I_LANDED] = 0
     ist[I_SIDE] = side
-    _natural(ist, mp, st[S_Q], st[S_Z], d)
+    _slope(ist, mp, st[S_Q], st[S_Z], d)
     return side
 
 
@@ -216,8 +246,7 @@ def _rhs(par, ist, mp, Y, t, y, dy, k):
     v = y[1]
     z = y[2]
     ph = par[P_PHI0] + par[P_OMEGA] * t
-    g, gq, gz = _slope(ist, mp, q, z, ist[I_DIR])
-    out, yq, yz = _output(ist, mp, q, z)
+    out, yq, yz, g, gq, gz = _model(ist, mp, q, z, ist[I_DIR])
     dy[0] = v
     dy[1] = -2.0 * zeta * v - q + math.cos(ph) + c * out
     dy[2] = g * v
@@ -382,6 +411,8 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
     # a non-integer exponent makes |z|ⁿ singular at the kink (z ~ t^(n+1) behind it): the
     # steps on both sides are graded geometrically down to h·GRADE_FIRST (module docstring)
     graded = kinked and mp[3] != math.floor(mp[3])
+    pole_stop = POLE_STOP * h_step
+    cap = math.inf  # Jiles–Atherton: a step that met the pole is retried shorter (below)
     first = 0  # 1: K[0] holds f(t, y), the previous step's end derivative
     _load(st, Y, y, k)
     while True:
@@ -400,15 +431,44 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
                 ahead = -y[2] / zdot
                 if ahead < 2.0 * h_max:
                     h_max = max(0.5 * ahead, h_step * GRADE_FIRST)
+        if not kinked:
+            # Jiles–Atherton: RK8 steps resolve the relaxation of M_irr (h·λ <= RELAX_STEP);
+            # with δ_M = 1 where the pole may be reached, half the predicted time to it, so
+            # that they close in on it geometrically: there the run ends (module docstring)
+            if first:
+                zdot = K[0, 2]
+            else:
+                zdot = _slope(ist, mp, y[0], y[2], ist[I_DIR])[0] * y[1]
+            rate, ahead = _ja_limits(mp, y[0], y[1], y[2], zdot, ist[I_DIR])
+            if rate * h_max > RELAX_STEP:
+                h_max = RELAX_STEP / rate
+            if ist[I_POLE] and ist[I_SIDE] > 0:
+                if ahead <= pole_stop:
+                    ist[I_BAD] = 1
+                    _store(st, Y, y, k)
+                    return ILL_POSED
+                h_max = min(h_max, 0.5 * ahead)
+        h_max = min(h_max, cap)
         last = rem <= h_max
         h = rem if last else h_max
         t = st[S_TAU]
         d = ist[I_DIR]
         _stages(par, ist, mp, Y, t, y, h, y1, K, tmp, k, first)
         first = 0
+        if not ist[I_BAD] and d * y1[1] > 0.0:
+            # the end derivative: the velocity-dip test's and the next step's first stage
+            _rhs(par, ist, mp, Y, t + h, y1, dy, k)
         if ist[I_BAD]:
-            _store(st, Y, y, k)
-            return ILL_POSED
+            # a stage (or the end) past Jiles–Atherton's pole, which the prediction missed:
+            # retry a quarter as long (K[0] = f(t, y) stays), down to the stop
+            if h <= pole_stop:
+                _store(st, Y, y, k)
+                return ILL_POSED
+            ist[I_BAD] = 0
+            cap = 0.25 * h
+            first = 1
+            continue
+        cap *= 2.0
         if not (abs(y1[0]) <= bound and abs(y1[1]) <= bound and abs(y1[2]) <= bound):
             st[S_Q] = y1[0]
             st[S_V] = y1[1]
@@ -418,9 +478,7 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
         if d * y1[1] <= 0.0:
             kind = -1
         else:
-            # a dip of v to zero and back within the step: cubic Hermite of d·v (a = v'); the
-            # end derivative is the next step's first stage
-            _rhs(par, ist, mp, Y, t + h, y1, dy, k)
+            # a dip of v to zero and back within the step: cubic Hermite of d·v (a = v')
             vmax, vmin = _hermite_extrema(d * y[1], d * K[0, 1], d * y1[1], d * dy[1], h)
             if vmin < 0.0:
                 args = _args(par, ist, mp, Y, t, y, 0, 0.0, loc)
