@@ -98,12 +98,14 @@ ILL_POSED = 6
 GRADE_FIRST = 2.0**-6
 #: the least subnormal number: a stage state on the step's side of the kink (see _slope)
 _TINY = 5e-324
-#: Jiles–Atherton: ``mp[M_GUESS]`` (after the 5 parameters) holds the last ``M`` solved, the
-#: warm start of the next solve of the output map (a scratch slot, not a parameter)
-M_GUESS = 5
+#: Jiles–Atherton's scratch slots after the 5 parameters of ``mp`` (not parameters): the last
+#: solve's ``M``, ``q``, ``z``, ``∂M/∂q``, ``∂M/∂z`` (the next solve starts from the linear
+#: prediction ``M + ∂M/∂q·Δq + ∂M/∂z·Δz``) and ``∂g/∂z`` (the relaxation rate at a step start)
+M_LAST, M_Q, M_Z, M_MQ, M_MZ, M_GZ = range(5, 11)
+N_JA_MP = 11
 #: Jiles–Atherton: the RK8 step times the relaxation rate ``λ = |v·∂g/∂M_irr|`` (about
 #: ``|v|/k``) stays below this (module docstring)
-RELAX_STEP = 0.25
+RELAX_STEP = 1.0
 #: Jiles–Atherton's pole: the predicted time to it (or a step that fails on it) below
 #: ``POLE_STOP·h`` ends the run with ``ILL_POSED`` there (module docstring)
 POLE_STOP = 1e-10
@@ -116,16 +118,24 @@ _MAX_STUCK = 50
 # --------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def _ja(ist, mp, q, z, d, on):
-    """Jiles–Atherton from one warm-started solve (``mp[M_GUESS]``, updated): ``(M, ∂M/∂q,
+    """Jiles–Atherton from one solve warm-started at the linear prediction from the last one
+    (the scratch slots ``mp[M_LAST:]``, updated): ``(M, ∂M/∂q,
     ∂M/∂z, g, ∂g/∂q, ∂g/∂z)`` with ``δ_M = on``; an ill-posed point sets ``I_BAD`` (and
     gives ``g = 0``)."""
+    guess = mp[M_LAST] + mp[M_MQ] * (q - mp[M_Q]) + mp[M_MZ] * (z - mp[M_Z])
     m, m_h, m_i, g, gh, gi, ok = jiles_atherton_rhs(
-        q, z, d, on, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_GUESS]
+        q, z, d, on, mp[0], mp[1], mp[2], mp[3], mp[4], guess
     )
-    mp[M_GUESS] = m
+    mp[M_LAST] = m
+    mp[M_Q] = q
+    mp[M_Z] = z
+    mp[M_MQ] = m_h
+    mp[M_MZ] = m_i
     if not ok:
         ist[I_BAD] = 1
+        mp[M_GZ] = math.inf
         return m, m_h, m_i, 0.0, 0.0, 0.0
+    mp[M_GZ] = gi
     return m, m_h, m_i, g, gh, gi
 
 
@@ -163,8 +173,7 @@ def _regime(ist, mp, q, z, d):
     1`` for ``d``; smooth, and defined past the pole too)."""
     if ist[I_MODEL] == MODEL_BOUC_WEN:
         return z, 0.0, 1.0
-    r = jiles_atherton_margins(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_GUESS])
-    mp[M_GUESS] = r[0]
+    r = jiles_atherton_margins(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_LAST])
     return r[1], r[2], r[3]
 
 
@@ -178,25 +187,16 @@ def _crossed(ist, mp, q, z, d, side):
 
 
 @njit(cache=True)
-def _ja_limits(mp, q, v, z, zdot, d):
-    """Jiles–Atherton's own rates at a step start, from the ``δ_M = 1`` formula (the one in
-    force, or the one a switch inside the step brings): ``(λ, t_pole)`` with ``λ = |v·∂g/∂z|``
-    the relaxation rate of ``M_irr`` toward ``M_an`` (``g = G/(k·w)``: ``∂g/∂z = G_z/(k·w) −
-    G·w_z/(k·w²)``, about ``|v|/k``) and ``t_pole`` the time to the pole ``w = 1 − αχ = 0``
-    predicted from ``w`` and ``ẇ = w_q·v + w_z·ż`` (``inf`` if ``w`` does not fall): near the
-    pole ``g ~ 1/w`` and ``w ~ (t* − t)^{1/2}`` (the branch ``H(M_irr)`` folds there), so
-    ``t* − t = w/(2|ẇ|)`` to leading order."""
-    _, big_g, _, g_z, w, w_q, w_z = jiles_atherton_margins(
-        q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_GUESS]
-    )
-    k = mp[2]
-    if not w > 0.0:
-        return math.inf, 0.0
-    rate = abs(v * (g_z / (k * w) - big_g * w_z / (k * w * w)))
+def _pole_distance(mp, q, v, z, zdot, d):
+    """Jiles–Atherton on the side ``δ_M = 1``: the time to the pole ``w = 1 − αχ = 0``
+    predicted from ``w`` and ``ẇ = w_q·v + w_z·ż`` at the state (``inf`` if ``w`` does not
+    fall). Near the pole ``g ~ 1/w`` and ``w ~ (t* − t)^{1/2}`` (the branch ``H(M_irr)``
+    folds there), so ``t* − t = w/(2|ẇ|)`` to leading order."""
+    w, w_q, w_z = jiles_atherton_margins(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_LAST])[4:]
     wdot = w_q * v + w_z * zdot
     if not wdot < 0.0:
-        return rate, math.inf
-    return rate, w / (-2.0 * wdot)
+        return math.inf
+    return max(w, 0.0) / (-2.0 * wdot)
 
 
 @njit(cache=True, inline="always")
@@ -413,6 +413,7 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
     graded = kinked and mp[3] != math.floor(mp[3])
     pole_stop = POLE_STOP * h_step
     cap = math.inf  # Jiles–Atherton: a step that met the pole is retried shorter (below)
+    gz_end = gz_new = 0.0
     first = 0  # 1: K[0] holds f(t, y), the previous step's end derivative
     _load(st, Y, y, k)
     while True:
@@ -435,14 +436,17 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
             # Jiles–Atherton: RK8 steps resolve the relaxation of M_irr (h·λ <= RELAX_STEP);
             # with δ_M = 1 where the pole may be reached, half the predicted time to it, so
             # that they close in on it geometrically: there the run ends (module docstring)
-            if first:
+            if first:  # K[0] = f(t, y) and gz_end = ∂g/∂z at y: the previous step's end
                 zdot = K[0, 2]
+                gz = gz_end
             else:
                 zdot = _slope(ist, mp, y[0], y[2], ist[I_DIR])[0] * y[1]
-            rate, ahead = _ja_limits(mp, y[0], y[1], y[2], zdot, ist[I_DIR])
+                gz = mp[M_GZ]
+            rate = abs(y[1] * gz)  # 0 on the side δ_M = 0 (the step is cut at the switch)
             if rate * h_max > RELAX_STEP:
-                h_max = RELAX_STEP / rate
+                h_max = max(RELAX_STEP / rate, pole_stop)
             if ist[I_POLE] and ist[I_SIDE] > 0:
+                ahead = _pole_distance(mp, y[0], y[1], y[2], zdot, ist[I_DIR])
                 if ahead <= pole_stop:
                     ist[I_BAD] = 1
                     _store(st, Y, y, k)
@@ -458,6 +462,7 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
         if not ist[I_BAD] and d * y1[1] > 0.0:
             # the end derivative: the velocity-dip test's and the next step's first stage
             _rhs(par, ist, mp, Y, t + h, y1, dy, k)
+            gz_new = mp[M_GZ] if not kinked else 0.0
         if ist[I_BAD]:
             # a stage (or the end) past Jiles–Atherton's pole, which the prediction missed:
             # retry a quarter as long (K[0] = f(t, y) stays), down to the stop
@@ -502,6 +507,7 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
                 y[r] = y1[r]
                 K[0, r] = dy[r]
             first = 1
+            gz_end = gz_new
             if st[S_HNEXT] != 0.0 and h == st[S_HNEXT]:
                 st[S_HNEXT] = 2.0 * h if 2.0 * h < h_step else 0.0
             if last:

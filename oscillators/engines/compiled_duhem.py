@@ -142,7 +142,10 @@ class CompiledDuhemEngine(TangentFlow, Engine):
         v = finite_scalar(state.v, "state.v")
         t0 = finite_scalar(state.t, "state.t")
         self._phi0 = wrap_phase(finite_scalar(state.phi, "state.phi"))
-        self._mp = np.array([float(spec.parameters[name]) for name in names] + [math.nan])
+        self._mp = np.array([float(spec.parameters[name]) for name in names])
+        if code == _k.MODEL_JILES_ATHERTON:  # the scratch slots: no previous solve yet
+            self._mp = np.concatenate([self._mp, np.zeros(_k.N_JA_MP - self._mp.size)])
+            self._mp[_k.M_LAST] = math.nan
         op_state = state.operator_state
         if op_state is None:
             op_state = op.initial_state(q)
