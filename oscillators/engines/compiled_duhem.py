@@ -13,12 +13,15 @@ The algorithm in words
 ----------------------
 The state is ``(q, v, z)`` in time: the Duhem law ``dz = g_d(q, z) dq`` becomes
 ``z' = g_d(q, z)·v`` with ``d = sign v``, integrated with fixed-step 8th-order Dormand–Prince
-(step ``h = step/ρ``, ``ρ = max(1, Ω, 2ζ, √(|C|·S))`` with ``S`` the operator's ``max_slope``,
-default ``step = 0.05`` as in the other compiled engines). The events, located by Newton on the
-step's own RK8 map (:mod:`oscillators.engines._duhem_engine_kernels`): the **reversal**
-``v = 0`` (``v := 0``, ``d`` flips) and, for Bouc–Wen, the **kink** ``z = 0`` of ``|z|ⁿ``
-(``z := 0``; no RK8 step straddles it; not counted among the events, which are the reversals,
-as in the generic engine).
+(step ``h = step/ρ``, ``ρ = max(1, Ω, 2ζ, √(|C|·S))`` with ``S`` the operator's ``max_slope``
+— Jiles–Atherton's from :func:`hysteresis._duhem_kernels.jiles_atherton_slope_bound` at the
+start state — default ``step = 0.05`` as in the other compiled engines; Jiles–Atherton's steps
+also resolve the relaxation of ``M_irr`` and close in on its pole, where the operator's
+:class:`~hysteresis.jiles_atherton.JilesAthertonInstability` is raised). The events, located
+by Newton on the step's own RK8 map (:mod:`oscillators.engines._duhem_engine_kernels`): the
+**reversal** ``v = 0`` (``v := 0``, ``d`` flips) and the **kink** (Bouc–Wen: ``z = 0`` of
+``|z|ⁿ``, ``z := 0``; Jiles–Atherton: the switch of ``δ_M``; no RK8 step straddles it; not
+counted among the events, which are the reversals, as in the generic engine).
 
 Tangent space: rows ``("q", "v"[, "phi"], "z")``, ``z`` the *current* internal variable (the
 memory of :class:`~hysteresis.duhem.DuhemState`), so that the Jacobian is the derivative of
