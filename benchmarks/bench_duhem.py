@@ -12,7 +12,8 @@ machine's load hits all alike. Cases (ζ = 0.05, Ω = 1):
   ``C = −0.8`` (the classic oscillator ``q'' + 2ζq' + q + 0.8·z = cos t``); ``n = 1.5`` pays
   for the graded steps at the kink ``z = 0``;
 * ``jiles-atherton``: ``JilesAtherton(ms=1, a=0.5, k=0.4, c=0.2, alpha=0.1)`` at ``C = 0.5``
-  (two implicit solves of the output map per right-hand side);
+  (one implicit solve of the output map per right-hand side, warm-started at the linear
+  prediction from the previous one);
 * ``bouc-wen python``: the Bouc–Wen oscillator (n = 1) on the generic engine
   (``engine_options={"method": "generic"}``), over ``--python-periods`` periods: what the
   compiled path saves.

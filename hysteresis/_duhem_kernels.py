@@ -19,6 +19,27 @@ Slopes (scalar float arguments; ``direction`` is ``+1.0`` rising, ``-1.0`` falli
   (``1/D`` for ``p = H``, ``α(1−c)/D`` for ``p = M_irr``), ``∂χ_irr/∂p = δ_M(M_an'·H_e,p −
   [p = M_irr])/(k·d)``, ``∂χ/∂p = (1−c)∂χ_irr/∂p + c·M_an''·H_e,p`` and
   ``∂g/∂p = (∂χ_irr/∂p + α·g·∂χ/∂p)/(1 − αχ)``.
+* :func:`jiles_atherton_rhs` ``(H, M_irr, d, δ_M, ms, a, k, c, α, guess) -> (M, ∂M/∂H,
+  ∂M/∂M_irr, g, ∂g/∂H, ∂g/∂M_irr, ok)``: both of the above from ONE solve of the output map,
+  warm-started at ``guess`` (the engine passes the previous ``M``), ``δ_M`` imposed (0 or 1) or
+  natural (:data:`DELTA_M_NATURAL`); the two functions above are this one, cold-started.
+* :func:`jiles_atherton_margins` ``(H, M_irr, d, ms, a, k, c, α, guess) -> (M, G, G_H, G_M,
+  w, w_H, w_M)``: the switch function ``G = d·(M_an − M_irr)`` (``δ_M = 1`` iff ``G > 0``) and
+  the pole margin ``w = 1 − αχ`` of the ``δ_M = 1`` formula, with partials (the engine's kink
+  and pole). Along a branch with ``δ_M = 1`` the gap obeys ``dG/dH_e = M_an'(H_e) − G/k`` (a
+  linear ODE in ``H_e``, which is monotone while ``w > 0``), so ``G <= max(G_0, k·ms/(3a))``:
+  :func:`jiles_atherton_slope_bound` turns that into ``χ <= χ_s = (1−c)·max(ms/(3a), |G_0|/k)
+  + c·ms/(3a)`` and ``dM/dH = χ/(1 − αχ) <= χ_s/(1 − αχ_s)`` (``None`` if ``αχ_s >= 1``; every
+  branch after a reversal starts at ``G <= 0``).
+
+The output map is solved by Newton on ``F`` from the guess, safeguarded by the bracket ``[−ms,
+ms]`` (bisection where Newton leaves it). Stopping rule (explicit): with ``r`` the root and
+``Δ = F(m)/F'(m)`` the Newton step from ``m``, ``|m − Δ − r| <= max|F''|·|m − r|²/F'(m)`` and
+``|m − r| <= |Δ|·F'(m)/D_min``, so ``|m − Δ − r| <= K·Δ²`` with ``K = α²c·ms·max|L''|/(a²·
+D_min²)`` (``D_min = 1 − αc·ms/(3a)``, ``max|L''| < 0.106``); the solve stops, accepting ``m −
+Δ``, once ``K·Δ² <= ε·ms`` (or the bracket is a few ulps wide): the truncation error is then
+below an ulp of ``ms`` and ``M`` carries only the rounding of ``F``, a few ``ε·ms/D``. From a
+warm start that is 1–2 Newton steps plus one evaluation of ``L`` at the root.
 
 The Langevin function ``L(x) = coth x − 1/x`` and its first two derivatives come from their
 Taylor series ``L(x) = Σ_{j>=1} 2^{2j}B_{2j}x^{2j−1}/(2j)!`` (Bernoulli numbers; radius π) for
@@ -37,9 +58,13 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "DELTA_M_NATURAL",
     "bouc_wen_slope",
+    "jiles_atherton_margins",
     "jiles_atherton_magnetization",
+    "jiles_atherton_rhs",
     "jiles_atherton_slope",
+    "jiles_atherton_slope_bound",
     "langevin",
 ]
 
@@ -104,38 +129,139 @@ def bouc_wen_slope(
     return g, dg
 
 
+#: a bound of ``|L''|`` (its maximum is 0.10596, at ``|x| = 1.372``): Newton's error bound
+_L2_MAX = 0.106
+#: ``delta_m`` of :func:`jiles_atherton_rhs`: δ_M from the sign of the gap
+DELTA_M_NATURAL = -1.0
+
+
 @njit(cache=True)
-def _magnetization(h, m_irr, ms, a, c, alpha):
-    """``(M, D, x)``: the output map's root, ``D = 1 − αc·M_an'(H_e)``, ``x = H_e/a``."""
+def _solve(h, m_irr, ms, a, c, alpha, guess):
+    """``(M, D, x, L(x), L'(x), L''(x))``: the output map's root from ``guess`` (a cold start,
+    one fixed-point step from ``M_irr``, where ``guess`` is NaN or outside ``[−ms, ms]``),
+    ``D = F'(M) = 1 − αc·M_an'(H_e)``, ``x = H_e/a`` (module docstring: the stopping rule)."""
     base = (1.0 - c) * m_irr
     if c == 0.0 or alpha == 0.0:
         x = (h + alpha * base) / a if c == 0.0 else h / a
-        lv, l1, _ = langevin(x)
-        return base + c * ms * lv, 1.0 - alpha * c * ms / a * l1, x
+        lv, l1, l2 = langevin(x)
+        return base + c * ms * lv, 1.0 - alpha * c * ms / a * l1, x, lv, l1, l2
+    s = alpha * c * ms / a  # F' = 1 − s·L'(x), in [1 − s/3, 1]
+    d_min = 1.0 - s / 3.0
+    bound = s * alpha / a * _L2_MAX / (d_min * d_min)  # |F''|max/D_min²
+    tol = 2.220446049250313e-16 * ms
+    if -ms <= guess <= ms:
+        m = guess
+    else:
+        m = base + c * ms * langevin((h + alpha * m_irr) / a)[0]
     lo, hi = -ms, ms
-    m = base + c * ms * langevin((h + alpha * m_irr) / a)[0]  # one fixed-point step from M_irr
-    eps = 2.220446049250313e-16
     for _ in range(100):
         x = (h + alpha * m) / a
-        lv, l1, _ = langevin(x)
+        lv, l1, l2 = langevin(x)
         f = m - base - c * ms * lv
-        d = 1.0 - alpha * c * ms / a * l1
+        if f == 0.0:
+            return m, 1.0 - s * l1, x, lv, l1, l2
         if f > 0.0:
             hi = m
-        elif f < 0.0:
-            lo = m
         else:
-            return m, d, x
-        step = f / d
-        nxt = m - step
-        if not lo < nxt < hi:  # Newton left the bracket: bisect
-            nxt = 0.5 * (lo + hi)
-        # F is rounded to a few ulps of ms, so M is known to ~4ε·ms/F' at best: stop there
-        if abs(nxt - m) <= 4.0 * eps * ms / d or hi - lo <= 4.0 * eps * ms:
-            x = (h + alpha * nxt) / a
-            return nxt, 1.0 - alpha * c * ms / a * langevin(x)[1], x
-        m = nxt
-    return m, 1.0 - alpha * c * ms / a * langevin((h + alpha * m) / a)[1], (h + alpha * m) / a
+            lo = m
+        step = f / (1.0 - s * l1)
+        if bound * step * step <= tol:  # the Newton iterate m − step is within ε·ms: done
+            m -= step
+            break
+        m -= step
+        if not lo < m < hi:  # Newton left the bracket: bisect
+            m = 0.5 * (lo + hi)
+        if hi - lo <= 4.0 * tol:
+            break
+    x = (h + alpha * m) / a
+    lv, l1, l2 = langevin(x)
+    return m, 1.0 - s * l1, x, lv, l1, l2
+
+
+@njit(cache=True)
+def jiles_atherton_rhs(
+    h: float,
+    m_irr: float,
+    direction: float,
+    delta_m: float,
+    ms: float,
+    a: float,
+    k: float,
+    c: float,
+    alpha: float,
+    guess: float,
+) -> tuple[float, float, float, float, float, float, bool]:
+    """``(M, ∂M/∂H, ∂M/∂M_irr, g, ∂g/∂H, ∂g/∂M_irr, ok)`` from one solve of the output map
+    from ``guess`` (the previous ``M``: a warm start; NaN: cold). ``delta_m`` 0 or 1 imposes
+    ``δ_M`` (1: the smooth δ_M = 1 formula also where rounding puts the gap on the other
+    side), :data:`DELTA_M_NATURAL` takes it from the sign of ``d·(M_an − M_irr)``. ``ok``
+    False (``g`` and its partials NaN) where ``1 − αχ <= 0`` (module docstring)."""
+    m, d, x, lv, l1, l2 = _solve(h, m_irr, ms, a, c, alpha, guess)
+    dman = ms / a * l1
+    m_h = c * dman / d
+    m_i = (1.0 - c) / d
+    gap = ms * lv - m_irr
+    if delta_m == 0.0 or (delta_m < 0.0 and direction * gap <= 0.0):  # no irreversible change
+        return m, m_h, m_i, 0.0, 0.0, 0.0, True
+    ddman = ms / (a * a) * l2
+    chi_irr = gap / (k * direction)
+    chi = (1.0 - c) * chi_irr + c * dman
+    q = 1.0 - alpha * chi
+    if not q > 0.0:
+        return m, m_h, m_i, math.nan, math.nan, math.nan, False
+    g = chi_irr / q
+    he_h = 1.0 / d
+    he_i = alpha * (1.0 - c) / d
+    ci_h = dman * he_h / (k * direction)
+    ci_i = (dman * he_i - 1.0) / (k * direction)
+    ch_h = (1.0 - c) * ci_h + c * ddman * he_h
+    ch_i = (1.0 - c) * ci_i + c * ddman * he_i
+    return m, m_h, m_i, g, (ci_h + alpha * g * ch_h) / q, (ci_i + alpha * g * ch_i) / q, True
+
+
+@njit(cache=True)
+def jiles_atherton_margins(
+    h: float,
+    m_irr: float,
+    direction: float,
+    ms: float,
+    a: float,
+    k: float,
+    c: float,
+    alpha: float,
+    guess: float,
+) -> tuple[float, float, float, float, float, float, float]:
+    """``(M, G, ∂G/∂H, ∂G/∂M_irr, w, ∂w/∂H, ∂w/∂M_irr)`` from one solve: the switch function
+    ``G = d·(M_an − M_irr)`` (``δ_M = 1`` where it is positive; smooth, whatever the side) and
+    the margin ``w = 1 − αχ`` of the ``δ_M = 1`` formula (ill-posed where ``w <= 0``), with
+    ``∂G/∂p = d·(M_an'·H_e,p − [p = M_irr])`` and ``∂w/∂p = −α·∂χ/∂p`` (module docstring)."""
+    m, d, x, lv, l1, l2 = _solve(h, m_irr, ms, a, c, alpha, guess)
+    dman = ms / a * l1
+    ddman = ms / (a * a) * l2
+    gap = ms * lv - m_irr
+    he_h = 1.0 / d
+    he_i = alpha * (1.0 - c) / d
+    big_g = direction * gap
+    g_h = direction * dman * he_h
+    g_i = direction * (dman * he_i - 1.0)
+    chi = (1.0 - c) * big_g / k + c * dman
+    ch_h = (1.0 - c) * g_h / k + c * ddman * he_h
+    ch_i = (1.0 - c) * g_i / k + c * ddman * he_i
+    return m, big_g, g_h, g_i, 1.0 - alpha * chi, -alpha * ch_h, -alpha * ch_i
+
+
+def jiles_atherton_slope_bound(
+    h: float, m_irr: float, ms: float, a: float, k: float, c: float, alpha: float
+) -> float | None:
+    """A bound of ``dM/dH`` on every branch of a motion from ``(H, M_irr)``, or ``None`` where
+    the model may reach its pole (module docstring: ``χ <= χ_s``, ``dM/dH <= χ_s/(1 − αχ_s)``
+    when ``αχ_s < 1``)."""
+    gap = abs(jiles_atherton_margins(h, m_irr, 1.0, ms, a, k, c, alpha, math.nan)[1])
+    top = ms / (3.0 * a)  # max M_an'
+    chi = (1.0 - c) * max(top, gap / k) + c * top
+    if not alpha * chi < 1.0:
+        return None
+    return chi / (1.0 - alpha * chi)
 
 
 @njit(cache=True)
@@ -143,10 +269,9 @@ def jiles_atherton_magnetization(
     h: float, m_irr: float, ms: float, a: float, c: float, alpha: float
 ) -> tuple[float, float, float]:
     """``(M, ∂M/∂H, ∂M/∂M_irr)`` of the output map ``M = (1−c)M_irr + c·M_an(H + αM)``
-    (module docstring; safeguarded Newton in ``[−ms, ms]``, stopped at ``4ε·ms/F'``)."""
-    m, d, x = _magnetization(h, m_irr, ms, a, c, alpha)
-    dman = ms / a * langevin(x)[1]
-    return m, c * dman / d, (1.0 - c) / d
+    (module docstring; safeguarded Newton in ``[−ms, ms]`` from a cold start)."""
+    m, m_h, m_i, _, _, _, _ = jiles_atherton_rhs(h, m_irr, 1.0, 0.0, ms, a, 1.0, c, alpha, math.nan)
+    return m, m_h, m_i
 
 
 @njit(cache=True)
@@ -162,27 +287,10 @@ def jiles_atherton_slope(
 ) -> tuple[float, float, float, bool]:
     """``(g, ∂g/∂H, ∂g/∂M_irr, ok)`` with ``g = dM_irr/dH = χ_irr/(1 − αχ)`` (module
     docstring); ``ok`` False (and ``g`` NaN) where ``1 − αχ <= 0``."""
-    m, d, x = _magnetization(h, m_irr, ms, a, c, alpha)
-    lv, l1, l2 = langevin(x)
-    man = ms * lv
-    dman = ms / a * l1
-    ddman = ms / (a * a) * l2
-    gap = man - m_irr
-    if direction * gap <= 0.0:  # δ_M = 0: no irreversible change
-        return 0.0, 0.0, 0.0, True
-    chi_irr = gap / (k * direction)
-    chi = (1.0 - c) * chi_irr + c * dman
-    q = 1.0 - alpha * chi
-    if not q > 0.0:
-        return math.nan, math.nan, math.nan, False
-    g = chi_irr / q
-    he_h = 1.0 / d
-    he_i = alpha * (1.0 - c) / d
-    ci_h = dman * he_h / (k * direction)
-    ci_i = (dman * he_i - 1.0) / (k * direction)
-    ch_h = (1.0 - c) * ci_h + c * ddman * he_h
-    ch_i = (1.0 - c) * ci_i + c * ddman * he_i
-    return g, (ci_h + alpha * g * ch_h) / q, (ci_i + alpha * g * ch_i) / q, True
+    _, _, _, g, g_h, g_i, ok = jiles_atherton_rhs(
+        h, m_irr, direction, DELTA_M_NATURAL, ms, a, k, c, alpha, math.nan
+    )
+    return g, g_h, g_i, ok
 
 
 # -- apply: the branch ODE along a sampled record ---------------------------------------------
@@ -274,8 +382,8 @@ def _kink_step(model, p, u, z, d, h, k1, z_end):
 @njit(cache=True)
 def _ja_gap(p, h, m_irr, d):
     """``d·(M_an(He) − M_irr)`` of Jiles–Atherton: δ_M = 1 where it is positive."""
-    m, _, x = _magnetization(h, m_irr, p[0], p[1], p[3], p[4])
-    return d * (p[0] * langevin(x)[0] - m_irr)
+    lv = _solve(h, m_irr, p[0], p[1], p[3], p[4], math.nan)[3]
+    return d * (p[0] * lv - m_irr)
 
 
 @njit(cache=True)

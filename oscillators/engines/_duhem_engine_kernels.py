@@ -48,6 +48,18 @@ the grading leaves the steps at the singularity itself, ``~(h·GRADE_FIRST)^(n+1
 (about 12 extra steps per kink). Integer ``n`` is smooth on each
 side: no grading.
 
+Jiles–Atherton. The kink is the switch of ``δ_M`` (the sign of ``G = d·(M_an − M_irr)``,
+smooth, the event function); at ``G = 0`` exactly (the demagnetised state, or a reversal on
+the anhysteretic curve) the side is ``δ_M = 1``: with ``M_irr`` frozen ``dG/dH·d = M_an'/D > 0``.
+Each side's ``δ_M`` is imposed on the stages. The relaxation of ``M_irr`` toward ``M_an`` has
+the rate ``λ = |v·∂g/∂M_irr|`` (about ``|v|/k``), which neither ``ρ`` nor ``max_slope`` sees:
+the steps keep ``h·λ <= RELAX_STEP = 1`` (a fixed step with ``h·λ ~ 6`` erred by 5e-4; at 1 and
+below the error is 5e-11, measured). Where the pole ``w = 1 − αχ = 0`` is reachable
+(:func:`hysteresis._duhem_kernels.jiles_atherton_slope_bound` is None: ``I_POLE``) the steps
+on the side ``δ_M = 1`` are half the predicted time to it (``w ~ (t* − t)^{1/2}``), so they
+close in geometrically; when that time (or a retried step that met the pole) is below
+``POLE_STOP·h`` the run stops there with ``ILL_POSED`` (the field located to ~1e-12·|v|).
+
 Status codes of :func:`run`: ``DONE``, ``EVENTS_FULL`` (``ev`` full: drained and called again),
 ``DIVERGED``, ``STUCK``, ``ILL_POSED`` (the model's slope is undefined at a state reached:
 Jiles–Atherton with ``1 − α·χ <= 0``).
@@ -62,8 +74,8 @@ from numba import njit
 
 from hysteresis._duhem_kernels import (
     bouc_wen_slope,
-    jiles_atherton_magnetization,
-    jiles_atherton_slope,
+    jiles_atherton_margins,
+    jiles_atherton_rhs,
 )
 from oscillators.engines import _dop853_kernel as _dop
 from oscillators.engines._play_kernels import _hermite_extrema
@@ -74,8 +86,8 @@ _N_STAGES = _dop.N_STAGES
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
 N_PAR = 8
 I_DIR, I_PERIOD, I_EVENTS, I_SAMPLE, I_NEV, I_RECORD, I_K, I_MODEL = range(8)
-I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED = range(8, 13)
-N_IST = 13
+I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED, I_POLE = range(8, 14)
+N_IST = 14
 S_TAU, S_Q, S_V, S_Z, S_HNEXT = range(5)
 N_ST = 5
 
@@ -98,9 +110,17 @@ ILL_POSED = 6
 GRADE_FIRST = 2.0**-6
 #: the least subnormal number: a stage state on the step's side of the kink (see _slope)
 _TINY = 5e-324
-#: Jiles–Atherton: a stage on the side δ_M = 1 that rounding puts at δ_M = 0 is evaluated this
-#: far (relative to M_s) inside it (see _slope): its slope is then ~1e-12·M_s/k instead of ~0
-KINK_NUDGE = 1e-12
+#: Jiles–Atherton's scratch slots after the 5 parameters of ``mp`` (not parameters): the last
+#: solve's ``M``, ``q``, ``z``, ``∂M/∂q``, ``∂M/∂z`` (the next solve starts from the linear
+#: prediction ``M + ∂M/∂q·Δq + ∂M/∂z·Δz``) and ``∂g/∂z`` (the relaxation rate at a step start)
+M_LAST, M_Q, M_Z, M_MQ, M_MZ, M_GZ = range(5, 11)
+N_JA_MP = 11
+#: Jiles–Atherton: the RK8 step times the relaxation rate ``λ = |v·∂g/∂M_irr|`` (about
+#: ``|v|/k``) stays below this (module docstring)
+RELAX_STEP = 1.0
+#: Jiles–Atherton's pole: the predicted time to it (or a step that fails on it) below
+#: ``POLE_STOP·h`` ends the run with ``ILL_POSED`` there (module docstring)
+POLE_STOP = 1e-10
 #: events at zero distance in a row before STUCK
 _MAX_STUCK = 50
 
@@ -109,67 +129,86 @@ _MAX_STUCK = 50
 # the model
 # --------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
-def _natural(ist, mp, q, z, d):
-    """``(g, ∂g/∂q, ∂g/∂z)`` of the model in direction ``d`` as its kernel gives it; a state
-    where the model is ill-posed sets ``I_BAD`` (and gives zeros)."""
-    if ist[I_MODEL] == MODEL_BOUC_WEN:
-        g, gz = bouc_wen_slope(z, d, mp[0], mp[1], mp[2], mp[3])
-        return g, 0.0, gz
-    g, gh, gi, ok = jiles_atherton_slope(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4])
+def _ja(ist, mp, q, z, d, on):
+    """Jiles–Atherton from one solve warm-started at the linear prediction from the last one
+    (the scratch slots ``mp[M_LAST:]``, updated): ``(M, ∂M/∂q,
+    ∂M/∂z, g, ∂g/∂q, ∂g/∂z)`` with ``δ_M = on``; an ill-posed point sets ``I_BAD`` (and
+    gives ``g = 0``)."""
+    guess = mp[M_LAST] + mp[M_MQ] * (q - mp[M_Q]) + mp[M_MZ] * (z - mp[M_Z])
+    m, m_h, m_i, g, gh, gi, ok = jiles_atherton_rhs(
+        q, z, d, on, mp[0], mp[1], mp[2], mp[3], mp[4], guess
+    )
+    mp[M_LAST] = m
+    mp[M_Q] = q
+    mp[M_Z] = z
+    mp[M_MQ] = m_h
+    mp[M_MZ] = m_i
     if not ok:
         ist[I_BAD] = 1
-        return 0.0, 0.0, 0.0
-    return g, gh, gi
+        mp[M_GZ] = math.inf
+        return m, m_h, m_i, 0.0, 0.0, 0.0
+    mp[M_GZ] = gi
+    return m, m_h, m_i, g, gh, gi
+
+
+@njit(cache=True, inline="always")
+def _model(ist, mp, q, z, d):
+    """``(y, ∂y/∂q, ∂y/∂z, g, ∂g/∂q, ∂g/∂z)``: the output and the slope in direction ``d`` on
+    the side ``ist[I_SIDE]`` of the kink that the step is on (no step straddles a kink; its
+    stage states may lie a little beyond it, and there each side's own smooth formula holds,
+    not the other side's, whose ``∂g/∂z`` differs by a finite jump: one such stage errs the
+    tangent by ``~h·b·v·jump``, measured 1e-4).
+
+    Bouc–Wen (kink ``z = 0``): a stage beyond it is evaluated at the least subnormal number of
+    the step's side (``|z|ⁿ`` is 0 there to rounding). Jiles–Atherton (kink where ``δ_M``
+    switches, ``M_an = M_irr``): the side's ``δ_M`` is imposed (0: ``g = 0``; 1: the ``δ_M =
+    1`` formula, smooth through the kink)."""
+    side = ist[I_SIDE]
+    if ist[I_MODEL] == MODEL_BOUC_WEN:
+        zs = side * _TINY if side * z <= 0.0 else z
+        g, gz = bouc_wen_slope(zs, d, mp[0], mp[1], mp[2], mp[3])
+        return z, 0.0, 1.0, g, 0.0, gz
+    return _ja(ist, mp, q, z, d, 1.0 if side > 0 else 0.0)
 
 
 @njit(cache=True, inline="always")
 def _slope(ist, mp, q, z, d):
-    """``(g, ∂g/∂q, ∂g/∂z)`` on the side ``ist[I_SIDE]`` of the kink that the step is on (no
-    step straddles a kink; its stage states may lie a little beyond it, and there each side's
-    own smooth formula holds, not the other side's, whose ``∂g/∂z`` differs by a finite jump:
-    one such stage errs the tangent by ``~h·b·v·jump``, measured 1e-4).
-
-    Bouc–Wen (kink ``z = 0``): a stage beyond it is evaluated at the least subnormal number of
-    the step's side (``|z|ⁿ`` is 0 there to rounding). Jiles–Atherton (kink where ``δ_M``
-    switches, ``M_an = M_irr``): on the side ``δ_M = 0`` the slope is 0 (exactly that side's
-    formula); on the side ``δ_M = 1`` a stage the kernel puts at ``δ_M = 0`` (a rounding error
-    away) is evaluated ``KINK_NUDGE·M_s`` inside it."""
-    side = ist[I_SIDE]
-    if ist[I_MODEL] == MODEL_BOUC_WEN:
-        if side * z <= 0.0:
-            z = side * _TINY
-        return _natural(ist, mp, q, z, d)
-    if side < 0:
-        return 0.0, 0.0, 0.0
-    g, gh, gi = _natural(ist, mp, q, z, d)
-    if g == 0.0 and gi == 0.0 and gh == 0.0:
-        g, gh, gi = _natural(ist, mp, q, z - d * KINK_NUDGE * mp[0], d)
-    return g, gh, gi
+    """``(g, ∂g/∂q, ∂g/∂z)`` of :func:`_model`."""
+    r = _model(ist, mp, q, z, d)
+    return r[3], r[4], r[5]
 
 
 @njit(cache=True, inline="always")
 def _regime(ist, mp, q, z, d):
     """The function whose sign tells the side of the kink, with ``(∂/∂q, ∂/∂z)``: Bouc–Wen
-    ``z``; Jiles–Atherton ``g_d − g_{−d}`` (positive where ``δ_M = 1`` for ``d``: ``g_d > 0 =
-    g_{−d}``; negative where ``δ_M = 0``: ``g_d = 0 < g_{−d}``; continuous through the kink)."""
+    ``z``; Jiles–Atherton the switch function ``G = d·(M_an − M_irr)`` (positive where ``δ_M =
+    1`` for ``d``; smooth, and defined past the pole too)."""
     if ist[I_MODEL] == MODEL_BOUC_WEN:
         return z, 0.0, 1.0
-    g1, h1, i1 = _natural(ist, mp, q, z, d)
-    g2, h2, i2 = _natural(ist, mp, q, z, -d)
-    return g1 - g2, h1 - h2, i1 - i2
+    r = jiles_atherton_margins(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_LAST])
+    return r[1], r[2], r[3]
 
 
 @njit(cache=True, inline="always")
 def _crossed(ist, mp, q, z, d, side):
     """Whether ``(q, z)`` lies beyond the kink seen from ``side`` (Bouc–Wen: ``side·z <= 0``;
-    Jiles–Atherton from ``δ_M = 0``: ``g_d != 0``; an ill-posed point there is not flagged,
-    the step to the kink decides)."""
+    Jiles–Atherton from ``δ_M = 0``: ``G > 0``)."""
     if ist[I_MODEL] == MODEL_BOUC_WEN:
         return side * z <= 0.0
-    bad = ist[I_BAD]
-    g = _natural(ist, mp, q, z, d)[0]
-    ist[I_BAD] = bad
-    return g != 0.0
+    return _regime(ist, mp, q, z, d)[0] > 0.0
+
+
+@njit(cache=True)
+def _pole_distance(mp, q, v, z, zdot, d):
+    """Jiles–Atherton on the side ``δ_M = 1``: the time to the pole ``w = 1 − αχ = 0``
+    predicted from ``w`` and ``ẇ = w_q·v + w_z·ż`` at the state (``inf`` if ``w`` does not
+    fall). Near the pole ``g ~ 1/w`` and ``w ~ (t* − t)^{1/2}`` (the branch ``H(M_irr)``
+    folds there), so ``t* − t = w/(2|ẇ|)`` to leading order."""
+    w, w_q, w_z = jiles_atherton_margins(q, z, d, mp[0], mp[1], mp[2], mp[3], mp[4], mp[M_LAST])[4:]
+    wdot = w_q * v + w_z * zdot
+    if not wdot < 0.0:
+        return math.inf
+    return max(w, 0.0) / (-2.0 * wdot)
 
 
 @njit(cache=True, inline="always")
@@ -177,7 +216,8 @@ def _output(ist, mp, q, z):
     """``(y, ∂y/∂q, ∂y/∂z)``: the operator's output."""
     if ist[I_MODEL] == MODEL_BOUC_WEN:
         return z, 0.0, 1.0
-    return jiles_atherton_magnetization(q, z, mp[0], mp[1], mp[3], mp[4])
+    r = _ja(ist, mp, q, z, 1.0, 0.0)
+    return r[0], r[1], r[2]
 
 
 @njit(cache=True)
@@ -189,18 +229,20 @@ def output_now(ist, st, mp):
 @njit(cache=True)
 def side_now(ist, st, mp, d):
     """The side of the kink the current state is on (``I_SIDE``), or at the kink the side it
-    moves into (Bouc–Wen: ``z' = A·v`` at ``z = 0``; Jiles–Atherton: after a kink landed on,
-    the other side); sets ``I_BAD`` where the model is ill-posed."""
+    moves into (after a kink landed on: the other side; Bouc–Wen at ``z = 0``: ``z' = A·v``,
+    the side ``d``; Jiles–Atherton at ``G = 0``: ``δ_M = 1``, since with ``M_irr`` frozen
+    ``dG/dH·d = M_an'/D > 0``: the gap opens at once whichever way the input moves); sets
+    ``I_BAD`` where the model is ill-posed on that side."""
     r = _regime(ist, mp, st[S_Q], st[S_Z], d)[0]
     if ist[I_LANDED]:
         side = -ist[I_SIDE]
     elif r == 0.0:
-        side = d if ist[I_MODEL] == MODEL_BOUC_WEN else -1
+        side = d if ist[I_MODEL] == MODEL_BOUC_WEN else 1
     else:
         side = 1 if r > 0.0 else -1
     ist[I_LANDED] = 0
     ist[I_SIDE] = side
-    _natural(ist, mp, st[S_Q], st[S_Z], d)
+    _slope(ist, mp, st[S_Q], st[S_Z], d)
     return side
 
 
@@ -216,8 +258,7 @@ def _rhs(par, ist, mp, Y, t, y, dy, k):
     v = y[1]
     z = y[2]
     ph = par[P_PHI0] + par[P_OMEGA] * t
-    g, gq, gz = _slope(ist, mp, q, z, ist[I_DIR])
-    out, yq, yz = _output(ist, mp, q, z)
+    out, yq, yz, g, gq, gz = _model(ist, mp, q, z, ist[I_DIR])
     dy[0] = v
     dy[1] = -2.0 * zeta * v - q + math.cos(ph) + c * out
     dy[2] = g * v
@@ -382,6 +423,9 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
     # a non-integer exponent makes |z|ⁿ singular at the kink (z ~ t^(n+1) behind it): the
     # steps on both sides are graded geometrically down to h·GRADE_FIRST (module docstring)
     graded = kinked and mp[3] != math.floor(mp[3])
+    pole_stop = POLE_STOP * h_step
+    cap = math.inf  # Jiles–Atherton: a step that met the pole is retried shorter (below)
+    gz_end = gz_new = 0.0
     first = 0  # 1: K[0] holds f(t, y), the previous step's end derivative
     _load(st, Y, y, k)
     while True:
@@ -400,15 +444,48 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
                 ahead = -y[2] / zdot
                 if ahead < 2.0 * h_max:
                     h_max = max(0.5 * ahead, h_step * GRADE_FIRST)
+        if not kinked:
+            # Jiles–Atherton: RK8 steps resolve the relaxation of M_irr (h·λ <= RELAX_STEP);
+            # with δ_M = 1 where the pole may be reached, half the predicted time to it, so
+            # that they close in on it geometrically: there the run ends (module docstring)
+            if first:  # K[0] = f(t, y) and gz_end = ∂g/∂z at y: the previous step's end
+                zdot = K[0, 2]
+                gz = gz_end
+            else:
+                zdot = _slope(ist, mp, y[0], y[2], ist[I_DIR])[0] * y[1]
+                gz = mp[M_GZ]
+            rate = abs(y[1] * gz)  # 0 on the side δ_M = 0 (the step is cut at the switch)
+            if rate * h_max > RELAX_STEP:
+                h_max = max(RELAX_STEP / rate, pole_stop)
+            if ist[I_POLE] and ist[I_SIDE] > 0:
+                ahead = _pole_distance(mp, y[0], y[1], y[2], zdot, ist[I_DIR])
+                if ahead <= pole_stop:
+                    ist[I_BAD] = 1
+                    _store(st, Y, y, k)
+                    return ILL_POSED
+                h_max = min(h_max, 0.5 * ahead)
+        h_max = min(h_max, cap)
         last = rem <= h_max
         h = rem if last else h_max
         t = st[S_TAU]
         d = ist[I_DIR]
         _stages(par, ist, mp, Y, t, y, h, y1, K, tmp, k, first)
         first = 0
+        if not ist[I_BAD] and d * y1[1] > 0.0:
+            # the end derivative: the velocity-dip test's and the next step's first stage
+            _rhs(par, ist, mp, Y, t + h, y1, dy, k)
+            gz_new = mp[M_GZ] if not kinked else 0.0
         if ist[I_BAD]:
-            _store(st, Y, y, k)
-            return ILL_POSED
+            # a stage (or the end) past Jiles–Atherton's pole, which the prediction missed:
+            # retry a quarter as long (K[0] = f(t, y) stays), down to the stop
+            if h <= pole_stop:
+                _store(st, Y, y, k)
+                return ILL_POSED
+            ist[I_BAD] = 0
+            cap = 0.25 * h
+            first = 1
+            continue
+        cap *= 2.0
         if not (abs(y1[0]) <= bound and abs(y1[1]) <= bound and abs(y1[2]) <= bound):
             st[S_Q] = y1[0]
             st[S_V] = y1[1]
@@ -418,9 +495,7 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
         if d * y1[1] <= 0.0:
             kind = -1
         else:
-            # a dip of v to zero and back within the step: cubic Hermite of d·v (a = v'); the
-            # end derivative is the next step's first stage
-            _rhs(par, ist, mp, Y, t + h, y1, dy, k)
+            # a dip of v to zero and back within the step: cubic Hermite of d·v (a = v')
             vmax, vmin = _hermite_extrema(d * y[1], d * K[0, 1], d * y1[1], d * dy[1], h)
             if vmin < 0.0:
                 args = _args(par, ist, mp, Y, t, y, 0, 0.0, loc)
@@ -444,6 +519,7 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
                 y[r] = y1[r]
                 K[0, r] = dy[r]
             first = 1
+            gz_end = gz_new
             if st[S_HNEXT] != 0.0 and h == st[S_HNEXT]:
                 st[S_HNEXT] = 2.0 * h if 2.0 * h < h_step else 0.0
             if last:

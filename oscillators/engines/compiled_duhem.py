@@ -13,12 +13,15 @@ The algorithm in words
 ----------------------
 The state is ``(q, v, z)`` in time: the Duhem law ``dz = g_d(q, z) dq`` becomes
 ``z' = g_d(q, z)·v`` with ``d = sign v``, integrated with fixed-step 8th-order Dormand–Prince
-(step ``h = step/ρ``, ``ρ = max(1, Ω, 2ζ, √(|C|·S))`` with ``S`` the operator's ``max_slope``,
-default ``step = 0.05`` as in the other compiled engines). The events, located by Newton on the
-step's own RK8 map (:mod:`oscillators.engines._duhem_engine_kernels`): the **reversal**
-``v = 0`` (``v := 0``, ``d`` flips) and, for Bouc–Wen, the **kink** ``z = 0`` of ``|z|ⁿ``
-(``z := 0``; no RK8 step straddles it; not counted among the events, which are the reversals,
-as in the generic engine).
+(step ``h = step/ρ``, ``ρ = max(1, Ω, 2ζ, √(|C|·S))`` with ``S`` the operator's ``max_slope``
+— Jiles–Atherton's from :func:`hysteresis._duhem_kernels.jiles_atherton_slope_bound` at the
+start state — default ``step = 0.05`` as in the other compiled engines; Jiles–Atherton's steps
+also resolve the relaxation of ``M_irr`` and close in on its pole, where the operator's
+:class:`~hysteresis.jiles_atherton.JilesAthertonInstability` is raised). The events, located
+by Newton on the step's own RK8 map (:mod:`oscillators.engines._duhem_engine_kernels`): the
+**reversal** ``v = 0`` (``v := 0``, ``d`` flips) and the **kink** (Bouc–Wen: ``z = 0`` of
+``|z|ⁿ``, ``z := 0``; Jiles–Atherton: the switch of ``δ_M``; no RK8 step straddles it; not
+counted among the events, which are the reversals, as in the generic engine).
 
 Tangent space: rows ``("q", "v"[, "phi"], "z")``, ``z`` the *current* internal variable (the
 memory of :class:`~hysteresis.duhem.DuhemState`), so that the Jacobian is the derivative of
@@ -43,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from hysteresis._duhem_kernels import jiles_atherton_slope_bound
 from hysteresis._validation import finite_scalar, positive_scalar
 from oscillators.engines import _duhem_engine_kernels as _k
 from oscillators.engines.base import (
@@ -141,7 +145,21 @@ class CompiledDuhemEngine(TangentFlow, Engine):
         v = finite_scalar(state.v, "state.v")
         t0 = finite_scalar(state.t, "state.t")
         self._phi0 = wrap_phase(finite_scalar(state.phi, "state.phi"))
+        self._mp = np.array([float(spec.parameters[name]) for name in names])
+        if code == _k.MODEL_JILES_ATHERTON:  # the scratch slots: no previous solve yet
+            self._mp = np.concatenate([self._mp, np.zeros(_k.N_JA_MP - self._mp.size)])
+            self._mp[_k.M_LAST] = math.nan
+        op_state = state.operator_state
+        if op_state is None:
+            op_state = op.initial_state(q)
+        z0 = finite_scalar(spec.memory(op_state), "operator_state memory")
         slope = op.max_slope
+        pole = False
+        if code == _k.MODEL_JILES_ATHERTON:
+            # the steepest branch of a motion from this state, or None where the pole may be
+            # reached (then the steps close in on it: _duhem_engine_kernels)
+            slope = jiles_atherton_slope_bound(q, z0, *self._mp[:5])
+            pole = slope is None
         stiff = math.sqrt(abs(coupling) * float(slope)) if slope is not None else 0.0
         # the RK8 step's local error scales as (ρh)^9: ρ the largest rate of the linearised
         # motion (forcing, damping, the stiffness C·slope of the steepest branch)
@@ -155,10 +173,6 @@ class CompiledDuhemEngine(TangentFlow, Engine):
         self._par[_k.P_PERIOD] = self._period
         self._par[_k.P_BOUND] = float(system.divergence_bound)
         self._par[_k.P_T0] = t0
-        self._mp = np.array([float(spec.parameters[name]) for name in names])
-        op_state = state.operator_state
-        if op_state is None:
-            op_state = op.initial_state(q)
         u = getattr(op_state, "input", None)
         if u is not None and abs(float(u) - q) > 1e-12 * max(1.0, abs(q)):
             raise ValueError(f"state.operator_state.input ({float(u)}) must equal state.q ({q})")
@@ -167,7 +181,8 @@ class CompiledDuhemEngine(TangentFlow, Engine):
         self._st = np.zeros(_k.N_ST)
         self._st[_k.S_Q] = q
         self._st[_k.S_V] = v
-        self._st[_k.S_Z] = finite_scalar(spec.memory(op_state), "operator_state memory")
+        self._st[_k.S_Z] = z0
+        self._ist[_k.I_POLE] = 1 if pole else 0
         self._include_phase = False
         self._events: list[np.ndarray] = []
         self._ev = np.zeros((0, 6))
@@ -191,13 +206,12 @@ class CompiledDuhemEngine(TangentFlow, Engine):
         return int(self._ist[_k.I_PERIOD]), float(self._st[_k.S_TAU])
 
     def _check_posed(self) -> None:
+        """Raise the operator's own error (``Duhem._domain_error``: Jiles–Atherton's
+        :class:`~hysteresis.jiles_atherton.JilesAthertonInstability`, as the generic engine's
+        branch flow does) where the motion reached a point the model cannot continue past."""
         if self._ist[_k.I_BAD]:
-            raise ValueError(
-                f"{self._op!r} is ill-posed at q = {self._st[_k.S_Q]!r}, internal variable "
-                f"{self._st[_k.S_Z]!r} (t = {self.start.t + self.elapsed:.6g}): its slope is "
-                "undefined there (Jiles–Atherton: 1 − α·χ <= 0), so the motion cannot be "
-                "continued"
-            )
+            q, z = float(self._st[_k.S_Q]), float(self._st[_k.S_Z])
+            raise self._op._domain_error(q, z, int(self._ist[_k.I_DIR]))
 
     @property
     def n_events(self) -> int:

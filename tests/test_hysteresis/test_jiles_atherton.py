@@ -199,3 +199,18 @@ def test_coupled_trajectory_matches_an_independent_integration():
     # both at 1e-12 over ~10 reversals: ~1e-10; 1e-7 leaves room for the event timing
     np.testing.assert_allclose(traj.q, ref[:, 0], rtol=0, atol=1e-7)
     np.testing.assert_allclose(traj.M, m_ref, rtol=0, atol=1e-7)
+
+
+def test_coupled_virgin_curve_from_the_demagnetised_state():
+    """From ``state(0.0, 0.0)`` the gap ``M_an − M_irr`` is exactly 0 and opens as soon as H
+    moves (``d·dG/dH = M_an'/D > 0`` with M_irr frozen): δ_M switches on at once, which the
+    engine must not miss (M_irr would stay 0). Against the independent integration."""
+    system = ForcedOscillator(UNIT, coupling=COUPLING, damping_ratio=ZETA, frequency=OMEGA)
+    state = UNIT.state(0.0, 0.0)
+    traj = system.trajectory(10.0, q0=0.0, v0=0.4, operator_state=state, sample_dt=0.25)
+    ref = _reference(traj.t, 0.0, 0.4, 0.0)
+    assert ref[4, 2] > 0.01  # the virgin curve: M_irr grew on the first rise
+    m_ref = np.array([UNIT.map_output(q, m) for q, m in ref[:, [0, 2]]])
+    np.testing.assert_allclose(traj.q, ref[:, 0], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(traj.M, m_ref, rtol=0, atol=1e-7)
+    assert traj.final.operator_state.z == pytest.approx(ref[-1, 2], abs=1e-7)
