@@ -204,7 +204,7 @@ class _BranchSolution:
                 # approaching one (a slope growing without bound); the operator names it
                 if self._error is None:
                     u_t, z_t = float(sol.t[-1]), float(sol.y[0, -1])
-                    self._error = self._op._domain_error(u_t, z_t, self._d, sol.message)
+                    self._error = self._op.domain_error(u_t, z_t, self._d, sol.message)
                 self._stop_at_domain_error(side, sol)
                 return
             if not np.all(np.isfinite(sol.y[:, -1])):
@@ -458,18 +458,20 @@ class Duhem(ContinuousHysteron[DuhemState]):
         moved = np.flatnonzero(steps)
         direction = state.direction if moved.size == 0 else (1 if steps[moved[-1]] > 0 else -1)
         if status == _kernels.STATUS_ILL_POSED:
-            raise self._domain_error(u_end, z_end, direction)
+            raise self.domain_error(u_end, z_end, direction)
         if status != _kernels.STATUS_OK:
             raise ValueError(
                 f"{self!r}: the integration step collapsed at u = {u_end!r}, z = {z_end!r}"
             )
         return self._outputs(u, z), DuhemState(float(z_end), float(u_end), direction)
 
-    def _domain_error(
+    def domain_error(
         self, u: float, z: float, direction: int, reason: str = "its step collapsed"
     ) -> DuhemDomainError:
         """The error for a branch that cannot be continued past ``(u, z)`` (a subclass with a
-        known ill-posedness names its parameters)."""
+        known ill-posedness names its parameters). Part of the contract a compiled engine uses:
+        it raises this where its kernel reports the model ill-posed, so both engines raise the
+        operator's own error."""
         return DuhemDomainError(
             f"{type(self).__name__}: the branch ODE could not be integrated past u = {u!r}, "
             f"z = {z!r} (direction {direction:+d}): {reason}"

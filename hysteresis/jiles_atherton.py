@@ -203,9 +203,10 @@ class JilesAtherton(Duhem):
             inputs, state, kern.MODEL_JILES_ATHERTON, params, self.ms, self.a
         )
 
-    def _domain_error(
+    def domain_error(
         self, u: float, z: float, direction: int, reason: str = ""
     ) -> JilesAthertonInstability:
+        """:class:`JilesAthertonInstability` at ``(H, M_irr) = (u, z)``."""
         return JilesAthertonInstability(self, u, z, direction)
 
     def compiled_model(self) -> tuple[str, dict[str, float]]:

@@ -206,12 +206,12 @@ class CompiledDuhemEngine(TangentFlow, Engine):
         return int(self._ist[_k.I_PERIOD]), float(self._st[_k.S_TAU])
 
     def _check_posed(self) -> None:
-        """Raise the operator's own error (``Duhem._domain_error``: Jiles–Atherton's
+        """Raise the operator's own error (``Duhem.domain_error``: Jiles–Atherton's
         :class:`~hysteresis.jiles_atherton.JilesAthertonInstability`, as the generic engine's
         branch flow does) where the motion reached a point the model cannot continue past."""
         if self._ist[_k.I_BAD]:
             q, z = float(self._st[_k.S_Q]), float(self._st[_k.S_Z])
-            raise self._op._domain_error(q, z, int(self._ist[_k.I_DIR]))
+            raise self._op.domain_error(q, z, int(self._ist[_k.I_DIR]))
 
     @property
     def n_events(self) -> int:
