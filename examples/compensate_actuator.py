@@ -53,7 +53,10 @@ class Actuator:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__.splitlines()[0],
+        epilog="The defaults are the full size (about 5 s on a quiet machine).",
+    )
     parser.add_argument("--out", default="out/examples", help="output directory")
     parser.add_argument("--smoke", action="store_true", help="short records (for tests)")
     parser.add_argument("--seed", type=int, default=0)

@@ -26,7 +26,10 @@ from oscillators import ForcedOscillator  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__.splitlines()[0],
+        epilog="The defaults are the full size (about 5 s on a quiet machine).",
+    )
     parser.add_argument("--out", default="out/examples", help="output directory")
     parser.add_argument("--smoke", action="store_true", help="tiny sizes (for tests)")
     parser.add_argument("--couplings", type=int, default=200, help="number of C values")

@@ -5,7 +5,7 @@
 
 The same study as ``hyst width-disorder`` (see its help and README "What the reproduction
 finds"), through the library: :func:`analysis.experiments.width_disorder.run_study`. By
-default a small run (about half a minute on two cores: σ_r ∈ {0.05, 0.2}, C ∈ {2.9, 4}, one
+default a small run (under a minute on a quiet machine: σ_r ∈ {0.05, 0.2}, C ∈ {2.9, 4}, one
 initial condition, t = 2000; finite N = 1000 with 10 realizations) that shows every quantity
 with its finite-time errors; ``--full`` runs the study's sizes (σ_r ∈ {0.0125 … 0.4}, three
 initial conditions, t = 2·10⁴, transient 160 periods; finite N ∈ {10³, 5·10³, 2·10⁴} with 100

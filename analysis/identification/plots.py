@@ -69,7 +69,7 @@ SIGNIFICANT = 1.959963984540054
 #: the FORC diagram's default crop: the nodes with ``|ρ|`` at least this fraction of the peak
 #: (FORCinel's white band: below it the colour scale is white anyway) ...
 CROP_FRACTION = 0.025
-#: ... widened by this fraction of their span on every cropped side
+#: ... widened by this fraction of their span on every cropped side (at least half a grid step)
 CROP_MARGIN = 0.1
 
 
@@ -266,8 +266,9 @@ def forc_limits(
     """``(B_c max, B_u min, B_u max)`` of the cropped diagram: the nodes where
     ``|ρ| >= fraction ×`` the peak (:data:`CROP_FRACTION`: FORCinel's white band, drawn white
     anyway) and, with standard errors, significant at 95 %, widened by :data:`CROP_MARGIN` of
-    their span and kept within the evaluated nodes.
-    ``fraction=0`` gives the evaluated region's extent."""
+    their span, but at least by half a grid step ``Δ/2`` (the reach of a node's drawn cell in
+    ``B_c`` and ``B_u``: a region one node thin keeps whole cells, not a zero-size window), and
+    kept within the evaluated nodes. ``fraction=0`` gives the evaluated region's extent."""
     if ident.density_alpha_beta is None:
         raise ValueError("a FORC diagram needs an identification made with smoothing")
     aa, bb = np.meshgrid(ident.alpha, ident.beta, indexing="ij")
@@ -286,7 +287,9 @@ def forc_limits(
         return full
     r_hi = float(rr[shown].max())
     s_lo, s_hi = float(ss[shown].min()), float(ss[shown].max())
-    pad_r, pad_s = CROP_MARGIN * r_hi, CROP_MARGIN * (s_hi - s_lo)
+    half_cell = 0.5 * ident.grid_step
+    pad_r = max(CROP_MARGIN * r_hi, half_cell)
+    pad_s = max(CROP_MARGIN * (s_hi - s_lo), half_cell)
     return min(r_hi + pad_r, full[0]), max(s_lo - pad_s, full[1]), min(s_hi + pad_s, full[2])
 
 
