@@ -57,34 +57,26 @@ from typing import Any
 
 import numpy as np
 
-from hysteresis._validation import finite_scalar, positive_scalar
 from oscillators.engines import _continuous_kernels as _k
 from oscillators.engines import _frozen_hops as _fh
 from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
-    Engine,
     GrazingError,
     StepBudgetError,
-    TangentFlow,
     split_times,
     step_budget,
-    wrap_phase,
 )
-from oscillators.engines.continuous import EVENT_DTYPE, ContinuousEngine
+from oscillators.engines.compiled_rk8 import (
+    DEFAULT_STEP,
+    METHODS,
+    CompiledRK8Engine,
+)
+from oscillators.engines.continuous import EVENT_DTYPE
 from oscillators.results import OscillatorState
 
 __all__ = ["CompiledContinuousEngine", "METHODS"]
 
-#: ``method`` values: ``"auto"``/``"compiled"`` this engine, ``"generic"`` the reference path.
-METHODS = ("auto", "compiled", "generic")
-#: RK8 step (time units) for ρ = 1 (module docstring).
-DEFAULT_STEP = 0.05
-#: largest ζ the compiled continuous engine integrates: its explicit RK8 step is 0.05/(2ζ), so
-#: a forcing period costs ~250·ζ steps (measured, a PI operator: 0.05 s at ζ = 100, 0.55 s at
-#: 1e3, 4.5 s at 1e4); at the oscillator's limit ζ = 1e6 a period would take minutes, so such
-#: a system is refused when it is built (the relay kernels solve any ζ in closed form)
-STIFF_DAMPING_LIMIT = 1e4
 #: events kept per kernel call before the buffer is drained
 _EVENT_BUFFER = 4096
 #: smallest staircase capacity (entries; doubled when a push needs room)
@@ -108,7 +100,7 @@ def _slope_bound(spec: Any) -> float:
     return 0.0
 
 
-class CompiledContinuousEngine(TangentFlow, Engine):
+class CompiledContinuousEngine(CompiledRK8Engine):
     """Compiled engine for operators with ``compiled_flow()`` (see the module docstring).
 
     Parameters
@@ -131,25 +123,6 @@ class CompiledContinuousEngine(TangentFlow, Engine):
     name = "compiled continuous engine"
     kernel_module = "oscillators.engines._continuous_kernels"
 
-    @classmethod
-    def check_system(cls, system: Any) -> None:
-        """Refuse a damping ratio above :data:`STIFF_DAMPING_LIMIT` (the explicit step would
-        make every period cost ~250·ζ RK8 steps)."""
-        zeta = float(system.damping_ratio)
-        if zeta > STIFF_DAMPING_LIMIT:
-            raise ValueError(
-                f"damping_ratio must be <= {STIFF_DAMPING_LIMIT:g} for the compiled continuous "
-                f"engine, got {zeta:g}: its explicit RK8 step 0.05/(2ζ) would cost about "
-                f"{250 * zeta:.0e} steps per forcing period"
-            )
-
-    def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **options: Any):
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-        if method == "generic":
-            return ContinuousEngine(system, state, **options)
-        return super().__new__(cls)
-
     def __init__(
         self,
         system: Any,
@@ -164,16 +137,8 @@ class CompiledContinuousEngine(TangentFlow, Engine):
             raise TypeError(f"operator {op!r} has no compiled_flow(): use the generic engine")
         self._op = op
         self._spec = spec
-        step = positive_scalar(step, "step")
-        if step > 0.2:
-            raise ValueError(f"step must lie in (0, 0.2], got {step}")
-        zeta = finite_scalar(system.damping_ratio, "damping_ratio")
-        self._zeta = zeta
-        coupling = finite_scalar(system.coupling, "coupling")
-        q = finite_scalar(state.q, "state.q")
-        v = finite_scalar(state.v, "state.v")
-        t0 = finite_scalar(state.t, "state.t")
-        self._phi0 = wrap_phase(finite_scalar(state.phi, "state.phi"))
+        step, coupling, q, v, t0 = self._start(system, state, step)
+        zeta = self._zeta
         # the RK8 step's local error scales as (ρh)^9: ρ = the largest rate of the linearised
         # motion (forcing, damping, the stiffness C·slope of the steepest branch)
         rho = max(1.0, self._omega, 2.0 * zeta, math.sqrt(abs(coupling) * _slope_bound(spec)))

@@ -47,39 +47,35 @@ from typing import Any
 import numpy as np
 
 from hysteresis._duhem_kernels import jiles_atherton_slope_bound
-from hysteresis._validation import finite_scalar, positive_scalar
+from hysteresis._validation import finite_scalar
 from oscillators.engines import _duhem_engine_kernels as _k
 from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
-    Engine,
     StepBudgetError,
-    TangentFlow,
     split_times,
     step_budget,
-    wrap_phase,
 )
-from oscillators.engines.continuous import EVENT_DTYPE, ContinuousEngine
+from oscillators.engines.compiled_rk8 import (
+    DEFAULT_STEP,
+    METHODS,
+    CompiledRK8Engine,
+)
+from oscillators.engines.continuous import EVENT_DTYPE
 from oscillators.results import OscillatorState
 
 __all__ = ["CompiledDuhemEngine", "METHODS", "MODELS"]
 
-#: ``method`` values: ``"auto"``/``"compiled"`` this engine, ``"generic"`` the reference path.
-METHODS = ("auto", "compiled", "generic")
 #: the compiled models: id -> (kernel code, parameter names in the kernel's order)
 MODELS = {
     "bouc_wen": (_k.MODEL_BOUC_WEN, ("A", "beta", "gamma", "n")),
     "jiles_atherton": (_k.MODEL_JILES_ATHERTON, ("ms", "a", "k", "c", "alpha")),
 }
-#: RK8 step (time units) for ρ = 1 (module docstring).
-DEFAULT_STEP = 0.05
-#: largest ζ integrated (as the compiled continuous engine: the explicit step is 0.05/(2ζ))
-STIFF_DAMPING_LIMIT = 1e4
 #: events kept per kernel call before the buffer is drained
 _EVENT_BUFFER = 4096
 
 
-class CompiledDuhemEngine(TangentFlow, Engine):
+class CompiledDuhemEngine(CompiledRK8Engine):
     """Compiled engine for Duhem operators with a ``"duhem"`` ``compiled_flow()`` (module
     docstring).
 
@@ -102,24 +98,6 @@ class CompiledDuhemEngine(TangentFlow, Engine):
     name = "compiled Duhem engine"
     kernel_module = "oscillators.engines._duhem_engine_kernels"
 
-    @classmethod
-    def check_system(cls, system: Any) -> None:
-        """Refuse a damping ratio above :data:`STIFF_DAMPING_LIMIT` (explicit RK8 steps)."""
-        zeta = float(system.damping_ratio)
-        if zeta > STIFF_DAMPING_LIMIT:
-            raise ValueError(
-                f"damping_ratio must be <= {STIFF_DAMPING_LIMIT:g} for the compiled Duhem "
-                f"engine, got {zeta:g}: its explicit RK8 step 0.05/(2ζ) would cost about "
-                f"{250 * zeta:.0e} steps per forcing period"
-            )
-
-    def __new__(cls, system: Any, state: OscillatorState, method: str = "auto", **options: Any):
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-        if method == "generic":
-            return ContinuousEngine(system, state, **options)
-        return super().__new__(cls)
-
     def __init__(
         self,
         system: Any,
@@ -135,16 +113,8 @@ class CompiledDuhemEngine(TangentFlow, Engine):
         self._op = op
         self._spec = spec
         code, names = MODELS[spec.model]
-        step = positive_scalar(step, "step")
-        if step > 0.2:
-            raise ValueError(f"step must lie in (0, 0.2], got {step}")
-        zeta = finite_scalar(system.damping_ratio, "damping_ratio")
-        self._zeta = zeta
-        coupling = finite_scalar(system.coupling, "coupling")
-        q = finite_scalar(state.q, "state.q")
-        v = finite_scalar(state.v, "state.v")
-        t0 = finite_scalar(state.t, "state.t")
-        self._phi0 = wrap_phase(finite_scalar(state.phi, "state.phi"))
+        step, coupling, q, v, t0 = self._start(system, state, step)
+        zeta = self._zeta
         self._mp = np.array([float(spec.parameters[name]) for name in names])
         if code == _k.MODEL_JILES_ATHERTON:  # the scratch slots: no previous solve yet
             self._mp = np.concatenate([self._mp, np.zeros(_k.N_JA_MP - self._mp.size)])
