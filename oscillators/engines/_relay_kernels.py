@@ -68,13 +68,31 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
 from oscillators.linear import exact_step, hom_matrix, phase_column
 
 # fused multiply-add allowed (no other fast-math liberty): shorter dependency chains, and
 # each fused step rounds once instead of twice
 _CONTRACT = {"contract"}
+
+
+@intrinsic
+def _memory_barrier(typingctx):
+    """A compiler-only memory barrier (empty inline assembly that clobbers memory; no machine
+    instruction): LLVM must assume every array changed, so values loaded before it are loaded
+    again after it. Keeps the event loop's code (and its fused multiply-adds) what it was when
+    reference counting calls stood at these places."""
+
+    def codegen(context, builder, sig, args):
+        fnty = ir.FunctionType(ir.VoidType(), [])
+        builder.asm(fnty, "", "~{memory}", [], side_effect=True)
+        return context.get_dummy_value()
+
+    return types.none(), codegen
+
 
 #: Taylor order of the short-hop expansion (error term h^9/9! ≈ 1e-21 at h = 0.02).
 ORDER = 8
@@ -746,6 +764,7 @@ def hop(
                 mode = 2
     if mode == 1 or mode == 2:
         hh = h if mode == 1 else horizon
+        _memory_barrier()
         p, dp = _poly2(e, hh)
         cx, sx = _rotation(omega * hh)
         c1 = c * cx - s * sx
@@ -858,7 +877,7 @@ def settle_switch(
 
 
 # -- the event loop (one body for every table kind) ----------------------------------------------
-@njit(cache=True, fastmath=_CONTRACT)
+@njit(cache=True, fastmath=_CONTRACT, _nrt=False)
 def advance_table(
     par, kind, tf, ti, bits, lay, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
 ):
