@@ -56,14 +56,16 @@ else): the hop is a chain of dependent polynomial evaluations, and a fused step 
 and rounded once.
 
 The event loop (:func:`advance_table`) is compiled without numba's reference counting
-(``_nrt=False``; the functions it calls inherit it): it allocates nothing and only borrows the
-arrays of its caller, but the helpers inlined into it (:func:`hop`, :func:`_table_switch`,
-:func:`settle_switch`) take arrays, and numba counted their references on every pass, about 18
-atomic read-modify-writes per switch (measured: 52 -> 30 ns per switch of the N = 20 000
-dimers without tangent, 58 -> 38 ns with). The results are bit for bit those of the
-reference-counted loop: the counting calls also stopped LLVM from reusing values loaded before
-them, and where that reuse would change which products are fused (the Taylor landing's
-polynomial, see :func:`hop`), :func:`_memory_barrier` keeps the former code.
+(``_nrt=False``, an option outside numba's public API: probed at import, the plain loop where
+numba refuses it or ``HYSTERESIS_RELAY_REFCOUNT=1``; the functions it calls inherit it): it
+allocates nothing and only borrows the arrays of its caller, but the helpers inlined into it
+(:func:`hop`, :func:`_table_switch`, :func:`settle_switch`) take arrays, and numba counted
+their references on every pass, about 18 atomic read-modify-writes per switch (measured: 52 ->
+30 ns per switch of the N = 20 000 dimers without tangent, 58 -> 38 ns with). The results are
+bit for bit those of the reference-counted loop: the counting calls also stopped LLVM from
+reusing values loaded before them, and where that reuse would change which products are fused
+(the Taylor landing's polynomial, see :func:`hop`), :func:`_memory_barrier` keeps the former
+code.
 
 Grazing: crossings are decided on the computed extrema. A maximum that reaches ``up`` (``>=``)
 switches (the relay convention ``u >= α``); a minimum that only touches ``down`` (``== down``)
@@ -76,6 +78,7 @@ tiny at once.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 from llvmlite import ir
@@ -87,6 +90,32 @@ from oscillators.linear import exact_step, hom_matrix, phase_column
 # fused multiply-add allowed (no other fast-math liberty): shorter dependency chains, and
 # each fused step rounds once instead of twice
 _CONTRACT = {"contract"}
+
+#: environment variable that, set to ``1``, compiles the event loop with numba's reference
+#: counting (the plain path; tests/test_oscillators/test_relay_refcount.py compares the two)
+PLAIN_LOOP_ENV = "HYSTERESIS_RELAY_REFCOUNT"
+
+
+@njit(cache=True)
+def _probe(x):
+    return x + 1.0
+
+
+def _loop_options() -> dict:
+    """``{"_nrt": False}`` (the event loop without reference counting, module docstring) where
+    this numba accepts that option — it is not part of numba's public API, so it is probed on
+    a trivial function once per process (cached) — else ``{}``, the plain reference-counted
+    loop; ``{}`` too when :data:`PLAIN_LOOP_ENV` is ``1``."""
+    if os.environ.get(PLAIN_LOOP_ENV) == "1":
+        return {}
+    try:
+        njit(cache=True, _nrt=False)(_probe.py_func)(1.0)
+    except Exception:  # noqa: BLE001  (any refusal of the option means: the plain loop)
+        return {}
+    return {"_nrt": False}
+
+
+_LOOP_OPTIONS = _loop_options()
 
 
 @intrinsic
@@ -889,7 +918,7 @@ def settle_switch(
 
 
 # -- the event loop (one body for every table kind) ----------------------------------------------
-@njit(cache=True, fastmath=_CONTRACT, _nrt=False)
+@njit(cache=True, fastmath=_CONTRACT, **_LOOP_OPTIONS)
 def advance_table(
     par, kind, tf, ti, bits, lay, st, ist, tau_stop, tan_on, y, ntan, e, mp, rec_on, sw, sw_count
 ):
