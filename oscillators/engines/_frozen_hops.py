@@ -214,12 +214,13 @@ def frozen_tangent(par, h, c0, s0, c1, s1, Y, F, k):
         Y[1, j] = m10 * dq + m11 * dv + pv * phi + fv * f
 
 
-@njit(cache=True)
-def landing(par, tau, q, v, d, theta, hmax, y, y1, y2, y3, y4):
+@njit(cache=True, inline="always")
+def landing(par, cp, sp, q, v, d, theta, hmax, y, y1, y2, y3, y4):
     """Time to the relay threshold ``theta`` ahead on a *pushed* branch (a dragged play: the
     output ``y(q)`` is smooth, not constant) by its Taylor polynomial, or −1.
 
-    ``y, y1..y4`` are the output and its first four derivatives in ``q`` at the start. The
+    ``y, y1..y4`` are the output and its first four derivatives in ``q`` at the start, ``cp``,
+    ``sp`` the cosine and sine of the forcing phase there. The
     time derivatives of ``q`` follow from ``q'' = −2ζq' − q + cos φ + C·y(q)`` by the chain rule
     (``u = y(q(t))``: ``u' = y1 q'``, ``u'' = y2 q'² + y1 q''``, ...); the degree-6 polynomial
     is solved for ``q(h) = θ`` by Newton from the root of its quadratic. Accepted when
@@ -237,9 +238,6 @@ def landing(par, tau, q, v, d, theta, hmax, y, y1, y2, y3, y4):
     hlim = min(hmax, LANDING_RH / rate)
     if gap >= hlim * av * 2.0:
         return -1.0, 0.0  # too far for one landing (v would have to double)
-    ph = par[P_PHI0] + omega * tau
-    cp = math.cos(ph)
-    sp = math.sin(ph)
     o2 = omega * omega
     a = -2.0 * zeta * v - q + cp + coupling * y
     j = -2.0 * zeta * a - v - omega * sp + coupling * (y1 * v)
