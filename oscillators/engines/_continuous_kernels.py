@@ -183,7 +183,7 @@ _MAX_STUCK = 50
 # --------------------------------------------------------------------------------------------
 # the operator on the current branch
 # --------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _operator(ist, st, ep, et, q):
     """(y, s, g) at input q: output, ∂y/∂u + dragged weights, partner's derivative."""
     if ist[I_OP] == OP_PI:
@@ -218,7 +218,7 @@ def _operator(ist, st, ep, et, q):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rhs(par, ist, st, F, ep, et, t, y, dy, k):
     """Right-hand side of (q, v) and of k tangent columns (δq, δv) at time t (in the period)."""
     zeta = par[P_ZETA]

@@ -105,7 +105,8 @@ def relay_seek(ist, st, rel, rord):
         bp = alpha[order[i]] if i < n else inf
 
     The scan starts where the last one stopped while the direction is unchanged (the input
-    only moved on), so a branch costs O(N) in all, a binary search per reversal."""
+    only moved on), so a branch costs O(N) in all, a binary search per reversal. (``rord`` is
+    read by element: a row view would cost a reference count per call.)"""
     n = rel.shape[0]
     if n == 0:
         st[S_RBP] = ist[I_DIR] * np.inf
@@ -114,35 +115,33 @@ def relay_seek(ist, st, rel, rord):
     q = st[S_Q]
     i = ist[I_RPTR]
     if d > 0:
-        order = rord[0]
         if i < 0:  # a new direction: binary search
             lo, hi = 0, n
             while lo < hi:
                 mid = (lo + hi) // 2
-                if rel[order[mid], R_ALPHA] < q:
+                if rel[rord[0, mid], R_ALPHA] < q:
                     lo = mid + 1
                 else:
                     hi = mid
             i = lo
-        while i < n and rel[order[i], R_OUT] > 0.0:
+        while i < n and rel[rord[0, i], R_OUT] > 0.0:
             i += 1
         ist[I_RPTR] = i
-        st[S_RBP] = rel[order[i], R_ALPHA] if i < n else np.inf
+        st[S_RBP] = rel[rord[0, i], R_ALPHA] if i < n else np.inf
     else:
-        order = rord[1]
         if i < 0:
             lo, hi = 0, n
             while lo < hi:
                 mid = (lo + hi) // 2
-                if rel[order[mid], R_BETA] <= q:
+                if rel[rord[1, mid], R_BETA] <= q:
                     lo = mid + 1
                 else:
                     hi = mid
             i = n - 1 - (lo - 1)  # counted from the top: the greatest β <= q first
-        while i < n and rel[order[n - 1 - i], R_OUT] < 0.0:
+        while i < n and rel[rord[1, n - 1 - i], R_OUT] < 0.0:
             i += 1
         ist[I_RPTR] = i
-        st[S_RBP] = rel[order[n - 1 - i], R_BETA] if i < n else -np.inf
+        st[S_RBP] = rel[rord[1, n - 1 - i], R_BETA] if i < n else -np.inf
 
 
 @njit(cache=True)
@@ -185,17 +184,15 @@ def relay_jump(ist, st, rel, rord):
     i = ist[I_RPTR]
     jump = 0.0
     if d > 0:
-        order = rord[0]
-        while i < n and rel[order[i], R_ALPHA] == q:
-            j = order[i]
+        while i < n and rel[rord[0, i], R_ALPHA] == q:
+            j = rord[0, i]
             if rel[j, R_OUT] < 0.0:
                 rel[j, R_OUT] = 1.0
                 jump += 2.0 * rel[j, R_WEIGHT]
             i += 1
     else:
-        order = rord[1]
-        while i < n and rel[order[n - 1 - i], R_BETA] == q:
-            j = order[n - 1 - i]
+        while i < n and rel[rord[1, n - 1 - i], R_BETA] == q:
+            j = rord[1, n - 1 - i]
             if rel[j, R_OUT] > 0.0:
                 rel[j, R_OUT] = -1.0
                 jump -= 2.0 * rel[j, R_WEIGHT]
