@@ -49,6 +49,7 @@ from oscillators.engines._continuous_layout import (
     P_PERIOD,
     P_PHI0,
     P_T0,
+    P_ZETA,
     R_ALPHA,
     R_BETA,
     R_OUT,
@@ -65,7 +66,7 @@ from oscillators.engines._continuous_layout import (
     S_V,
     S_Y0,
 )
-from oscillators.engines._frozen_hops import landing
+from oscillators.engines._frozen_hops import F_KAPPA, F_RHO, landing
 from oscillators.engines._relay_kernels import _rotation
 
 __all__ = [
@@ -74,12 +75,15 @@ __all__ = [
     "LEAN_STOP",
     "add_time",
     "branch_taylor",
+    "erf_play_terms",
     "merge_breakpoints",
     "nearest_breakpoint",
     "pushed_stretch",
     "relay_output",
+    "relay_jump",
     "relay_seek",
     "relay_switch",
+    "record_switch",
 ]
 
 #: :func:`pushed_stretch` outcomes: stopped (the caller's loop decides what comes next), the
@@ -258,28 +262,39 @@ def record_switch(par, ist, st, ev, out, jump):
 
 
 @njit(cache=True, inline="always")
+def erf_play_terms(a, kap, z):
+    """One dragged erf play's ``a·erf(z)``, ``z = κ(q − d r)``, and its first four derivatives
+    in ``q``, ``a·κⁿ·erf⁽ⁿ⁾(z)`` with ``erf⁽¹⁾ = (2/√π)e^{−z²}``, ``erf⁽²⁾ = −2z·erf⁽¹⁾``,
+    ``erf⁽³⁾ = (4z² − 2)·erf⁽¹⁾``, ``erf⁽⁴⁾ = (12z − 8z³)·erf⁽¹⁾``."""
+    g = a * kap * _TWO_OVER_SQRT_PI * math.exp(-z * z)
+    g2 = g * kap
+    g3 = g2 * kap
+    return (
+        a * math.erf(z),
+        g,
+        -(2.0 * z * g2),
+        (4.0 * z * z - 2.0) * g3,
+        (12.0 * z - 8.0 * z * z * z) * g3 * kap,
+    )
+
+
+@njit(cache=True)
 def branch_taylor(st, ep, q):
     """The PI branch's output (relays included) and its first four derivatives in ``q``: the
-    dragged plain plays contribute the slope, each dragged erf play ``a·erf(z)``,
-    ``z = κ(q − d r)``, the derivatives ``a·κⁿ·erf⁽ⁿ⁾(z)`` with ``erf⁽¹⁾ = (2/√π)e^{−z²}``,
-    ``erf⁽²⁾ = −2z·erf⁽¹⁾``, ``erf⁽³⁾ = (4z² − 2)·erf⁽¹⁾``, ``erf⁽⁴⁾ = (12z − 8z³)·erf⁽¹⁾``."""
+    dragged plain plays contribute the slope, each dragged erf play :func:`erf_play_terms`."""
     y = st[S_Y0] + st[S_SLOPE] * (q - st[S_U0])
     y1 = st[S_SLOPE]
     y2 = 0.0
     y3 = 0.0
     y4 = 0.0
     for j in range(int(ep[0])):
-        a = ep[1 + 3 * j]
         kap = ep[3 + 3 * j]
-        z = (q - ep[2 + 3 * j]) * kap
-        y += a * math.erf(z)
-        g = a * kap * _TWO_OVER_SQRT_PI * math.exp(-z * z)
-        y1 += g
-        g *= kap
-        y2 -= 2.0 * z * g
-        g *= kap
-        y3 += (4.0 * z * z - 2.0) * g
-        y4 += (12.0 * z - 8.0 * z * z * z) * g * kap
+        t0, t1, t2, t3, t4 = erf_play_terms(ep[1 + 3 * j], kap, (q - ep[2 + 3 * j]) * kap)
+        y += t0
+        y1 += t1
+        y2 += t2
+        y3 += t3
+        y4 += t4
     return y + (st[S_RELAY] + st[S_RCOMP]), y1, y2, y3, y4
 
 
@@ -292,52 +307,128 @@ def pushed_stretch(par, ist, st, y, hw, pos, slv, rel, rord, ep, ev, fpar, nt, t
     a relay threshold), ``LEAN_FAILED`` (the Taylor landing declined: ``h = -1``), or
     ``LEAN_LANDED`` (``h`` > 0 to a relay threshold that is also a wall: ``y[1]`` holds v
     there, the time is not yet advanced). ``y``, ``st`` (q, v) and the dragged wagons are
-    current on return."""
+    current on return.
+
+    The loop body calls nothing that takes an array (numba counts references to every array
+    argument of a call, two atomic operations each, ~40% of the time of a switch): the
+    branch's Taylor data (:func:`branch_taylor`), the clock (:func:`add_time`), the switch
+    (:func:`relay_jump`) and the next threshold (:func:`relay_seek`, :func:`nearest_breakpoint`)
+    are written out here, direction-generic (``d = ±1``: the relays at θ with ``d·y_i < 0``
+    flip to ``y_i = d``; the scan skips those with ``d·y_i > 0``)."""
     period = par[P_PERIOD]
     h_step = par[P_H]
     omega = par[P_OMEGA]
+    zeta = par[P_ZETA]
+    coupling = par[P_C]
+    rho = fpar[F_RHO]
+    kappa = fpar[F_KAPPA]
     d = ist[I_DIR]
+    fd = float(d)
     record = ist[I_RECORD] != 0
+    n_rel = rel.shape[0]
+    row = 0 if d > 0 else 1  # rord[0]: α ascending; rord[1]: β ascending, read from the top
+    col = R_ALPHA if d > 0 else R_BETA
+    n_shaped = int(ep[0])
+    base = st[S_Y0]
+    slope = st[S_SLOPE]
+    u0 = st[S_U0]
+    cbp = st[S_CBP]
     q = y[0]
     v = y[1]
-    ph = par[P_PHI0] + omega * st[S_TAU]
+    tau = st[S_TAU]
+    n = ist[I_PERIOD]
+    ph = par[P_PHI0] + omega * tau
     c = math.cos(ph)
     s = math.sin(ph)
     code = LEAN_STOP
     h_land = -1.0
     while True:
-        rem = (nt - ist[I_PERIOD]) * period + (taut - st[S_TAU])
-        if rem <= 0.0 or st[S_BP] != st[S_RBP]:
+        rem = (nt - n) * period + (taut - tau)
+        theta = st[S_BP]
+        if rem <= 0.0 or theta != st[S_RBP]:
             break
         if record and ist[I_NEV] >= ev.shape[0]:
             break
         h = rem if rem <= h_step else h_step
-        yb, g1, g2, g3, g4 = branch_taylor(st, ep, q)
-        tau, v1 = landing(fpar, c, s, q, v, d, st[S_BP], h, yb, g1, g2, g3, g4)
-        if not tau > 0.0:
+        # the branch's output and its q-derivatives at q (branch_taylor)
+        yb = base + slope * (q - u0)
+        y1 = slope
+        y2 = 0.0
+        y3 = 0.0
+        y4 = 0.0
+        for j in range(n_shaped):
+            kap = ep[3 + 3 * j]
+            t0, t1, t2, t3, t4 = erf_play_terms(ep[1 + 3 * j], kap, (q - ep[2 + 3 * j]) * kap)
+            yb += t0
+            y1 += t1
+            y2 += t2
+            y3 += t3
+            y4 += t4
+        yb = yb + (st[S_RELAY] + st[S_RCOMP])
+        hl, v1 = landing(zeta, omega, coupling, rho, kappa, c, s, q, v, d, theta, h, yb, y1, y2,
+                         y3, y4)  # fmt: skip
+        if not hl > 0.0:
             code = LEAN_FAILED
             break
         v = v1
-        if st[S_BP] == st[S_CBP]:
+        if theta == cbp:
             code = LEAN_LANDED  # a wall too: the general event
-            h_land = tau
+            h_land = hl
             break
-        q = st[S_BP]  # q := the threshold exactly
-        n = ist[I_PERIOD]
-        add_time(par, ist, st, tau)
-        if ist[I_PERIOD] == n:
-            cx, sx = _rotation(omega * tau)
-            c, s = c * cx - s * sx, s * cx + c * sx
-        else:  # a new period: the phase afresh
-            ph = par[P_PHI0] + omega * st[S_TAU]
+        q = theta  # q := the threshold exactly
+        # the clock (add_time); the phase rotated, afresh in a new period
+        tau += hl
+        if tau >= period:
+            tau -= period
+            n += 1
+            if tau >= period or tau < 0.0:  # rounding
+                extra = math.floor(tau / period)
+                n += int(extra)
+                tau -= extra * period
+                if tau < 0.0:
+                    tau = 0.0
+            ph = par[P_PHI0] + omega * tau
             c = math.cos(ph)
             s = math.sin(ph)
+        else:
+            cx, sx = _rotation(omega * hl)
+            c, s = c * cx - s * sx, s * cx + c * sx
+        st[S_TAU] = tau
+        ist[I_PERIOD] = n
         st[S_Q] = q
         st[S_V] = v
-        jump = relay_jump(ist, st, rel, rord)
-        nearest_breakpoint(ist, st, rel, rord)
-        out = branch_taylor(st, ep, q)[0] if record else 0.0
-        record_switch(par, ist, st, ev, out, jump)
+        # the relays at θ switch (relay_jump)
+        i = ist[I_RPTR]
+        jump = 0.0
+        while i < n_rel:
+            r = rord[row, i] if d > 0 else rord[row, n_rel - 1 - i]
+            if rel[r, col] != theta:
+                break
+            if fd * rel[r, R_OUT] < 0.0:
+                rel[r, R_OUT] = fd
+                jump += 2.0 * fd * rel[r, R_WEIGHT]
+            i += 1
+        total = st[S_RELAY] + jump  # Neumaier, as relay_jump
+        if abs(st[S_RELAY]) >= abs(jump):
+            st[S_RCOMP] += (st[S_RELAY] - total) + jump
+        else:
+            st[S_RCOMP] += (jump - total) + st[S_RELAY]
+        st[S_RELAY] = total
+        # the next threshold ahead (relay_seek, nearest_breakpoint)
+        rbp = fd * np.inf
+        while i < n_rel:
+            r = rord[row, i] if d > 0 else rord[row, n_rel - 1 - i]
+            if not fd * rel[r, R_OUT] > 0.0:
+                rbp = rel[r, col]
+                break
+            i += 1
+        ist[I_RPTR] = i
+        st[S_RBP] = rbp
+        st[S_BP] = min(cbp, rbp) if d > 0 else max(cbp, rbp)
+        if record:
+            record_switch(par, ist, st, ev, branch_taylor(st, ep, q)[0], jump)
+        else:
+            ist[I_EVENTS] += 1
         ist[I_STUCK] = 0
     y[0] = q
     y[1] = v
