@@ -39,7 +39,8 @@ bound, where the branch slope jumps and each step takes it on the side it moves 
 A composite with relays (plays + relays): while every play is frozen the motion hops in closed
 form from relay switch to switch (the relay kernel's hop; the walls are thresholds too, every
 turning point an event); while a play is pushed and no tangent is carried, each relay threshold
-is landed on by the branch's Taylor polynomial (:mod:`oscillators.engines._frozen_hops`).
+is landed on by the branch's Taylor polynomial (:mod:`oscillators.engines._frozen_hops`), one
+after the other in a lean loop (:mod:`oscillators.engines._relay_landings`).
 
 Tangent space and saltations: rows ``("q", "v"[, "phi"], *labels)`` with the labels of the
 generic engine (``w0 .. w{K-1}``; ``M1, m1, M2, ...``), the same saltations (a wagon that
