@@ -19,7 +19,8 @@
 * :mod:`~oscillators.engines.select` — :func:`select_engine` (from the operator's contract).
 
 Compiled kernels: ``_relay_kernels.py``, ``_switching_kernels.py``, ``_play_kernels.py``,
-``_continuous_kernels.py``, ``_duhem_engine_kernels.py``, ``_dop853_kernel.py``.
+``_continuous_kernels.py`` (with ``_continuous_layout.py``, ``_relay_landings.py``,
+``_frozen_hops.py``), ``_duhem_engine_kernels.py``, ``_dop853_kernel.py``.
 """
 
 from oscillators.engines.base import (

@@ -80,10 +80,10 @@ Composites with relays (PI branch + ``rel``): while no wagon is dragged the syst
 relay kernel's linear one with constant forcing, and :func:`_frozen_stretch` hops in closed
 form from event to event (:mod:`oscillators.engines._frozen_hops`: the relay kernel's ``hop``,
 the play walls as thresholds, every turning point an event, the tangent columns by ``Φ(h)``);
-on a pushed branch without tangent columns the next relay threshold is landed on by the
-branch's degree-6 Taylor polynomial (:func:`_branch_taylor`,
-:func:`oscillators.engines._frozen_hops.landing`), the RK8 landing :func:`_relay_hop` being
-the fallback (hops beyond ``0.02/ρ_eff``, and always with the tangent on).
+on a pushed branch without tangent columns one relay threshold after the other is landed on
+by the branch's degree-6 Taylor polynomial in a lean loop
+(:func:`oscillators.engines._relay_landings.pushed_stretch`), the RK8 landing
+:func:`_relay_hop` being the fallback (hops beyond ``0.02/ρ_eff``, and always with the tangent on).
 
 Status codes of :func:`run`: ``DONE``; ``GROW`` (a Preisach push may need more room: the Python
 side enlarges ``stack``/``Y`` and calls again); ``EVENTS_FULL`` (``ev`` full: drained and called
@@ -101,30 +101,62 @@ from numba import njit
 from hysteresis.preisach._everett_kernels import everett_eval
 from oscillators.engines import _dop853_kernel as _dop
 from oscillators.engines import _frozen_hops as _fh
+from oscillators.engines import _relay_landings as _rl
+from oscillators.engines._continuous_layout import (
+    EVENT_SWITCH,
+    I_DIR,
+    I_EVENTS,
+    I_EVERETT,
+    I_FREE,
+    I_K,
+    I_NEV,
+    I_OP,
+    I_OUTSIDE,
+    I_PARTNER,
+    I_PERIOD,
+    I_PUSHED,
+    I_RECORD,
+    I_RPTR,
+    I_SAMPLE,
+    I_STUCK,
+    P_BOUND,
+    P_C,
+    P_H,
+    P_OMEGA,
+    P_PERIOD,
+    P_PHI0,
+    P_T0,
+    P_ZETA,
+    S_BP,
+    S_CBP,
+    S_M,
+    S_Q,
+    S_RBP,
+    S_RCOMP,
+    S_RELAY,
+    S_SLOPE,
+    S_TAU,
+    S_U0,
+    S_V,
+    S_Y0,
+)
 from oscillators.engines._play_kernels import _hermite_extrema
 from oscillators.engines._relay_kernels import hop_coefficients
+from oscillators.engines._relay_landings import (
+    add_time,
+    merge_breakpoints,
+    nearest_breakpoint,
+    relay_switch,
+)
 from oscillators.engines._roots import find_root, secant_start
 
 _N_STAGES = _dop.N_STAGES
-
-# ``par``, ``ist`` and ``st`` layouts (module docstring)
-P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
-N_PAR = 8
-I_DIR, I_PERIOD, I_PARTNER, I_EVENTS, I_FREE, I_SAMPLE, I_NEV, I_RECORD = range(8)
-I_K, I_OP, I_EVERETT, I_STUCK, I_PUSHED, I_OUTSIDE, I_RPTR = range(8, 15)
-N_IST = 15
-S_TAU, S_Q, S_V, S_BP, S_U0, S_Y0, S_SLOPE, S_M, S_RELAY, S_CBP, S_RBP, S_RCOMP = range(12)
-N_ST = 12
-#: columns of ``rel`` (one row per relay of a composite: thresholds, weight, output ±1)
-R_ALPHA, R_BETA, R_WEIGHT, R_OUT = range(4)
 
 OP_PI = 0
 OP_PREISACH = 1
 #: ``CompiledEverett.kind`` of a tabulated (C¹ bicubic Hermite) Everett function
 KIND_TABLE = 1
 
-#: the ``kind`` of a recorded event at which relays switched (the output jumps by ``Δy``)
-EVENT_SWITCH = 2
 
 DONE = 0
 GROW = 1
@@ -151,7 +183,7 @@ _MAX_STUCK = 50
 # --------------------------------------------------------------------------------------------
 # the operator on the current branch
 # --------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _operator(ist, st, ep, et, q):
     """(y, s, g) at input q: output, ∂y/∂u + dragged weights, partner's derivative."""
     if ist[I_OP] == OP_PI:
@@ -186,7 +218,7 @@ def _operator(ist, st, ep, et, q):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rhs(par, ist, st, F, ep, et, t, y, dy, k):
     """Right-hand side of (q, v) and of k tangent columns (δq, δv) at time t (in the period)."""
     zeta = par[P_ZETA]
@@ -354,138 +386,6 @@ def output_now(ist, st, ep, et):
 
 
 # --------------------------------------------------------------------------------------------
-# the relays of a composite (play + relays): constant output between their thresholds
-# --------------------------------------------------------------------------------------------
-@njit(cache=True)
-def relay_seek(ist, st, rel, rord):
-    """The relays' next threshold ahead of q (``S_RBP``; ``±inf`` if none) and the scan
-    pointer ``I_RPTR`` at it. Rising: the least α of the down relays (every relay with
-    α <= q is up); falling: the greatest β of the up relays (every relay with β > q is down).
-    In plain Python, rising::
-
-        order = argsort(alpha);  i = first index with alpha[order[i]] >= q
-        while i < n and out[order[i]] == +1:  i += 1      # skip the relays already up
-        bp = alpha[order[i]] if i < n else inf
-
-    The scan starts where the last one stopped while the direction is unchanged (the input
-    only moved on), so a branch costs O(N) in all, a binary search per reversal."""
-    n = rel.shape[0]
-    if n == 0:
-        st[S_RBP] = ist[I_DIR] * np.inf
-        return
-    d = ist[I_DIR]
-    q = st[S_Q]
-    i = ist[I_RPTR]
-    if d > 0:
-        order = rord[0]
-        if i < 0:  # a new direction: binary search
-            lo, hi = 0, n
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if rel[order[mid], R_ALPHA] < q:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            i = lo
-        while i < n and rel[order[i], R_OUT] > 0.0:
-            i += 1
-        ist[I_RPTR] = i
-        st[S_RBP] = rel[order[i], R_ALPHA] if i < n else np.inf
-    else:
-        order = rord[1]
-        if i < 0:
-            lo, hi = 0, n
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if rel[order[mid], R_BETA] <= q:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            i = n - 1 - (lo - 1)  # counted from the top: the greatest β <= q first
-        while i < n and rel[order[n - 1 - i], R_OUT] < 0.0:
-            i += 1
-        ist[I_RPTR] = i
-        st[S_RBP] = rel[order[n - 1 - i], R_BETA] if i < n else -np.inf
-
-
-@njit(cache=True)
-def merge_breakpoints(ist, st, rel, rord):
-    """After the continuous branch set ``S_BP``: keep it as ``S_CBP``, seek the relays' next
-    threshold and make ``S_BP`` the nearer of the two."""
-    st[S_CBP] = st[S_BP]
-    nearest_breakpoint(ist, st, rel, rord)
-
-
-@njit(cache=True)
-def nearest_breakpoint(ist, st, rel, rord):
-    """``S_BP`` := the nearer of the continuous branch's ``S_CBP`` and the relays' next
-    threshold (sought afresh from the scan pointer)."""
-    relay_seek(ist, st, rel, rord)
-    if ist[I_DIR] > 0:
-        st[S_BP] = min(st[S_CBP], st[S_RBP])
-    else:
-        st[S_BP] = max(st[S_CBP], st[S_RBP])
-
-
-@njit(cache=True)
-def relay_output(rel):
-    """``Σ w_i y_i`` of the relays (in table order)."""
-    total = 0.0
-    for i in range(rel.shape[0]):
-        total += rel[i, R_WEIGHT] * rel[i, R_OUT]
-    return total
-
-
-@njit(cache=True)
-def _relay_switch(par, ist, st, rel, rord, Y):
-    """Switch every relay at the threshold reached (``q = S_RBP``): rising, the down relays
-    with α = q go up; falling, the up relays with β = q go down (the relay rule ``u < β``
-    holds just past it). The output jumps by ``Δy = Σ 2 w_i·(±1)`` and each tangent column
-    gets the saltation ``δv += C·Δy/v*·δq`` (paper eq. ``salt_matrix``). Returns (False, Δy)
-    at a turning point with the tangent flow on (infinite saltation: the caller raises), else
-    (True, Δy)."""
-    n = rel.shape[0]
-    d = ist[I_DIR]
-    q = st[S_RBP]
-    i = ist[I_RPTR]
-    jump = 0.0
-    if d > 0:
-        order = rord[0]
-        while i < n and rel[order[i], R_ALPHA] == q:
-            j = order[i]
-            if rel[j, R_OUT] < 0.0:
-                rel[j, R_OUT] = 1.0
-                jump += 2.0 * rel[j, R_WEIGHT]
-            i += 1
-    else:
-        order = rord[1]
-        while i < n and rel[order[n - 1 - i], R_BETA] == q:
-            j = order[n - 1 - i]
-            if rel[j, R_OUT] > 0.0:
-                rel[j, R_OUT] = -1.0
-                jump -= 2.0 * rel[j, R_WEIGHT]
-            i += 1
-    ist[I_RPTR] = i
-    # the relays' output as a compensated running sum (Neumaier): O(1) per switch, and the
-    # error stays at a few ulps of the largest term instead of growing with the switches
-    total = st[S_RELAY] + jump
-    if abs(st[S_RELAY]) >= abs(jump):
-        st[S_RCOMP] += (st[S_RELAY] - total) + jump
-    else:
-        st[S_RCOMP] += (jump - total) + st[S_RELAY]
-    st[S_RELAY] = total
-    k = ist[I_K]
-    if k > 0 and jump != 0.0:
-        v = st[S_V]
-        if v == 0.0:
-            return False, jump
-        f = par[P_C] * jump / v
-        for j in range(k):
-            Y[1, j] += f * Y[0, j]
-    return True, jump
-
-
-# --------------------------------------------------------------------------------------------
 # events
 # --------------------------------------------------------------------------------------------
 @njit(cache=True)
@@ -499,7 +399,7 @@ def _event(
     q = st[S_Q]
     jump = 0.0
     if kind > 0 and rel.shape[0] > 0 and st[S_BP] == st[S_RBP]:
-        ok, jump = _relay_switch(par, ist, st, rel, rord, Y)
+        ok, jump = relay_switch(par, ist, st, rel, rord, Y)
         if not ok:
             return False
         kind = EVENT_SWITCH
@@ -736,20 +636,6 @@ def _relay_hop(par, ist, st, F, ep, et, t, y, h, dy, work):
 
 
 @njit(cache=True)
-def _add_time(par, ist, st, h):
-    st[S_TAU] += h
-    if st[S_TAU] >= par[P_PERIOD]:
-        st[S_TAU] -= par[P_PERIOD]
-        ist[I_PERIOD] += 1
-        if st[S_TAU] >= par[P_PERIOD] or st[S_TAU] < 0.0:  # rounding
-            extra = math.floor(st[S_TAU] / par[P_PERIOD])
-            ist[I_PERIOD] += int(extra)
-            st[S_TAU] -= extra * par[P_PERIOD]
-            if st[S_TAU] < 0.0:
-                st[S_TAU] = 0.0
-
-
-@njit(cache=True)
 def _load(st, Y, y, k):
     y[0] = st[S_Q]
     y[1] = st[S_V]
@@ -776,32 +662,6 @@ def _sync(ist, st, hw, pos, slv, Y):
             if slv[i]:
                 for j in range(ist[I_K]):
                     Y[3 + i, j] = Y[0, j]
-
-
-@njit(cache=True)
-def _branch_taylor(st, ep, q):
-    """The PI branch's output (relays included) and its first four derivatives in ``q``: the
-    dragged plain plays contribute the slope, each dragged erf play ``a·erf(z)``,
-    ``z = κ(q − d r)``, the derivatives ``a·κⁿ·erf⁽ⁿ⁾(z)`` with ``erf⁽¹⁾ = (2/√π)e^{−z²}``,
-    ``erf⁽²⁾ = −2z·erf⁽¹⁾``, ``erf⁽³⁾ = (4z² − 2)·erf⁽¹⁾``, ``erf⁽⁴⁾ = (12z − 8z³)·erf⁽¹⁾``."""
-    y = st[S_Y0] + st[S_SLOPE] * (q - st[S_U0])
-    y1 = st[S_SLOPE]
-    y2 = 0.0
-    y3 = 0.0
-    y4 = 0.0
-    for j in range(int(ep[0])):
-        a = ep[1 + 3 * j]
-        kap = ep[3 + 3 * j]
-        z = (q - ep[2 + 3 * j]) * kap
-        y += a * math.erf(z)
-        g = a * kap * _TWO_OVER_SQRT_PI * math.exp(-z * z)
-        y1 += g
-        g *= kap
-        y2 -= 2.0 * z * g
-        g *= kap
-        y3 += (4.0 * z * z - 2.0) * g
-        y4 += (12.0 * z - 8.0 * z * z * z) * g * kap
-    return y + (st[S_RELAY] + st[S_RCOMP]), y1, y2, y3, y4
 
 
 @njit(cache=True)
@@ -876,6 +736,19 @@ def _frozen_stretch(
             st[S_TAU] = tau
             if code == _fh.STOPPED:
                 continue
+        if code == _fh.CROSSED and st[S_BP] == st[S_RBP] and st[S_BP] != st[S_CBP]:
+            # relays switch, the branch goes on: _event's relay-only path, inline
+            jump = _rl.relay_jump(ist, st, rel, rord)
+            if k > 0 and jump != 0.0:
+                if st[S_V] == 0.0:
+                    return GRAZING  # a turning point: infinite saltation
+                f = par[P_C] * jump / st[S_V]
+                for j in range(k):
+                    Y[1, j] += f * Y[0, j]
+            nearest_breakpoint(ist, st, rel, rord)
+            out = output_now(ist, st, ep, et) if ist[I_RECORD] else 0.0
+            _rl.record_switch(par, ist, st, ev, out, jump)
+            continue
         # an event: q = bp or v = 0 exactly (frozen_hop), applied as on the RK8 path
         if not _event(
             par, ist, st, code, hw, wt, pos, slv, free, stack, prefix, dlo, dhi, ep, et, Y, F,
@@ -936,11 +809,18 @@ def _to_target(
             # land on it directly instead of stepping past it and locating it (module docstring)
             tau = -1.0
             if k == 0 and hops:
-                # without the tangent: the branch's Taylor polynomial (_frozen_hops.landing)
-                yb, g1, g2, g3, g4 = _branch_taylor(st, ep, y[0])
-                tau, v1 = _fh.landing(fpar, t, y[0], y[1], d, st[S_BP], h, yb, g1, g2, g3, g4)
-                if tau > 0.0:
-                    y[1] = v1
+                # without the tangent: threshold after threshold by the branch's Taylor
+                # polynomial, in one lean loop (_relay_landings.pushed_stretch)
+                code, tau = _rl.pushed_stretch(
+                    par, ist, st, y, hw, pos, slv, rel, rord, ep, ev, fpar, nt, taut
+                )
+                if code == _rl.LEAN_STOP:
+                    continue
+                # this switch is left to the RK8 landing or the general event: from here
+                rem = (nt - ist[I_PERIOD]) * par[P_PERIOD] + (taut - st[S_TAU])
+                last = rem <= h_step
+                h = rem if last else h_step
+                t = st[S_TAU]
             if tau < 0.0:
                 tau = _relay_hop(par, ist, st, F, ep, et, t, y, h, dy, loc)
                 if tau > 0.0:
@@ -948,7 +828,7 @@ def _to_target(
                     for r in range(n):
                         y[r] = y1[r]
             if tau > 0.0:
-                _add_time(par, ist, st, tau)
+                add_time(par, ist, st, tau)
                 y[0] = st[S_BP]  # q := the threshold exactly
                 _store(st, Y, y, k)
                 _sync(ist, st, hw, pos, slv, Y)
@@ -1027,12 +907,12 @@ def _to_target(
                 ist[I_PERIOD] = nt
                 st[S_TAU] = taut
             else:
-                _add_time(par, ist, st, h)
+                add_time(par, ist, st, h)
             continue
         _rk8(par, ist, st, F, ep, et, t, y, tau, y1, K, tmp, k)
         for r in range(n):
             y[r] = y1[r]
-        _add_time(par, ist, st, tau)
+        add_time(par, ist, st, tau)
         if kind > 0:
             y[0] = st[S_BP]  # q := bp exactly
         else:

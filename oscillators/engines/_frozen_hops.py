@@ -214,32 +214,29 @@ def frozen_tangent(par, h, c0, s0, c1, s1, Y, F, k):
         Y[1, j] = m10 * dq + m11 * dv + pv * phi + fv * f
 
 
-@njit(cache=True)
-def landing(par, tau, q, v, d, theta, hmax, y, y1, y2, y3, y4):
+@njit(cache=True, inline="always")
+def landing(zeta, omega, coupling, rho, kappa, cp, sp, q, v, d, theta, hmax, y, y1, y2, y3, y4):
     """Time to the relay threshold ``theta`` ahead on a *pushed* branch (a dragged play: the
     output ``y(q)`` is smooth, not constant) by its Taylor polynomial, or −1.
 
-    ``y, y1..y4`` are the output and its first four derivatives in ``q`` at the start. The
+    ``y, y1..y4`` are the output and its first four derivatives in ``q`` at the start, ``cp``,
+    ``sp`` the cosine and sine of the forcing phase there; ``rho``, ``kappa`` are ``fpar``'s
+    ``F_RHO``, ``F_KAPPA`` (scalars only: inlined into a loop, an array argument would cost a
+    reference count per call). The
     time derivatives of ``q`` follow from ``q'' = −2ζq' − q + cos φ + C·y(q)`` by the chain rule
     (``u = y(q(t))``: ``u' = y1 q'``, ``u'' = y2 q'² + y1 q''``, ...); the degree-6 polynomial
     is solved for ``q(h) = θ`` by Newton from the root of its quadratic. Accepted when
     ``h <= min(hmax, LANDING_RH/ρ_eff)`` with ``ρ_eff = max(ρ, κ|v|)`` (the rate of the
     shaped plays' argument), the Newton step has converged, and ``q`` is provably monotone on
     [0, h] (``Σ n|e_n| h^(n−1) < |v|/2``). Returns ``(h, v(h))``."""
-    zeta = par[P_ZETA]
-    omega = par[P_OMEGA]
-    coupling = par[P_C]
     gap = d * (theta - q)
     av = d * v
     if not (gap > 0.0 and av > 0.0):
         return -1.0, 0.0
-    rate = max(par[F_RHO], par[F_KAPPA] * av)
+    rate = max(rho, kappa * av)
     hlim = min(hmax, LANDING_RH / rate)
     if gap >= hlim * av * 2.0:
         return -1.0, 0.0  # too far for one landing (v would have to double)
-    ph = par[P_PHI0] + omega * tau
-    cp = math.cos(ph)
-    sp = math.sin(ph)
     o2 = omega * omega
     a = -2.0 * zeta * v - q + cp + coupling * y
     j = -2.0 * zeta * a - v - omega * sp + coupling * (y1 * v)

@@ -39,7 +39,8 @@ bound, where the branch slope jumps and each step takes it on the side it moves 
 A composite with relays (plays + relays): while every play is frozen the motion hops in closed
 form from relay switch to switch (the relay kernel's hop; the walls are thresholds too, every
 turning point an event); while a play is pushed and no tangent is carried, each relay threshold
-is landed on by the branch's Taylor polynomial (:mod:`oscillators.engines._frozen_hops`).
+is landed on by the branch's Taylor polynomial (:mod:`oscillators.engines._frozen_hops`), one
+after the other in a lean loop (:mod:`oscillators.engines._relay_landings`).
 
 Tangent space and saltations: rows ``("q", "v"[, "phi"], *labels)`` with the labels of the
 generic engine (``w0 .. w{K-1}``; ``M1, m1, M2, ...``), the same saltations (a wagon that
@@ -58,7 +59,9 @@ from typing import Any
 import numpy as np
 
 from oscillators.engines import _continuous_kernels as _k
+from oscillators.engines import _continuous_layout as _lay
 from oscillators.engines import _frozen_hops as _fh
+from oscillators.engines import _relay_landings as _rl
 from oscillators.engines.base import (
     STEPS_PER_TIME,
     DivergenceError,
@@ -143,7 +146,7 @@ class CompiledContinuousEngine(CompiledRK8Engine):
         # motion (forcing, damping, the stiffness C·slope of the steepest branch)
         rho = max(1.0, self._omega, 2.0 * zeta, math.sqrt(abs(coupling) * _slope_bound(spec)))
         self._rho = rho
-        self._par = np.zeros(_k.N_PAR)
+        self._par = np.zeros(_lay.N_PAR)
         self._par[_k.P_ZETA] = zeta
         self._par[_k.P_OMEGA] = self._omega
         self._par[_k.P_C] = coupling
@@ -158,8 +161,8 @@ class CompiledContinuousEngine(CompiledRK8Engine):
         u = getattr(op_state, "input", None)
         if u is not None and abs(float(u) - q) > 1e-12 * max(1.0, abs(q)):
             raise ValueError(f"state.operator_state.input ({float(u)}) must equal state.q ({q})")
-        self._ist = np.zeros(_k.N_IST, dtype=np.int64)
-        self._st = np.zeros(_k.N_ST)
+        self._ist = np.zeros(_lay.N_IST, dtype=np.int64)
+        self._st = np.zeros(_lay.N_ST)
         self._st[1] = q
         self._st[2] = v
         self._include_phase = False
@@ -246,7 +249,7 @@ class CompiledContinuousEngine(CompiledRK8Engine):
                 np.argsort(spec.relay_beta, kind="stable"),
             ]
         ).astype(np.int64)
-        self._st[_k.S_RELAY] = _k.relay_output(self._rel)
+        self._st[_k.S_RELAY] = _rl.relay_output(self._rel)
         if self._ist[9] == _k.OP_PI:
             par = self._par
             kappa = float(np.max(self._et[0, 0], initial=0.0))  # the largest 1/(√2 R)
@@ -354,7 +357,7 @@ class CompiledContinuousEngine(CompiledRK8Engine):
         if self._ist[9] == _k.OP_PI:
             make = self._spec.make_state
             if self._rel.shape[0]:
-                op_state = make(self._pos.copy(), q, self._rel[:, _k.R_OUT].copy())
+                op_state = make(self._pos.copy(), q, self._rel[:, _lay.R_OUT].copy())
             else:
                 op_state = (self._op.state if make is None else make)(self._pos.copy(), q)
         else:
