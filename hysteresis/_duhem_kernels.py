@@ -42,13 +42,13 @@ lies in ``[D_min, 1]``, ``D_min = 1 − s/3``), ``|e − Δ| <= B₂e²/(2D_min)
 max|L'''|`` (``max|L''| < 0.106``, ``max|L'''| = 2/15``). The solve stops, accepting that step,
 once ``K₃|Δ|³ <= ε·ms`` (or the bracket is a few ulps wide): the truncation error is then below
 an ulp of ``ms`` and ``M`` carries only the rounding of ``F``, a few ``ε·ms/D``. ``L, L', L''``
-at the accepted root are Taylor's from the last evaluation (to 3rd, 3rd and 2nd order in
-``δ = (α/a)·(m_new − m)``, with ``L'''`` and ``L''''`` from :func:`_langevin4`): the remainders
-``L''''δ⁴/24`` and ``L⁽⁵⁾δ⁴/24`` are far below an ulp, ``L⁽⁵⁾δ³/6`` (``|L⁽⁵⁾| <= 16/63``; in
-``L''`` alone, which enters only ``∂g/∂p``, times ``c``) below ``2ε/c``: the rounding of the
-closed form of ``L''`` near ``|x| = 1`` is as large (measured: both within 70ε·max|L''| of a
-direct evaluation). From a warm start within ``(ε·ms/K₃)^{1/3}`` of the root (``1.8e-4·ms``
-for ``ms = 1, a = 0.5, c = 0.2, α = 0.1``) that is ONE evaluation of ``L``.
+at the accepted root are Taylor's from the last evaluation where the step is short, ``|δ| <=
+2e-5`` (``δ = (α/a)·(m_new − m)``; to 3rd, 3rd and 2nd order, with ``L'''`` and ``L''''`` from
+:func:`_langevin4`): the remainders ``L''''δ⁴/24``, ``L⁽⁵⁾δ⁴/24`` and ``L⁽⁵⁾δ³/6`` (``|L⁽⁵⁾|
+<= 16/63``) are below 3.4e-16, as small as the rounding of the closed form of ``L''`` near
+``|x| = 1`` (measured: within 70ε·max|L''| of a direct evaluation); a longer one evaluates
+``L`` there. From a warm start within ``min((ε·ms/K₃)^{1/3}, 2e-5·a/α)`` of the root
+(``1e-4·ms`` for ``ms = 1, a = 0.5, c = 0.2, α = 0.1``) that is ONE evaluation of ``L``.
 
 The Langevin function ``L(x) = coth x − 1/x`` and its first two derivatives come from their
 Taylor series ``L(x) = Σ_{j>=1} 2^{2j}B_{2j}x^{2j−1}/(2j)!`` (Bernoulli numbers; radius π) for
@@ -142,6 +142,10 @@ def bouc_wen_slope(
 #: the constant of the solve's stopping rule (module docstring)
 _L2_MAX = 0.106
 _L3_MAX = 2.0 / 15.0 + 1e-15
+#: the longest last step ``|δx|`` across which the solve carries ``L, L', L''`` by Taylor: the
+#: remainders, at most ``(16/63)·δx³/6 = 3.4e-16`` in ``L''`` and less in ``L'`` and ``L``,
+#: stay at the rounding of ``L`` (module docstring)
+_TAYLOR_STEP = 2e-5
 #: ``delta_m`` of :func:`jiles_atherton_rhs`: δ_M from the sign of the gap
 DELTA_M_NATURAL = -1.0
 
@@ -178,7 +182,7 @@ def _langevin4(x):
     in ``L''''``), the closed forms above (``C = coth x``, ``S = 1/sinh²x = 4e/(1−e)²``, ``e =
     exp(−2|x|)``: ``L''' = −2S² − 4C²S + 6/x⁴``, ``L'''' = 16CS² + 8C³S − 24/x⁵``, whose
     cancellation costs up to ~300ε at ``|x| = 1``). ``L'''`` and ``L''''`` only carry ``L, L',
-    L''`` across the solve's last step (``|δx| < 1e-3``), where these errors are immaterial."""
+    L''`` across the solve's last step (``|δx| <= 2e-5``), where these errors are immaterial."""
     if abs(x) < 1.0:
         y = x * x
         return (
@@ -246,9 +250,12 @@ def _solve(h, m_irr, ms, a, c, alpha, guess):
             # remainders L''''δ⁴/24, L⁽⁵⁾δ⁴/24, L⁽⁵⁾δ³/6 with |δ| <= r·|Δ|: module docstring)
             x1 = (h + alpha * m_new) / a
             dx = x1 - x
-            lv += dx * (l1 + 0.5 * dx * (l2 + dx / 3.0 * l3))
-            l1 += dx * (l2 + 0.5 * dx * (l3 + dx / 3.0 * l4))
-            l2 += dx * (l3 + 0.5 * dx * l4)
+            if abs(dx) <= _TAYLOR_STEP:
+                lv += dx * (l1 + 0.5 * dx * (l2 + dx / 3.0 * l3))
+                l1 += dx * (l2 + 0.5 * dx * (l3 + dx / 3.0 * l4))
+                l2 += dx * (l3 + 0.5 * dx * l4)
+            else:
+                lv, l1, l2 = langevin(x1)
             return m_new, 1.0 - s * l1, x1, lv, l1, l2
         m = m_new
         if not lo < m < hi:  # the step left the bracket: bisect
