@@ -146,6 +146,7 @@ _L3_MAX = 2.0 / 15.0 + 1e-15
 #: remainders, at most ``(16/63)·δx³/6 = 3.4e-16`` in ``L''`` and less in ``L'`` and ``L``,
 #: stay at the rounding of ``L`` (module docstring)
 _TAYLOR_STEP = 2e-5
+_THIRD, _SIXTH = 1.0 / 3.0, 1.0 / 6.0
 #: ``delta_m`` of :func:`jiles_atherton_rhs`: δ_M from the sign of the gap
 DELTA_M_NATURAL = -1.0
 
@@ -193,10 +194,11 @@ def _langevin4(x):
             x * _horner(_S4, y),
         )
     e = math.exp(-2.0 * abs(x))
-    r = 1.0 / (1.0 - e)
+    w = 1.0 / ((1.0 - e) * x)  # one division for 1/(1 − e) and 1/x
+    r = x * w
     coth = (1.0 + e) * r if x > 0.0 else -(1.0 + e) * r
     sh = 4.0 * e * r * r  # 1/sinh²x
-    ix = 1.0 / x
+    ix = (1.0 - e) * w
     ix2 = ix * ix
     return (
         coth - ix,
@@ -219,21 +221,23 @@ def _solve(h, m_irr, ms, a, c, alpha, guess):
         x = (h + alpha * base) / a if c == 0.0 else h / a
         lv, l1, l2 = langevin(x)
         return base + c * ms * lv, 1.0 - alpha * c * ms / a * l1, x, lv, l1, l2
-    s = alpha * c * ms / a  # F' = 1 − s·L'(x), in [D_min, 1], D_min = 1 − s/3
-    r = alpha / a  # dx/dM
-    d_min = 1.0 - s / 3.0
+    inv_a = 1.0 / a
+    r = alpha * inv_a  # dx/dM
+    s = c * ms * r  # F' = 1 − s·L'(x), in [D_min, 1], D_min = 1 − s/3
+    d_min = 1.0 - s * _THIRD
     b2 = s * r * _L2_MAX  # max|F''|
     b3 = s * r * r * _L3_MAX  # max|F'''|
-    # Chebyshev's step from m errs by <= k3·Δ³ (module docstring)
-    k3 = (b2 * b2 * (1.0 + 1.0 / d_min) / 4.0 + b3 / 6.0) / (d_min * d_min * d_min * d_min)
-    tol = 2.220446049250313e-16 * ms
+    # Chebyshev's step from m errs by <= K₃·|Δ|³ (module docstring); the test K₃|Δ|³ <= ε·ms
+    # multiplied out by D_min⁵ (no division)
+    k3 = b2 * b2 * (1.0 + d_min) * 0.25 + b3 * d_min * _SIXTH
+    tol = 2.220446049250313e-16 * ms * (d_min * d_min) * (d_min * d_min) * d_min
     if -ms <= guess <= ms:
         m = guess
     else:
         m = base + c * ms * langevin((h + alpha * m_irr) / a)[0]
     lo, hi = -ms, ms
     for _ in range(100):
-        x = (h + alpha * m) / a
+        x = (h + alpha * m) * inv_a
         lv, l1, l2, l3, l4 = _langevin4(x)
         f = m - base - c * ms * lv
         fp = 1.0 - s * l1
@@ -243,16 +247,18 @@ def _solve(h, m_irr, ms, a, c, alpha, guess):
             hi = m
         else:
             lo = m
-        step = f / fp
-        m_new = m - step + 0.5 * s * r * l2 / fp * step * step  # Chebyshev (F'' = −s·r·L'')
-        if k3 * abs(step) ** 3 <= tol and lo <= m_new <= hi:
+        inv_fp = 1.0 / fp
+        step = f * inv_fp
+        m_new = m - step + 0.5 * s * r * l2 * inv_fp * step * step  # Chebyshev: F'' = −s·r·L''
+        size = abs(step)
+        if k3 * size * size * size <= tol and lo <= m_new <= hi:
             # within ε·ms of the root: L and its derivatives there by Taylor from x (the
             # remainders L''''δ⁴/24, L⁽⁵⁾δ⁴/24, L⁽⁵⁾δ³/6 with |δ| <= r·|Δ|: module docstring)
-            x1 = (h + alpha * m_new) / a
+            x1 = (h + alpha * m_new) * inv_a
             dx = x1 - x
             if abs(dx) <= _TAYLOR_STEP:
-                lv += dx * (l1 + 0.5 * dx * (l2 + dx / 3.0 * l3))
-                l1 += dx * (l2 + 0.5 * dx * (l3 + dx / 3.0 * l4))
+                lv += dx * (l1 + 0.5 * dx * (l2 + dx * _THIRD * l3))
+                l1 += dx * (l2 + 0.5 * dx * (l3 + dx * _THIRD * l4))
                 l2 += dx * (l3 + 0.5 * dx * l4)
             else:
                 lv, l1, l2 = langevin(x1)
@@ -260,7 +266,7 @@ def _solve(h, m_irr, ms, a, c, alpha, guess):
         m = m_new
         if not lo < m < hi:  # the step left the bracket: bisect
             m = 0.5 * (lo + hi)
-        if hi - lo <= 4.0 * tol:
+        if hi - lo <= 8.9e-16 * ms:
             break
     x = (h + alpha * m) / a
     lv, l1, l2 = langevin(x)
