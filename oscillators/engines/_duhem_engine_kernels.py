@@ -11,8 +11,9 @@ irreversible magnetisation, ``y = M(H, M_irr)``). The right-hand sides are those
 
 Layouts (named constants below): ``par`` (float64) ``P_ZETA`` ζ, ``P_OMEGA`` Ω, ``P_C`` C,
 ``P_PHI0`` φ0, ``P_H`` the RK8 step, ``P_PERIOD`` T, ``P_BOUND`` the divergence bound,
-``P_T0`` the start time; ``mp`` the model's parameters in the kernel's order (Bouc–Wen
-``A, β, γ, n``; Jiles–Atherton ``M_s, a, k, c, α``); ``ist`` (int64) ``I_DIR`` d,
+``P_T0`` the start time, then scratch (``P_TRIG_H``: the stages' forcing phases by angle
+addition for steps of the usual length); ``mp`` the model's parameters in the kernel's order
+(Bouc–Wen ``A, β, γ, n``; Jiles–Atherton ``M_s, a, k, c, α``); ``ist`` (int64) ``I_DIR`` d,
 ``I_PERIOD`` period index, ``I_EVENTS`` reversals since the start, ``I_SAMPLE`` next sample,
 ``I_NEV`` events in ``ev``, ``I_RECORD``, ``I_K`` tangent columns (0: off), ``I_MODEL``,
 ``I_STUCK`` events at zero distance in a row, ``I_BAD`` the model was evaluated where it is
@@ -84,7 +85,12 @@ from oscillators.engines._roots import find_root, secant_start
 _N_STAGES = _dop.N_STAGES
 
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
-N_PAR = 8
+#: scratch after the parameters (not parameters): the step ``h`` of the table (0: none), then
+#: ``cos(Ω c_i h)`` and ``sin(Ω c_i h)`` of the RK8 nodes (``_stages``)
+P_TRIG_H = 8
+P_COS = 9
+P_SIN = P_COS + _N_STAGES
+N_PAR = P_SIN + _N_STAGES
 I_DIR, I_PERIOD, I_EVENTS, I_SAMPLE, I_NEV, I_RECORD, I_K, I_MODEL = range(8)
 I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED, I_POLE = range(8, 14)
 N_IST = 14
@@ -249,21 +255,26 @@ def side_now(ist, st, mp, d):
 # --------------------------------------------------------------------------------------------
 # the RK8 step
 # --------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rhs(par, ist, mp, Y, t, y, dy, k):
     """Right-hand side of (q, v, z) and of k tangent columns (δq, δv, δz) at time t."""
+    ph = par[P_PHI0] + par[P_OMEGA] * t
+    _rhs_at(par, ist, mp, Y, math.cos(ph), math.sin(ph) if k > 0 else 0.0, y, dy, k)
+
+
+@njit(cache=True, inline="always")
+def _rhs_at(par, ist, mp, Y, cph, sph, y, dy, k):
+    """:func:`_rhs` at the forcing phase whose cosine and sine are ``cph``, ``sph``."""
     zeta = par[P_ZETA]
     c = par[P_C]
     q = y[0]
     v = y[1]
     z = y[2]
-    ph = par[P_PHI0] + par[P_OMEGA] * t
     out, yq, yz, g, gq, gz = _model(ist, mp, q, z, ist[I_DIR])
     dy[0] = v
-    dy[1] = -2.0 * zeta * v - q + math.cos(ph) + c * out
+    dy[1] = -2.0 * zeta * v - q + cph + c * out
     dy[2] = g * v
     if k > 0:
-        sph = math.sin(ph)
         cq = c * yq - 1.0
         cz = c * yz
         vq = v * gq
@@ -289,12 +300,38 @@ def _stages(par, ist, mp, Y, t, y, h, out, K, tmp, k, first):
     stage and end sums: the right-hand side takes arrays) with stages ``first``.. evaluated
     (``first = 1``: ``K[0] = f(t, y)`` is there, the previous step's end derivative)."""
     n = 3 + 3 * k
+    if par[P_TRIG_H] != h:  # a step of another length (an event's): the phase of each stage
+        if first == 0:
+            _rhs(par, ist, mp, Y, t, y, K[0], k)
+        for i in range(1, _N_STAGES):
+            ti = _dop.rk8_stage(i, t, y, h, K, tmp, n)
+            _rhs(par, ist, mp, Y, ti, tmp, K[i], k)
+        _dop.rk8_end(y, h, K, out, n)
+        return
+    # the step of the table: the stages' forcing by angle addition from the step start's
+    # (cos(φ + Ωc_i h) = cos φ·cos(Ωc_i h) − sin φ·sin(Ωc_i h): two trigonometric calls per
+    # step instead of twelve; a few ulps, as the direct call's argument carries)
+    ph = par[P_PHI0] + par[P_OMEGA] * t
+    c0 = math.cos(ph)
+    s0 = math.sin(ph)
     if first == 0:
-        _rhs(par, ist, mp, Y, t, y, K[0], k)
+        _rhs_at(par, ist, mp, Y, c0, s0, y, K[0], k)
     for i in range(1, _N_STAGES):
-        ti = _dop.rk8_stage(i, t, y, h, K, tmp, n)
-        _rhs(par, ist, mp, Y, ti, tmp, K[i], k)
+        _dop.rk8_stage(i, t, y, h, K, tmp, n)
+        ci = par[P_COS + i]
+        si = par[P_SIN + i]
+        _rhs_at(par, ist, mp, Y, c0 * ci - s0 * si, s0 * ci + c0 * si, tmp, K[i], k)
     _dop.rk8_end(y, h, K, out, n)
+
+
+@njit(cache=True)
+def set_trig_table(par, h):
+    """Fill the table of :func:`_stages` for steps of length ``h``."""
+    for i in range(_N_STAGES):
+        arg = par[P_OMEGA] * (_dop.C[i] * h)
+        par[P_COS + i] = math.cos(arg)
+        par[P_SIN + i] = math.sin(arg)
+    par[P_TRIG_H] = h
 
 
 # --------------------------------------------------------------------------------------------
