@@ -49,16 +49,19 @@ the grading leaves the steps at the singularity itself, ``~(h·GRADE_FIRST)^(n+1
 (about 12 extra steps per kink). Integer ``n`` is smooth on each
 side: no grading.
 
-Jiles–Atherton. The kink is the switch of ``δ_M`` (the sign of ``G = d·(M_an − M_irr)``,
-smooth, the event function); at ``G = 0`` exactly (the demagnetised state, or a reversal on
-the anhysteretic curve) the side is ``δ_M = 1``: with ``M_irr`` frozen ``dG/dH·d = M_an'/D > 0``.
-Each side's ``δ_M`` is imposed on the stages. The relaxation of ``M_irr`` toward ``M_an`` has
-the rate ``λ = |v·∂g/∂M_irr|`` (about ``|v|/k``), which neither ``ρ`` nor ``max_slope`` sees:
-the steps keep ``h·λ <= RELAX_STEP = 1`` (a fixed step with ``h·λ ~ 6`` erred by 5e-4; at 1 and
-below the error is 5e-11, measured). Where the pole ``w = 1 − αχ = 0`` is reachable
-(:func:`hysteresis._duhem_kernels.jiles_atherton_slope_bound` is None: ``I_POLE``) the steps
-on the side ``δ_M = 1`` are half the predicted time to it (``w ~ (t* − t)^{1/2}``), so they
-close in geometrically; when that time (or a retried step that met the pole) is below
+Jiles–Atherton. The kink is the switch of ``δ_M`` (the sign of ``G = d·(M_an − M_irr)``, smooth,
+the event function); at ``G = 0`` exactly (the demagnetised state, or a reversal on the
+anhysteretic curve) the side is ``δ_M = 1``: with ``M_irr`` frozen ``dG/dH·d = M_an'/D > 0``.
+Each side's ``δ_M`` is imposed on the stages. Deep in saturation ``G' = M_an'·v`` is small and
+``G`` is known only to its rounding (a few ``ε·M_s``), so the kink is located to that band
+(``_ja_gap_noise``: ``|G|`` below it counts as the root; the kink moves by band/``|G'|``, and a
+stage past it errs by ``g ~ G/k`` inside the band: nothing). The relaxation of ``M_irr`` toward
+``M_an`` has the rate ``λ = |v·∂g/∂M_irr|`` (about ``|v|/k``), which neither ``ρ`` nor
+``max_slope`` sees: the steps keep ``h·λ <= RELAX_STEP = 1`` (a fixed step with ``h·λ ~ 6``
+erred by 5e-4; at 1 and below the error is 5e-11, measured). Where the pole ``w = 1 − αχ = 0``
+is reachable (:func:`hysteresis._duhem_kernels.jiles_atherton_slope_bound` is None: ``I_POLE``)
+the steps on the side ``δ_M = 1`` are half the predicted time to it (``w ~ (t* − t)^{1/2}``), so
+they close in geometrically; when that time (or a retried step that met the pole) is below
 ``POLE_STOP·h`` the run stops there with ``ILL_POSED`` (the field located to ~1e-12·|v|).
 
 Status codes of :func:`run`: ``DONE``, ``EVENTS_FULL`` (``ev`` full: drained and called again),
