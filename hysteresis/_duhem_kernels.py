@@ -32,14 +32,23 @@ Slopes (scalar float arguments; ``direction`` is ``+1.0`` rising, ``-1.0`` falli
   + c·ms/(3a)`` and ``dM/dH = χ/(1 − αχ) <= χ_s/(1 − αχ_s)`` (``None`` if ``αχ_s >= 1``; every
   branch after a reversal starts at ``G <= 0``).
 
-The output map is solved by Newton on ``F`` from the guess, safeguarded by the bracket ``[−ms,
-ms]`` (bisection where Newton leaves it). Stopping rule (explicit): with ``r`` the root and
-``Δ = F(m)/F'(m)`` the Newton step from ``m``, ``|m − Δ − r| <= max|F''|·|m − r|²/F'(m)`` and
-``|m − r| <= |Δ|·F'(m)/D_min``, so ``|m − Δ − r| <= K·Δ²`` with ``K = α²c·ms·max|L''|/(a²·
-D_min²)`` (``D_min = 1 − αc·ms/(3a)``, ``max|L''| < 0.106``); the solve stops, accepting ``m −
-Δ``, once ``K·Δ² <= ε·ms`` (or the bracket is a few ulps wide): the truncation error is then
-below an ulp of ``ms`` and ``M`` carries only the rounding of ``F``, a few ``ε·ms/D``. From a
-warm start that is 1–2 Newton steps plus one evaluation of ``L`` at the root.
+The output map is solved by Chebyshev's method on ``F`` from the guess (``m ← m − Δ − βΔ²``,
+``Δ = F(m)/F'(m)``, ``β = F''(m)/(2F'(m))``; ``F'' = −(α/a)·s·L''``, ``s = αc·ms/a``),
+safeguarded by the bracket ``[−ms, ms]`` (bisection where a step leaves it). Stopping rule
+(explicit): with ``r`` the root and ``e = m − r``, ``|e| <= |F(m)|/D_min <= |Δ|/D_min`` (``F'``
+lies in ``[D_min, 1]``, ``D_min = 1 − s/3``), ``|e − Δ| <= B₂e²/(2D_min)`` and ``Δ = e − βe² +
+γe³`` with ``|γ| <= B₃/(6D_min)``, so the step errs by ``|β(e − Δ)(e + Δ) − γe³| <= K₃·|Δ|³``,
+``K₃ = (B₂²(1 + 1/D_min)/4 + B₃/6)/D_min⁴``, ``B₂ = s(α/a)·max|L''|``, ``B₃ = s(α/a)²·
+max|L'''|`` (``max|L''| < 0.106``, ``max|L'''| = 2/15``). The solve stops, accepting that step,
+once ``K₃|Δ|³ <= ε·ms`` (or the bracket is a few ulps wide): the truncation error is then below
+an ulp of ``ms`` and ``M`` carries only the rounding of ``F``, a few ``ε·ms/D``. ``L, L', L''``
+at the accepted root are Taylor's from the last evaluation where the step is short, ``|δ| <=
+2e-5`` (``δ = (α/a)·(m_new − m)``; to 3rd, 3rd and 2nd order, with ``L'''`` and ``L''''`` from
+:func:`_langevin4`): the remainders ``L''''δ⁴/24``, ``L⁽⁵⁾δ⁴/24`` and ``L⁽⁵⁾δ³/6`` (``|L⁽⁵⁾|
+<= 16/63``) are below 3.4e-16, as small as the rounding of the closed form of ``L''`` near
+``|x| = 1`` (measured: within 70ε·max|L''| of a direct evaluation); a longer one evaluates
+``L`` there. From a warm start within ``min((ε·ms/K₃)^{1/3}, 2e-5·a/α)`` of the root
+(``1e-4·ms`` for ``ms = 1, a = 0.5, c = 0.2, α = 0.1``) that is ONE evaluation of ``L``.
 
 The Langevin function ``L(x) = coth x − 1/x`` and its first two derivatives come from their
 Taylor series ``L(x) = Σ_{j>=1} 2^{2j}B_{2j}x^{2j−1}/(2j)!`` (Bernoulli numbers; radius π) for
@@ -129,49 +138,135 @@ def bouc_wen_slope(
     return g, dg
 
 
-#: a bound of ``|L''|`` (its maximum is 0.10596, at ``|x| = 1.372``): Newton's error bound
+#: bounds of ``|L''|``, ``|L'''|`` (the maxima: 0.10596 at ``|x| = 1.372``, ``2/15`` at 0):
+#: the constant of the solve's stopping rule (module docstring)
 _L2_MAX = 0.106
+_L3_MAX = 2.0 / 15.0 + 1e-15
+#: the longest last step ``|δx|`` across which the solve carries ``L, L', L''`` by Taylor: the
+#: remainders, at most ``(16/63)·δx³/6 = 3.4e-16`` in ``L''`` and less in ``L'`` and ``L``,
+#: stay at the rounding of ``L`` (module docstring)
+_TAYLOR_STEP = 2e-5
+_THIRD, _SIXTH = 1.0 / 3.0, 1.0 / 6.0
 #: ``delta_m`` of :func:`jiles_atherton_rhs`: δ_M from the sign of the gap
 DELTA_M_NATURAL = -1.0
+
+
+def _derivative_series(order: int) -> np.ndarray:
+    """Coefficients of ``L^(order)`` in powers of ``x²`` (times ``x`` for even ``order``):
+    ``d^order/dx^order Σ_j c_j x^(2j+1)``, the terms with ``2j + 1 >= order``."""
+    out = []
+    for j, cj in enumerate(_LANGEVIN_SERIES):
+        p = 2 * j + 1
+        if p < order:
+            continue
+        out.append(cj * math.prod(range(p - order + 1, p + 1)))
+    return np.array(out)
+
+
+#: the series of ``L, L', L'', L''', L''''`` (``L = x·S0(x²)``, ``L' = S1(x²)``, ``L'' =
+#: x·S2(x²)``, ``L''' = S3(x²)``, ``L'''' = x·S4(x²)``)
+_S0, _S1, _S2, _S3, _S4 = (_derivative_series(n) for n in range(5))
+
+
+@njit(cache=True, inline="always")
+def _horner(c, y):
+    p = c[c.size - 1]
+    for j in range(c.size - 2, -1, -1):
+        p = p * y + c[j]
+    return p
+
+
+@njit(cache=True)
+def _langevin4(x):
+    """``(L, L', L'', L''', L'''')`` at ``x``: the series below ``|x| = 1`` (each derivative's
+    own from the 20 terms of ``L``: the first omitted term is below 2e-16 in ``L'''`` and 7e-15
+    in ``L''''``), the closed forms above (``C = coth x``, ``S = 1/sinh²x = 4e/(1−e)²``, ``e =
+    exp(−2|x|)``: ``L''' = −2S² − 4C²S + 6/x⁴``, ``L'''' = 16CS² + 8C³S − 24/x⁵``, whose
+    cancellation costs up to ~300ε at ``|x| = 1``). ``L'''`` and ``L''''`` only carry ``L, L',
+    L''`` across the solve's last step (``|δx| <= 2e-5``), where these errors are immaterial."""
+    if abs(x) < 1.0:
+        y = x * x
+        return (
+            x * _horner(_S0, y),
+            _horner(_S1, y),
+            x * _horner(_S2, y),
+            _horner(_S3, y),
+            x * _horner(_S4, y),
+        )
+    e = math.exp(-2.0 * abs(x))
+    w = 1.0 / ((1.0 - e) * x)  # one division for 1/(1 − e) and 1/x
+    r = x * w
+    coth = (1.0 + e) * r if x > 0.0 else -(1.0 + e) * r
+    sh = 4.0 * e * r * r  # 1/sinh²x
+    ix = (1.0 - e) * w
+    ix2 = ix * ix
+    return (
+        coth - ix,
+        ix2 - sh,
+        2.0 * coth * sh - 2.0 * ix2 * ix,
+        -2.0 * sh * sh - 4.0 * coth * coth * sh + 6.0 * ix2 * ix2,
+        (16.0 * sh + 8.0 * coth * coth) * coth * sh - 24.0 * ix2 * ix2 * ix,
+    )
 
 
 @njit(cache=True)
 def _solve(h, m_irr, ms, a, c, alpha, guess):
     """``(M, D, x, L(x), L'(x), L''(x))``: the output map's root from ``guess`` (a cold start,
     one fixed-point step from ``M_irr``, where ``guess`` is NaN or outside ``[−ms, ms]``),
-    ``D = F'(M) = 1 − αc·M_an'(H_e)``, ``x = H_e/a`` (module docstring: the stopping rule)."""
+    ``D = F'(M) = 1 − αc·M_an'(H_e)``, ``x = H_e/a`` (module docstring: the stopping rule; the
+    last step is Chebyshev's, and ``L, L', L''`` at the root are Taylor's from the last
+    evaluation, so that a warm start costs one evaluation of ``L`` as a rule)."""
     base = (1.0 - c) * m_irr
     if c == 0.0 or alpha == 0.0:
         x = (h + alpha * base) / a if c == 0.0 else h / a
         lv, l1, l2 = langevin(x)
         return base + c * ms * lv, 1.0 - alpha * c * ms / a * l1, x, lv, l1, l2
-    s = alpha * c * ms / a  # F' = 1 − s·L'(x), in [1 − s/3, 1]
-    d_min = 1.0 - s / 3.0
-    bound = s * alpha / a * _L2_MAX / (d_min * d_min)  # |F''|max/D_min²
-    tol = 2.220446049250313e-16 * ms
+    inv_a = 1.0 / a
+    r = alpha * inv_a  # dx/dM
+    s = c * ms * r  # F' = 1 − s·L'(x), in [D_min, 1], D_min = 1 − s/3
+    d_min = 1.0 - s * _THIRD
+    b2 = s * r * _L2_MAX  # max|F''|
+    b3 = s * r * r * _L3_MAX  # max|F'''|
+    # Chebyshev's step from m errs by <= K₃·|Δ|³ (module docstring); the test K₃|Δ|³ <= ε·ms
+    # multiplied out by D_min⁵ (no division)
+    k3 = b2 * b2 * (1.0 + d_min) * 0.25 + b3 * d_min * _SIXTH
+    tol = 2.220446049250313e-16 * ms * (d_min * d_min) * (d_min * d_min) * d_min
     if -ms <= guess <= ms:
         m = guess
     else:
         m = base + c * ms * langevin((h + alpha * m_irr) / a)[0]
     lo, hi = -ms, ms
     for _ in range(100):
-        x = (h + alpha * m) / a
-        lv, l1, l2 = langevin(x)
+        x = (h + alpha * m) * inv_a
+        lv, l1, l2, l3, l4 = _langevin4(x)
         f = m - base - c * ms * lv
+        fp = 1.0 - s * l1
         if f == 0.0:
-            return m, 1.0 - s * l1, x, lv, l1, l2
+            return m, fp, x, lv, l1, l2
         if f > 0.0:
             hi = m
         else:
             lo = m
-        step = f / (1.0 - s * l1)
-        if bound * step * step <= tol:  # the Newton iterate m − step is within ε·ms: done
-            m -= step
-            break
-        m -= step
-        if not lo < m < hi:  # Newton left the bracket: bisect
+        inv_fp = 1.0 / fp
+        step = f * inv_fp
+        m_new = m - step + 0.5 * s * r * l2 * inv_fp * step * step  # Chebyshev: F'' = −s·r·L''
+        size = abs(step)
+        if k3 * size * size * size <= tol and lo <= m_new <= hi:
+            # within ε·ms of the root: L and its derivatives there by Taylor from x (the
+            # remainders L''''δ⁴/24, L⁽⁵⁾δ⁴/24, L⁽⁵⁾δ³/6 with |δ| <= r·|Δ|: module docstring)
+            x1 = (h + alpha * m_new) * inv_a
+            dx = x1 - x
+            if abs(dx) <= _TAYLOR_STEP:
+                lv += dx * (l1 + 0.5 * dx * (l2 + dx * _THIRD * l3))
+                l1 += dx * (l2 + 0.5 * dx * (l3 + dx * _THIRD * l4))
+                l2 += dx * (l3 + 0.5 * dx * l4)
+            else:
+                lv, l1, l2 = langevin(x1)
+            return m_new, 1.0 - s * l1, x1, lv, l1, l2
+        m = m_new
+        if not lo < m < hi:  # the step left the bracket: bisect
             m = 0.5 * (lo + hi)
-        if hi - lo <= 4.0 * tol:
+        if hi - lo <= 8.9e-16 * ms:
             break
     x = (h + alpha * m) / a
     lv, l1, l2 = langevin(x)
@@ -197,26 +292,36 @@ def jiles_atherton_rhs(
     side), :data:`DELTA_M_NATURAL` takes it from the sign of ``d·(M_an − M_irr)``. ``ok``
     False (``g`` and its partials NaN) where ``1 − αχ <= 0`` (module docstring)."""
     m, d, x, lv, l1, l2 = _solve(h, m_irr, ms, a, c, alpha, guess)
+    he_h = 1.0 / d  # ∂H_e/∂H (the only divisions: by D, k and 1 − αχ)
     dman = ms / a * l1
-    m_h = c * dman / d
-    m_i = (1.0 - c) / d
+    m_h = c * dman * he_h
+    m_i = (1.0 - c) * he_h
     gap = ms * lv - m_irr
     if delta_m == 0.0 or (delta_m < 0.0 and direction * gap <= 0.0):  # no irreversible change
         return m, m_h, m_i, 0.0, 0.0, 0.0, True
     ddman = ms / (a * a) * l2
-    chi_irr = gap / (k * direction)
+    dk = direction / k  # 1/(k·d)
+    chi_irr = gap * dk
     chi = (1.0 - c) * chi_irr + c * dman
     q = 1.0 - alpha * chi
     if not q > 0.0:
         return m, m_h, m_i, math.nan, math.nan, math.nan, False
-    g = chi_irr / q
-    he_h = 1.0 / d
-    he_i = alpha * (1.0 - c) / d
-    ci_h = dman * he_h / (k * direction)
-    ci_i = (dman * he_i - 1.0) / (k * direction)
+    inv_q = 1.0 / q
+    g = chi_irr * inv_q
+    he_i = alpha * m_i
+    ci_h = dman * he_h * dk
+    ci_i = (dman * he_i - 1.0) * dk
     ch_h = (1.0 - c) * ci_h + c * ddman * he_h
     ch_i = (1.0 - c) * ci_i + c * ddman * he_i
-    return m, m_h, m_i, g, (ci_h + alpha * g * ch_h) / q, (ci_i + alpha * g * ch_i) / q, True
+    return (
+        m,
+        m_h,
+        m_i,
+        g,
+        (ci_h + alpha * g * ch_h) * inv_q,
+        (ci_i + alpha * g * ch_i) * inv_q,
+        True,
+    )
 
 
 @njit(cache=True)

@@ -11,8 +11,9 @@ irreversible magnetisation, ``y = M(H, M_irr)``). The right-hand sides are those
 
 Layouts (named constants below): ``par`` (float64) ``P_ZETA`` ζ, ``P_OMEGA`` Ω, ``P_C`` C,
 ``P_PHI0`` φ0, ``P_H`` the RK8 step, ``P_PERIOD`` T, ``P_BOUND`` the divergence bound,
-``P_T0`` the start time; ``mp`` the model's parameters in the kernel's order (Bouc–Wen
-``A, β, γ, n``; Jiles–Atherton ``M_s, a, k, c, α``); ``ist`` (int64) ``I_DIR`` d,
+``P_T0`` the start time, then scratch (``P_TRIG_H``: the stages' forcing phases by angle
+addition for steps of the usual length); ``mp`` the model's parameters in the kernel's order
+(Bouc–Wen ``A, β, γ, n``; Jiles–Atherton ``M_s, a, k, c, α``); ``ist`` (int64) ``I_DIR`` d,
 ``I_PERIOD`` period index, ``I_EVENTS`` reversals since the start, ``I_SAMPLE`` next sample,
 ``I_NEV`` events in ``ev``, ``I_RECORD``, ``I_K`` tangent columns (0: off), ``I_MODEL``,
 ``I_STUCK`` events at zero distance in a row, ``I_BAD`` the model was evaluated where it is
@@ -48,16 +49,19 @@ the grading leaves the steps at the singularity itself, ``~(h·GRADE_FIRST)^(n+1
 (about 12 extra steps per kink). Integer ``n`` is smooth on each
 side: no grading.
 
-Jiles–Atherton. The kink is the switch of ``δ_M`` (the sign of ``G = d·(M_an − M_irr)``,
-smooth, the event function); at ``G = 0`` exactly (the demagnetised state, or a reversal on
-the anhysteretic curve) the side is ``δ_M = 1``: with ``M_irr`` frozen ``dG/dH·d = M_an'/D > 0``.
-Each side's ``δ_M`` is imposed on the stages. The relaxation of ``M_irr`` toward ``M_an`` has
-the rate ``λ = |v·∂g/∂M_irr|`` (about ``|v|/k``), which neither ``ρ`` nor ``max_slope`` sees:
-the steps keep ``h·λ <= RELAX_STEP = 1`` (a fixed step with ``h·λ ~ 6`` erred by 5e-4; at 1 and
-below the error is 5e-11, measured). Where the pole ``w = 1 − αχ = 0`` is reachable
-(:func:`hysteresis._duhem_kernels.jiles_atherton_slope_bound` is None: ``I_POLE``) the steps
-on the side ``δ_M = 1`` are half the predicted time to it (``w ~ (t* − t)^{1/2}``), so they
-close in geometrically; when that time (or a retried step that met the pole) is below
+Jiles–Atherton. The kink is the switch of ``δ_M`` (the sign of ``G = d·(M_an − M_irr)``, smooth,
+the event function); at ``G = 0`` exactly (the demagnetised state, or a reversal on the
+anhysteretic curve) the side is ``δ_M = 1``: with ``M_irr`` frozen ``dG/dH·d = M_an'/D > 0``.
+Each side's ``δ_M`` is imposed on the stages. Deep in saturation ``G' = M_an'·v`` is small and
+``G`` is known only to its rounding (a few ``ε·M_s``), so the kink is located to that band
+(``_ja_gap_noise``: ``|G|`` below it counts as the root; the kink moves by band/``|G'|``, and a
+stage past it errs by ``g ~ G/k`` inside the band: nothing). The relaxation of ``M_irr`` toward
+``M_an`` has the rate ``λ = |v·∂g/∂M_irr|`` (about ``|v|/k``), which neither ``ρ`` nor
+``max_slope`` sees: the steps keep ``h·λ <= RELAX_STEP = 1`` (a fixed step with ``h·λ ~ 6``
+erred by 5e-4; at 1 and below the error is 5e-11, measured). Where the pole ``w = 1 − αχ = 0``
+is reachable (:func:`hysteresis._duhem_kernels.jiles_atherton_slope_bound` is None: ``I_POLE``)
+the steps on the side ``δ_M = 1`` are half the predicted time to it (``w ~ (t* − t)^{1/2}``), so
+they close in geometrically; when that time (or a retried step that met the pole) is below
 ``POLE_STOP·h`` the run stops there with ``ILL_POSED`` (the field located to ~1e-12·|v|).
 
 Status codes of :func:`run`: ``DONE``, ``EVENTS_FULL`` (``ev`` full: drained and called again),
@@ -84,7 +88,12 @@ from oscillators.engines._roots import find_root, secant_start
 _N_STAGES = _dop.N_STAGES
 
 P_ZETA, P_OMEGA, P_C, P_PHI0, P_H, P_PERIOD, P_BOUND, P_T0 = range(8)
-N_PAR = 8
+#: scratch after the parameters (not parameters): the step ``h`` of the table (0: none), then
+#: ``cos(Ω c_i h)`` and ``sin(Ω c_i h)`` of the RK8 nodes (``_stages``)
+P_TRIG_H = 8
+P_COS = 9
+P_SIN = P_COS + _N_STAGES
+N_PAR = P_SIN + _N_STAGES
 I_DIR, I_PERIOD, I_EVENTS, I_SAMPLE, I_NEV, I_RECORD, I_K, I_MODEL = range(8)
 I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED, I_POLE = range(8, 14)
 N_IST = 14
@@ -121,6 +130,7 @@ RELAX_STEP = 1.0
 #: Jiles–Atherton's pole: the predicted time to it (or a step that fails on it) below
 #: ``POLE_STOP·h`` ends the run with ``ILL_POSED`` there (module docstring)
 POLE_STOP = 1e-10
+_EPS = 2.220446049250313e-16
 #: events at zero distance in a row before STUCK
 _MAX_STUCK = 50
 
@@ -190,6 +200,15 @@ def _regime(ist, mp, q, z, d):
 
 
 @njit(cache=True, inline="always")
+def _ja_gap_noise(mp):
+    """The rounding of Jiles–Atherton's gap ``G = d·(M_s·L(x) − M_irr)``: ``M`` from the solve
+    to a few ``ε·M_s/D`` (moving ``x`` by ``α/a`` times that, ``L`` by a third of it), ``L``
+    to a few ε, the difference to ε·M_s: bounded by ``16ε·M_s·(1 + α·M_s/a)`` (D >= 1/3 for
+    the benchmark's and most parameters; a wider band only moves the kink by band/|G'|)."""
+    return 16.0 * _EPS * mp[0] * (1.0 + mp[4] * mp[0] / mp[1])
+
+
+@njit(cache=True, inline="always")
 def _crossed(ist, mp, q, z, d, side):
     """Whether ``(q, z)`` lies beyond the kink seen from ``side`` (Bouc–Wen: ``side·z <= 0``;
     Jiles–Atherton from ``δ_M = 0``: ``G > 0``)."""
@@ -249,21 +268,26 @@ def side_now(ist, st, mp, d):
 # --------------------------------------------------------------------------------------------
 # the RK8 step
 # --------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rhs(par, ist, mp, Y, t, y, dy, k):
     """Right-hand side of (q, v, z) and of k tangent columns (δq, δv, δz) at time t."""
+    ph = par[P_PHI0] + par[P_OMEGA] * t
+    _rhs_at(par, ist, mp, Y, math.cos(ph), math.sin(ph) if k > 0 else 0.0, y, dy, k)
+
+
+@njit(cache=True, inline="always")
+def _rhs_at(par, ist, mp, Y, cph, sph, y, dy, k):
+    """:func:`_rhs` at the forcing phase whose cosine and sine are ``cph``, ``sph``."""
     zeta = par[P_ZETA]
     c = par[P_C]
     q = y[0]
     v = y[1]
     z = y[2]
-    ph = par[P_PHI0] + par[P_OMEGA] * t
     out, yq, yz, g, gq, gz = _model(ist, mp, q, z, ist[I_DIR])
     dy[0] = v
-    dy[1] = -2.0 * zeta * v - q + math.cos(ph) + c * out
+    dy[1] = -2.0 * zeta * v - q + cph + c * out
     dy[2] = g * v
     if k > 0:
-        sph = math.sin(ph)
         cq = c * yq - 1.0
         cz = c * yz
         vq = v * gq
@@ -289,12 +313,38 @@ def _stages(par, ist, mp, Y, t, y, h, out, K, tmp, k, first):
     stage and end sums: the right-hand side takes arrays) with stages ``first``.. evaluated
     (``first = 1``: ``K[0] = f(t, y)`` is there, the previous step's end derivative)."""
     n = 3 + 3 * k
+    if par[P_TRIG_H] != h:  # a step of another length (an event's): the phase of each stage
+        if first == 0:
+            _rhs(par, ist, mp, Y, t, y, K[0], k)
+        for i in range(1, _N_STAGES):
+            ti = _dop.rk8_stage(i, t, y, h, K, tmp, n)
+            _rhs(par, ist, mp, Y, ti, tmp, K[i], k)
+        _dop.rk8_end(y, h, K, out, n)
+        return
+    # the step of the table: the stages' forcing by angle addition from the step start's
+    # (cos(φ + Ωc_i h) = cos φ·cos(Ωc_i h) − sin φ·sin(Ωc_i h): two trigonometric calls per
+    # step instead of twelve; a few ulps, as the direct call's argument carries)
+    ph = par[P_PHI0] + par[P_OMEGA] * t
+    c0 = math.cos(ph)
+    s0 = math.sin(ph)
     if first == 0:
-        _rhs(par, ist, mp, Y, t, y, K[0], k)
+        _rhs_at(par, ist, mp, Y, c0, s0, y, K[0], k)
     for i in range(1, _N_STAGES):
-        ti = _dop.rk8_stage(i, t, y, h, K, tmp, n)
-        _rhs(par, ist, mp, Y, ti, tmp, K[i], k)
+        _dop.rk8_stage(i, t, y, h, K, tmp, n)
+        ci = par[P_COS + i]
+        si = par[P_SIN + i]
+        _rhs_at(par, ist, mp, Y, c0 * ci - s0 * si, s0 * ci + c0 * si, tmp, K[i], k)
     _dop.rk8_end(y, h, K, out, n)
+
+
+@njit(cache=True)
+def set_trig_table(par, h):
+    """Fill the table of :func:`_stages` for steps of length ``h``."""
+    for i in range(_N_STAGES):
+        arg = par[P_OMEGA] * (_dop.C[i] * h)
+        par[P_COS + i] = math.cos(arg)
+        par[P_SIN + i] = math.sin(arg)
+    par[P_TRIG_H] = h
 
 
 # --------------------------------------------------------------------------------------------
@@ -312,6 +362,10 @@ def _event_fn(tau, args):
     if which == 0:
         return -d * z[1], -d * dz[1]
     r, rq, rz = _regime(ist, mp, z[0], z[2], d)
+    if ist[I_MODEL] == MODEL_JILES_ATHERTON and abs(r) <= _ja_gap_noise(mp):
+        # Jiles–Atherton's gap within its rounding of zero: the kink, as closely as G tells it
+        # (Newton would bounce in that noise until the bracket closed: 13 RK8 steps a kink)
+        return 0.0, -s * (rq * z[1] + rz * dz[2])
     return -s * r, -s * (rq * z[1] + rz * dz[2])
 
 

@@ -143,6 +143,7 @@ class CompiledDuhemEngine(CompiledRK8Engine):
         self._par[_k.P_PERIOD] = self._period
         self._par[_k.P_BOUND] = float(system.divergence_bound)
         self._par[_k.P_T0] = t0
+        _k.set_trig_table(self._par, self._par[_k.P_H])
         u = getattr(op_state, "input", None)
         if u is not None and abs(float(u) - q) > 1e-12 * max(1.0, abs(q)):
             raise ValueError(f"state.operator_state.input ({float(u)}) must equal state.q ({q})")
