@@ -166,38 +166,64 @@ def build_lists(
         _bs_set(sets, lay, g * levels, levels, rank[i])
 
 
+@njit(cache=True)
+def candidates(fsorted, jn, sets, lay, levels, ptr, cand, ctr):  # pragma: no cover
+    """The candidates of every list from its pointer ``ptr[g]`` (the entries with ``t <= u``):
+    ``cand[g]`` its first set bit at or after the pointer (``N``: none), ``cand[G + g]`` its
+    last set bit before it (``-1``: none), their thresholds in ``ctr`` (``±inf``: none)."""
+    ng = jn.size
+    for g in range(ng):
+        _set_hi(g, ptr[g], fsorted, jn, sets, lay, levels, cand, ctr)
+        _set_lo(g, ptr[g] - 1, fsorted, jn, sets, lay, levels, cand, ctr)
+
+
 @njit(cache=True, inline="always")
-def _triggers(fsorted, coupling, nvals, sets, lay, levels, ptr):  # pragma: no cover - compiled
-    """(next up trigger, next down trigger) of the relaxed state (module docstring)."""
+def _set_hi(g, p, fsorted, jn, sets, lay, levels, cand, ctr):  # pragma: no cover
+    """``cand[g]`` = the first set bit of list ``g`` at or after ``p`` (and its threshold)."""
     n = fsorted.size
-    up = np.inf
-    down = -np.inf
-    for g in range(nvals.size):
-        base = g * levels
-        jn = coupling * nvals[g]
-        p = _next_set(sets, lay, base, levels, ptr[g], n)
-        if p >= 0:
-            t = -(fsorted[p] + jn)
-            if t < up:
-                up = t
-        p = _prev_set(sets, lay, base, levels, ptr[g] - 1)
-        if p >= 0:
-            t = -(fsorted[p] + jn)
-            if t > down:
-                down = t
+    r = _next_set(sets, lay, g * levels, levels, p, n)
+    if r >= 0:
+        cand[g] = r
+        ctr[g] = -(fsorted[r] + jn[g])
+    else:
+        cand[g] = n
+        ctr[g] = np.inf
+
+
+@njit(cache=True, inline="always")
+def _set_lo(g, p, fsorted, jn, sets, lay, levels, cand, ctr):  # pragma: no cover
+    """``cand[G + g]`` = the last set bit of list ``g`` at or before ``p`` (and its threshold)."""
+    ng = jn.size
+    r = _prev_set(sets, lay, g * levels, levels, p)
+    cand[ng + g] = r
+    ctr[ng + g] = -(fsorted[r] + jn[g]) if r >= 0 else -np.inf
+
+
+@njit(cache=True, inline="always")
+def _triggers(ctr, ng):  # pragma: no cover - compiled
+    """(next up trigger, next down trigger): the least up candidate, the greatest down one."""
+    up = ctr[0]
+    down = ctr[ng]
+    for g in range(1, ng):
+        if ctr[g] < up:
+            up = ctr[g]
+        if ctr[ng + g] > down:
+            down = ctr[ng + g]
     return up, down
 
 
 @njit(cache=True)
-def refresh(st, fsorted, coupling, nvals, sets, lay, levels, ptr):  # pragma: no cover - compiled
+def refresh(st, jn, ctr):  # pragma: no cover - compiled
     """The next triggers into ``st[S_UP]``, ``st[S_DN]``."""
-    st[S_UP], st[S_DN] = _triggers(fsorted, coupling, nvals, sets, lay, levels, ptr)
+    st[S_UP], st[S_DN] = _triggers(ctr, jn.size)
 
 
 @njit(cache=True, inline="always")
-def _relist(queue, t0, tail, nup, listed, sets, lay, levels, rank, gidx, lat, offsets, adj,
-            max_degree, buf):  # pragma: no cover - compiled  # fmt: skip
-    """Move the neighbours of the spins ``queue[t0:tail]`` to the lists of their new sums."""
+def _relist(queue, t0, tail, u, fields, fsorted, coupling, jn, nup, listed, sets, lay, levels,
+            rank, gidx, lat, offsets, adj, max_degree, cand, ctr, buf):  # pragma: no cover  # fmt: skip
+    """Move the neighbours of the spins ``queue[t0:tail]`` to the lists of their new sums,
+    keeping every list's candidates (consecutive set bits around ``u``) up to date."""
+    ng = jn.size
     for q in range(t0, tail):
         deg = _neighbours(queue[q], lat, offsets, adj, buf)
         for k in range(deg):
@@ -209,12 +235,24 @@ def _relist(queue, t0, tail, nup, listed, sets, lay, levels, rank, gidx, lat, of
                 _bs_clear(sets, lay, old * levels, levels, r)
                 _bs_set(sets, lay, g * levels, levels, r)
                 listed[m] = g
+                if cand[old] == r:
+                    _set_hi(old, r + 1, fsorted, jn, sets, lay, levels, cand, ctr)
+                elif cand[ng + old] == r:
+                    _set_lo(old, r - 1, fsorted, jn, sets, lay, levels, cand, ctr)
+                if cand[ng + g] < r < cand[g]:  # between the candidates: it becomes one
+                    t = -(fields[m] + jn[g])
+                    if t <= u:
+                        cand[ng + g] = r
+                        ctr[ng + g] = t
+                    else:
+                        cand[g] = r
+                        ctr[g] = t
 
 
 @njit(cache=True, inline="always")
 def _event(
-    direction, st, ist, fields, fsorted, order, rank, nvals, gidx, lat, offsets, adj, max_degree,
-    coupling, bits, nup, listed, queue, sets, lay, levels, ptr, buf,
+    direction, st, ist, fields, fsorted, order, rank, jn, gidx, lat, offsets, adj, max_degree,
+    coupling, bits, nup, listed, queue, sets, lay, levels, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
@@ -222,56 +260,68 @@ def _event(
     u = st[S_UP] if rising else np.nextafter(st[S_DN], -np.inf)
     want = 0 if rising else 1
     n = fields.size
+    ng = jn.size
     tail = 0
-    for g in range(nvals.size):
-        jn = coupling * nvals[g]
-        p0 = ptr[g]
-        p1 = p0
-        while p1 < n and -(fsorted[p1] + jn) <= u:
-            p1 += 1
-        while p1 > 0 and -(fsorted[p1 - 1] + jn) > u:
-            p1 -= 1
-        ptr[g] = p1
-        lo, hi = (p0, p1) if rising else (p1, p0)
-        base = g * levels
-        p = _next_set(sets, lay, base, levels, lo, n)
-        while p >= 0 and p < hi:
-            i = order[p]
-            if _spin(bits, i) == want and listed[i] == g:
-                t0 = tail
-                tail = avalanche(
-                    i, rising, u, bits, nup, fields, coupling, lat, offsets, adj, queue, tail, buf
-                )
-                _relist(queue, t0, tail, nup, listed, sets, lay, levels, rank, gidx, lat, offsets,
-                        adj, max_degree, buf)  # fmt: skip
-            p = _next_set(sets, lay, base, levels, p + 1, n)
+    for g in range(ng):
+        if rising:
+            while ctr[g] <= u:  # pass the entry: it is the last one with t <= u so far
+                r = cand[g]
+                cand[ng + g] = r
+                ctr[ng + g] = ctr[g]
+                _set_hi(g, r + 1, fsorted, jn, sets, lay, levels, cand, ctr)
+                i = order[r]
+                if _spin(bits, i) == want:
+                    t0 = tail
+                    tail = avalanche(
+                        i, rising, u, bits, nup, fields, coupling, lat, offsets, adj, queue, tail,
+                        buf,
+                    )  # fmt: skip
+                    _relist(queue, t0, tail, u, fields, fsorted, coupling, jn, nup, listed,
+                            sets, lay, levels, rank, gidx, lat, offsets, adj, max_degree, cand,
+                            ctr, buf)  # fmt: skip
+        else:
+            while ctr[ng + g] > u:  # pass the entry: it is the first one with t > u so far
+                r = cand[ng + g]
+                cand[g] = r
+                ctr[g] = ctr[ng + g]
+                _set_lo(g, r - 1, fsorted, jn, sets, lay, levels, cand, ctr)
+                i = order[r]
+                if _spin(bits, i) == want:
+                    t0 = tail
+                    tail = avalanche(
+                        i, rising, u, bits, nup, fields, coupling, lat, offsets, adj, queue, tail,
+                        buf,
+                    )  # fmt: skip
+                    _relist(queue, t0, tail, u, fields, fsorted, coupling, jn, nup, listed,
+                            sets, lay, levels, rank, gidx, lat, offsets, adj, max_degree, cand,
+                            ctr, buf)  # fmt: skip
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
     st[S_MV] = (2 * n_up - n) / n  # the operator's own formula: the same float
     st[S_U] = u
-    st[S_UP], st[S_DN] = _triggers(fsorted, coupling, nvals, sets, lay, levels, ptr)
+    st[S_UP], st[S_DN] = _triggers(ctr, ng)
     return st[S_MV] - m_old, tail
 
 
 @njit(cache=True)
 def switch(
-    direction, st, ist, fields, fsorted, order, rank, nvals, gidx, lat, offsets, adj, max_degree,
-    coupling, bits, nup, listed, queue, sets, lay, levels, ptr,
+    direction, st, ist, fields, fsorted, order, rank, jn, gidx, lat, offsets, adj, max_degree,
+    coupling, bits, nup, listed, queue, sets, lay, levels, cand, ctr,
 ):  # pragma: no cover - compiled  # fmt: skip
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
-        direction, st, ist, fields, fsorted, order, rank, nvals, gidx, lat, offsets, adj,
-        max_degree, coupling, bits, nup, listed, queue, sets, lay, levels, ptr, buf,
+        direction, st, ist, fields, fsorted, order, rank, jn, gidx, lat, offsets, adj,
+        max_degree, coupling, bits, nup, listed, queue, sets, lay, levels, cand, ctr, buf,
     )  # fmt: skip
 
 
 @njit(cache=True, fastmath=_CONTRACT)
 def _advance(
     par, st, ist, tau_stop, tan_on, y, ntan, e, coefs, mp, rec_on, sw, sw_count, fields, fsorted,
-    order, rank, nvals, gidx, lat, offsets, adj, max_degree, coupling, bits, nup, listed, queue,
-    sets, lay, levels, ptr, buf,
+    order, rank, jn, gidx, lat, offsets, adj, max_degree, coupling, bits, nup, listed, queue,
+    sets, lay, levels, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
@@ -294,8 +344,8 @@ def _advance(
         if direction == 0:
             break
         jump, flips = _event(
-            direction, st, ist, fields, fsorted, order, rank, nvals, gidx, lat, offsets, adj,
-            max_degree, coupling, bits, nup, listed, queue, sets, lay, levels, ptr, buf,
+            direction, st, ist, fields, fsorted, order, rank, jn, gidx, lat, offsets, adj,
+            max_degree, coupling, bits, nup, listed, queue, sets, lay, levels, cand, ctr, buf,
         )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
         nsw += flips  # n_events counts spin flips
@@ -319,8 +369,8 @@ def _advance(
 @njit(cache=True)
 def run_spins(
     par, st, ist, tgt_n, tgt_tau, i_start, out, rec_on, sw, sw_count, tan_on, y, ntan, mp,
-    fields, fsorted, order, rank, nvals, gidx, lat, offsets, adj, max_degree, coupling, bits, nup,
-    listed, queue, sets, lay, levels, ptr,
+    fields, fsorted, order, rank, jn, gidx, lat, offsets, adj, max_degree, coupling, bits, nup,
+    listed, queue, sets, lay, levels, cand, ctr,
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.run_table` with the spins' plan: advance through
     the targets (period index, period time) from ``i_start``; row i of ``out`` (if it has rows)
@@ -333,16 +383,16 @@ def run_spins(
         while ist[I_N] < tgt_n[i]:
             status = _advance(
                 par, st, ist, par[P_T], tan_on, y, ntan, e, coefs, mp, rec_on, sw, sw_count,
-                fields, fsorted, order, rank, nvals, gidx, lat, offsets, adj, max_degree,
-                coupling, bits, nup, listed, queue, sets, lay, levels, ptr, buf,
+                fields, fsorted, order, rank, jn, gidx, lat, offsets, adj, max_degree,
+                coupling, bits, nup, listed, queue, sets, lay, levels, cand, ctr, buf,
             )  # fmt: skip
             if status != 0:
                 return status, i
             _wrap(par, st, ist)
         status = _advance(
             par, st, ist, tgt_tau[i], tan_on, y, ntan, e, coefs, mp, rec_on, sw, sw_count,
-            fields, fsorted, order, rank, nvals, gidx, lat, offsets, adj, max_degree, coupling,
-            bits, nup, listed, queue, sets, lay, levels, ptr, buf,
+            fields, fsorted, order, rank, jn, gidx, lat, offsets, adj, max_degree, coupling,
+            bits, nup, listed, queue, sets, lay, levels, cand, ctr, buf,
         )  # fmt: skip
         if status != 0:
             return status, i

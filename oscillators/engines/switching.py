@@ -86,10 +86,14 @@ class SwitchingKernelEngine(RelayKernelEngine):
             [np.searchsorted(-(fs + j * nv), u0, side="right") for nv in nvals.tolist()],
             dtype=np.int64,
         )
+        cand = np.empty(2 * nvals.size, dtype=np.int64)
+        ctr = np.empty(2 * nvals.size)
+        jn = j * nvals  # J·n rounded once, here: the kernels add it (no fused multiply-add)
+        sk.candidates(fs, jn, sets, lay, levels, ptr, cand, ctr)
         self._plan = (
-            spec.fields, fs, spec.order, rank, nvals, gidx, spec.lattice, spec.offsets,
+            spec.fields, fs, spec.order, rank, jn, gidx, spec.lattice, spec.offsets,
             spec.adjacency, deg, j, bits, nup, listed, np.empty(max(n, 1), dtype=np.int32),
-            sets, lay, levels, ptr,
+            sets, lay, levels, cand, ctr,
         )  # fmt: skip
         self._n_relays = n  # the switch budget scales with the spins
         self._mp = rk.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
@@ -105,7 +109,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
         st[rk.S_MV] = (2 * n_up - n) / n
         ist = np.zeros(rk.N_IST, dtype=np.int64)
         ist[sk.I_NUP] = n_up
-        sk.refresh(st, fs, j, nvals, sets, lay, levels, ptr)
+        sk.refresh(st, jn, ctr)
         self._st, self._ist = st, ist
         self._start_on_sliding_set(q0, v0)
 
