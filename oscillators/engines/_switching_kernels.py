@@ -56,7 +56,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hysteresis._rfim_kernels import _flip, _neighbours, _spin
+from hysteresis._rfim_kernels import _flip, _spin
 from oscillators.engines._relay_kernels import (
     _CONTRACT,
     I_MAXSW,
@@ -86,9 +86,11 @@ from oscillators.engines._relay_kernels import (
 
 __all__ = [
     "I_NUP",
+    "MAX_LISTS",
     "PL_BITS",
     "S_U",
     "bitset_layout",
+    "boundary_flags",
     "build_lists",
     "refresh",
     "run_spins",
@@ -122,6 +124,48 @@ def bitset_layout(n: int, lists: int) -> tuple[np.ndarray, int, int, int]:
         lay[lv] = at
         at += (size + 1) * stride
     return lay, stride, len(sizes), at
+
+
+#: ``reci[4i + 3]`` holds the list in its low 24 bits; on a lattice the high byte flags the
+#: sites on a face: bit ``2a`` at coordinate 0 of axis ``a``, bit ``2a + 1`` at ``L_a − 1``
+_LIST = 0xFFFFFF
+#: the most lists (neighbour-sum values) a list index in 24 bits allows
+MAX_LISTS = _LIST + 1
+
+
+def boundary_flags(lat: np.ndarray, n: int) -> np.ndarray:
+    """The face flags (``reci[4i + 3] >> 24``) of the ``n`` sites of lattice ``lat``."""
+    flags = np.zeros(n, dtype=np.int32)
+    site = np.arange(n, dtype=np.int64)
+    for a in range(int(lat[0])):
+        length, stride = int(lat[1 + a]), int(lat[4 + a])
+        c = (site // stride) % length
+        flags |= (c == 0).astype(np.int32) << (2 * a)
+        flags |= (c == length - 1).astype(np.int32) << (2 * a + 1)
+    return flags
+
+
+@njit(cache=True, inline="always")
+def _neighbours(i, reci, lat, offsets, adj, buf):  # pragma: no cover - compiled
+    """Write the neighbours of ``i`` into ``buf`` (the order of
+    :func:`hysteresis._rfim_kernels._neighbours`; on a lattice from the face flags, no
+    division); returns their number."""
+    nd = lat[0]
+    if nd > 0:
+        flags = reci[4 * i + 3] >> 24
+        k = 0
+        for a in range(nd):
+            stride = lat[4 + a]
+            span = (lat[1 + a] - 1) * stride
+            buf[k] = i - span if (flags >> (2 * a + 1)) & 1 else i + stride
+            buf[k + 1] = i + span if (flags >> (2 * a)) & 1 else i - stride
+            k += 2
+        return k
+    start = offsets[i]
+    stop = offsets[i + 1]
+    for k in range(stop - start):
+        buf[k] = adj[start + k]
+    return stop - start
 
 
 @njit(cache=True, inline="always")
@@ -210,7 +254,7 @@ def build_lists(reci, gidx, nvals, nup, lat, offsets, max_degree, sets, lay, str
     for i in range(nup.size):
         deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
         g = gidx[2 * nup[i] - deg + max_degree]
-        reci[4 * i + 3] = g
+        reci[4 * i + 3] |= g
         _bs_set(sets, lay, stride, g, levels, reci[4 * i + 2])
 
 
@@ -267,13 +311,14 @@ def refresh(st, jn, ctr):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _avalanche(i, rising, u, plan, tail, buf):  # pragma: no cover - compiled
+def _avalanche(
+    i, rising, u, recf, reci, fsorted, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
+    sets, lay, stride, levels, cand, ctr, tail, buf,
+):  # pragma: no cover - compiled  # fmt: skip
     """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at input ``u``
     (breadth first, each at most once; appended to the queue from ``tail``), moving every
     neighbour of a flipped spin to the list of its new sum and keeping the candidates (module
     docstring); returns the new tail (flips = new tail − tail)."""
-    (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
-     sets, lay, stride, levels, cand, ctr) = plan  # fmt: skip
     ng = jn.size
     want = 0 if rising else 1  # the spins that may follow: down ones rising, up ones falling
     dn = 2 if rising else -2  # the change of a neighbour's sum
@@ -284,13 +329,14 @@ def _avalanche(i, rising, u, plan, tail, buf):  # pragma: no cover - compiled
     while head < tail:
         j = queue[head]
         head += 1
-        deg = _neighbours(j, lat, offsets, adj, buf)
+        deg = _neighbours(j, reci, lat, offsets, adj, buf)
         for k in range(deg):
             m = buf[k]
-            old = reci[4 * m + 3]
+            word = reci[4 * m + 3]
+            old = word & _LIST
             g = gidx[nvals[old] + dn + max_degree]
             r = reci[4 * m + 2]
-            reci[4 * m + 3] = g
+            reci[4 * m + 3] = word - old + g
             _bs_clear(sets, lay, stride, old, levels, r)
             _bs_set(sets, lay, stride, g, levels, r)
             if cand[old] == r:
@@ -314,12 +360,12 @@ def _avalanche(i, rising, u, plan, tail, buf):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _event(direction, st, ist, plan, buf):  # pragma: no cover - compiled
+def _event(
+    direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree,
+    bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
-    fsorted, order, jn = plan[2], plan[3], plan[4]
-    bits, sets, lay, stride, levels, cand, ctr = plan[11], plan[13], plan[14], plan[15], \
-        plan[16], plan[17], plan[18]  # fmt: skip
     rising = direction > 0
     u = st[S_UP] if rising else np.nextafter(st[S_DN], -np.inf)
     want = 0 if rising else 1
@@ -335,7 +381,10 @@ def _event(direction, st, ist, plan, buf):  # pragma: no cover - compiled
                 _set_hi(g, r + 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
                 i = order[r]
                 if _spin(bits, i) == want:
-                    tail = _avalanche(i, rising, u, plan, tail, buf)
+                    tail = _avalanche(
+                        i, rising, u, recf, reci, fsorted, jn, nvals, gidx, lat, offsets, adj,
+                        max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, tail, buf,
+                    )  # fmt: skip
         else:
             while ctr[ng + g] > u:  # pass lo[g]: now the first entry with t > u
                 r = cand[ng + g]
@@ -344,7 +393,10 @@ def _event(direction, st, ist, plan, buf):  # pragma: no cover - compiled
                 _set_lo(g, r - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
                 i = order[r]
                 if _spin(bits, i) == want:
-                    tail = _avalanche(i, rising, u, plan, tail, buf)
+                    tail = _avalanche(
+                        i, rising, u, recf, reci, fsorted, jn, nvals, gidx, lat, offsets, adj,
+                        max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, tail, buf,
+                    )  # fmt: skip
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
@@ -357,8 +409,13 @@ def _event(direction, st, ist, plan, buf):  # pragma: no cover - compiled
 @njit(cache=True)
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
-    buf = np.empty(max(plan[10], 1), np.int64)
-    return _event(direction, st, ist, plan, buf)
+    (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
+     sets, lay, stride, levels, cand, ctr) = plan  # fmt: skip
+    buf = np.empty(max(max_degree, 1), np.int64)
+    return _event(
+        direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj,
+        max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+    )  # fmt: skip
 
 
 @njit(cache=True, fastmath=_CONTRACT)
@@ -367,6 +424,8 @@ def _advance(
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
+    (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
+     sets, lay, stride, levels, cand, ctr) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
     nsw = ist[I_NSW]
@@ -385,7 +444,10 @@ def _advance(
         )  # fmt: skip
         if direction == 0:
             break
-        jump, flips = _event(direction, st, ist, plan, buf)
+        jump, flips = _event(
+            direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj,
+            max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+        )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
         nsw += flips  # n_events counts spin flips
         status, b0, b1, b2, prev_q, prev_jump = settle_switch(

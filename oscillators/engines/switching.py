@@ -76,6 +76,11 @@ class SwitchingKernelEngine(RelayKernelEngine):
         n = spec.n_spins
         deg = int(spec.max_degree)
         nvals = np.asarray(spec.neighbour_sums, dtype=np.int64)
+        if nvals.size > sk.MAX_LISTS:
+            raise ValueError(
+                f"the spins' graph has {nvals.size} neighbour-sum values; the switching kernel "
+                f"takes at most {sk.MAX_LISTS} (a degree below {sk.MAX_LISTS // 2})"
+            )
         gidx = np.full(2 * deg + 1, -1, dtype=np.int64)
         gidx[nvals + deg] = np.arange(nvals.size)
         bits = np.array(bits, dtype=np.uint8)
@@ -86,6 +91,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
         recf[0::2] = spec.fields
         reci = recf.view(np.int32)
         reci[2::4][spec.order] = np.arange(n, dtype=np.int32)
+        reci[3::4] = sk.boundary_flags(spec.lattice, n) << 24  # the list is or-ed in below
         lay, stride, levels, words = sk.bitset_layout(n, nvals.size)
         sets = _aligned_zeros(words)
         sk.build_lists(reci, gidx, nvals, nup, spec.lattice, spec.offsets, deg, sets, lay,
