@@ -39,11 +39,13 @@ replaced candidate — no sweep over the lists, no search per list.
 
 Layout, for few cache misses per flip (the lattice is far larger than the caches and an
 avalanche's spins are scattered over the sorted lists): per spin one 16-byte record in site
-order (``recf[2i]`` = ``f_i``, ``reci[4i + 2]`` = ``rank[i]``, ``reci[4i + 3]`` = its list ``g``;
-two views of one buffer, each slot read through one view), so a neighbour's field, position and
-list share a cache line; the lists' bitsets interleaved (word ``w`` of level ``lv`` of list ``g``
-at ``lay[lv] + w·stride + g``, ``stride = 8`` for up to 8 lists: one aligned 64-byte line holds
-the word of every list), so moving a spin between lists touches one line. The spins themselves
+order (``recf[2i]`` = ``f_i``, ``reci[4i + 2]`` = ``rank[i]``, ``reci[4i + 3]`` = its list ``g``
+in the low 24 bits and, on a lattice, flags of the faces the site lies on in the high byte, so
+its neighbours need no division; two views of one buffer, each slot read through one view), so
+a neighbour's field, position and list share a cache line; the lists' bitsets interleaved
+(word ``w`` of level ``lv`` of list ``g`` at ``lay[lv] + w·stride + g``, ``stride = 8`` for up
+to 8 lists: one aligned 64-byte line holds the word of every list), so moving a spin between
+lists touches one line. The spins themselves
 are the packed bits the operator's states hold.
 
 State slots: the relay kernel's float/int state layouts (``st``, ``ist``) with ``S_U`` (the

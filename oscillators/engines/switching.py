@@ -4,9 +4,10 @@ An operator without a relay table whose ``compiled_switching()`` hands over inte
 spins (:class:`hysteresis.compiled_spins.CompiledSpins`: a random-field Ising lattice) is
 integrated here: between events the relay kernel's closed-form hops, the next trigger input
 in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`,
-O(G·log₆₄ N) per event, no trial run), each avalanche one jump ``C·ΔM`` at its trigger input
-with the saltation ``δv += C·ΔM/v*·δq``, ``n_events`` counting spin flips. Filippov sliding,
-the switch budget, grazing, the tangent flow and the records are the relay kernel engine's
+every list's two candidates kept up to date: O(G + z·flips) per event, no search per list, no
+trial run), each avalanche one jump ``C·ΔM`` at its trigger input with the saltation
+``δv += C·ΔM/v*·δq``, ``n_events`` counting spin flips. Filippov sliding, the switch budget,
+grazing, the tangent flow and the records are the relay kernel engine's
 (:class:`~oscillators.engines.relay.RelayKernelEngine`, whose Python side this class reuses).
 
 Methods (``engine_options={"method": ...}``): ``"auto"`` (this engine) or ``"generic"`` (the
