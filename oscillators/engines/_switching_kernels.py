@@ -25,12 +25,13 @@ The candidates and their thresholds are kept, not searched for: an event at the 
 ``u < β``); in every list the entries from ``hi[g]`` on with ``t <= u`` are passed (``lo = hi``,
 ``hi`` = the next set bit: one bitset search), and each down spin among them starts an
 avalanche (breadth first, each spin at most once). Every flip changes the neighbour sums of the
-spin's neighbours by ``±2``: each is moved at once to the list of its new sum (clear one bit,
-set one bit), a candidate it was is replaced by the next set bit (a search), and if its new
-position falls between the candidates of its new list it becomes one (``lo`` if its threshold
-is ``<= u``, else ``hi``); then it flips if its threshold has crossed ``u`` (the same test as
-``u + (f + J·n) >= 0``: a rounded sum has the sign of the exact one, and ``J·n`` is rounded once,
-outside, as ``jn[g]``, so no fused multiply-add can change a threshold). Spins whose triggers
+spin's neighbours by ``±2`` (kept in their records) and a neighbour flips if its threshold has
+crossed ``u`` (the same test as ``u + (f + J·n) >= 0``: a rounded sum has the sign of the exact
+one, and ``J·n`` is rounded once, outside, as ``jn[g]``, so no fused multiply-add can change a
+threshold); after the avalanche each neighbour whose sum changed is moved once to the list of
+its new sum (clear one bit, set one bit), a candidate it was is replaced by the next set bit (a
+search), and if its new position falls between the candidates of its new list it becomes one
+(``lo`` if its threshold is ``<= u``, else ``hi``). Spins whose triggers
 coincide exactly flip in the same event (passed in the same pass), and ferromagnetic ``J``
 makes the final state independent of the order — it is the state
 :meth:`hysteresis.rfim.RandomFieldIsing.apply` reaches at that input. The cost of an event is
@@ -40,12 +41,12 @@ replaced candidate — no sweep over the lists, no search per list.
 Layout, for few cache misses per flip (the lattice is far larger than the caches and an
 avalanche's spins are scattered over the sorted lists): per spin one 16-byte record in site
 order (``recf[2i]`` = ``f_i``, ``reci[4i + 2]`` = ``rank[i]``, ``reci[4i + 3]`` = its list ``g``
-in the low 24 bits and, on a lattice, flags of the faces the site lies on in the high byte, so
-its neighbours need no division; two views of one buffer, each slot read through one view), so
-a neighbour's field, position and list share a cache line; the lists' bitsets interleaved
-(word ``w`` of level ``lv`` of list ``g`` at ``lay[lv] + w·stride + g``, ``stride = 8`` for up
-to 8 lists: one aligned 64-byte line holds the word of every list), so moving a spin between
-lists touches one line. The spins themselves
+(bits 0–12; bits 13–25 the list of its current sum) and, on a lattice, flags of the faces the
+site lies on (bits 26–31), so its neighbours need no division; two views of one buffer, each
+slot read through one view), so a neighbour's field, position and list share a cache line;
+the lists' bitsets interleaved (word ``w`` of level ``lv`` of list ``g`` at
+``lay[lv] + w·stride + g``, ``stride = 8`` for up to 8 lists: one aligned 64-byte line holds the
+word of every list), so moving a spin between lists touches one line. The spins themselves
 are the packed bits the operator's states hold.
 
 State slots: the relay kernel's float/int state layouts (``st``, ``ist``) with ``S_U`` (the
@@ -88,6 +89,7 @@ from oscillators.engines._relay_kernels import (
 
 __all__ = [
     "I_NUP",
+    "FACES",
     "MAX_LISTS",
     "PL_BITS",
     "S_U",
@@ -128,15 +130,18 @@ def bitset_layout(n: int, lists: int) -> tuple[np.ndarray, int, int, int]:
     return lay, stride, len(sizes), at
 
 
-#: ``reci[4i + 3]`` holds the list in its low 24 bits; on a lattice the high byte flags the
-#: sites on a face: bit ``2a`` at coordinate 0 of axis ``a``, bit ``2a + 1`` at ``L_a − 1``
-_LIST = 0xFFFFFF
-#: the most lists (neighbour-sum values) a list index in 24 bits allows
+#: ``reci[4i + 3]``: bits 0–12 the list the spin is listed in, bits 13–25 the list of its
+#: current neighbour sum (they differ only inside an avalanche), bits 26–31 on a lattice the
+#: faces the site lies on: bit ``2a`` at coordinate 0 of axis ``a``, bit ``2a + 1`` at ``L_a − 1``
+_LIST = 0x1FFF
+_SUM = 13
+FACES = 26
+#: the most lists (neighbour-sum values) a list index in 13 bits allows
 MAX_LISTS = _LIST + 1
 
 
 def boundary_flags(lat: np.ndarray, n: int) -> np.ndarray:
-    """The face flags (``reci[4i + 3] >> 24``) of the ``n`` sites of lattice ``lat``."""
+    """The face flags (``reci[4i + 3] >> 26``) of the ``n`` sites of lattice ``lat``."""
     flags = np.zeros(n, dtype=np.int32)
     site = np.arange(n, dtype=np.int64)
     for a in range(int(lat[0])):
@@ -154,7 +159,7 @@ def _neighbours(i, reci, lat, offsets, adj, buf):  # pragma: no cover - compiled
     division); returns their number."""
     nd = lat[0]
     if nd > 0:
-        flags = reci[4 * i + 3] >> 24
+        flags = reci[4 * i + 3] >> FACES
         k = 0
         for a in range(nd):
             stride = lat[4 + a]
@@ -256,7 +261,7 @@ def build_lists(reci, gidx, nvals, nup, lat, offsets, max_degree, sets, lay, str
     for i in range(nup.size):
         deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
         g = gidx[2 * nup[i] - deg + max_degree]
-        reci[4 * i + 3] |= g
+        reci[4 * i + 3] |= g | (g << _SUM)
         _bs_set(sets, lay, stride, g, levels, reci[4 * i + 2])
 
 
@@ -314,14 +319,13 @@ def refresh(st, jn, ctr):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _avalanche(
-    i, rising, u, recf, reci, fsorted, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
-    sets, lay, stride, levels, cand, ctr, tail, buf,
+    i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue, tail,
+    buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at input ``u``
-    (breadth first, each at most once; appended to the queue from ``tail``), moving every
-    neighbour of a flipped spin to the list of its new sum and keeping the candidates (module
-    docstring); returns the new tail (flips = new tail − tail)."""
-    ng = jn.size
+    (breadth first, each at most once; appended to the queue from ``tail``), keeping every
+    spin's current list (its neighbour sum) in its record; returns the new tail (flips = new
+    tail − tail). The lists' bitsets are brought up to date afterwards (:func:`_relist`)."""
     want = 0 if rising else 1  # the spins that may follow: down ones rising, up ones falling
     dn = 2 if rising else -2  # the change of a neighbour's sum
     _flip(bits, i)
@@ -335,30 +339,50 @@ def _avalanche(
         for k in range(deg):
             m = buf[k]
             word = reci[4 * m + 3]
-            old = word & _LIST
+            old = (word >> _SUM) & _LIST
             g = gidx[nvals[old] + dn + max_degree]
+            reci[4 * m + 3] = word + ((g - old) << _SUM)
+            if _spin(bits, m) == want and (-(recf[2 * m] + jn[g]) <= u) == rising:
+                _flip(bits, m)
+                queue[tail] = m
+                tail += 1
+    return tail
+
+
+@njit(cache=True, inline="always")
+def _relist(
+    t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay, stride, levels,
+    cand, ctr, buf,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Move the neighbours of the spins ``queue[t0:tail]`` whose sums changed to the lists of
+    their new sums (once each, however many of their neighbours flipped), keeping the
+    candidates (module docstring)."""
+    ng = jn.size
+    for q in range(t0, tail):
+        deg = _neighbours(queue[q], reci, lat, offsets, adj, buf)
+        for k in range(deg):
+            m = buf[k]
+            word = reci[4 * m + 3]
+            old = word & _LIST
+            g = (word >> _SUM) & _LIST
+            if g == old:
+                continue
+            reci[4 * m + 3] = word + (g - old)
             r = reci[4 * m + 2]
-            reci[4 * m + 3] = word - old + g
             _bs_clear(sets, lay, stride, old, levels, r)
             _bs_set(sets, lay, stride, g, levels, r)
             if cand[old] == r:
                 _set_hi(old, r + 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
             elif cand[ng + old] == r:
                 _set_lo(old, r - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-            t = -(recf[2 * m] + jn[g])
-            below = t <= u  # m is up in the state relaxed at u (or flips up now)
             if cand[ng + g] < r < cand[g]:  # between the candidates of its list: one of them
-                if below:
+                t = -(recf[2 * m] + jn[g])
+                if t <= u:  # up in the state relaxed at u
                     cand[ng + g] = r
                     ctr[ng + g] = t
                 else:
                     cand[g] = r
                     ctr[g] = t
-            if below == rising and _spin(bits, m) == want:
-                _flip(bits, m)
-                queue[tail] = m
-                tail += 1
-    return tail
 
 
 @njit(cache=True, inline="always")
@@ -383,9 +407,14 @@ def _event(
                 _set_hi(g, r + 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
                 i = order[r]
                 if _spin(bits, i) == want:
+                    t0 = tail
                     tail = _avalanche(
-                        i, rising, u, recf, reci, fsorted, jn, nvals, gidx, lat, offsets, adj,
-                        max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, tail, buf,
+                        i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree,
+                        bits, queue, tail, buf,
+                    )  # fmt: skip
+                    _relist(
+                        t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay,
+                        stride, levels, cand, ctr, buf,
                     )  # fmt: skip
         else:
             while ctr[ng + g] > u:  # pass lo[g]: now the first entry with t > u
@@ -395,9 +424,14 @@ def _event(
                 _set_lo(g, r - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
                 i = order[r]
                 if _spin(bits, i) == want:
+                    t0 = tail
                     tail = _avalanche(
-                        i, rising, u, recf, reci, fsorted, jn, nvals, gidx, lat, offsets, adj,
-                        max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, tail, buf,
+                        i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree,
+                        bits, queue, tail, buf,
+                    )  # fmt: skip
+                    _relist(
+                        t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay,
+                        stride, levels, cand, ctr, buf,
                     )  # fmt: skip
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up

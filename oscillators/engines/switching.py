@@ -92,7 +92,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
         recf[0::2] = spec.fields
         reci = recf.view(np.int32)
         reci[2::4][spec.order] = np.arange(n, dtype=np.int32)
-        reci[3::4] = sk.boundary_flags(spec.lattice, n) << 24  # the list is or-ed in below
+        reci[3::4] = sk.boundary_flags(spec.lattice, n) << sk.FACES  # the lists or-ed in below
         lay, stride, levels, words = sk.bitset_layout(n, nvals.size)
         sets = _aligned_zeros(words)
         sk.build_lists(reci, gidx, nvals, nup, spec.lattice, spec.offsets, deg, sets, lay,
