@@ -32,6 +32,11 @@ A rising sweep from ``u`` to ``u1``, plain-Python reading of :func:`sweep`::
             for every down neighbour m of j with u + (f_m + J n_m) >= 0: flip m up, push m
     u = u1
 
+Without a record of the avalanches (:func:`sweep` with ``record`` false) the lists are not
+merged: each list's passed entries are read in turn and every eligible one starts an avalanche
+relaxed at the target input itself — the same final state (below), and the merge, a comparison
+of G heads with an unpredictable winner per entry, was most of a sweep's time.
+
 Skipped entries are never needed later: during a rising sweep ``n_i`` only grows, and a spin
 whose ``n_i`` reaches a list it was skipped in is a neighbour of a spin that just flipped, so
 the avalanche tests it. Every spin flips once per monotone sweep and each list is passed once:
@@ -253,6 +258,34 @@ def sweep(
             if direction != (1 if rising else -1):
                 _pointers(fsorted, coupling, nvals, u, rising, ptr, heads)
                 direction = 1 if rising else -1
+            if not record:
+                # no trigger inputs wanted: relax at the target list by list, no merge (the
+                # final state depends neither on the order of the flips nor on the path)
+                for g in range(ng):
+                    p = ptr[g]
+                    jn = nvals[g]
+                    while (
+                        (p < n and -(fsorted[p] + coupling * jn) <= target)
+                        if rising
+                        else (p >= 0 and target < -(fsorted[p] + coupling * jn))
+                    ):
+                        i = order[p]
+                        if _eligible(i, jn, want, bits, nup, lat, offsets):
+                            new_tail = avalanche(
+                                i, rising, target, bits, nup, fields, coupling, lat, offsets, adj,
+                                queue, tail, buf,
+                            )  # fmt: skip
+                            n_up += new_tail - tail if rising else tail - new_tail
+                            tail = new_tail
+                        p += 1 if rising else -1
+                    ptr[g] = p
+                    inside = p < n if rising else p >= 0
+                    heads[g] = (
+                        -(fsorted[p] + coupling * jn) if inside else (np.inf if rising else -np.inf)
+                    )
+                u = target
+                out[k] = (2 * n_up - n) / n
+                continue
             while True:
                 g = _best(heads, rising)
                 t = heads[g]

@@ -4,9 +4,10 @@ An operator without a relay table whose ``compiled_switching()`` hands over inte
 spins (:class:`hysteresis.compiled_spins.CompiledSpins`: a random-field Ising lattice) is
 integrated here: between events the relay kernel's closed-form hops, the next trigger input
 in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`,
-O(G·log₆₄ N) per event, no trial run), each avalanche one jump ``C·ΔM`` at its trigger input
-with the saltation ``δv += C·ΔM/v*·δq``, ``n_events`` counting spin flips. Filippov sliding,
-the switch budget, grazing, the tangent flow and the records are the relay kernel engine's
+every list's two candidates kept up to date: O(G + z·flips) per event, no search per list, no
+trial run), each avalanche one jump ``C·ΔM`` at its trigger input with the saltation
+``δv += C·ΔM/v*·δq``, ``n_events`` counting spin flips. Filippov sliding, the switch budget,
+grazing, the tangent flow and the records are the relay kernel engine's
 (:class:`~oscillators.engines.relay.RelayKernelEngine`, whose Python side this class reuses).
 
 Methods (``engine_options={"method": ...}``): ``"auto"`` (this engine) or ``"generic"`` (the
@@ -30,6 +31,14 @@ from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayRefer
 from oscillators.results import OscillatorState
 
 __all__ = ["SwitchingKernelEngine"]
+
+
+def _aligned_zeros(words: int) -> np.ndarray:
+    """``words`` zero uint64 starting on a 64-byte boundary (a row of 8 interleaved bitset
+    words is one cache line)."""
+    raw = np.zeros(words + 8, dtype=np.uint64)
+    skip = (-raw.ctypes.data // 8) % 8
+    return raw[skip : skip + words]
 
 
 class SwitchingKernelEngine(RelayKernelEngine):
@@ -68,28 +77,38 @@ class SwitchingKernelEngine(RelayKernelEngine):
         n = spec.n_spins
         deg = int(spec.max_degree)
         nvals = np.asarray(spec.neighbour_sums, dtype=np.int64)
-        small = np.uint8 if deg < 256 else np.int32
+        if nvals.size > sk.MAX_LISTS:
+            raise ValueError(
+                f"the spins' graph has {nvals.size} neighbour-sum values; the switching kernel "
+                f"takes at most {sk.MAX_LISTS} (a degree below {sk.MAX_LISTS // 2})"
+            )
         gidx = np.full(2 * deg + 1, -1, dtype=np.int64)
         gidx[nvals + deg] = np.arange(nvals.size)
-        rank = np.empty(n, dtype=np.int32)
-        rank[spec.order] = np.arange(n, dtype=np.int32)
         bits = np.array(bits, dtype=np.uint8)
-        nup = np.zeros(n, dtype=small)
+        nup = np.zeros(n, dtype=np.uint8 if deg < 256 else np.int32)
         count_up_neighbours(bits, spec.lattice, spec.offsets, spec.adjacency, deg, nup)
-        lay, levels, words = sk.bitset_layout(n, nvals.size)
-        sets = np.zeros(words, dtype=np.uint64)
-        listed = np.empty(n, dtype=small)
-        sk.build_lists(nup, spec.lattice, spec.offsets, deg, gidx, rank, listed, sets, lay, levels)
+        # one 16-byte record per spin in site order: f_i, rank_i, list_i (kernel docstring)
+        recf = np.empty(2 * n)
+        recf[0::2] = spec.fields
+        reci = recf.view(np.int32)
+        reci[2::4][spec.order] = np.arange(n, dtype=np.int32)
+        reci[3::4] = sk.boundary_flags(spec.lattice, n) << sk.FACES  # the lists or-ed in below
+        lay, stride, levels, words = sk.bitset_layout(n, nvals.size)
+        sets = _aligned_zeros(words)
+        sk.build_lists(reci, gidx, nvals, nup, spec.lattice, spec.offsets, deg, sets, lay,
+                       stride, levels)  # fmt: skip
+        del nup
         fs, j = spec.sorted_fields, float(spec.spin_coupling)
-        # pointers: the entries of every list with t <= u0 (binary search; t grows along a list)
-        ptr = np.array(
-            [np.searchsorted(-(fs + j * nv), u0, side="right") for nv in nvals.tolist()],
-            dtype=np.int64,
-        )
+        jn = j * nvals  # J·n rounded once, here: the kernels add it (no fused multiply-add)
+        # every list's entries with t <= u0 (binary search; t grows along a list)
+        ptr = np.array([np.searchsorted(-(fs + x), u0, side="right") for x in jn.tolist()])
+        cand = np.empty(2 * nvals.size, dtype=np.int64)
+        ctr = np.empty(2 * nvals.size)
+        sk.candidates(fs, jn, sets, lay, stride, levels, ptr.astype(np.int64), cand, ctr)
         self._plan = (
-            spec.fields, fs, spec.order, rank, nvals, gidx, spec.lattice, spec.offsets,
-            spec.adjacency, deg, j, bits, nup, listed, np.empty(max(n, 1), dtype=np.int32),
-            sets, lay, levels, ptr,
+            recf, reci, fs, spec.order, jn, nvals, gidx, spec.lattice, spec.offsets,
+            spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), sets, lay, stride,
+            levels, cand, ctr,
         )  # fmt: skip
         self._n_relays = n  # the switch budget scales with the spins
         self._mp = rk.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
@@ -105,24 +124,24 @@ class SwitchingKernelEngine(RelayKernelEngine):
         st[rk.S_MV] = (2 * n_up - n) / n
         ist = np.zeros(rk.N_IST, dtype=np.int64)
         ist[sk.I_NUP] = n_up
-        sk.refresh(st, fs, j, nvals, sets, lay, levels, ptr)
+        sk.refresh(st, jn, ctr)
         self._st, self._ist = st, ist
         self._start_on_sliding_set(q0, v0)
 
     def _run(self, par, _tf, _ti, _bits, _lay, st, ist, *rest):  # noqa: ANN001, ANN202
         """:meth:`RelayKernelEngine._run_targets`'s kernel call, on the spins' plan."""
-        return sk.run_spins(par, st, ist, *rest, *self._plan)
+        return sk.run_spins(par, st, ist, *rest, self._plan)
 
     def _switched_copy(self, direction: int) -> tuple[float, float, float]:
         """(output, next up, next down trigger) after the event at the current trigger in
         ``direction``, on a copy of the plan (O(N): only where a start sits on a trigger)."""
         st, ist = self._st.copy(), self._ist.copy()
         plan = tuple(a.copy() if isinstance(a, np.ndarray) else a for a in self._plan)
-        sk.switch(direction, st, ist, *plan[:11], *plan[11:])
+        sk.switch(direction, st, ist, plan)
         return float(st[rk.S_MV]), float(st[rk.S_UP]), float(st[rk.S_DN])
 
     def _slide_switch(self, direction: int) -> None:
-        sk.switch(direction, self._st, self._ist, *self._plan)
+        sk.switch(direction, self._st, self._ist, self._plan)
 
     def relay_outputs(self) -> np.ndarray:
         """No relay table: the spins are in :meth:`state` (``operator.spins(...)``)."""
@@ -146,7 +165,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
             u = float(np.nextafter(q, -np.inf))
             if not st[rk.S_DN] <= u < st[rk.S_UP]:
                 u = float(st[sk.S_U])  # sliding on a trigger: the input of the last event
-        bits = self._plan[11].copy()
+        bits = self._plan[sk.PL_BITS].copy()
         opstate = self._spec.make_state(bits, self.n_up, u)
         check_state(
             opstate, f"returned by {type(self._op).__name__}.compiled_switching().make_state"
