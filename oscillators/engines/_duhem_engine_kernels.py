@@ -81,8 +81,10 @@ from hysteresis._duhem_kernels import (
     jiles_atherton_margins,
     jiles_atherton_rhs,
 )
+from oscillators.engines import _continuous_layout as _layout
 from oscillators.engines import _dop853_kernel as _dop
 from oscillators.engines._play_kernels import _hermite_extrema
+from oscillators.engines._relay_landings import add_time
 from oscillators.engines._roots import find_root, secant_start
 
 _N_STAGES = _dop.N_STAGES
@@ -98,6 +100,9 @@ I_DIR, I_PERIOD, I_EVENTS, I_SAMPLE, I_NEV, I_RECORD, I_K, I_MODEL = range(8)
 I_STUCK, I_BAD, I_KINKS, I_SIDE, I_LANDED, I_POLE = range(8, 14)
 N_IST = 14
 S_TAU, S_Q, S_V, S_Z, S_HNEXT = range(5)
+# the clock slots are the continuous engine's, so its clock arithmetic (add_time) serves both
+if (P_PERIOD, I_PERIOD, S_TAU) != (_layout.P_PERIOD, _layout.I_PERIOD, _layout.S_TAU):
+    raise ImportError("the Duhem kernels' clock slots must match _continuous_layout")
 N_ST = 5
 
 MODEL_BOUC_WEN = 0
@@ -410,20 +415,6 @@ def _state_at(par, ist, mp, Y, t, y, tau, work):
 
 
 @njit(cache=True)
-def _add_time(par, ist, st, h):
-    st[S_TAU] += h
-    if st[S_TAU] >= par[P_PERIOD]:
-        st[S_TAU] -= par[P_PERIOD]
-        ist[I_PERIOD] += 1
-        if st[S_TAU] >= par[P_PERIOD] or st[S_TAU] < 0.0:  # rounding
-            extra = math.floor(st[S_TAU] / par[P_PERIOD])
-            ist[I_PERIOD] += int(extra)
-            st[S_TAU] -= extra * par[P_PERIOD]
-            if st[S_TAU] < 0.0:
-                st[S_TAU] = 0.0
-
-
-@njit(cache=True)
 def _load(st, Y, y, k):
     y[0] = st[S_Q]
     y[1] = st[S_V]
@@ -580,12 +571,12 @@ def _to_target(par, ist, mp, st, nt, taut, Y, ev, work):
                 ist[I_PERIOD] = nt
                 st[S_TAU] = taut
             else:
-                _add_time(par, ist, st, h)
+                add_time(par, ist, st, h)
             continue
         _stages(par, ist, mp, Y, t, y, tau, y1, K, tmp, k, 1)
         for r in range(n):
             y[r] = y1[r]
-        _add_time(par, ist, st, tau)
+        add_time(par, ist, st, tau)
         if kind > 0:
             if kinked:
                 y[2] = 0.0  # z := 0 exactly (the kink)
