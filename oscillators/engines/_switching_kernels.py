@@ -12,42 +12,45 @@ The plan (spins ``s_i``, local field ``h_i = u + (f_i + J·n_i)``, threshold
 ``t_i(n) = −(f_i + J·n)``; up iff ``u >= t_i(n_i)`` in a state relaxed at ``u``). Kuntz,
 Perković and Sethna's sorted lists: list ``g`` holds the thresholds ``t_g(p) =
 −(fsorted[p] + J·n_g)`` in the order ``p`` of the fields descending, so ``t_g`` is
-non-decreasing along every list. Each spin is *listed* in the one list of its current
-neighbour sum: a set bit at its position ``rank[i]`` in that list's hierarchical 64-ary bitset.
-In a state relaxed at ``u`` a listed entry with ``t <= u`` is an up spin and one with ``t > u``
-a down spin (that is what relaxed means), so every list has two *candidates*, consecutive set
-bits: ``hi[g]``, its first set bit with ``t > u``, and ``lo[g]``, the last with ``t <= u``, and::
+non-decreasing along every list, and spin ``i`` sits at position ``rank[i]`` of every list; it
+is a *member* of the list of its current neighbour sum. Per list one boundary ``B[g]`` = the
+number of entries with ``t <= u`` (found by comparing thresholds: exact). Then a member of
+list ``g`` at ``p < B[g]`` is up, one at ``p >= B[g]`` down (that is what relaxed means), and
+a threshold test is an integer comparison: a spin whose sum becomes ``n_g`` is unstable at
+``u`` iff ``rank < B[g]`` (it is down) or ``rank >= B[g]`` (it is up) — the same decision as
+``u + (f + J·n) >= 0`` (a rounded sum has the sign of the exact one, and ``J·n`` is rounded
+once, outside, as ``jn[g]``, so no fused multiply-add moves a threshold) because ``t_g`` is
+monotone in ``p``. No spin is ever moved between lists: its membership is its sum, kept in
+its record.
 
-    next up trigger   = min_g t_g(hi[g])        next down trigger = max_g t_g(lo[g])
+An event at the up trigger ``T`` relaxes at ``u = T`` (falling: at the largest float below
+``T``, the relay convention ``u < β``): every ``B[g]`` moves over the entries it passes (a
+sequential read of the sorted fields), then every passed entry that is a down member starts
+an avalanche (breadth first, each spin at most once, the flip test above; ferromagnetic ``J``
+makes the final state independent of the order: it is the state
+:meth:`hysteresis.rfim.RandomFieldIsing.apply` reaches at that input). Then the two triggers:
 
-The candidates and their thresholds are kept, not searched for: an event at the up trigger
-``t*`` relaxes at ``u = t*`` (falling: at the largest float below ``t*``, the relay convention
-``u < β``); in every list the entries from ``hi[g]`` on with ``t <= u`` are passed (``lo = hi``,
-``hi`` = the next set bit: one bitset search), and each down spin among them starts an
-avalanche (breadth first, each spin at most once). Every flip changes the neighbour sums of the
-spin's neighbours by ``±2`` (kept in their records) and a neighbour flips if its threshold has
-crossed ``u`` (the same test as ``u + (f + J·n) >= 0``: a rounded sum has the sign of the exact
-one, and ``J·n`` is rounded once, outside, as ``jn[g]``, so no fused multiply-add can change a
-threshold); after the avalanche each neighbour whose sum changed is moved once to the list of
-its new sum (clear one bit, set one bit), a candidate it was is replaced by the next set bit (a
-search), and if its new position falls between the candidates of its new list it becomes one
-(``lo`` if its threshold is ``<= u``, else ``hi``). Spins whose triggers
-coincide exactly flip in the same event (passed in the same pass), and ferromagnetic ``J``
-makes the final state independent of the order — it is the state
-:meth:`hysteresis.rfim.RandomFieldIsing.apply` reaches at that input. The cost of an event is
-O(G + z·flips) plus a bitset search (O(log₆₄ N), usually one word) per passed entry and per
-replaced candidate — no sweep over the lists, no search per list.
+* in the event's direction (rising: the least threshold of a down spin) by a merge of the
+  lists from their boundaries, the head with the least threshold first, non-members skipped;
+  the skipped entries lie below the trigger, so the next event passes them: every entry is
+  read O(1) times per monotone stretch (Kuntz–Perković–Sethna);
+* against it (rising: the greatest threshold of an up spin, ``<= u``): ``T`` itself if a
+  passed entry at threshold ``T`` is still a member in the new state (the usual case: an
+  avalanche's trigger spin whose sum did not change); else the greatest current threshold of
+  the spins just flipped and of the spin that held this trigger after the previous event in
+  this direction (kept with its list: valid while it is still a member, since during a rising
+  stretch sums only grow and up spins' thresholds only fall); only if that spin has left its
+  list, a merge of the lists downwards from their boundaries, bounded by the flipped spins'
+  greatest threshold. Falling events are the mirror image.
 
-Layout, for few cache misses per flip (the lattice is far larger than the caches and an
-avalanche's spins are scattered over the sorted lists): per spin one 16-byte record in site
-order (``recf[2i]`` = ``f_i``, ``reci[4i + 2]`` = ``rank[i]``, ``reci[4i + 3]`` = its list ``g``
-(bits 0–12; bits 13–25 the list of its current sum) and, on a lattice, flags of the faces the
-site lies on (bits 26–31), so its neighbours need no division; two views of one buffer, each
-slot read through one view), so a neighbour's field, position and list share a cache line;
-the lists' bitsets interleaved (word ``w`` of level ``lv`` of list ``g`` at
-``lay[lv] + w·stride + g``, ``stride = 8`` for up to 8 lists: one aligned 64-byte line holds the
-word of every list), so moving a spin between lists touches one line. The spins themselves
-are the packed bits the operator's states hold.
+The cost of an event is O(z·flips) for the avalanches plus the entries the merges read:
+nothing is relisted, no bitset kept.
+
+Layout: per spin one 8-byte record in site order (bits 0–31 ``rank``, 32–37 on a lattice the
+faces the site lies on, so its neighbours need no division, 40–52 its list, bit 56 up), so an
+avalanche reads and writes one word per neighbour and 10⁶ spins take 8 MB; the sorted fields
+and ``order`` are the operator's own arrays, read along the lists. The spins are also kept as
+the packed bits the operator's states hold.
 
 State slots: the relay kernel's float/int state layouts (``st``, ``ist``) with ``S_U`` (the
 input the spins are relaxed at) and ``I_NUP`` (up spins) in slots the relay tables use for
@@ -59,7 +62,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hysteresis._rfim_kernels import _flip, _spin
+from hysteresis._rfim_kernels import _flip
 from oscillators.engines._relay_kernels import (
     _CONTRACT,
     I_MAXSW,
@@ -80,7 +83,6 @@ from oscillators.engines._relay_kernels import (
     S_TAU,
     S_UP,
     S_V,
-    _ctz,
     _wrap,
     hop,
     hop_coefficients,
@@ -88,14 +90,15 @@ from oscillators.engines._relay_kernels import (
 )
 
 __all__ = [
-    "I_NUP",
     "FACES",
+    "I_NUP",
+    "LIST",
     "MAX_LISTS",
     "PL_BITS",
     "S_U",
-    "bitset_layout",
+    "UP",
     "boundary_flags",
-    "build_lists",
+    "records",
     "refresh",
     "run_spins",
     "switch",
@@ -104,62 +107,53 @@ __all__ = [
 #: the input the spins are relaxed at / the number of up spins (slots unused by spins)
 S_U = S_M
 I_NUP = I_UP
-#: the plan tuple: (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree,
-#: bits, queue, sets, lay, stride, levels, cand, ctr); ``bits`` (the spins) at ``PL_BITS``
-PL_BITS = 11
+#: the plan tuple: (recs, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue,
+#: bound, old, heads, pos, cache, cachef); ``bits`` (the spins) at ``PL_BITS``
+PL_BITS = 10
 
-_U0 = np.uint64(0)
-_U1 = np.uint64(1)
-_ALL = np.uint64(0xFFFFFFFFFFFFFFFF)
-
-
-def bitset_layout(n: int, lists: int) -> tuple[np.ndarray, int, int, int]:
-    """(level offsets ``lay[lv]``, stride, levels, words) of ``lists`` interleaved hierarchical
-    64-ary bitsets over ``n`` positions (word ``w`` of level ``lv`` of list ``g`` at
-    ``lay[lv] + w·stride + g``); every level has one zero row of padding, so a search may read
-    one row past a level's end."""
-    stride = 8 if lists <= 8 else lists
-    sizes = [max(1, -(-n // 64))]
-    while sizes[-1] > 1:
-        sizes.append(-(-sizes[-1] // 64))
-    lay = np.empty(len(sizes), dtype=np.int64)
-    at = 0
-    for lv, size in enumerate(sizes):
-        lay[lv] = at
-        at += (size + 1) * stride
-    return lay, stride, len(sizes), at
-
-
-#: ``reci[4i + 3]``: bits 0–12 the list the spin is listed in, bits 13–25 the list of its
-#: current neighbour sum (they differ only inside an avalanche), bits 26–31 on a lattice the
-#: faces the site lies on: bit ``2a`` at coordinate 0 of axis ``a``, bit ``2a + 1`` at ``L_a − 1``
-_LIST = 0x1FFF
-_SUM = 13
-FACES = 26
+#: a spin's record (int64): bits 0–31 its rank, 32–37 on a lattice its faces (bit ``2a`` at
+#: coordinate 0 of axis ``a``, ``2a + 1`` at ``L_a − 1``), 40–52 its list, bit 56 up
+_RANK = 0xFFFFFFFF
+FACES = 32
+LIST = 40
+_GMASK = 0x1FFF
+UP = 1 << 56
 #: the most lists (neighbour-sum values) a list index in 13 bits allows
-MAX_LISTS = _LIST + 1
+MAX_LISTS = _GMASK + 1
 
 
 def boundary_flags(lat: np.ndarray, n: int) -> np.ndarray:
-    """The face flags (``reci[4i + 3] >> 26``) of the ``n`` sites of lattice ``lat``."""
-    flags = np.zeros(n, dtype=np.int32)
+    """The face flags (record bits 32–37) of the ``n`` sites of lattice ``lat``."""
+    flags = np.zeros(n, dtype=np.int64)
     site = np.arange(n, dtype=np.int64)
     for a in range(int(lat[0])):
         length, stride = int(lat[1 + a]), int(lat[4 + a])
         c = (site // stride) % length
-        flags |= (c == 0).astype(np.int32) << (2 * a)
-        flags |= (c == length - 1).astype(np.int32) << (2 * a + 1)
+        flags |= (c == 0).astype(np.int64) << (2 * a)
+        flags |= (c == length - 1).astype(np.int64) << (2 * a + 1)
     return flags
 
 
+@njit(cache=True)
+def records(recs, memb, bits, nup, gidx, lat, offsets, max_degree):  # pragma: no cover
+    """Or the list (the neighbour sum ``2·nup − degree``) and the up bit of every spin into its
+    record (rank and faces already there)."""
+    for i in range(recs.size):
+        deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
+        g = gidx[2 * nup[i] - deg + max_degree]
+        up = (bits[i >> 3] >> (i & 7)) & 1
+        recs[i] |= (g << LIST) | (up << 56)
+        memb[recs[i] & _RANK] = 2 * g + up
+
+
 @njit(cache=True, inline="always")
-def _neighbours(i, reci, lat, offsets, adj, buf):  # pragma: no cover - compiled
-    """Write the neighbours of ``i`` into ``buf`` (the order of
+def _neighbours(i, rec, lat, offsets, adj, buf):  # pragma: no cover - compiled
+    """Write the neighbours of ``i`` (record ``rec``) into ``buf`` (the order of
     :func:`hysteresis._rfim_kernels._neighbours`; on a lattice from the face flags, no
     division); returns their number."""
     nd = lat[0]
     if nd > 0:
-        flags = reci[4 * i + 3] >> FACES
+        flags = rec >> FACES
         k = 0
         for a in range(nd):
             stride = lat[4 + a]
@@ -176,158 +170,64 @@ def _neighbours(i, reci, lat, offsets, adj, buf):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _msb(x):  # pragma: no cover - compiled
-    """Index of the highest set bit of a non-zero uint64."""
-    x |= x >> np.uint64(1)
-    x |= x >> np.uint64(2)
-    x |= x >> np.uint64(4)
-    x |= x >> np.uint64(8)
-    x |= x >> np.uint64(16)
-    x |= x >> np.uint64(32)
-    return _ctz(x ^ (x >> _U1))
-
-
-@njit(cache=True, inline="always")
-def _next_set(sets, lay, stride, g, levels, p, n):  # pragma: no cover - compiled
-    """Smallest set position ``>= p`` of list ``g``'s bitset, or -1."""
-    if p >= n:
-        return -1
-    idx = p
-    lv = 0
-    while True:
-        w = sets[lay[lv] + (idx >> 6) * stride + g] & (_ALL << np.uint64(idx & 63))
-        if w != _U0:
-            idx = (idx & ~63) + _ctz(w)
-            break
-        if lv + 1 == levels:
-            return -1
-        idx = (idx >> 6) + 1  # the next word of this level, a bit one level up
-        lv += 1
-    while lv > 0:
-        lv -= 1
-        idx = idx * 64 + _ctz(sets[lay[lv] + idx * stride + g])
-    return idx
-
-
-@njit(cache=True, inline="always")
-def _prev_set(sets, lay, stride, g, levels, p):  # pragma: no cover - compiled
-    """Largest set position ``<= p`` of list ``g``'s bitset, or -1."""
-    if p < 0:
-        return -1
-    idx = p
-    lv = 0
-    while True:
-        w = sets[lay[lv] + (idx >> 6) * stride + g] & (_ALL >> np.uint64(63 - (idx & 63)))
-        if w != _U0:
-            idx = (idx & ~63) + _msb(w)
-            break
-        if lv + 1 == levels or (idx >> 6) == 0:
-            return -1
-        idx = (idx >> 6) - 1
-        lv += 1
-    while lv > 0:
-        lv -= 1
-        idx = idx * 64 + _msb(sets[lay[lv] + idx * stride + g])
-    return idx
-
-
-@njit(cache=True, inline="always")
-def _bs_set(sets, lay, stride, g, levels, idx):  # pragma: no cover - compiled
-    for lv in range(levels):
-        pos = lay[lv] + (idx >> 6) * stride + g
-        w = sets[pos]
-        sets[pos] = w | (_U1 << np.uint64(idx & 63))
-        if w != _U0:
-            return  # the summary bits above are set already
-        idx >>= 6
-
-
-@njit(cache=True, inline="always")
-def _bs_clear(sets, lay, stride, g, levels, idx):  # pragma: no cover - compiled
-    for lv in range(levels):
-        pos = lay[lv] + (idx >> 6) * stride + g
-        w = sets[pos] & ~(_U1 << np.uint64(idx & 63))
-        sets[pos] = w
-        if w != _U0:
-            return  # the word still holds a set bit: the summary bit above stays
-        idx >>= 6
-
-
-@njit(cache=True)
-def build_lists(reci, gidx, nvals, nup, lat, offsets, max_degree, sets, lay, stride, levels):
+def _scan(rising, best, spin, lst, memb, fsorted, order, jn, bound, heads, pos):
     # pragma: no cover - compiled
-    """List every spin in the list of its neighbour sum ``2·nup − degree``: ``reci[4i + 3]``
-    and a set bit at ``reci[4i + 2]`` (its rank) in that list."""
-    for i in range(nup.size):
-        deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
-        g = gidx[2 * nup[i] - deg + max_degree]
-        reci[4 * i + 3] |= g | (g << _SUM)
-        _bs_set(sets, lay, stride, g, levels, reci[4 * i + 2])
-
-
-@njit(cache=True, inline="always")
-def _set_hi(g, p, fsorted, jn, sets, lay, stride, levels, cand, ctr):  # pragma: no cover
-    """``hi[g] = cand[g]`` := the first set bit of list ``g`` at or after ``p`` (``N``: none),
-    its threshold into ``ctr[g]`` (``+inf``: none)."""
+    """The trigger of the spins that flip in direction ``rising`` beyond ``best`` (rising: the
+    least threshold of a down spin if below ``best``; falling: the greatest of an up spin if
+    above it): a merge of the lists from their boundaries, the nearest head first, entries
+    that are not members of their list skipped. Returns ``(threshold, spin, list)``, or
+    ``(best, spin, lst)`` as given if none beats ``best``."""
     n = fsorted.size
-    r = _next_set(sets, lay, stride, g, levels, p, n)
-    if r >= 0:
-        cand[g] = r
-        ctr[g] = -(fsorted[r] + jn[g])
-    else:
-        cand[g] = n
-        ctr[g] = np.inf
-
-
-@njit(cache=True, inline="always")
-def _set_lo(g, p, fsorted, jn, sets, lay, stride, levels, cand, ctr):  # pragma: no cover
-    """``lo[g] = cand[G + g]`` := the last set bit of list ``g`` at or before ``p`` (``-1``:
-    none), its threshold into ``ctr[G + g]`` (``-inf``: none)."""
     ng = jn.size
-    r = _prev_set(sets, lay, stride, g, levels, p)
-    cand[ng + g] = r
-    ctr[ng + g] = -(fsorted[r] + jn[g]) if r >= 0 else -np.inf
+    for g in range(ng):
+        p = bound[g] if rising else bound[g] - 1
+        pos[g] = p
+        if rising:
+            heads[g] = -(fsorted[p] + jn[g]) if p < n else np.inf
+        else:
+            heads[g] = -(fsorted[p] + jn[g]) if p >= 0 else -np.inf
+    want = 0 if rising else 1
+    while True:
+        g = 0
+        for k in range(1, ng):
+            if (heads[k] < heads[g]) if rising else (heads[k] > heads[g]):
+                g = k
+        t = heads[g]
+        if not ((t < best) if rising else (t > best)):
+            return best, spin, lst
+        p = pos[g]
+        if memb[p] == 2 * g + want:
+            return t, order[p], g
+        if rising:
+            p += 1
+            heads[g] = -(fsorted[p] + jn[g]) if p < n else np.inf
+        else:
+            p -= 1
+            heads[g] = -(fsorted[p] + jn[g]) if p >= 0 else -np.inf
+        pos[g] = p
 
 
 @njit(cache=True)
-def candidates(fsorted, jn, sets, lay, stride, levels, ptr, cand, ctr):  # pragma: no cover
-    """Every list's candidates from its pointer ``ptr[g]`` (the number of its entries with
-    ``t <= u``)."""
-    for g in range(jn.size):
-        _set_hi(g, ptr[g], fsorted, jn, sets, lay, stride, levels, cand, ctr)
-        _set_lo(g, ptr[g] - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
+def refresh(st, memb, fsorted, order, jn, bound, heads, pos, cache):  # pragma: no cover
+    """Both triggers of the state relaxed at ``st[S_U]`` (boundaries ``bound`` current) into
+    ``st[S_UP]``, ``st[S_DN]``; the kept against-trigger spin forgotten."""
+    st[S_UP] = _scan(True, np.inf, -1, -1, memb, fsorted, order, jn, bound, heads, pos)[0]
+    st[S_DN] = _scan(False, -np.inf, -1, -1, memb, fsorted, order, jn, bound, heads, pos)[0]
+    cache[0] = 0
 
 
 @njit(cache=True, inline="always")
-def _triggers(ctr, ng):  # pragma: no cover - compiled
-    """(next up trigger, next down trigger): the least ``hi`` threshold, the greatest ``lo``."""
-    up = ctr[0]
-    down = ctr[ng]
-    for g in range(1, ng):
-        if ctr[g] < up:
-            up = ctr[g]
-        if ctr[ng + g] > down:
-            down = ctr[ng + g]
-    return up, down
-
-
-@njit(cache=True)
-def refresh(st, jn, ctr):  # pragma: no cover - compiled
-    """The next triggers into ``st[S_UP]``, ``st[S_DN]``."""
-    st[S_UP], st[S_DN] = _triggers(ctr, jn.size)
-
-
-@njit(cache=True, inline="always")
-def _avalanche(
-    i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue, tail,
-    buf,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at input ``u``
-    (breadth first, each at most once; appended to the queue from ``tail``), keeping every
-    spin's current list (its neighbour sum) in its record; returns the new tail (flips = new
-    tail − tail). The lists' bitsets are brought up to date afterwards (:func:`_relist`)."""
-    want = 0 if rising else 1  # the spins that may follow: down ones rising, up ones falling
-    dn = 2 if rising else -2  # the change of a neighbour's sum
+def _avalanche(i, rising, recs, memb, bound, nxt, lat, offsets, adj, bits, queue, tail, buf):
+    # pragma: no cover - compiled
+    """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at the input the
+    boundaries ``bound`` hold (breadth first, each at most once; appended to the queue from
+    ``tail``), keeping every spin's list (its neighbour sum) in its record; returns the new
+    tail (flips = new tail − tail)."""
+    want = 0 if rising else UP  # the spins that may follow: down ones rising, up ones falling
+    row = 0 if rising else 1  # nxt[row, g]: the list after a neighbour's flip
+    r = recs[i] ^ UP
+    recs[i] = r
+    memb[r & _RANK] ^= 1
     _flip(bits, i)
     queue[tail] = i
     head = tail
@@ -335,122 +235,132 @@ def _avalanche(
     while head < tail:
         j = queue[head]
         head += 1
-        deg = _neighbours(j, reci, lat, offsets, adj, buf)
+        deg = _neighbours(j, recs[j], lat, offsets, adj, buf)
         for k in range(deg):
             m = buf[k]
-            word = reci[4 * m + 3]
-            old = (word >> _SUM) & _LIST
-            g = gidx[nvals[old] + dn + max_degree]
-            reci[4 * m + 3] = word + ((g - old) << _SUM)
-            if _spin(bits, m) == want and (-(recf[2 * m] + jn[g]) <= u) == rising:
+            r = recs[m]
+            g = (r >> LIST) & _GMASK
+            g2 = nxt[row, g]
+            r += (g2 - g) << LIST
+            rank = r & _RANK
+            if (r & UP) == want and (rank < bound[g2]) == rising:
+                r ^= UP
                 _flip(bits, m)
                 queue[tail] = m
                 tail += 1
+            recs[m] = r
+            memb[rank] = 2 * g2 + (r >> 56)
     return tail
 
 
 @njit(cache=True, inline="always")
-def _relist(
-    t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay, stride, levels,
-    cand, ctr, buf,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Move the neighbours of the spins ``queue[t0:tail]`` whose sums changed to the lists of
-    their new sums (once each, however many of their neighbours flipped), keeping the
-    candidates (module docstring)."""
-    ng = jn.size
-    for q in range(t0, tail):
-        deg = _neighbours(queue[q], reci, lat, offsets, adj, buf)
-        for k in range(deg):
-            m = buf[k]
-            word = reci[4 * m + 3]
-            old = word & _LIST
-            g = (word >> _SUM) & _LIST
-            if g == old:
-                continue
-            reci[4 * m + 3] = word + (g - old)
-            r = reci[4 * m + 2]
-            _bs_clear(sets, lay, stride, old, levels, r)
-            _bs_set(sets, lay, stride, g, levels, r)
-            if cand[old] == r:
-                _set_hi(old, r + 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-            elif cand[ng + old] == r:
-                _set_lo(old, r - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-            if cand[ng + g] < r < cand[g]:  # between the candidates of its list: one of them
-                t = -(recf[2 * m] + jn[g])
-                if t <= u:  # up in the state relaxed at u
-                    cand[ng + g] = r
-                    ctr[ng + g] = t
-                else:
-                    cand[g] = r
-                    ctr[g] = t
-
-
-@njit(cache=True, inline="always")
 def _event(
-    direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree,
-    bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+    direction, st, ist, recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, bits, queue,
+    bound, old, heads, pos, cache, cachef, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
     rising = direction > 0
-    u = st[S_UP] if rising else np.nextafter(st[S_DN], -np.inf)
-    want = 0 if rising else 1
+    trig = st[S_UP] if rising else st[S_DN]
+    u = trig if rising else np.nextafter(trig, -np.inf)
     n = fsorted.size
     ng = jn.size
-    tail = 0
-    for g in range(ng):
+    for g in range(ng):  # the boundaries at u (all of them before any flip test)
+        jg = jn[g]
+        b = bound[g]
+        old[g] = b
         if rising:
-            while ctr[g] <= u:  # pass hi[g]: now the last entry with t <= u
-                r = cand[g]
-                cand[ng + g] = r
-                ctr[ng + g] = ctr[g]
-                _set_hi(g, r + 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-                i = order[r]
-                if _spin(bits, i) == want:
-                    t0 = tail
-                    tail = _avalanche(
-                        i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree,
-                        bits, queue, tail, buf,
-                    )  # fmt: skip
-                    _relist(
-                        t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay,
-                        stride, levels, cand, ctr, buf,
-                    )  # fmt: skip
+            while b < n and -(fsorted[b] + jg) <= u:
+                b += 1
         else:
-            while ctr[ng + g] > u:  # pass lo[g]: now the first entry with t > u
-                r = cand[ng + g]
-                cand[g] = r
-                ctr[g] = ctr[ng + g]
-                _set_lo(g, r - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-                i = order[r]
-                if _spin(bits, i) == want:
-                    t0 = tail
-                    tail = _avalanche(
-                        i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree,
-                        bits, queue, tail, buf,
-                    )  # fmt: skip
-                    _relist(
-                        t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay,
-                        stride, levels, cand, ctr, buf,
-                    )  # fmt: skip
+            while b > 0 and -(fsorted[b - 1] + jg) > u:
+                b -= 1
+        bound[g] = b
+    want = 0 if rising else 1
+    tail = 0
+    for g in range(ng):  # the passed entries that are unstable members start avalanches
+        lo, hi = (old[g], bound[g]) if rising else (bound[g], old[g])
+        for p in range(lo, hi):
+            if memb[p] == 2 * g + want:
+                tail = _avalanche(order[p], rising, recs, memb, bound, nxt, lat, offsets, adj,
+                                  bits, queue, tail, buf)  # fmt: skip
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
     st[S_MV] = (2 * n_up - n) / n  # the operator's own formula: the same float
     st[S_U] = u
-    st[S_UP], st[S_DN] = _triggers(ctr, ng)
+    # the trigger in this direction: the merge from the boundaries
+    fwd = _scan(rising, np.inf if rising else -np.inf, -1, -1, memb, fsorted, order, jn, bound,
+                heads, pos)[0]  # fmt: skip
+    # the trigger against it: a passed entry at the trigger still a member (flipped: it is on
+    # the new side of u), else the flipped spins and the kept spin, else a bounded merge
+    flipped = 1 if rising else 0
+    back = np.nan
+    for g in range(ng):
+        jg = jn[g]
+        if rising:
+            p = bound[g] - 1
+            while p >= old[g] and -(fsorted[p] + jg) == trig:
+                if memb[p] == 2 * g + flipped:
+                    back = trig
+                    cache[1] = order[p]
+                    cache[2] = g
+                    break
+                p -= 1
+        else:
+            p = bound[g]
+            while p < old[g] and -(fsorted[p] + jg) == trig:
+                if memb[p] == 2 * g + flipped:
+                    back = trig
+                    cache[1] = order[p]
+                    cache[2] = g
+                    break
+                p += 1
+        if back == trig:
+            break
+    if back != trig:
+        best = -np.inf if rising else np.inf
+        spin = -1
+        lst = -1
+        for q in range(tail):
+            i = queue[q]
+            r = recs[i]
+            g = (r >> LIST) & _GMASK
+            t = -(fsorted[r & _RANK] + jn[g])
+            if (t > best) if rising else (t < best):
+                best = t
+                spin = i
+                lst = g
+        c = cache[1]
+        if cache[0] == direction and ((recs[c] >> LIST) & _GMASK) == cache[2]:
+            if (cachef[0] > best) if rising else (cachef[0] < best):
+                best = cachef[0]
+                spin = c
+                lst = cache[2]
+        else:
+            best, spin, lst = _scan(not rising, best, spin, lst, memb, fsorted, order, jn, bound,
+                                    heads, pos)  # fmt: skip
+        back = best
+        cache[1] = spin
+        cache[2] = lst
+    cache[0] = direction if cache[1] >= 0 else 0
+    cachef[0] = back
+    if rising:
+        st[S_UP], st[S_DN] = fwd, back
+    else:
+        st[S_UP], st[S_DN] = back, fwd
     return st[S_MV] - m_old, tail
 
 
 @njit(cache=True)
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
-    (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
-     sets, lay, stride, levels, cand, ctr) = plan  # fmt: skip
+    (recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
+     old, heads, pos, cache, cachef) = plan  # fmt: skip
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
-        direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj,
-        max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+        direction, st, ist, recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, bits, queue,
+        bound, old, heads, pos, cache, cachef, buf,
     )  # fmt: skip
 
 
@@ -460,8 +370,8 @@ def _advance(
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
-    (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
-     sets, lay, stride, levels, cand, ctr) = plan  # fmt: skip
+    (recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
+     old, heads, pos, cache, cachef) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
     nsw = ist[I_NSW]
@@ -481,8 +391,8 @@ def _advance(
         if direction == 0:
             break
         jump, flips = _event(
-            direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj,
-            max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+            direction, st, ist, recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, bits,
+            queue, bound, old, heads, pos, cache, cachef, buf,
         )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
         nsw += flips  # n_events counts spin flips
@@ -512,7 +422,7 @@ def run_spins(
     gets (q, v, M) at target i. Returns (status, next target index)."""
     e = np.empty(ORDER + 1)
     coefs = hop_coefficients(mp)
-    buf = np.empty(max(plan[10], 1), np.int64)
+    buf = np.empty(max(plan[9], 1), np.int64)
     sample = out.shape[0] > 0
     for i in range(i_start, tgt_n.shape[0]):
         while ist[I_N] < tgt_n[i]:

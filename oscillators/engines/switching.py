@@ -33,14 +33,6 @@ from oscillators.results import OscillatorState
 __all__ = ["SwitchingKernelEngine"]
 
 
-def _aligned_zeros(words: int) -> np.ndarray:
-    """``words`` zero uint64 starting on a 64-byte boundary (a row of 8 interleaved bitset
-    words is one cache line)."""
-    raw = np.zeros(words + 8, dtype=np.uint64)
-    skip = (-raw.ctypes.data // 8) % 8
-    return raw[skip : skip + words]
-
-
 class SwitchingKernelEngine(RelayKernelEngine):
     """Compiled event-driven engine for interacting spins (module docstring).
 
@@ -84,31 +76,33 @@ class SwitchingKernelEngine(RelayKernelEngine):
             )
         gidx = np.full(2 * deg + 1, -1, dtype=np.int64)
         gidx[nvals + deg] = np.arange(nvals.size)
+        # the list after a neighbour's flip up (row 0) or down (row 1); sums that cannot occur
+        # keep their list (never read)
+        nxt = np.empty((2, nvals.size), dtype=np.int64)
+        for row, dn in enumerate((2, -2)):
+            k = np.clip(nvals + dn + deg, 0, 2 * deg)
+            nxt[row] = np.where(gidx[k] >= 0, gidx[k], np.arange(nvals.size))
         bits = np.array(bits, dtype=np.uint8)
         nup = np.zeros(n, dtype=np.uint8 if deg < 256 else np.int32)
         count_up_neighbours(bits, spec.lattice, spec.offsets, spec.adjacency, deg, nup)
-        # one 16-byte record per spin in site order: f_i, rank_i, list_i (kernel docstring)
-        recf = np.empty(2 * n)
-        recf[0::2] = spec.fields
-        reci = recf.view(np.int32)
-        reci[2::4][spec.order] = np.arange(n, dtype=np.int32)
-        reci[3::4] = sk.boundary_flags(spec.lattice, n) << sk.FACES  # the lists or-ed in below
-        lay, stride, levels, words = sk.bitset_layout(n, nvals.size)
-        sets = _aligned_zeros(words)
-        sk.build_lists(reci, gidx, nvals, nup, spec.lattice, spec.offsets, deg, sets, lay,
-                       stride, levels)  # fmt: skip
+        # one 8-byte record per spin in site order: rank, faces, list, up (kernel docstring)
+        recs = np.empty(n, dtype=np.int64)
+        recs[spec.order] = np.arange(n, dtype=np.int64)
+        recs |= sk.boundary_flags(spec.lattice, n) << sk.FACES
+        # the same in rank order, one small word per entry of the lists: 2·list + up
+        memb = np.empty(n, dtype=np.uint8 if 2 * nvals.size <= 256 else np.uint16)
+        sk.records(recs, memb, bits, nup, gidx, spec.lattice, spec.offsets, deg)
         del nup
         fs, j = spec.sorted_fields, float(spec.spin_coupling)
         jn = j * nvals  # J·n rounded once, here: the kernels add it (no fused multiply-add)
-        # every list's entries with t <= u0 (binary search; t grows along a list)
-        ptr = np.array([np.searchsorted(-(fs + x), u0, side="right") for x in jn.tolist()])
-        cand = np.empty(2 * nvals.size, dtype=np.int64)
-        ctr = np.empty(2 * nvals.size)
-        sk.candidates(fs, jn, sets, lay, stride, levels, ptr.astype(np.int64), cand, ctr)
+        # every list's boundary: its entries with t <= u0 (binary search; t grows along a list)
+        bound = np.array([np.searchsorted(-(fs + x), u0, side="right") for x in jn.tolist()],
+                         dtype=np.int64)  # fmt: skip
+        ng = nvals.size
         self._plan = (
-            recf, reci, fs, spec.order, jn, nvals, gidx, spec.lattice, spec.offsets,
-            spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), sets, lay, stride,
-            levels, cand, ctr,
+            recs, memb, fs, spec.order, jn, nxt, spec.lattice, spec.offsets, spec.adjacency, deg, bits,
+            np.empty(max(n, 1), dtype=np.int32), bound, np.empty(ng, dtype=np.int64),
+            np.empty(ng), np.empty(ng, dtype=np.int64), np.zeros(3, dtype=np.int64), np.zeros(1),
         )  # fmt: skip
         self._n_relays = n  # the switch budget scales with the spins
         self._mp = rk.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
@@ -124,7 +118,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
         st[rk.S_MV] = (2 * n_up - n) / n
         ist = np.zeros(rk.N_IST, dtype=np.int64)
         ist[sk.I_NUP] = n_up
-        sk.refresh(st, jn, ctr)
+        sk.refresh(st, *(self._plan[k] for k in (1, 2, 3, 4, 12, 14, 15, 16)))
         self._st, self._ist = st, ist
         self._start_on_sliding_set(q0, v0)
 
