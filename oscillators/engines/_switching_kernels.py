@@ -83,6 +83,7 @@ from oscillators.engines._relay_kernels import (
     S_TAU,
     S_UP,
     S_V,
+    _ctz,
     _wrap,
     hop,
     hop_coefficients,
@@ -109,7 +110,7 @@ S_U = S_M
 I_NUP = I_UP
 #: the plan tuple: (recs, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue,
 #: bound, old, heads, pos, cache, cachef); ``bits`` (the spins) at ``PL_BITS``
-PL_BITS = 10
+PL_BITS = 11
 
 #: a spin's record (int64): bits 0–31 its rank, 32–37 on a lattice its faces (bit ``2a`` at
 #: coordinate 0 of axis ``a``, ``2a + 1`` at ``L_a − 1``), 40–52 its list, bit 56 up
@@ -169,60 +170,135 @@ def _neighbours(i, rec, lat, offsets, adj, buf):  # pragma: no cover - compiled
     return stop - start
 
 
+_U0 = np.uint64(0)
+_U1 = np.uint64(1)
+_ALL = np.uint64(0xFFFFFFFFFFFFFFFF)
+_LO = np.uint64(0x0101010101010101)
+_HI = np.uint64(0x8080808080808080)
+_EVEN = np.uint64(0xFEFEFEFEFEFEFEFE)
+
+
 @njit(cache=True, inline="always")
-def _scan(rising, best, spin, lst, memb, fsorted, order, jn, bound, heads, pos):
-    # pragma: no cover - compiled
-    """The trigger of the spins that flip in direction ``rising`` beyond ``best`` (rising: the
-    least threshold of a down spin if below ``best``; falling: the greatest of an up spin if
-    above it): a merge of the lists from their boundaries, the nearest head first, entries
-    that are not members of their list skipped. Returns ``(threshold, spin, list)``, or
-    ``(best, spin, lst)`` as given if none beats ``best``."""
-    n = fsorted.size
-    ng = jn.size
-    for g in range(ng):
-        p = bound[g] if rising else bound[g] - 1
-        pos[g] = p
-        if rising:
-            heads[g] = -(fsorted[p] + jn[g]) if p < n else np.inf
-        else:
-            heads[g] = -(fsorted[p] + jn[g]) if p >= 0 else -np.inf
-    want = 0 if rising else 1
-    while True:
-        g = 0
-        for k in range(1, ng):
-            if (heads[k] < heads[g]) if rising else (heads[k] > heads[g]):
-                g = k
-        t = heads[g]
-        if not ((t < best) if rising else (t > best)):
-            return best, spin, lst
-        p = pos[g]
-        if memb[p] == 2 * g + want:
-            return t, order[p], g
-        if rising:
+def _msb(x):  # pragma: no cover - compiled
+    """Index of the highest set bit of a non-zero uint64."""
+    x |= x >> np.uint64(1)
+    x |= x >> np.uint64(2)
+    x |= x >> np.uint64(4)
+    x |= x >> np.uint64(8)
+    x |= x >> np.uint64(16)
+    x |= x >> np.uint64(32)
+    return _ctz(x ^ (x >> _U1))
+
+
+@njit(cache=True, inline="always")
+def _members(word, g):  # pragma: no cover - compiled
+    """Bit 7 of every byte of ``word`` (8 membership bytes) that is a member of list ``g``
+    (byte ``2g`` or ``2g + 1``): with bit 0 cleared the bytes are even, so the zero-byte test
+    ``(x − 0x01…) & ~x & 0x80…`` has no false positives."""
+    x = (word ^ (np.uint64(2 * g) * _LO)) & _EVEN
+    return (x - _LO) & ~x & _HI
+
+
+@njit(cache=True, inline="always")
+def _next_member(memb, mw, g, p, n):  # pragma: no cover - compiled
+    """The first position ``>= p`` and ``< n`` of a member of list ``g`` (``n``: none)."""
+    if p >= n:
+        return n
+    if mw.size == 0:  # two-byte membership words: one at a time
+        while p < n and memb[p] >> 1 != g:
             p += 1
-            heads[g] = -(fsorted[p] + jn[g]) if p < n else np.inf
-        else:
+        return p
+    w = p >> 3
+    z = _members(mw[w], g) & (_ALL << np.uint64(8 * (p & 7)))
+    last = (n - 1) >> 3
+    while z == _U0:
+        if w >= last:
+            return n
+        w += 1
+        z = _members(mw[w], g)
+    q = 8 * w + (_ctz(z) >> 3)
+    return q if q < n else n
+
+
+@njit(cache=True, inline="always")
+def _prev_member(memb, mw, g, p, stop):  # pragma: no cover - compiled
+    """The last position ``<= p`` and ``>= stop >= 0`` of a member of list ``g`` (``-1``:
+    none)."""
+    if p < stop:
+        return -1
+    if mw.size == 0:
+        while p >= stop and memb[p] >> 1 != g:
             p -= 1
-            heads[g] = -(fsorted[p] + jn[g]) if p >= 0 else -np.inf
-        pos[g] = p
+        return p if p >= stop else -1
+    w = p >> 3
+    z = _members(mw[w], g) & (_ALL >> np.uint64(8 * (7 - (p & 7))))
+    first = stop >> 3
+    while z == _U0:
+        if w <= first:
+            return -1
+        w -= 1
+        z = _members(mw[w], g)
+    q = 8 * w + (_msb(z) >> 3)
+    return q if q >= stop else -1
+
+
+@njit(cache=True, inline="always")
+def _set_hi(g, p, memb, mw, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
+    """``hi[g] = cand[g]`` := the first member of list ``g`` at or after ``p`` (``N``: none),
+    its threshold into ``ctr[g]`` (``+inf``: none)."""
+    n = fsorted.size
+    r = _next_member(memb, mw, g, p, n)
+    cand[g] = r
+    ctr[g] = -(fsorted[r] + jn[g]) if r < n else np.inf
+
+
+@njit(cache=True, inline="always")
+def _set_lo(g, p, memb, mw, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
+    """``lo[g] = cand[G + g]`` := the last member of list ``g`` at or before ``p`` (``-1``:
+    none), its threshold into ``ctr[G + g]`` (``-inf``: none)."""
+    ng = jn.size
+    r = _prev_member(memb, mw, g, p, 0)
+    cand[ng + g] = r
+    ctr[ng + g] = -(fsorted[r] + jn[g]) if r >= 0 else -np.inf
 
 
 @njit(cache=True)
-def refresh(st, memb, fsorted, order, jn, bound, heads, pos, cache):  # pragma: no cover
-    """Both triggers of the state relaxed at ``st[S_U]`` (boundaries ``bound`` current) into
-    ``st[S_UP]``, ``st[S_DN]``; the kept against-trigger spin forgotten."""
-    st[S_UP] = _scan(True, np.inf, -1, -1, memb, fsorted, order, jn, bound, heads, pos)[0]
-    st[S_DN] = _scan(False, -np.inf, -1, -1, memb, fsorted, order, jn, bound, heads, pos)[0]
-    cache[0] = 0
+def candidates(memb, mw, fsorted, jn, bound, cand, ctr):  # pragma: no cover - compiled
+    """Every list's candidates from its boundary."""
+    for g in range(jn.size):
+        _set_hi(g, bound[g], memb, mw, fsorted, jn, cand, ctr)
+        _set_lo(g, bound[g] - 1, memb, mw, fsorted, jn, cand, ctr)
 
 
 @njit(cache=True, inline="always")
-def _avalanche(i, rising, recs, memb, bound, nxt, lat, offsets, adj, bits, queue, tail, buf):
-    # pragma: no cover - compiled
+def _triggers(ctr, ng):  # pragma: no cover - compiled
+    """(next up trigger, next down trigger): the least ``hi`` threshold, the greatest ``lo``."""
+    up = ctr[0]
+    down = ctr[ng]
+    for g in range(1, ng):
+        if ctr[g] < up:
+            up = ctr[g]
+        if ctr[ng + g] > down:
+            down = ctr[ng + g]
+    return up, down
+
+
+@njit(cache=True)
+def refresh(st, ctr, ng):  # pragma: no cover - compiled
+    """The next triggers into ``st[S_UP]``, ``st[S_DN]``."""
+    st[S_UP], st[S_DN] = _triggers(ctr, ng)
+
+
+@njit(cache=True, inline="always")
+def _avalanche(
+    i, rising, recs, memb, mw, fsorted, jn, bound, nxt, cand, ctr, lat, offsets, adj, bits,
+    queue, tail, buf,
+):  # pragma: no cover - compiled  # fmt: skip
     """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at the input the
     boundaries ``bound`` hold (breadth first, each at most once; appended to the queue from
-    ``tail``), keeping every spin's list (its neighbour sum) in its record; returns the new
-    tail (flips = new tail − tail)."""
+    ``tail``), keeping every spin's list (its neighbour sum) in its record and membership
+    byte and the lists' candidates; returns the new tail (flips = new tail − tail)."""
+    ng = jn.size
     want = 0 if rising else UP  # the spins that may follow: down ones rising, up ones falling
     row = 0 if rising else 1  # nxt[row, g]: the list after a neighbour's flip
     r = recs[i] ^ UP
@@ -243,26 +319,39 @@ def _avalanche(i, rising, recs, memb, bound, nxt, lat, offsets, adj, bits, queue
             g2 = nxt[row, g]
             r += (g2 - g) << LIST
             rank = r & _RANK
-            if (r & UP) == want and (rank < bound[g2]) == rising:
+            below = rank < bound[g2]
+            if (r & UP) == want and below == rising:
                 r ^= UP
                 _flip(bits, m)
                 queue[tail] = m
                 tail += 1
             recs[m] = r
             memb[rank] = 2 * g2 + (r >> 56)
+            # the candidates: the spin leaves list g (one of its candidates: the next member
+            # replaces it) and joins list g2 (between its candidates: it becomes one)
+            if cand[g] == rank:
+                _set_hi(g, rank + 1, memb, mw, fsorted, jn, cand, ctr)
+            elif cand[ng + g] == rank:
+                _set_lo(g, rank - 1, memb, mw, fsorted, jn, cand, ctr)
+            if cand[ng + g2] < rank < cand[g2]:
+                if below:
+                    cand[ng + g2] = rank
+                    ctr[ng + g2] = -(fsorted[rank] + jn[g2])
+                else:
+                    cand[g2] = rank
+                    ctr[g2] = -(fsorted[rank] + jn[g2])
     return tail
 
 
 @njit(cache=True, inline="always")
 def _event(
-    direction, st, ist, recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, bits, queue,
-    bound, old, heads, pos, cache, cachef, buf,
+    direction, st, ist, recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, bits, queue,
+    bound, old, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
     rising = direction > 0
-    trig = st[S_UP] if rising else st[S_DN]
-    u = trig if rising else np.nextafter(trig, -np.inf)
+    u = st[S_UP] if rising else np.nextafter(st[S_DN], -np.inf)
     n = fsorted.size
     ng = jn.size
     for g in range(ng):  # the boundaries at u (all of them before any flip test)
@@ -275,92 +364,52 @@ def _event(
         else:
             while b > 0 and -(fsorted[b - 1] + jg) > u:
                 b -= 1
+        if b == old[g]:
+            continue
         bound[g] = b
+        # the candidates at the new boundary (members passed: the last is lo rising, hi falling)
+        if rising:
+            lo = _prev_member(memb, mw, g, b - 1, old[g])
+            if lo >= old[g]:
+                cand[ng + g] = lo
+                ctr[ng + g] = -(fsorted[lo] + jg)
+            if cand[g] < b:
+                _set_hi(g, b, memb, mw, fsorted, jn, cand, ctr)
+        else:
+            hi = _next_member(memb, mw, g, b, old[g])
+            if hi < old[g]:
+                cand[g] = hi
+                ctr[g] = -(fsorted[hi] + jg)
+            if cand[ng + g] >= b:
+                _set_lo(g, b - 1, memb, mw, fsorted, jn, cand, ctr)
     want = 0 if rising else 1
     tail = 0
     for g in range(ng):  # the passed entries that are unstable members start avalanches
         lo, hi = (old[g], bound[g]) if rising else (bound[g], old[g])
         for p in range(lo, hi):
             if memb[p] == 2 * g + want:
-                tail = _avalanche(order[p], rising, recs, memb, bound, nxt, lat, offsets, adj,
-                                  bits, queue, tail, buf)  # fmt: skip
+                tail = _avalanche(
+                    order[p], rising, recs, memb, mw, fsorted, jn, bound, nxt, cand, ctr, lat,
+                    offsets, adj, bits, queue, tail, buf,
+                )  # fmt: skip
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
     st[S_MV] = (2 * n_up - n) / n  # the operator's own formula: the same float
     st[S_U] = u
-    # the trigger in this direction: the merge from the boundaries
-    fwd = _scan(rising, np.inf if rising else -np.inf, -1, -1, memb, fsorted, order, jn, bound,
-                heads, pos)[0]  # fmt: skip
-    # the trigger against it: a passed entry at the trigger still a member (flipped: it is on
-    # the new side of u), else the flipped spins and the kept spin, else a bounded merge
-    flipped = 1 if rising else 0
-    back = np.nan
-    for g in range(ng):
-        jg = jn[g]
-        if rising:
-            p = bound[g] - 1
-            while p >= old[g] and -(fsorted[p] + jg) == trig:
-                if memb[p] == 2 * g + flipped:
-                    back = trig
-                    cache[1] = order[p]
-                    cache[2] = g
-                    break
-                p -= 1
-        else:
-            p = bound[g]
-            while p < old[g] and -(fsorted[p] + jg) == trig:
-                if memb[p] == 2 * g + flipped:
-                    back = trig
-                    cache[1] = order[p]
-                    cache[2] = g
-                    break
-                p += 1
-        if back == trig:
-            break
-    if back != trig:
-        best = -np.inf if rising else np.inf
-        spin = -1
-        lst = -1
-        for q in range(tail):
-            i = queue[q]
-            r = recs[i]
-            g = (r >> LIST) & _GMASK
-            t = -(fsorted[r & _RANK] + jn[g])
-            if (t > best) if rising else (t < best):
-                best = t
-                spin = i
-                lst = g
-        c = cache[1]
-        if cache[0] == direction and ((recs[c] >> LIST) & _GMASK) == cache[2]:
-            if (cachef[0] > best) if rising else (cachef[0] < best):
-                best = cachef[0]
-                spin = c
-                lst = cache[2]
-        else:
-            best, spin, lst = _scan(not rising, best, spin, lst, memb, fsorted, order, jn, bound,
-                                    heads, pos)  # fmt: skip
-        back = best
-        cache[1] = spin
-        cache[2] = lst
-    cache[0] = direction if cache[1] >= 0 else 0
-    cachef[0] = back
-    if rising:
-        st[S_UP], st[S_DN] = fwd, back
-    else:
-        st[S_UP], st[S_DN] = back, fwd
+    st[S_UP], st[S_DN] = _triggers(ctr, ng)
     return st[S_MV] - m_old, tail
 
 
 @njit(cache=True)
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
-    (recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
-     old, heads, pos, cache, cachef) = plan  # fmt: skip
+    (recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
+     old, cand, ctr) = plan  # fmt: skip
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
-        direction, st, ist, recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, bits, queue,
-        bound, old, heads, pos, cache, cachef, buf,
+        direction, st, ist, recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, bits,
+        queue, bound, old, cand, ctr, buf,
     )  # fmt: skip
 
 
@@ -370,8 +419,8 @@ def _advance(
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
-    (recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
-     old, heads, pos, cache, cachef) = plan  # fmt: skip
+    (recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
+     old, cand, ctr) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
     nsw = ist[I_NSW]
@@ -391,8 +440,8 @@ def _advance(
         if direction == 0:
             break
         jump, flips = _event(
-            direction, st, ist, recs, memb, fsorted, order, jn, nxt, lat, offsets, adj, bits,
-            queue, bound, old, heads, pos, cache, cachef, buf,
+            direction, st, ist, recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj,
+            bits, queue, bound, old, cand, ctr, buf,
         )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
         nsw += flips  # n_events counts spin flips
@@ -422,7 +471,7 @@ def run_spins(
     gets (q, v, M) at target i. Returns (status, next target index)."""
     e = np.empty(ORDER + 1)
     coefs = hop_coefficients(mp)
-    buf = np.empty(max(plan[9], 1), np.int64)
+    buf = np.empty(max(plan[10], 1), np.int64)
     sample = out.shape[0] > 0
     for i in range(i_start, tgt_n.shape[0]):
         while ist[I_N] < tgt_n[i]:

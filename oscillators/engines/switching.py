@@ -89,9 +89,13 @@ class SwitchingKernelEngine(RelayKernelEngine):
         recs = np.empty(n, dtype=np.int64)
         recs[spec.order] = np.arange(n, dtype=np.int64)
         recs |= sk.boundary_flags(spec.lattice, n) << sk.FACES
-        # the same in rank order, one small word per entry of the lists: 2·list + up
-        memb = np.empty(n, dtype=np.uint8 if 2 * nvals.size <= 256 else np.uint16)
+        # the lists in rank order, one byte per entry (two past 127 lists): 2·list + up, padded
+        # with 0xFF to whole 8-byte words (the kernels search 8 entries at a time)
+        small = 2 * nvals.size <= 254
+        words = (n + 7) // 8 + 1
+        memb = np.full(8 * words if small else n, 0xFF, dtype=np.uint8 if small else np.uint16)
         sk.records(recs, memb, bits, nup, gidx, spec.lattice, spec.offsets, deg)
+        mw = memb.view(np.uint64) if small else np.empty(0, dtype=np.uint64)
         del nup
         fs, j = spec.sorted_fields, float(spec.spin_coupling)
         jn = j * nvals  # J·n rounded once, here: the kernels add it (no fused multiply-add)
@@ -99,10 +103,13 @@ class SwitchingKernelEngine(RelayKernelEngine):
         bound = np.array([np.searchsorted(-(fs + x), u0, side="right") for x in jn.tolist()],
                          dtype=np.int64)  # fmt: skip
         ng = nvals.size
+        cand = np.empty(2 * ng, dtype=np.int64)
+        ctr = np.empty(2 * ng)
+        sk.candidates(memb, mw, fs, jn, bound, cand, ctr)
         self._plan = (
-            recs, memb, fs, spec.order, jn, nxt, spec.lattice, spec.offsets, spec.adjacency, deg, bits,
-            np.empty(max(n, 1), dtype=np.int32), bound, np.empty(ng, dtype=np.int64),
-            np.empty(ng), np.empty(ng, dtype=np.int64), np.zeros(3, dtype=np.int64), np.zeros(1),
+            recs, memb, mw, fs, spec.order, jn, nxt, spec.lattice, spec.offsets, spec.adjacency,
+            deg, bits, np.empty(max(n, 1), dtype=np.int32), bound, np.empty(ng, dtype=np.int64),
+            cand, ctr,
         )  # fmt: skip
         self._n_relays = n  # the switch budget scales with the spins
         self._mp = rk.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
@@ -118,7 +125,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
         st[rk.S_MV] = (2 * n_up - n) / n
         ist = np.zeros(rk.N_IST, dtype=np.int64)
         ist[sk.I_NUP] = n_up
-        sk.refresh(st, *(self._plan[k] for k in (1, 2, 3, 4, 12, 14, 15, 16)))
+        sk.refresh(st, ctr, ng)
         self._st, self._ist = st, ist
         self._start_on_sliding_set(q0, v0)
 
@@ -130,7 +137,10 @@ class SwitchingKernelEngine(RelayKernelEngine):
         """(output, next up, next down trigger) after the event at the current trigger in
         ``direction``, on a copy of the plan (O(N): only where a start sits on a trigger)."""
         st, ist = self._st.copy(), self._ist.copy()
-        plan = tuple(a.copy() if isinstance(a, np.ndarray) else a for a in self._plan)
+        plan = [a.copy() if isinstance(a, np.ndarray) else a for a in self._plan]
+        if plan[2].size:
+            plan[2] = plan[1].view(np.uint64)  # the membership words: a view of the bytes
+        plan = tuple(plan)
         sk.switch(direction, st, ist, plan)
         return float(st[rk.S_MV]), float(st[rk.S_UP]), float(st[rk.S_DN])
 
