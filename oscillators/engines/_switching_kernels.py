@@ -65,6 +65,7 @@ from numba import njit
 from hysteresis._rfim_kernels import _flip
 from oscillators.engines._relay_kernels import (
     _CONTRACT,
+    _LOOP_OPTIONS,
     I_MAXSW,
     I_N,
     I_NSW,
@@ -308,10 +309,23 @@ def _avalanche(
     queue[tail] = i
     head = tail
     tail += 1
+    nd = lat[0]
+    s0, s1, s2 = lat[4], lat[5], lat[6]  # a lattice's strides and wrap-arounds, in registers
+    w0, w1, w2 = (lat[1] - 1) * s0, (lat[2] - 1) * s1, (lat[3] - 1) * s2
     while head < tail:
         j = queue[head]
         head += 1
-        deg = _neighbours(j, recs[j], lat, offsets, adj, buf)
+        if nd == 3:
+            fl = recs[j] >> FACES
+            buf[0] = j - w0 if fl & 2 else j + s0
+            buf[1] = j + w0 if fl & 1 else j - s0
+            buf[2] = j - w1 if fl & 8 else j + s1
+            buf[3] = j + w1 if fl & 4 else j - s1
+            buf[4] = j - w2 if fl & 32 else j + s2
+            buf[5] = j + w2 if fl & 16 else j - s2
+            deg = 6
+        else:
+            deg = _neighbours(j, recs[j], lat, offsets, adj, buf)
         for k in range(deg):
             m = buf[k]
             r = recs[m]
@@ -413,7 +427,7 @@ def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     )  # fmt: skip
 
 
-@njit(cache=True, fastmath=_CONTRACT)
+@njit(cache=True, fastmath=_CONTRACT, **_LOOP_OPTIONS)
 def _advance(
     par, st, ist, tau_stop, tan_on, y, ntan, e, coefs, mp, rec_on, sw, sw_count, plan, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
