@@ -92,13 +92,13 @@ from oscillators.engines._relay_kernels import (
 )
 
 __all__ = [
-    "FACES",
     "I_NUP",
-    "LIST",
+    "LARGE_SHIFT",
     "MAX_LISTS",
     "PL_BITS",
     "S_U",
-    "UP",
+    "record_layout",
+    "SMALL_SHIFT",
     "boundary_flags",
     "records",
     "refresh",
@@ -111,51 +111,59 @@ S_U = S_M
 I_NUP = I_UP
 #: the plan tuple: (recs, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue,
 #: bound, old, heads, pos, cache, cachef); ``bits`` (the spins) at ``PL_BITS``
-PL_BITS = 11
+PL_BITS = 13
 
-#: a spin's record (int64): bits 0–31 its rank, 32–37 on a lattice its faces (bit ``2a`` at
-#: coordinate 0 of axis ``a``, ``2a + 1`` at ``L_a − 1``), 40–52 its list, bit 56 up
-_RANK = 0xFFFFFFFF
-FACES = 32
-LIST = 40
-_GMASK = 0x1FFF
-UP = 1 << 56
+#: a spin's record: bit 0 up, bits 1 to ``shift − 1`` its list, the rest its rank (uint32 with
+#: ``shift`` 5 for up to 16 lists and 2²⁷ spins, else int64 with ``shift`` 14); the low
+#: ``shift`` bits are its membership word ``2·list + up``
+SMALL_SHIFT = 5
+LARGE_SHIFT = 14
 #: the most lists (neighbour-sum values) a list index in 13 bits allows
-MAX_LISTS = _GMASK + 1
+MAX_LISTS = 1 << (LARGE_SHIFT - 1)
 
 
 def boundary_flags(lat: np.ndarray, n: int) -> np.ndarray:
-    """The face flags (record bits 32–37) of the ``n`` sites of lattice ``lat``."""
-    flags = np.zeros(n, dtype=np.int64)
-    site = np.arange(n, dtype=np.int64)
+    """The faces the ``n`` sites of lattice ``lat`` lie on (uint8: bit ``2a`` at coordinate 0
+    of axis ``a``, ``2a + 1`` at ``L_a − 1``; empty for a graph), so that a site's neighbours
+    need no division."""
+    flags = np.zeros(n if lat[0] > 0 else 0, dtype=np.uint8)
+    site = np.arange(flags.size, dtype=np.int64)
     for a in range(int(lat[0])):
         length, stride = int(lat[1 + a]), int(lat[4 + a])
         c = (site // stride) % length
-        flags |= (c == 0).astype(np.int64) << (2 * a)
-        flags |= (c == length - 1).astype(np.int64) << (2 * a + 1)
+        flags |= (c == 0).astype(np.uint8) << (2 * a)
+        flags |= (c == length - 1).astype(np.uint8) << (2 * a + 1)
     return flags
 
 
+def record_layout(n: int, lists: int) -> tuple[type, int]:
+    """(dtype, shift) of the spins' records: uint32 when ``lists`` and ``n`` fit, else int64."""
+    if lists <= 1 << (SMALL_SHIFT - 1) and n <= 1 << (32 - SMALL_SHIFT):
+        return np.uint32, SMALL_SHIFT
+    return np.int64, LARGE_SHIFT
+
+
 @njit(cache=True)
-def records(recs, memb, bits, nup, gidx, lat, offsets, max_degree):  # pragma: no cover
-    """Or the list (the neighbour sum ``2·nup − degree``) and the up bit of every spin into its
-    record (rank and faces already there)."""
+def records(recs, shift, rank, memb, bits, nup, gidx, lat, offsets, max_degree):
+    # pragma: no cover - compiled
+    """Every spin's record (rank ``rank[i]``, the list of its neighbour sum ``2·nup − degree``,
+    up) and membership word."""
     for i in range(recs.size):
         deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
         g = gidx[2 * nup[i] - deg + max_degree]
         up = (bits[i >> 3] >> (i & 7)) & 1
-        recs[i] |= (g << LIST) | (up << 56)
-        memb[recs[i] & _RANK] = 2 * g + up
+        recs[i] = (rank[i] << shift) | (2 * g + up)
+        memb[rank[i]] = 2 * g + up
 
 
 @njit(cache=True, inline="always")
-def _neighbours(i, rec, lat, offsets, adj, buf):  # pragma: no cover - compiled
-    """Write the neighbours of ``i`` (record ``rec``) into ``buf`` (the order of
+def _neighbours(i, faces, lat, offsets, adj, buf):  # pragma: no cover - compiled
+    """Write the neighbours of ``i`` into ``buf`` (the order of
     :func:`hysteresis._rfim_kernels._neighbours`; on a lattice from the face flags, no
     division); returns their number."""
     nd = lat[0]
     if nd > 0:
-        flags = rec >> FACES
+        flags = faces[i]
         k = 0
         for a in range(nd):
             stride = lat[4 + a]
@@ -292,19 +300,20 @@ def refresh(st, ctr, ng):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _avalanche(
-    i, rising, recs, memb, mw, fsorted, jn, bound, nxt, cand, ctr, lat, offsets, adj, bits,
-    queue, tail, buf,
+    i, rising, recs, shift, memb, mw, fsorted, jn, bound, nxt, cand, ctr, faces, lat, offsets,
+    adj, bits, queue, tail, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at the input the
     boundaries ``bound`` hold (breadth first, each at most once; appended to the queue from
     ``tail``), keeping every spin's list (its neighbour sum) in its record and membership
     byte and the lists' candidates; returns the new tail (flips = new tail − tail)."""
     ng = jn.size
-    want = 0 if rising else UP  # the spins that may follow: down ones rising, up ones falling
+    want = 0 if rising else 1  # the spins that may follow: down ones rising, up ones falling
     row = 0 if rising else 1  # nxt[row, g]: the list after a neighbour's flip
-    r = recs[i] ^ UP
+    low = (1 << shift) - 1
+    r = recs[i] ^ 1
     recs[i] = r
-    memb[r & _RANK] ^= 1
+    memb[r >> shift] ^= 1
     _flip(bits, i)
     queue[tail] = i
     head = tail
@@ -316,7 +325,7 @@ def _avalanche(
         j = queue[head]
         head += 1
         if nd == 3:
-            fl = recs[j] >> FACES
+            fl = faces[j]
             buf[0] = j - w0 if fl & 2 else j + s0
             buf[1] = j + w0 if fl & 1 else j - s0
             buf[2] = j - w1 if fl & 8 else j + s1
@@ -325,22 +334,22 @@ def _avalanche(
             buf[5] = j + w2 if fl & 16 else j - s2
             deg = 6
         else:
-            deg = _neighbours(j, recs[j], lat, offsets, adj, buf)
+            deg = _neighbours(j, faces, lat, offsets, adj, buf)
         for k in range(deg):
             m = buf[k]
             r = recs[m]
-            g = (r >> LIST) & _GMASK
+            g = (r & low) >> 1
             g2 = nxt[row, g]
-            r += (g2 - g) << LIST
-            rank = r & _RANK
+            r += (g2 - g) << 1
+            rank = r >> shift
             below = rank < bound[g2]
-            if (r & UP) == want and below == rising:
-                r ^= UP
+            if (r & 1) == want and below == rising:
+                r ^= 1
                 _flip(bits, m)
                 queue[tail] = m
                 tail += 1
             recs[m] = r
-            memb[rank] = 2 * g2 + (r >> 56)
+            memb[rank] = r & low
             # the candidates: the spin leaves list g (one of its candidates: the next member
             # replaces it) and joins list g2 (between its candidates: it becomes one)
             if cand[g] == rank:
@@ -359,8 +368,8 @@ def _avalanche(
 
 @njit(cache=True, inline="always")
 def _event(
-    direction, st, ist, recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, bits, queue,
-    bound, old, cand, ctr, buf,
+    direction, st, ist, recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets, adj,
+    bits, queue, bound, old, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
@@ -403,8 +412,8 @@ def _event(
         for p in range(lo, hi):
             if memb[p] == 2 * g + want:
                 tail = _avalanche(
-                    order[p], rising, recs, memb, mw, fsorted, jn, bound, nxt, cand, ctr, lat,
-                    offsets, adj, bits, queue, tail, buf,
+                    order[p], rising, recs, shift, memb, mw, fsorted, jn, bound, nxt, cand, ctr,
+                    faces, lat, offsets, adj, bits, queue, tail, buf,
                 )  # fmt: skip
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
@@ -418,12 +427,12 @@ def _event(
 @njit(cache=True)
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
-    (recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
-     old, cand, ctr) = plan  # fmt: skip
+    (recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
+     queue, bound, old, cand, ctr) = plan  # fmt: skip
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
-        direction, st, ist, recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, bits,
-        queue, bound, old, cand, ctr, buf,
+        direction, st, ist, recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets,
+        adj, bits, queue, bound, old, cand, ctr, buf,
     )  # fmt: skip
 
 
@@ -433,8 +442,8 @@ def _advance(
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
-    (recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue, bound,
-     old, cand, ctr) = plan  # fmt: skip
+    (recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
+     queue, bound, old, cand, ctr) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
     nsw = ist[I_NSW]
@@ -454,8 +463,8 @@ def _advance(
         if direction == 0:
             break
         jump, flips = _event(
-            direction, st, ist, recs, memb, mw, fsorted, order, jn, nxt, lat, offsets, adj,
-            bits, queue, bound, old, cand, ctr, buf,
+            direction, st, ist, recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat,
+            offsets, adj, bits, queue, bound, old, cand, ctr, buf,
         )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
         nsw += flips  # n_events counts spin flips
@@ -485,7 +494,7 @@ def run_spins(
     gets (q, v, M) at target i. Returns (status, next target index)."""
     e = np.empty(ORDER + 1)
     coefs = hop_coefficients(mp)
-    buf = np.empty(max(plan[10], 1), np.int64)
+    buf = np.empty(max(plan[12], 1), np.int64)
     sample = out.shape[0] > 0
     for i in range(i_start, tgt_n.shape[0]):
         while ist[I_N] < tgt_n[i]:

@@ -85,16 +85,20 @@ class SwitchingKernelEngine(RelayKernelEngine):
         bits = np.array(bits, dtype=np.uint8)
         nup = np.zeros(n, dtype=np.uint8 if deg < 256 else np.int32)
         count_up_neighbours(bits, spec.lattice, spec.offsets, spec.adjacency, deg, nup)
-        # one 8-byte record per spin in site order: rank, faces, list, up (kernel docstring)
-        recs = np.empty(n, dtype=np.int64)
-        recs[spec.order] = np.arange(n, dtype=np.int64)
-        recs |= sk.boundary_flags(spec.lattice, n) << sk.FACES
+        # one record per spin in site order: rank, list, up (kernel docstring; 4 bytes on a
+        # lattice), and on a lattice its faces
+        dtype, shift = sk.record_layout(n, nvals.size)
+        recs = np.empty(n, dtype=dtype)
+        rank = np.empty(n, dtype=np.int64)
+        rank[spec.order] = np.arange(n, dtype=np.int64)
+        faces = sk.boundary_flags(spec.lattice, n)
         # the lists in rank order, one byte per entry (two past 127 lists): 2·list + up, padded
         # with 0xFF to whole 8-byte words (the kernels search 8 entries at a time)
         small = 2 * nvals.size <= 254
         words = (n + 7) // 8 + 1
         memb = np.full(8 * words if small else n, 0xFF, dtype=np.uint8 if small else np.uint16)
-        sk.records(recs, memb, bits, nup, gidx, spec.lattice, spec.offsets, deg)
+        sk.records(recs, shift, rank, memb, bits, nup, gidx, spec.lattice, spec.offsets, deg)
+        del rank
         mw = memb.view(np.uint64) if small else np.empty(0, dtype=np.uint64)
         del nup
         fs, j = spec.sorted_fields, float(spec.spin_coupling)
@@ -107,8 +111,8 @@ class SwitchingKernelEngine(RelayKernelEngine):
         ctr = np.empty(2 * ng)
         sk.candidates(memb, mw, fs, jn, bound, cand, ctr)
         self._plan = (
-            recs, memb, mw, fs, spec.order, jn, nxt, spec.lattice, spec.offsets, spec.adjacency,
-            deg, bits, np.empty(max(n, 1), dtype=np.int32), bound, np.empty(ng, dtype=np.int64),
+            recs, shift, memb, mw, fs, spec.order, jn, nxt, faces, spec.lattice, spec.offsets,
+            spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), bound, np.empty(ng, dtype=np.int64),
             cand, ctr,
         )  # fmt: skip
         self._n_relays = n  # the switch budget scales with the spins
@@ -138,8 +142,8 @@ class SwitchingKernelEngine(RelayKernelEngine):
         ``direction``, on a copy of the plan (O(N): only where a start sits on a trigger)."""
         st, ist = self._st.copy(), self._ist.copy()
         plan = [a.copy() if isinstance(a, np.ndarray) else a for a in self._plan]
-        if plan[2].size:
-            plan[2] = plan[1].view(np.uint64)  # the membership words: a view of the bytes
+        if plan[3].size:
+            plan[3] = plan[2].view(np.uint64)  # the membership words: a view of the bytes
         plan = tuple(plan)
         sk.switch(direction, st, ist, plan)
         return float(st[rk.S_MV]), float(st[rk.S_UP]), float(st[rk.S_DN])
