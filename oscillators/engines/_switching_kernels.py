@@ -12,45 +12,45 @@ The plan (spins ``s_i``, local field ``h_i = u + (f_i + J·n_i)``, threshold
 ``t_i(n) = −(f_i + J·n)``; up iff ``u >= t_i(n_i)`` in a state relaxed at ``u``). Kuntz,
 Perković and Sethna's sorted lists: list ``g`` holds the thresholds ``t_g(p) =
 −(fsorted[p] + J·n_g)`` in the order ``p`` of the fields descending, so ``t_g`` is
-non-decreasing along every list, and spin ``i`` sits at position ``rank[i]`` of every list; it
-is a *member* of the list of its current neighbour sum. Per list one boundary ``B[g]`` = the
-number of entries with ``t <= u`` (found by comparing thresholds: exact). Then a member of
-list ``g`` at ``p < B[g]`` is up, one at ``p >= B[g]`` down (that is what relaxed means), and
-a threshold test is an integer comparison: a spin whose sum becomes ``n_g`` is unstable at
-``u`` iff ``rank < B[g]`` (it is down) or ``rank >= B[g]`` (it is up) — the same decision as
-``u + (f + J·n) >= 0`` (a rounded sum has the sign of the exact one, and ``J·n`` is rounded
-once, outside, as ``jn[g]``, so no fused multiply-add moves a threshold) because ``t_g`` is
-monotone in ``p``. No spin is ever moved between lists: its membership is its sum, kept in
-its record.
+non-decreasing along every list; spin ``i`` sits at position ``rank[i]`` of every list and is a
+*member* of the list of its current neighbour sum. Three things are kept:
 
-An event at the up trigger ``T`` relaxes at ``u = T`` (falling: at the largest float below
-``T``, the relay convention ``u < β``): every ``B[g]`` moves over the entries it passes (a
-sequential read of the sorted fields), then every passed entry that is a down member starts
-an avalanche (breadth first, each spin at most once, the flip test above; ferromagnetic ``J``
-makes the final state independent of the order: it is the state
-:meth:`hysteresis.rfim.RandomFieldIsing.apply` reaches at that input). Then the two triggers:
+* per list a boundary ``B[g]``, the number of its entries with ``t <= u`` (found by comparing
+  thresholds, so exact). A member at ``p < B[g]`` is up, one at ``p >= B[g]`` down (that is
+  what relaxed means), and the flip test of a spin whose sum becomes ``n_g`` is an integer
+  comparison, ``rank < B[g]`` — the same decision as ``u + (f + J·n) >= 0`` because ``t_g`` is
+  monotone in ``p`` (a rounded sum has the sign of the exact one, and ``J·n`` is rounded once,
+  outside, as ``jn[g]``, so no fused multiply-add moves a threshold);
+* the lists themselves as one *membership word* per position, ``memb[p] = 2·list + up`` of
+  the spin at ``p`` (one byte up to 127 lists), so that moving a spin between lists is one
+  store, and the next member of a list is found 8 positions at a time (a zero-byte test on
+  64-bit words);
+* per list two *candidates*: ``hi[g]``, its first member at or after ``B[g]``, and
+  ``lo[g]``, its last member before, with their thresholds, so that::
 
-* in the event's direction (rising: the least threshold of a down spin) by a merge of the
-  lists from their boundaries, the head with the least threshold first, non-members skipped;
-  the skipped entries lie below the trigger, so the next event passes them: every entry is
-  read O(1) times per monotone stretch (Kuntz–Perković–Sethna);
-* against it (rising: the greatest threshold of an up spin, ``<= u``): ``T`` itself if a
-  passed entry at threshold ``T`` is still a member in the new state (the usual case: an
-  avalanche's trigger spin whose sum did not change); else the greatest current threshold of
-  the spins just flipped and of the spin that held this trigger after the previous event in
-  this direction (kept with its list: valid while it is still a member, since during a rising
-  stretch sums only grow and up spins' thresholds only fall); only if that spin has left its
-  list, a merge of the lists downwards from their boundaries, bounded by the flipped spins'
-  greatest threshold. Falling events are the mirror image.
+    next up trigger   = min_g t_g(hi[g])        next down trigger = max_g t_g(lo[g])
 
-The cost of an event is O(z·flips) for the avalanches plus the entries the merges read:
-nothing is relisted, no bitset kept.
+An event at the up trigger ``t*`` relaxes at ``u = t*`` (falling: at the largest float below
+``t*``, the relay convention ``u < β``): every ``B[g]`` moves over the entries it passes (a
+sequential read of the sorted fields; the candidates follow: the last member passed is the new
+``lo``, ``hi`` is searched from ``B[g]`` if it was passed), then every passed entry that is an
+unstable member starts an avalanche (breadth first, each spin at most once, the flip test
+above). Every flip changes its neighbours' sums by ``±2``: each neighbour's record and
+membership word change, a candidate it was is replaced by the next member (a search), and if
+its position lies between the candidates of its new list it becomes one (``lo`` below ``B``,
+``hi`` above). Spins whose triggers coincide exactly flip in the same event, and
+ferromagnetic ``J`` makes the final state independent of the order — it is the state
+:meth:`hysteresis.rfim.RandomFieldIsing.apply` reaches at that input. The cost of an event is
+O(G + entries passed + z·flips) plus a search per replaced candidate; no spin is relisted in a
+bitset.
 
-Layout: per spin one 8-byte record in site order (bits 0–31 ``rank``, 32–37 on a lattice the
-faces the site lies on, so its neighbours need no division, 40–52 its list, bit 56 up), so an
-avalanche reads and writes one word per neighbour and 10⁶ spins take 8 MB; the sorted fields
-and ``order`` are the operator's own arrays, read along the lists. The spins are also kept as
-the packed bits the operator's states hold.
+Layout: per spin one record in site order, ``rank << shift | 2·list | up`` (uint32 on a lattice,
+``shift`` 5: 4 MB for 10⁶ spins; int64 for more than 16 lists or 2²⁷ spins) and on a lattice a
+byte of the faces the site lies on (so that its neighbours need no division); the membership
+words in rank order (1 byte per spin); the sorted fields and ``order`` are the operator's own
+arrays, read along the lists. The spins are also kept as the packed bits the operator's states
+hold. The event loop is compiled without reference counting where numba allows it (the relay
+kernel's ``_LOOP_OPTIONS``).
 
 State slots: the relay kernel's float/int state layouts (``st``, ``ist``) with ``S_U`` (the
 input the spins are relaxed at) and ``I_NUP`` (up spins) in slots the relay tables use for

@@ -3,11 +3,12 @@
 An operator without a relay table whose ``compiled_switching()`` hands over interacting Ising
 spins (:class:`hysteresis.compiled_spins.CompiledSpins`: a random-field Ising lattice) is
 integrated here: between events the relay kernel's closed-form hops, the next trigger input
-in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`,
-every list's two candidates kept up to date: O(G + z·flips) per event, no search per list, no
-trial run), each avalanche one jump ``C·ΔM`` at its trigger input with the saltation
-``δv += C·ΔM/v*·δq``, ``n_events`` counting spin flips. Filippov sliding, the switch budget,
-grazing, the tangent flow and the records are the relay kernel engine's
+in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`:
+per list a boundary at the current input and two candidates kept up to date over one
+membership byte per spin; O(G + entries passed + z·flips) per event, no trial run), each
+avalanche one jump ``C·ΔM`` at its trigger input with the saltation ``δv += C·ΔM/v*·δq``,
+``n_events`` counting spin flips. Filippov sliding, the switch budget, grazing, the tangent
+flow and the records are the relay kernel engine's
 (:class:`~oscillators.engines.relay.RelayKernelEngine`, whose Python side this class reuses).
 
 Methods (``engine_options={"method": ...}``): ``"auto"`` (this engine) or ``"generic"`` (the
@@ -112,8 +113,8 @@ class SwitchingKernelEngine(RelayKernelEngine):
         sk.candidates(memb, mw, fs, jn, bound, cand, ctr)
         self._plan = (
             recs, shift, memb, mw, fs, spec.order, jn, nxt, faces, spec.lattice, spec.offsets,
-            spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), bound, np.empty(ng, dtype=np.int64),
-            cand, ctr,
+            spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), bound,
+            np.empty(ng, dtype=np.int64), cand, ctr,
         )  # fmt: skip
         self._n_relays = n  # the switch budget scales with the spins
         self._mp = rk.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
