@@ -367,6 +367,47 @@ def _avalanche(
 
 
 @njit(cache=True, inline="always")
+def _boundary(fsorted, jg, b, u, rising):  # pragma: no cover - compiled
+    """The boundary of the list with ``J·n = jg`` at ``u`` (the number of its entries with
+    ``−(fsorted[p] + jg) <= u``) from the boundary ``b`` at an input below ``u`` (``rising``)
+    or above: galloping from ``b``, then bisection — O(log d) for d entries passed, and the
+    same count as a walk, the thresholds being monotone along the list."""
+    n = fsorted.size
+    if rising:
+        if b >= n or -(fsorted[b] + jg) > u:
+            return b
+        lo = b  # t(lo) <= u
+        step = 1
+        hi = n
+        while lo + step < n:
+            if -(fsorted[lo + step] + jg) > u:
+                hi = lo + step
+                break
+            lo += step
+            step *= 2
+        lo += 1  # the first entry with t > u lies in [lo, hi]
+    else:
+        if b == 0 or -(fsorted[b - 1] + jg) <= u:
+            return b
+        hi = b - 1  # t(hi) > u
+        step = 1
+        lo = 0
+        while hi - step >= 0:
+            if -(fsorted[hi - step] + jg) <= u:
+                lo = hi - step + 1
+                break
+            hi -= step
+            step *= 2
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if -(fsorted[mid] + jg) <= u:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, inline="always")
 def _event(
     direction, st, ist, recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets, adj,
     bits, queue, bound, old, cand, ctr, buf,
@@ -381,12 +422,7 @@ def _event(
         jg = jn[g]
         b = bound[g]
         old[g] = b
-        if rising:
-            while b < n and -(fsorted[b] + jg) <= u:
-                b += 1
-        else:
-            while b > 0 and -(fsorted[b - 1] + jg) > u:
-                b -= 1
+        b = _boundary(fsorted, jg, b, u, rising)
         if b == old[g]:
             continue
         bound[g] = b
@@ -407,14 +443,16 @@ def _event(
                 _set_lo(g, b - 1, memb, mw, fsorted, jn, cand, ctr)
     want = 0 if rising else 1
     tail = 0
-    for g in range(ng):  # the passed entries that are unstable members start avalanches
+    for g in range(ng):  # the passed members that are unstable start avalanches
         lo, hi = (old[g], bound[g]) if rising else (bound[g], old[g])
-        for p in range(lo, hi):
+        p = _next_member(memb, mw, g, lo, hi)
+        while p < hi:
             if memb[p] == 2 * g + want:
                 tail = _avalanche(
                     order[p], rising, recs, shift, memb, mw, fsorted, jn, bound, nxt, cand, ctr,
                     faces, lat, offsets, adj, bits, queue, tail, buf,
                 )  # fmt: skip
+            p = _next_member(memb, mw, g, p + 1, hi)
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
