@@ -111,7 +111,7 @@ S_U = S_M
 I_NUP = I_UP
 #: the plan tuple: (recs, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue,
 #: bound, old, heads, pos, cache, cachef); ``bits`` (the spins) at ``PL_BITS``
-PL_BITS = 13
+PL_BITS = 14
 
 #: a spin's record: bit 0 up, bits 1 to ``shift − 1`` its list, the rest its rank (uint32 with
 #: ``shift`` 5 for up to 16 lists and 2²⁷ spins, else int64 with ``shift`` 14); the low
@@ -144,16 +144,19 @@ def record_layout(n: int, lists: int) -> tuple[type, int]:
 
 
 @njit(cache=True)
-def records(recs, shift, rank, memb, bits, nup, gidx, lat, offsets, max_degree):
+def records(recs, shift, rank, memb, cnt, bits, nup, gidx, lat, offsets, max_degree):
     # pragma: no cover - compiled
     """Every spin's record (rank ``rank[i]``, the list of its neighbour sum ``2·nup − degree``,
-    up) and membership word."""
+    up), membership word and, with ``cnt`` (lists × blocks of 64 positions), its block's
+    count of members of its list."""
     for i in range(recs.size):
         deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
         g = gidx[2 * nup[i] - deg + max_degree]
         up = (bits[i >> 3] >> (i & 7)) & 1
         recs[i] = (rank[i] << shift) | (2 * g + up)
         memb[rank[i]] = 2 * g + up
+        if cnt.size:
+            cnt[g, rank[i] >> 6] += 1
 
 
 @njit(cache=True, inline="always")
@@ -209,28 +212,37 @@ def _members(word, g):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _next_member(memb, mw, g, p, n):  # pragma: no cover - compiled
-    """The first position ``>= p`` and ``< n`` of a member of list ``g`` (``n``: none)."""
+def _next_member(memb, mw, cnt, g, p, n):  # pragma: no cover - compiled
+    """The first position ``>= p`` and ``< n`` of a member of list ``g`` (``n``: none): the
+    rest of ``p``'s block 8 entries at a time, the blocks without a member of ``g`` skipped by
+    their counts, then the first block with one."""
     if p >= n:
         return n
     if mw.size == 0:  # two-byte membership words: one at a time
         while p < n and memb[p] >> 1 != g:
             p += 1
         return p
+    last = (n - 1) >> 3
     w = p >> 3
     z = _members(mw[w], g) & (_ALL << np.uint64(8 * (p & 7)))
-    last = (n - 1) >> 3
     while z == _U0:
         if w >= last:
             return n
         w += 1
+        if w & 7 == 0:  # a new block: skip the blocks without a member
+            blk = w >> 3
+            while cnt[g, blk] == 0:
+                blk += 1
+                if 8 * blk > last:
+                    return n
+            w = 8 * blk
         z = _members(mw[w], g)
     q = 8 * w + (_ctz(z) >> 3)
     return q if q < n else n
 
 
 @njit(cache=True, inline="always")
-def _prev_member(memb, mw, g, p, stop):  # pragma: no cover - compiled
+def _prev_member(memb, mw, cnt, g, p, stop):  # pragma: no cover - compiled
     """The last position ``<= p`` and ``>= stop >= 0`` of a member of list ``g`` (``-1``:
     none)."""
     if p < stop:
@@ -246,37 +258,44 @@ def _prev_member(memb, mw, g, p, stop):  # pragma: no cover - compiled
         if w <= first:
             return -1
         w -= 1
+        if w & 7 == 7:  # a new block (from its end): skip the blocks without a member
+            blk = w >> 3
+            while cnt[g, blk] == 0:
+                if 8 * blk <= first:
+                    return -1
+                blk -= 1
+            w = min(w, 8 * blk + 7)
         z = _members(mw[w], g)
     q = 8 * w + (_msb(z) >> 3)
     return q if q >= stop else -1
 
 
 @njit(cache=True, inline="always")
-def _set_hi(g, p, memb, mw, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
+def _set_hi(g, p, memb, mw, cnt, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
     """``hi[g] = cand[g]`` := the first member of list ``g`` at or after ``p`` (``N``: none),
     its threshold into ``ctr[g]`` (``+inf``: none)."""
     n = fsorted.size
-    r = _next_member(memb, mw, g, p, n)
+    r = _next_member(memb, mw, cnt, g, p, n)
     cand[g] = r
     ctr[g] = -(fsorted[r] + jn[g]) if r < n else np.inf
 
 
 @njit(cache=True, inline="always")
-def _set_lo(g, p, memb, mw, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
+def _set_lo(g, p, memb, mw, cnt, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
     """``lo[g] = cand[G + g]`` := the last member of list ``g`` at or before ``p`` (``-1``:
     none), its threshold into ``ctr[G + g]`` (``-inf``: none)."""
     ng = jn.size
-    r = _prev_member(memb, mw, g, p, 0)
+    r = _prev_member(memb, mw, cnt, g, p, 0)
     cand[ng + g] = r
     ctr[ng + g] = -(fsorted[r] + jn[g]) if r >= 0 else -np.inf
 
 
 @njit(cache=True)
-def candidates(memb, mw, fsorted, jn, bound, cand, ctr):  # pragma: no cover - compiled
+def candidates(memb, mw, cnt, fsorted, jn, bound, cand, ctr):  # pragma: no cover - compiled
     """Every list's candidates from its boundary."""
     for g in range(jn.size):
-        _set_hi(g, bound[g], memb, mw, fsorted, jn, cand, ctr)
-        _set_lo(g, bound[g] - 1, memb, mw, fsorted, jn, cand, ctr)
+        _set_hi(g, bound[g], memb, mw, cnt, fsorted, jn, cand, ctr)
+        _set_lo(g, bound[g] - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
 
 
 @njit(cache=True, inline="always")
@@ -300,7 +319,7 @@ def refresh(st, ctr, ng):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _avalanche(
-    i, rising, recs, shift, memb, mw, fsorted, jn, bound, nxt, cand, ctr, faces, lat, offsets,
+    i, rising, recs, shift, memb, mw, cnt, fsorted, jn, bound, nxt, cand, ctr, faces, lat, offsets,
     adj, bits, queue, tail, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at the input the
@@ -350,12 +369,15 @@ def _avalanche(
                 tail += 1
             recs[m] = r
             memb[rank] = r & low
+            if cnt.size:  # the blocks' member counts
+                cnt[g, rank >> 6] -= 1
+                cnt[g2, rank >> 6] += 1
             # the candidates: the spin leaves list g (one of its candidates: the next member
             # replaces it) and joins list g2 (between its candidates: it becomes one)
             if cand[g] == rank:
-                _set_hi(g, rank + 1, memb, mw, fsorted, jn, cand, ctr)
+                _set_hi(g, rank + 1, memb, mw, cnt, fsorted, jn, cand, ctr)
             elif cand[ng + g] == rank:
-                _set_lo(g, rank - 1, memb, mw, fsorted, jn, cand, ctr)
+                _set_lo(g, rank - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
             if cand[ng + g2] < rank < cand[g2]:
                 if below:
                     cand[ng + g2] = rank
@@ -409,7 +431,7 @@ def _boundary(fsorted, jg, b, u, rising):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _event(
-    direction, st, ist, recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets, adj,
+    direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj,
     bits, queue, bound, old, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
@@ -428,31 +450,31 @@ def _event(
         bound[g] = b
         # the candidates at the new boundary (members passed: the last is lo rising, hi falling)
         if rising:
-            lo = _prev_member(memb, mw, g, b - 1, old[g])
+            lo = _prev_member(memb, mw, cnt, g, b - 1, old[g])
             if lo >= old[g]:
                 cand[ng + g] = lo
                 ctr[ng + g] = -(fsorted[lo] + jg)
             if cand[g] < b:
-                _set_hi(g, b, memb, mw, fsorted, jn, cand, ctr)
+                _set_hi(g, b, memb, mw, cnt, fsorted, jn, cand, ctr)
         else:
-            hi = _next_member(memb, mw, g, b, old[g])
+            hi = _next_member(memb, mw, cnt, g, b, old[g])
             if hi < old[g]:
                 cand[g] = hi
                 ctr[g] = -(fsorted[hi] + jg)
             if cand[ng + g] >= b:
-                _set_lo(g, b - 1, memb, mw, fsorted, jn, cand, ctr)
+                _set_lo(g, b - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
     want = 0 if rising else 1
     tail = 0
     for g in range(ng):  # the passed members that are unstable start avalanches
         lo, hi = (old[g], bound[g]) if rising else (bound[g], old[g])
-        p = _next_member(memb, mw, g, lo, hi)
+        p = _next_member(memb, mw, cnt, g, lo, hi)
         while p < hi:
             if memb[p] == 2 * g + want:
                 tail = _avalanche(
-                    order[p], rising, recs, shift, memb, mw, fsorted, jn, bound, nxt, cand, ctr,
+                    order[p], rising, recs, shift, memb, mw, cnt, fsorted, jn, bound, nxt, cand, ctr,
                     faces, lat, offsets, adj, bits, queue, tail, buf,
                 )  # fmt: skip
-            p = _next_member(memb, mw, g, p + 1, hi)
+            p = _next_member(memb, mw, cnt, g, p + 1, hi)
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
@@ -465,11 +487,11 @@ def _event(
 @njit(cache=True)
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
-    (recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
+    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
      queue, bound, old, cand, ctr) = plan  # fmt: skip
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
-        direction, st, ist, recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets,
+        direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets,
         adj, bits, queue, bound, old, cand, ctr, buf,
     )  # fmt: skip
 
@@ -480,7 +502,7 @@ def _advance(
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
-    (recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
+    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
      queue, bound, old, cand, ctr) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
@@ -501,7 +523,7 @@ def _advance(
         if direction == 0:
             break
         jump, flips = _event(
-            direction, st, ist, recs, shift, memb, mw, fsorted, order, jn, nxt, faces, lat,
+            direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat,
             offsets, adj, bits, queue, bound, old, cand, ctr, buf,
         )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
@@ -532,7 +554,7 @@ def run_spins(
     gets (q, v, M) at target i. Returns (status, next target index)."""
     e = np.empty(ORDER + 1)
     coefs = hop_coefficients(mp)
-    buf = np.empty(max(plan[12], 1), np.int64)
+    buf = np.empty(max(plan[13], 1), np.int64)
     sample = out.shape[0] > 0
     for i in range(i_start, tgt_n.shape[0]):
         while ist[I_N] < tgt_n[i]:

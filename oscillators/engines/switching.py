@@ -98,7 +98,11 @@ class SwitchingKernelEngine(RelayKernelEngine):
         small = 2 * nvals.size <= 254
         words = (n + 7) // 8 + 1
         memb = np.full(8 * words if small else n, 0xFF, dtype=np.uint8 if small else np.uint16)
-        sk.records(recs, shift, rank, memb, bits, nup, gidx, spec.lattice, spec.offsets, deg)
+        # per list and block of 64 positions the number of members (the searches skip empty
+        # blocks)
+        cnt = np.zeros((nvals.size, words // 8 + 1) if small else (0, 0), dtype=np.uint8)
+        sk.records(recs, shift, rank, memb, cnt, bits, nup, gidx, spec.lattice, spec.offsets,
+                   deg)  # fmt: skip
         del rank
         mw = memb.view(np.uint64) if small else np.empty(0, dtype=np.uint64)
         del nup
@@ -110,9 +114,9 @@ class SwitchingKernelEngine(RelayKernelEngine):
         ng = nvals.size
         cand = np.empty(2 * ng, dtype=np.int64)
         ctr = np.empty(2 * ng)
-        sk.candidates(memb, mw, fs, jn, bound, cand, ctr)
+        sk.candidates(memb, mw, cnt, fs, jn, bound, cand, ctr)
         self._plan = (
-            recs, shift, memb, mw, fs, spec.order, jn, nxt, faces, spec.lattice, spec.offsets,
+            recs, shift, memb, mw, cnt, fs, spec.order, jn, nxt, faces, spec.lattice, spec.offsets,
             spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), bound,
             np.empty(ng, dtype=np.int64), cand, ctr,
         )  # fmt: skip
