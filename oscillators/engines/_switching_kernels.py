@@ -319,13 +319,13 @@ def refresh(st, ctr, ng):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _avalanche(
-    i, rising, recs, shift, memb, mw, cnt, fsorted, jn, bound, nxt, cand, ctr, faces, lat, offsets,
+    i, rising, u, recs, shift, memb, mw, cnt, fsorted, jn, nxt, cand, ctr, faces, lat, offsets,
     adj, bits, queue, tail, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
-    """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at the input the
-    boundaries ``bound`` hold (breadth first, each at most once; appended to the queue from
-    ``tail``), keeping every spin's list (its neighbour sum) in its record and membership
-    byte and the lists' candidates; returns the new tail (flips = new tail − tail)."""
+    """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at input ``u``
+    (breadth first, each at most once; appended to the queue from ``tail``), keeping every
+    spin's list (its neighbour sum) in its record and membership byte and the lists'
+    candidates (current at ``u``); returns the new tail (flips = new tail − tail)."""
     ng = jn.size
     want = 0 if rising else 1  # the spins that may follow: down ones rising, up ones falling
     row = 0 if rising else 1  # nxt[row, g]: the list after a neighbour's flip
@@ -361,7 +361,11 @@ def _avalanche(
             g2 = nxt[row, g]
             r += (g2 - g) << 1
             rank = r >> shift
-            below = rank < bound[g2]
+            # t <= u? Below lo or above hi of the new list by position (t is monotone along
+            # it), between them by the threshold itself (then it becomes a candidate)
+            between = cand[ng + g2] < rank < cand[g2]
+            t = -(fsorted[rank] + jn[g2]) if between else 0.0
+            below = t <= u if between else rank < cand[ng + g2]
             if (r & 1) == want and below == rising:
                 r ^= 1
                 _flip(bits, m)
@@ -378,61 +382,20 @@ def _avalanche(
                 _set_hi(g, rank + 1, memb, mw, cnt, fsorted, jn, cand, ctr)
             elif cand[ng + g] == rank:
                 _set_lo(g, rank - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
-            if cand[ng + g2] < rank < cand[g2]:
+            if between:
                 if below:
                     cand[ng + g2] = rank
-                    ctr[ng + g2] = -(fsorted[rank] + jn[g2])
+                    ctr[ng + g2] = t
                 else:
                     cand[g2] = rank
-                    ctr[g2] = -(fsorted[rank] + jn[g2])
+                    ctr[g2] = t
     return tail
-
-
-@njit(cache=True, inline="always")
-def _boundary(fsorted, jg, b, u, rising):  # pragma: no cover - compiled
-    """The boundary of the list with ``J·n = jg`` at ``u`` (the number of its entries with
-    ``−(fsorted[p] + jg) <= u``) from the boundary ``b`` at an input below ``u`` (``rising``)
-    or above: galloping from ``b``, then bisection — O(log d) for d entries passed, and the
-    same count as a walk, the thresholds being monotone along the list."""
-    n = fsorted.size
-    if rising:
-        if b >= n or -(fsorted[b] + jg) > u:
-            return b
-        lo = b  # t(lo) <= u
-        step = 1
-        hi = n
-        while lo + step < n:
-            if -(fsorted[lo + step] + jg) > u:
-                hi = lo + step
-                break
-            lo += step
-            step *= 2
-        lo += 1  # the first entry with t > u lies in [lo, hi]
-    else:
-        if b == 0 or -(fsorted[b - 1] + jg) <= u:
-            return b
-        hi = b - 1  # t(hi) > u
-        step = 1
-        lo = 0
-        while hi - step >= 0:
-            if -(fsorted[hi - step] + jg) <= u:
-                lo = hi - step + 1
-                break
-            hi -= step
-            step *= 2
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if -(fsorted[mid] + jg) <= u:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
 
 
 @njit(cache=True, inline="always")
 def _event(
     direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj,
-    bits, queue, bound, old, cand, ctr, buf,
+    bits, queue, start, end, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
@@ -440,41 +403,35 @@ def _event(
     u = st[S_UP] if rising else np.nextafter(st[S_DN], -np.inf)
     n = fsorted.size
     ng = jn.size
-    for g in range(ng):  # the boundaries at u (all of them before any flip test)
-        jg = jn[g]
-        b = bound[g]
-        old[g] = b
-        b = _boundary(fsorted, jg, b, u, rising)
-        if b == old[g]:
-            continue
-        bound[g] = b
-        # the candidates at the new boundary (members passed: the last is lo rising, hi falling)
+    for g in range(ng):  # every list's candidates at u (before any flip test): members passed
         if rising:
-            lo = _prev_member(memb, mw, cnt, g, b - 1, old[g])
-            if lo >= old[g]:
-                cand[ng + g] = lo
-                ctr[ng + g] = -(fsorted[lo] + jg)
-            if cand[g] < b:
-                _set_hi(g, b, memb, mw, cnt, fsorted, jn, cand, ctr)
+            start[g] = cand[g]
+            while ctr[g] <= u:  # hi[g] passed: now the last member with t <= u
+                r = cand[g]
+                cand[ng + g] = r
+                ctr[ng + g] = ctr[g]
+                _set_hi(g, r + 1, memb, mw, cnt, fsorted, jn, cand, ctr)
+            end[g] = cand[ng + g]
         else:
-            hi = _next_member(memb, mw, cnt, g, b, old[g])
-            if hi < old[g]:
-                cand[g] = hi
-                ctr[g] = -(fsorted[hi] + jg)
-            if cand[ng + g] >= b:
-                _set_lo(g, b - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
+            end[g] = cand[ng + g]
+            while ctr[ng + g] > u:  # lo[g] passed: now the first member with t > u
+                r = cand[ng + g]
+                cand[g] = r
+                ctr[g] = ctr[ng + g]
+                _set_lo(g, r - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
+            start[g] = cand[g]
     want = 0 if rising else 1
     tail = 0
     for g in range(ng):  # the passed members that are unstable start avalanches
-        lo, hi = (old[g], bound[g]) if rising else (bound[g], old[g])
-        p = _next_member(memb, mw, cnt, g, lo, hi)
-        while p < hi:
+        p = start[g]
+        stop = end[g] + 1
+        while p < stop:
             if memb[p] == 2 * g + want:
                 tail = _avalanche(
-                    order[p], rising, recs, shift, memb, mw, cnt, fsorted, jn, bound, nxt, cand, ctr,
+                    order[p], rising, u, recs, shift, memb, mw, cnt, fsorted, jn, nxt, cand, ctr,
                     faces, lat, offsets, adj, bits, queue, tail, buf,
                 )  # fmt: skip
-            p = _next_member(memb, mw, cnt, g, p + 1, hi)
+            p = _next_member(memb, mw, cnt, g, p + 1, stop)
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
@@ -488,11 +445,11 @@ def _event(
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
     (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
-     queue, bound, old, cand, ctr) = plan  # fmt: skip
+     queue, start, end, cand, ctr) = plan  # fmt: skip
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
         direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets,
-        adj, bits, queue, bound, old, cand, ctr, buf,
+        adj, bits, queue, start, end, cand, ctr, buf,
     )  # fmt: skip
 
 
@@ -503,7 +460,7 @@ def _advance(
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
     (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
-     queue, bound, old, cand, ctr) = plan  # fmt: skip
+     queue, start, end, cand, ctr) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
     nsw = ist[I_NSW]
@@ -524,7 +481,7 @@ def _advance(
             break
         jump, flips = _event(
             direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat,
-            offsets, adj, bits, queue, bound, old, cand, ctr, buf,
+            offsets, adj, bits, queue, start, end, cand, ctr, buf,
         )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
         nsw += flips  # n_events counts spin flips
