@@ -13,36 +13,36 @@ The plan (spins ``s_i``, local field ``h_i = u + (f_i + J·n_i)``, threshold
 Perković and Sethna's sorted lists: list ``g`` holds the thresholds ``t_g(p) =
 −(fsorted[p] + J·n_g)`` in the order ``p`` of the fields descending, so ``t_g`` is
 non-decreasing along every list; spin ``i`` sits at position ``rank[i]`` of every list and is a
-*member* of the list of its current neighbour sum. Three things are kept:
+*member* of the list of its current neighbour sum. Two things are kept:
 
-* per list a boundary ``B[g]``, the number of its entries with ``t <= u`` (found by comparing
-  thresholds, so exact). A member at ``p < B[g]`` is up, one at ``p >= B[g]`` down (that is
-  what relaxed means), and the flip test of a spin whose sum becomes ``n_g`` is an integer
-  comparison, ``rank < B[g]`` — the same decision as ``u + (f + J·n) >= 0`` because ``t_g`` is
-  monotone in ``p`` (a rounded sum has the sign of the exact one, and ``J·n`` is rounded once,
-  outside, as ``jn[g]``, so no fused multiply-add moves a threshold);
 * the lists themselves as one *membership word* per position, ``memb[p] = 2·list + up`` of
   the spin at ``p`` (one byte up to 127 lists), so that moving a spin between lists is one
-  store, and the next member of a list is found 8 positions at a time (a zero-byte test on
-  64-bit words);
-* per list two *candidates*: ``hi[g]``, its first member at or after ``B[g]``, and
-  ``lo[g]``, its last member before, with their thresholds, so that::
+  store (and two counts: per list and block of 64 positions its members, so that a search
+  skips empty blocks), and the next member of a list is found 8 positions at a time (a
+  zero-byte test on 64-bit words);
+* per list two *candidates*: ``hi[g]``, its first member with ``t > u``, and ``lo[g]``, its
+  last member with ``t <= u`` (consecutive members; in a state relaxed at ``u`` every member
+  up to ``lo`` is up and every one from ``hi`` on down: that is what relaxed means), with their
+  thresholds, so that::
 
     next up trigger   = min_g t_g(hi[g])        next down trigger = max_g t_g(lo[g])
 
 An event at the up trigger ``t*`` relaxes at ``u = t*`` (falling: at the largest float below
-``t*``, the relay convention ``u < β``): every ``B[g]`` moves over the entries it passes (a
-sequential read of the sorted fields; the candidates follow: the last member passed is the new
-``lo``, ``hi`` is searched from ``B[g]`` if it was passed), then every passed entry that is an
-unstable member starts an avalanche (breadth first, each spin at most once, the flip test
-above). Every flip changes its neighbours' sums by ``±2``: each neighbour's record and
-membership word change, a candidate it was is replaced by the next member (a search), and if
-its position lies between the candidates of its new list it becomes one (``lo`` below ``B``,
-``hi`` above). Spins whose triggers coincide exactly flip in the same event, and
-ferromagnetic ``J`` makes the final state independent of the order — it is the state
+``t*``, the relay convention ``u < β``): first every list's candidates move to ``u`` (each
+member with ``t <= u`` passed: ``lo = hi``, ``hi`` = the next member, a search), then every
+passed member that is down starts an avalanche (breadth first, each spin at most once). Every
+flip changes its neighbours' sums by ``±2``: each neighbour's record and membership word
+change, a candidate it was is replaced by the next member (a search), and its flip test needs
+no threshold unless it lands between the candidates of its new list: below ``lo`` it is at
+``t <= u``, above ``hi`` at ``t > u`` (``t`` is monotone along a list); between them it
+becomes one of them, by its threshold compared with ``u`` — the same float test as
+``u + (f + J·n) >= 0`` (a rounded sum has the sign of the exact one, and ``J·n`` is rounded
+once, outside, as ``jn[g]``, so no fused multiply-add moves a threshold). Spins whose
+triggers coincide exactly flip in the same event, and ferromagnetic ``J`` makes the final
+state independent of the order — it is the state
 :meth:`hysteresis.rfim.RandomFieldIsing.apply` reaches at that input. The cost of an event is
-O(G + entries passed + z·flips) plus a search per replaced candidate; no spin is relisted in a
-bitset.
+O(G + members passed + z·flips) plus a search per replaced candidate; no entry that is not a
+member is read one at a time, no spin is relisted in a bitset.
 
 Layout: per spin one record in site order, ``rank << shift | 2·list | up`` (uint32 on a lattice,
 ``shift`` 5: 4 MB for 10⁶ spins; int64 for more than 16 lists or 2²⁷ spins) and on a lattice a
@@ -109,8 +109,9 @@ __all__ = [
 #: the input the spins are relaxed at / the number of up spins (slots unused by spins)
 S_U = S_M
 I_NUP = I_UP
-#: the plan tuple: (recs, fsorted, order, jn, nxt, lat, offsets, adj, max_degree, bits, queue,
-#: bound, old, heads, pos, cache, cachef); ``bits`` (the spins) at ``PL_BITS``
+#: the plan tuple: (recs, shift, memb, mw (memb as uint64 words), cnt, fsorted, order, jn, nxt,
+#: faces, lat, offsets, adj, max_degree, bits, queue, start, end (scratch), cand, ctr);
+#: ``bits`` (the spins) at ``PL_BITS``
 PL_BITS = 14
 
 #: a spin's record: bit 0 up, bits 1 to ``shift − 1`` its list, the rest its rank (uint32 with
@@ -292,7 +293,8 @@ def _set_lo(g, p, memb, mw, cnt, fsorted, jn, cand, ctr):  # pragma: no cover - 
 
 @njit(cache=True)
 def candidates(memb, mw, cnt, fsorted, jn, bound, cand, ctr):  # pragma: no cover - compiled
-    """Every list's candidates from its boundary."""
+    """Every list's candidates from its boundary ``bound[g]`` (the number of its entries with
+    ``t <= u``)."""
     for g in range(jn.size):
         _set_hi(g, bound[g], memb, mw, cnt, fsorted, jn, cand, ctr)
         _set_lo(g, bound[g] - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
@@ -394,8 +396,8 @@ def _avalanche(
 
 @njit(cache=True, inline="always")
 def _event(
-    direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj,
-    bits, queue, start, end, cand, ctr, buf,
+    direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets,
+    adj, bits, queue, start, end, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
@@ -444,12 +446,12 @@ def _event(
 @njit(cache=True)
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
-    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
-     queue, start, end, cand, ctr) = plan  # fmt: skip
+    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree,
+     bits, queue, start, end, cand, ctr) = plan  # fmt: skip
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
-        direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets,
-        adj, bits, queue, start, end, cand, ctr, buf,
+        direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat,
+        offsets, adj, bits, queue, start, end, cand, ctr, buf,
     )  # fmt: skip
 
 
@@ -459,8 +461,8 @@ def _advance(
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
-    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree, bits,
-     queue, start, end, cand, ctr) = plan  # fmt: skip
+    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree,
+     bits, queue, start, end, cand, ctr) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
     nsw = ist[I_NSW]

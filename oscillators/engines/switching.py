@@ -4,8 +4,8 @@ An operator without a relay table whose ``compiled_switching()`` hands over inte
 spins (:class:`hysteresis.compiled_spins.CompiledSpins`: a random-field Ising lattice) is
 integrated here: between events the relay kernel's closed-form hops, the next trigger input
 in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`:
-per list a boundary at the current input and two candidates kept up to date over one
-membership byte per spin; O(G + entries passed + z·flips) per event, no trial run), each
+per list two candidates around the current input kept up to date over one membership byte
+per spin; O(G + members passed + z·flips) per event, no trial run), each
 avalanche one jump ``C·ΔM`` at its trigger input with the saltation ``δv += C·ΔM/v*·δq``,
 ``n_events`` counting spin flips. Filippov sliding, the switch budget, grazing, the tangent
 flow and the records are the relay kernel engine's
