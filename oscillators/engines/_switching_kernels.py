@@ -12,42 +12,45 @@ The plan (spins ``s_i``, local field ``h_i = u + (f_i + J·n_i)``, threshold
 ``t_i(n) = −(f_i + J·n)``; up iff ``u >= t_i(n_i)`` in a state relaxed at ``u``). Kuntz,
 Perković and Sethna's sorted lists: list ``g`` holds the thresholds ``t_g(p) =
 −(fsorted[p] + J·n_g)`` in the order ``p`` of the fields descending, so ``t_g`` is
-non-decreasing along every list. Each spin is *listed* in the one list of its current
-neighbour sum: a set bit at its position ``rank[i]`` in that list's hierarchical 64-ary bitset.
-In a state relaxed at ``u`` a listed entry with ``t <= u`` is an up spin and one with ``t > u``
-a down spin (that is what relaxed means), so every list has two *candidates*, consecutive set
-bits: ``hi[g]``, its first set bit with ``t > u``, and ``lo[g]``, the last with ``t <= u``, and::
+non-decreasing along every list; spin ``i`` sits at position ``rank[i]`` of every list and is a
+*member* of the list of its current neighbour sum. Two things are kept:
+
+* the lists themselves as one *membership word* per position, ``memb[p] = 2·list + up`` of
+  the spin at ``p`` (one byte up to 127 lists), so that moving a spin between lists is one
+  store (and two counts: per list and block of 64 positions its members, so that a search
+  skips empty blocks), and the next member of a list is found 8 positions at a time (a
+  zero-byte test on 64-bit words);
+* per list two *candidates*: ``hi[g]``, its first member with ``t > u``, and ``lo[g]``, its
+  last member with ``t <= u`` (consecutive members; in a state relaxed at ``u`` every member
+  up to ``lo`` is up and every one from ``hi`` on down: that is what relaxed means), with their
+  thresholds, so that::
 
     next up trigger   = min_g t_g(hi[g])        next down trigger = max_g t_g(lo[g])
 
-The candidates and their thresholds are kept, not searched for: an event at the up trigger
-``t*`` relaxes at ``u = t*`` (falling: at the largest float below ``t*``, the relay convention
-``u < β``); in every list the entries from ``hi[g]`` on with ``t <= u`` are passed (``lo = hi``,
-``hi`` = the next set bit: one bitset search), and each down spin among them starts an
-avalanche (breadth first, each spin at most once). Every flip changes the neighbour sums of the
-spin's neighbours by ``±2`` (kept in their records) and a neighbour flips if its threshold has
-crossed ``u`` (the same test as ``u + (f + J·n) >= 0``: a rounded sum has the sign of the exact
-one, and ``J·n`` is rounded once, outside, as ``jn[g]``, so no fused multiply-add can change a
-threshold); after the avalanche each neighbour whose sum changed is moved once to the list of
-its new sum (clear one bit, set one bit), a candidate it was is replaced by the next set bit (a
-search), and if its new position falls between the candidates of its new list it becomes one
-(``lo`` if its threshold is ``<= u``, else ``hi``). Spins whose triggers
-coincide exactly flip in the same event (passed in the same pass), and ferromagnetic ``J``
-makes the final state independent of the order — it is the state
+An event at the up trigger ``t*`` relaxes at ``u = t*`` (falling: at the largest float below
+``t*``, the relay convention ``u < β``): first every list's candidates move to ``u`` (each
+member with ``t <= u`` passed: ``lo = hi``, ``hi`` = the next member, a search), then every
+passed member that is down starts an avalanche (breadth first, each spin at most once). Every
+flip changes its neighbours' sums by ``±2``: each neighbour's record and membership word
+change, a candidate it was is replaced by the next member (a search), and its flip test needs
+no threshold unless it lands between the candidates of its new list: below ``lo`` it is at
+``t <= u``, above ``hi`` at ``t > u`` (``t`` is monotone along a list); between them it
+becomes one of them, by its threshold compared with ``u`` — the same float test as
+``u + (f + J·n) >= 0`` (a rounded sum has the sign of the exact one, and ``J·n`` is rounded
+once, outside, as ``jn[g]``, so no fused multiply-add moves a threshold). Spins whose
+triggers coincide exactly flip in the same event, and ferromagnetic ``J`` makes the final
+state independent of the order — it is the state
 :meth:`hysteresis.rfim.RandomFieldIsing.apply` reaches at that input. The cost of an event is
-O(G + z·flips) plus a bitset search (O(log₆₄ N), usually one word) per passed entry and per
-replaced candidate — no sweep over the lists, no search per list.
+O(G + members passed + z·flips) plus a search per replaced candidate; no entry that is not a
+member is read one at a time, no spin is relisted in a bitset.
 
-Layout, for few cache misses per flip (the lattice is far larger than the caches and an
-avalanche's spins are scattered over the sorted lists): per spin one 16-byte record in site
-order (``recf[2i]`` = ``f_i``, ``reci[4i + 2]`` = ``rank[i]``, ``reci[4i + 3]`` = its list ``g``
-(bits 0–12; bits 13–25 the list of its current sum) and, on a lattice, flags of the faces the
-site lies on (bits 26–31), so its neighbours need no division; two views of one buffer, each
-slot read through one view), so a neighbour's field, position and list share a cache line;
-the lists' bitsets interleaved (word ``w`` of level ``lv`` of list ``g`` at
-``lay[lv] + w·stride + g``, ``stride = 8`` for up to 8 lists: one aligned 64-byte line holds the
-word of every list), so moving a spin between lists touches one line. The spins themselves
-are the packed bits the operator's states hold.
+Layout: per spin one record in site order, ``rank << shift | 2·list | up`` (uint32 on a lattice,
+``shift`` 5: 4 MB for 10⁶ spins; int64 for more than 16 lists or 2²⁷ spins) and on a lattice a
+byte of the faces the site lies on (so that its neighbours need no division); the membership
+words in rank order (1 byte per spin); the sorted fields and ``order`` are the operator's own
+arrays, read along the lists. The spins are also kept as the packed bits the operator's states
+hold. The event loop is compiled without reference counting where numba allows it (the relay
+kernel's ``_LOOP_OPTIONS``).
 
 State slots: the relay kernel's float/int state layouts (``st``, ``ist``) with ``S_U`` (the
 input the spins are relaxed at) and ``I_NUP`` (up spins) in slots the relay tables use for
@@ -59,9 +62,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hysteresis._rfim_kernels import _flip, _spin
+from hysteresis._rfim_kernels import _flip
 from oscillators.engines._relay_kernels import (
     _CONTRACT,
+    _LOOP_OPTIONS,
     I_MAXSW,
     I_N,
     I_NSW,
@@ -89,13 +93,14 @@ from oscillators.engines._relay_kernels import (
 
 __all__ = [
     "I_NUP",
-    "FACES",
+    "LARGE_SHIFT",
     "MAX_LISTS",
     "PL_BITS",
     "S_U",
-    "bitset_layout",
+    "record_layout",
+    "SMALL_SHIFT",
     "boundary_flags",
-    "build_lists",
+    "records",
     "refresh",
     "run_spins",
     "switch",
@@ -104,62 +109,65 @@ __all__ = [
 #: the input the spins are relaxed at / the number of up spins (slots unused by spins)
 S_U = S_M
 I_NUP = I_UP
-#: the plan tuple: (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree,
-#: bits, queue, sets, lay, stride, levels, cand, ctr); ``bits`` (the spins) at ``PL_BITS``
-PL_BITS = 11
+#: the plan tuple: (recs, shift, memb, mw (memb as uint64 words), cnt, fsorted, order, jn, nxt,
+#: faces, lat, offsets, adj, max_degree, bits, queue, start, end (scratch), cand, ctr);
+#: ``bits`` (the spins) at ``PL_BITS``
+PL_BITS = 14
 
-_U0 = np.uint64(0)
-_U1 = np.uint64(1)
-_ALL = np.uint64(0xFFFFFFFFFFFFFFFF)
-
-
-def bitset_layout(n: int, lists: int) -> tuple[np.ndarray, int, int, int]:
-    """(level offsets ``lay[lv]``, stride, levels, words) of ``lists`` interleaved hierarchical
-    64-ary bitsets over ``n`` positions (word ``w`` of level ``lv`` of list ``g`` at
-    ``lay[lv] + w·stride + g``); every level has one zero row of padding, so a search may read
-    one row past a level's end."""
-    stride = 8 if lists <= 8 else lists
-    sizes = [max(1, -(-n // 64))]
-    while sizes[-1] > 1:
-        sizes.append(-(-sizes[-1] // 64))
-    lay = np.empty(len(sizes), dtype=np.int64)
-    at = 0
-    for lv, size in enumerate(sizes):
-        lay[lv] = at
-        at += (size + 1) * stride
-    return lay, stride, len(sizes), at
-
-
-#: ``reci[4i + 3]``: bits 0–12 the list the spin is listed in, bits 13–25 the list of its
-#: current neighbour sum (they differ only inside an avalanche), bits 26–31 on a lattice the
-#: faces the site lies on: bit ``2a`` at coordinate 0 of axis ``a``, bit ``2a + 1`` at ``L_a − 1``
-_LIST = 0x1FFF
-_SUM = 13
-FACES = 26
+#: a spin's record: bit 0 up, bits 1 to ``shift − 1`` its list, the rest its rank (uint32 with
+#: ``shift`` 5 for up to 16 lists and 2²⁷ spins, else int64 with ``shift`` 14); the low
+#: ``shift`` bits are its membership word ``2·list + up``
+SMALL_SHIFT = 5
+LARGE_SHIFT = 14
 #: the most lists (neighbour-sum values) a list index in 13 bits allows
-MAX_LISTS = _LIST + 1
+MAX_LISTS = 1 << (LARGE_SHIFT - 1)
 
 
 def boundary_flags(lat: np.ndarray, n: int) -> np.ndarray:
-    """The face flags (``reci[4i + 3] >> 26``) of the ``n`` sites of lattice ``lat``."""
-    flags = np.zeros(n, dtype=np.int32)
-    site = np.arange(n, dtype=np.int64)
+    """The faces the ``n`` sites of lattice ``lat`` lie on (uint8: bit ``2a`` at coordinate 0
+    of axis ``a``, ``2a + 1`` at ``L_a − 1``; empty for a graph), so that a site's neighbours
+    need no division."""
+    flags = np.zeros(n if lat[0] > 0 else 0, dtype=np.uint8)
+    site = np.arange(flags.size, dtype=np.int64)
     for a in range(int(lat[0])):
         length, stride = int(lat[1 + a]), int(lat[4 + a])
         c = (site // stride) % length
-        flags |= (c == 0).astype(np.int32) << (2 * a)
-        flags |= (c == length - 1).astype(np.int32) << (2 * a + 1)
+        flags |= (c == 0).astype(np.uint8) << (2 * a)
+        flags |= (c == length - 1).astype(np.uint8) << (2 * a + 1)
     return flags
 
 
+def record_layout(n: int, lists: int) -> tuple[type, int]:
+    """(dtype, shift) of the spins' records: uint32 when ``lists`` and ``n`` fit, else int64."""
+    if lists <= 1 << (SMALL_SHIFT - 1) and n <= 1 << (32 - SMALL_SHIFT):
+        return np.uint32, SMALL_SHIFT
+    return np.int64, LARGE_SHIFT
+
+
+@njit(cache=True)
+def records(recs, shift, rank, memb, cnt, bits, nup, gidx, lat, offsets, max_degree):
+    # pragma: no cover - compiled
+    """Every spin's record (rank ``rank[i]``, the list of its neighbour sum ``2·nup − degree``,
+    up), membership word and, with ``cnt`` (lists × blocks of 64 positions), its block's
+    count of members of its list."""
+    for i in range(recs.size):
+        deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
+        g = gidx[2 * nup[i] - deg + max_degree]
+        up = (bits[i >> 3] >> (i & 7)) & 1
+        recs[i] = (rank[i] << shift) | (2 * g + up)
+        memb[rank[i]] = 2 * g + up
+        if cnt.size:
+            cnt[g, rank[i] >> 6] += 1
+
+
 @njit(cache=True, inline="always")
-def _neighbours(i, reci, lat, offsets, adj, buf):  # pragma: no cover - compiled
+def _neighbours(i, faces, lat, offsets, adj, buf):  # pragma: no cover - compiled
     """Write the neighbours of ``i`` into ``buf`` (the order of
     :func:`hysteresis._rfim_kernels._neighbours`; on a lattice from the face flags, no
     division); returns their number."""
     nd = lat[0]
     if nd > 0:
-        flags = reci[4 * i + 3] >> FACES
+        flags = faces[i]
         k = 0
         for a in range(nd):
             stride = lat[4 + a]
@@ -175,6 +183,14 @@ def _neighbours(i, reci, lat, offsets, adj, buf):  # pragma: no cover - compiled
     return stop - start
 
 
+_U0 = np.uint64(0)
+_U1 = np.uint64(1)
+_ALL = np.uint64(0xFFFFFFFFFFFFFFFF)
+_LO = np.uint64(0x0101010101010101)
+_HI = np.uint64(0x8080808080808080)
+_EVEN = np.uint64(0xFEFEFEFEFEFEFEFE)
+
+
 @njit(cache=True, inline="always")
 def _msb(x):  # pragma: no cover - compiled
     """Index of the highest set bit of a non-zero uint64."""
@@ -188,114 +204,100 @@ def _msb(x):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _next_set(sets, lay, stride, g, levels, p, n):  # pragma: no cover - compiled
-    """Smallest set position ``>= p`` of list ``g``'s bitset, or -1."""
+def _members(word, g):  # pragma: no cover - compiled
+    """Bit 7 of every byte of ``word`` (8 membership bytes) that is a member of list ``g``
+    (byte ``2g`` or ``2g + 1``): with bit 0 cleared the bytes are even, so the zero-byte test
+    ``(x − 0x01…) & ~x & 0x80…`` has no false positives."""
+    x = (word ^ (np.uint64(2 * g) * _LO)) & _EVEN
+    return (x - _LO) & ~x & _HI
+
+
+@njit(cache=True, inline="always")
+def _next_member(memb, mw, cnt, g, p, n):  # pragma: no cover - compiled
+    """The first position ``>= p`` and ``< n`` of a member of list ``g`` (``n``: none): the
+    rest of ``p``'s block 8 entries at a time, the blocks without a member of ``g`` skipped by
+    their counts, then the first block with one."""
     if p >= n:
+        return n
+    if mw.size == 0:  # two-byte membership words: one at a time
+        while p < n and memb[p] >> 1 != g:
+            p += 1
+        return p
+    last = (n - 1) >> 3
+    w = p >> 3
+    z = _members(mw[w], g) & (_ALL << np.uint64(8 * (p & 7)))
+    while z == _U0:
+        if w >= last:
+            return n
+        w += 1
+        if w & 7 == 0:  # a new block: skip the blocks without a member
+            blk = w >> 3
+            while cnt[g, blk] == 0:
+                blk += 1
+                if 8 * blk > last:
+                    return n
+            w = 8 * blk
+        z = _members(mw[w], g)
+    q = 8 * w + (_ctz(z) >> 3)
+    return q if q < n else n
+
+
+@njit(cache=True, inline="always")
+def _prev_member(memb, mw, cnt, g, p, stop):  # pragma: no cover - compiled
+    """The last position ``<= p`` and ``>= stop >= 0`` of a member of list ``g`` (``-1``:
+    none)."""
+    if p < stop:
         return -1
-    idx = p
-    lv = 0
-    while True:
-        w = sets[lay[lv] + (idx >> 6) * stride + g] & (_ALL << np.uint64(idx & 63))
-        if w != _U0:
-            idx = (idx & ~63) + _ctz(w)
-            break
-        if lv + 1 == levels:
+    if mw.size == 0:
+        while p >= stop and memb[p] >> 1 != g:
+            p -= 1
+        return p if p >= stop else -1
+    w = p >> 3
+    z = _members(mw[w], g) & (_ALL >> np.uint64(8 * (7 - (p & 7))))
+    first = stop >> 3
+    while z == _U0:
+        if w <= first:
             return -1
-        idx = (idx >> 6) + 1  # the next word of this level, a bit one level up
-        lv += 1
-    while lv > 0:
-        lv -= 1
-        idx = idx * 64 + _ctz(sets[lay[lv] + idx * stride + g])
-    return idx
+        w -= 1
+        if w & 7 == 7:  # a new block (from its end): skip the blocks without a member
+            blk = w >> 3
+            while cnt[g, blk] == 0:
+                if 8 * blk <= first:
+                    return -1
+                blk -= 1
+            w = min(w, 8 * blk + 7)
+        z = _members(mw[w], g)
+    q = 8 * w + (_msb(z) >> 3)
+    return q if q >= stop else -1
 
 
 @njit(cache=True, inline="always")
-def _prev_set(sets, lay, stride, g, levels, p):  # pragma: no cover - compiled
-    """Largest set position ``<= p`` of list ``g``'s bitset, or -1."""
-    if p < 0:
-        return -1
-    idx = p
-    lv = 0
-    while True:
-        w = sets[lay[lv] + (idx >> 6) * stride + g] & (_ALL >> np.uint64(63 - (idx & 63)))
-        if w != _U0:
-            idx = (idx & ~63) + _msb(w)
-            break
-        if lv + 1 == levels or (idx >> 6) == 0:
-            return -1
-        idx = (idx >> 6) - 1
-        lv += 1
-    while lv > 0:
-        lv -= 1
-        idx = idx * 64 + _msb(sets[lay[lv] + idx * stride + g])
-    return idx
-
-
-@njit(cache=True, inline="always")
-def _bs_set(sets, lay, stride, g, levels, idx):  # pragma: no cover - compiled
-    for lv in range(levels):
-        pos = lay[lv] + (idx >> 6) * stride + g
-        w = sets[pos]
-        sets[pos] = w | (_U1 << np.uint64(idx & 63))
-        if w != _U0:
-            return  # the summary bits above are set already
-        idx >>= 6
-
-
-@njit(cache=True, inline="always")
-def _bs_clear(sets, lay, stride, g, levels, idx):  # pragma: no cover - compiled
-    for lv in range(levels):
-        pos = lay[lv] + (idx >> 6) * stride + g
-        w = sets[pos] & ~(_U1 << np.uint64(idx & 63))
-        sets[pos] = w
-        if w != _U0:
-            return  # the word still holds a set bit: the summary bit above stays
-        idx >>= 6
-
-
-@njit(cache=True)
-def build_lists(reci, gidx, nvals, nup, lat, offsets, max_degree, sets, lay, stride, levels):
-    # pragma: no cover - compiled
-    """List every spin in the list of its neighbour sum ``2·nup − degree``: ``reci[4i + 3]``
-    and a set bit at ``reci[4i + 2]`` (its rank) in that list."""
-    for i in range(nup.size):
-        deg = 2 * lat[0] if lat[0] > 0 else offsets[i + 1] - offsets[i]
-        g = gidx[2 * nup[i] - deg + max_degree]
-        reci[4 * i + 3] |= g | (g << _SUM)
-        _bs_set(sets, lay, stride, g, levels, reci[4 * i + 2])
-
-
-@njit(cache=True, inline="always")
-def _set_hi(g, p, fsorted, jn, sets, lay, stride, levels, cand, ctr):  # pragma: no cover
-    """``hi[g] = cand[g]`` := the first set bit of list ``g`` at or after ``p`` (``N``: none),
+def _set_hi(g, p, memb, mw, cnt, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
+    """``hi[g] = cand[g]`` := the first member of list ``g`` at or after ``p`` (``N``: none),
     its threshold into ``ctr[g]`` (``+inf``: none)."""
     n = fsorted.size
-    r = _next_set(sets, lay, stride, g, levels, p, n)
-    if r >= 0:
-        cand[g] = r
-        ctr[g] = -(fsorted[r] + jn[g])
-    else:
-        cand[g] = n
-        ctr[g] = np.inf
+    r = _next_member(memb, mw, cnt, g, p, n)
+    cand[g] = r
+    ctr[g] = -(fsorted[r] + jn[g]) if r < n else np.inf
 
 
 @njit(cache=True, inline="always")
-def _set_lo(g, p, fsorted, jn, sets, lay, stride, levels, cand, ctr):  # pragma: no cover
-    """``lo[g] = cand[G + g]`` := the last set bit of list ``g`` at or before ``p`` (``-1``:
+def _set_lo(g, p, memb, mw, cnt, fsorted, jn, cand, ctr):  # pragma: no cover - compiled
+    """``lo[g] = cand[G + g]`` := the last member of list ``g`` at or before ``p`` (``-1``:
     none), its threshold into ``ctr[G + g]`` (``-inf``: none)."""
     ng = jn.size
-    r = _prev_set(sets, lay, stride, g, levels, p)
+    r = _prev_member(memb, mw, cnt, g, p, 0)
     cand[ng + g] = r
     ctr[ng + g] = -(fsorted[r] + jn[g]) if r >= 0 else -np.inf
 
 
 @njit(cache=True)
-def candidates(fsorted, jn, sets, lay, stride, levels, ptr, cand, ctr):  # pragma: no cover
-    """Every list's candidates from its pointer ``ptr[g]`` (the number of its entries with
+def candidates(memb, mw, cnt, fsorted, jn, bound, cand, ctr):  # pragma: no cover - compiled
+    """Every list's candidates from its boundary ``bound[g]`` (the number of its entries with
     ``t <= u``)."""
     for g in range(jn.size):
-        _set_hi(g, ptr[g], fsorted, jn, sets, lay, stride, levels, cand, ctr)
-        _set_lo(g, ptr[g] - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
+        _set_hi(g, bound[g], memb, mw, cnt, fsorted, jn, cand, ctr)
+        _set_lo(g, bound[g] - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
 
 
 @njit(cache=True, inline="always")
@@ -312,127 +314,126 @@ def _triggers(ctr, ng):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def refresh(st, jn, ctr):  # pragma: no cover - compiled
+def refresh(st, ctr, ng):  # pragma: no cover - compiled
     """The next triggers into ``st[S_UP]``, ``st[S_DN]``."""
-    st[S_UP], st[S_DN] = _triggers(ctr, jn.size)
+    st[S_UP], st[S_DN] = _triggers(ctr, ng)
 
 
 @njit(cache=True, inline="always")
 def _avalanche(
-    i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue, tail,
-    buf,
+    i, rising, u, recs, shift, memb, mw, cnt, fsorted, jn, nxt, cand, ctr, faces, lat, offsets,
+    adj, bits, queue, tail, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Flip spin ``i`` (up if ``rising``) and every spin that becomes unstable at input ``u``
     (breadth first, each at most once; appended to the queue from ``tail``), keeping every
-    spin's current list (its neighbour sum) in its record; returns the new tail (flips = new
-    tail − tail). The lists' bitsets are brought up to date afterwards (:func:`_relist`)."""
+    spin's list (its neighbour sum) in its record and membership byte and the lists'
+    candidates (current at ``u``); returns the new tail (flips = new tail − tail)."""
+    ng = jn.size
     want = 0 if rising else 1  # the spins that may follow: down ones rising, up ones falling
-    dn = 2 if rising else -2  # the change of a neighbour's sum
+    row = 0 if rising else 1  # nxt[row, g]: the list after a neighbour's flip
+    low = (1 << shift) - 1
+    r = recs[i] ^ 1
+    recs[i] = r
+    memb[r >> shift] ^= 1
     _flip(bits, i)
     queue[tail] = i
     head = tail
     tail += 1
+    nd = lat[0]
+    s0, s1, s2 = lat[4], lat[5], lat[6]  # a lattice's strides and wrap-arounds, in registers
+    w0, w1, w2 = (lat[1] - 1) * s0, (lat[2] - 1) * s1, (lat[3] - 1) * s2
     while head < tail:
         j = queue[head]
         head += 1
-        deg = _neighbours(j, reci, lat, offsets, adj, buf)
+        if nd == 3:
+            fl = faces[j]
+            buf[0] = j - w0 if fl & 2 else j + s0
+            buf[1] = j + w0 if fl & 1 else j - s0
+            buf[2] = j - w1 if fl & 8 else j + s1
+            buf[3] = j + w1 if fl & 4 else j - s1
+            buf[4] = j - w2 if fl & 32 else j + s2
+            buf[5] = j + w2 if fl & 16 else j - s2
+            deg = 6
+        else:
+            deg = _neighbours(j, faces, lat, offsets, adj, buf)
         for k in range(deg):
             m = buf[k]
-            word = reci[4 * m + 3]
-            old = (word >> _SUM) & _LIST
-            g = gidx[nvals[old] + dn + max_degree]
-            reci[4 * m + 3] = word + ((g - old) << _SUM)
-            if _spin(bits, m) == want and (-(recf[2 * m] + jn[g]) <= u) == rising:
+            r = recs[m]
+            g = (r & low) >> 1
+            g2 = nxt[row, g]
+            r += (g2 - g) << 1
+            rank = r >> shift
+            # t <= u? Below lo or above hi of the new list by position (t is monotone along
+            # it), between them by the threshold itself (then it becomes a candidate)
+            between = cand[ng + g2] < rank < cand[g2]
+            t = -(fsorted[rank] + jn[g2]) if between else 0.0
+            below = t <= u if between else rank < cand[ng + g2]
+            if (r & 1) == want and below == rising:
+                r ^= 1
                 _flip(bits, m)
                 queue[tail] = m
                 tail += 1
+            recs[m] = r
+            memb[rank] = r & low
+            if cnt.size:  # the blocks' member counts
+                cnt[g, rank >> 6] -= 1
+                cnt[g2, rank >> 6] += 1
+            # the candidates: the spin leaves list g (one of its candidates: the next member
+            # replaces it) and joins list g2 (between its candidates: it becomes one)
+            if cand[g] == rank:
+                _set_hi(g, rank + 1, memb, mw, cnt, fsorted, jn, cand, ctr)
+            elif cand[ng + g] == rank:
+                _set_lo(g, rank - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
+            if between:
+                if below:
+                    cand[ng + g2] = rank
+                    ctr[ng + g2] = t
+                else:
+                    cand[g2] = rank
+                    ctr[g2] = t
     return tail
 
 
 @njit(cache=True, inline="always")
-def _relist(
-    t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay, stride, levels,
-    cand, ctr, buf,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Move the neighbours of the spins ``queue[t0:tail]`` whose sums changed to the lists of
-    their new sums (once each, however many of their neighbours flipped), keeping the
-    candidates (module docstring)."""
-    ng = jn.size
-    for q in range(t0, tail):
-        deg = _neighbours(queue[q], reci, lat, offsets, adj, buf)
-        for k in range(deg):
-            m = buf[k]
-            word = reci[4 * m + 3]
-            old = word & _LIST
-            g = (word >> _SUM) & _LIST
-            if g == old:
-                continue
-            reci[4 * m + 3] = word + (g - old)
-            r = reci[4 * m + 2]
-            _bs_clear(sets, lay, stride, old, levels, r)
-            _bs_set(sets, lay, stride, g, levels, r)
-            if cand[old] == r:
-                _set_hi(old, r + 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-            elif cand[ng + old] == r:
-                _set_lo(old, r - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-            if cand[ng + g] < r < cand[g]:  # between the candidates of its list: one of them
-                t = -(recf[2 * m] + jn[g])
-                if t <= u:  # up in the state relaxed at u
-                    cand[ng + g] = r
-                    ctr[ng + g] = t
-                else:
-                    cand[g] = r
-                    ctr[g] = t
-
-
-@njit(cache=True, inline="always")
 def _event(
-    direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree,
-    bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+    direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets,
+    adj, bits, queue, start, end, cand, ctr, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The avalanche at the current trigger in ``direction`` (module docstring); returns
     ``(ΔM, spins flipped)`` and leaves the next triggers and ``M`` in ``st``."""
     rising = direction > 0
     u = st[S_UP] if rising else np.nextafter(st[S_DN], -np.inf)
-    want = 0 if rising else 1
     n = fsorted.size
     ng = jn.size
-    tail = 0
-    for g in range(ng):
+    for g in range(ng):  # every list's candidates at u (before any flip test): members passed
         if rising:
-            while ctr[g] <= u:  # pass hi[g]: now the last entry with t <= u
+            start[g] = cand[g]
+            while ctr[g] <= u:  # hi[g] passed: now the last member with t <= u
                 r = cand[g]
                 cand[ng + g] = r
                 ctr[ng + g] = ctr[g]
-                _set_hi(g, r + 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-                i = order[r]
-                if _spin(bits, i) == want:
-                    t0 = tail
-                    tail = _avalanche(
-                        i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree,
-                        bits, queue, tail, buf,
-                    )  # fmt: skip
-                    _relist(
-                        t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay,
-                        stride, levels, cand, ctr, buf,
-                    )  # fmt: skip
+                _set_hi(g, r + 1, memb, mw, cnt, fsorted, jn, cand, ctr)
+            end[g] = cand[ng + g]
         else:
-            while ctr[ng + g] > u:  # pass lo[g]: now the first entry with t > u
+            end[g] = cand[ng + g]
+            while ctr[ng + g] > u:  # lo[g] passed: now the first member with t > u
                 r = cand[ng + g]
                 cand[g] = r
                 ctr[g] = ctr[ng + g]
-                _set_lo(g, r - 1, fsorted, jn, sets, lay, stride, levels, cand, ctr)
-                i = order[r]
-                if _spin(bits, i) == want:
-                    t0 = tail
-                    tail = _avalanche(
-                        i, rising, u, recf, reci, jn, nvals, gidx, lat, offsets, adj, max_degree,
-                        bits, queue, tail, buf,
-                    )  # fmt: skip
-                    _relist(
-                        t0, tail, u, recf, reci, fsorted, jn, lat, offsets, adj, queue, sets, lay,
-                        stride, levels, cand, ctr, buf,
-                    )  # fmt: skip
+                _set_lo(g, r - 1, memb, mw, cnt, fsorted, jn, cand, ctr)
+            start[g] = cand[g]
+    want = 0 if rising else 1
+    tail = 0
+    for g in range(ng):  # the passed members that are unstable start avalanches
+        p = start[g]
+        stop = end[g] + 1
+        while p < stop:
+            if memb[p] == 2 * g + want:
+                tail = _avalanche(
+                    order[p], rising, u, recs, shift, memb, mw, cnt, fsorted, jn, nxt, cand, ctr,
+                    faces, lat, offsets, adj, bits, queue, tail, buf,
+                )  # fmt: skip
+            p = _next_member(memb, mw, cnt, g, p + 1, stop)
     n_up = ist[I_NUP] + (tail if rising else -tail)
     ist[I_NUP] = n_up
     m_old = st[S_MV]
@@ -445,23 +446,23 @@ def _event(
 @njit(cache=True)
 def switch(direction, st, ist, plan):  # pragma: no cover - compiled
     """One event outside the loop (a slide's exit, a trial on a copy): :func:`_event`."""
-    (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
-     sets, lay, stride, levels, cand, ctr) = plan  # fmt: skip
+    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree,
+     bits, queue, start, end, cand, ctr) = plan  # fmt: skip
     buf = np.empty(max(max_degree, 1), np.int64)
     return _event(
-        direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj,
-        max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+        direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat,
+        offsets, adj, bits, queue, start, end, cand, ctr, buf,
     )  # fmt: skip
 
 
-@njit(cache=True, fastmath=_CONTRACT)
+@njit(cache=True, fastmath=_CONTRACT, **_LOOP_OPTIONS)
 def _advance(
     par, st, ist, tau_stop, tan_on, y, ntan, e, coefs, mp, rec_on, sw, sw_count, plan, buf,
 ):  # pragma: no cover - compiled  # fmt: skip
     """:func:`oscillators.engines._relay_kernels.advance_table` with the spins' plan: advance
     to period time ``tau_stop``; the same statuses."""
-    (recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj, max_degree, bits, queue,
-     sets, lay, stride, levels, cand, ctr) = plan  # fmt: skip
+    (recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat, offsets, adj, max_degree,
+     bits, queue, start, end, cand, ctr) = plan  # fmt: skip
     q, v, tau, c, s = st[S_Q], st[S_V], st[S_TAU], st[S_COS], st[S_SIN]
     up, down, mv = st[S_UP], st[S_DN], st[S_MV]
     nsw = ist[I_NSW]
@@ -481,8 +482,8 @@ def _advance(
         if direction == 0:
             break
         jump, flips = _event(
-            direction, st, ist, recf, reci, fsorted, order, jn, nvals, gidx, lat, offsets, adj,
-            max_degree, bits, queue, sets, lay, stride, levels, cand, ctr, buf,
+            direction, st, ist, recs, shift, memb, mw, cnt, fsorted, order, jn, nxt, faces, lat,
+            offsets, adj, bits, queue, start, end, cand, ctr, buf,
         )  # fmt: skip
         up, down, mv = st[S_UP], st[S_DN], st[S_MV]
         nsw += flips  # n_events counts spin flips
@@ -512,7 +513,7 @@ def run_spins(
     gets (q, v, M) at target i. Returns (status, next target index)."""
     e = np.empty(ORDER + 1)
     coefs = hop_coefficients(mp)
-    buf = np.empty(max(plan[10], 1), np.int64)
+    buf = np.empty(max(plan[13], 1), np.int64)
     sample = out.shape[0] > 0
     for i in range(i_start, tgt_n.shape[0]):
         while ist[I_N] < tgt_n[i]:

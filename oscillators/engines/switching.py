@@ -3,11 +3,12 @@
 An operator without a relay table whose ``compiled_switching()`` hands over interacting Ising
 spins (:class:`hysteresis.compiled_spins.CompiledSpins`: a random-field Ising lattice) is
 integrated here: between events the relay kernel's closed-form hops, the next trigger input
-in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`,
-every list's two candidates kept up to date: O(G + z·flips) per event, no search per list, no
-trial run), each avalanche one jump ``C·ΔM`` at its trigger input with the saltation
-``δv += C·ΔM/v*·δq``, ``n_events`` counting spin flips. Filippov sliding, the switch budget,
-grazing, the tangent flow and the records are the relay kernel engine's
+in each direction from the spins' sorted lists (:mod:`oscillators.engines._switching_kernels`:
+per list two candidates around the current input kept up to date over one membership byte
+per spin; O(G + members passed + z·flips) per event, no trial run), each
+avalanche one jump ``C·ΔM`` at its trigger input with the saltation ``δv += C·ΔM/v*·δq``,
+``n_events`` counting spin flips. Filippov sliding, the switch budget, grazing, the tangent
+flow and the records are the relay kernel engine's
 (:class:`~oscillators.engines.relay.RelayKernelEngine`, whose Python side this class reuses).
 
 Methods (``engine_options={"method": ...}``): ``"auto"`` (this engine) or ``"generic"`` (the
@@ -31,14 +32,6 @@ from oscillators.engines.relay import RelayEngine, RelayKernelEngine, RelayRefer
 from oscillators.results import OscillatorState
 
 __all__ = ["SwitchingKernelEngine"]
-
-
-def _aligned_zeros(words: int) -> np.ndarray:
-    """``words`` zero uint64 starting on a 64-byte boundary (a row of 8 interleaved bitset
-    words is one cache line)."""
-    raw = np.zeros(words + 8, dtype=np.uint64)
-    skip = (-raw.ctypes.data // 8) % 8
-    return raw[skip : skip + words]
 
 
 class SwitchingKernelEngine(RelayKernelEngine):
@@ -84,31 +77,48 @@ class SwitchingKernelEngine(RelayKernelEngine):
             )
         gidx = np.full(2 * deg + 1, -1, dtype=np.int64)
         gidx[nvals + deg] = np.arange(nvals.size)
+        # the list after a neighbour's flip up (row 0) or down (row 1); sums that cannot occur
+        # keep their list (never read)
+        nxt = np.empty((2, nvals.size), dtype=np.int64)
+        for row, dn in enumerate((2, -2)):
+            k = np.clip(nvals + dn + deg, 0, 2 * deg)
+            nxt[row] = np.where(gidx[k] >= 0, gidx[k], np.arange(nvals.size))
         bits = np.array(bits, dtype=np.uint8)
         nup = np.zeros(n, dtype=np.uint8 if deg < 256 else np.int32)
         count_up_neighbours(bits, spec.lattice, spec.offsets, spec.adjacency, deg, nup)
-        # one 16-byte record per spin in site order: f_i, rank_i, list_i (kernel docstring)
-        recf = np.empty(2 * n)
-        recf[0::2] = spec.fields
-        reci = recf.view(np.int32)
-        reci[2::4][spec.order] = np.arange(n, dtype=np.int32)
-        reci[3::4] = sk.boundary_flags(spec.lattice, n) << sk.FACES  # the lists or-ed in below
-        lay, stride, levels, words = sk.bitset_layout(n, nvals.size)
-        sets = _aligned_zeros(words)
-        sk.build_lists(reci, gidx, nvals, nup, spec.lattice, spec.offsets, deg, sets, lay,
-                       stride, levels)  # fmt: skip
+        # one record per spin in site order: rank, list, up (kernel docstring; 4 bytes on a
+        # lattice), and on a lattice its faces
+        dtype, shift = sk.record_layout(n, nvals.size)
+        recs = np.empty(n, dtype=dtype)
+        rank = np.empty(n, dtype=np.int64)
+        rank[spec.order] = np.arange(n, dtype=np.int64)
+        faces = sk.boundary_flags(spec.lattice, n)
+        # the lists in rank order, one byte per entry (two past 127 lists): 2·list + up, padded
+        # with 0xFF to whole 8-byte words (the kernels search 8 entries at a time)
+        small = 2 * nvals.size <= 254
+        words = (n + 7) // 8 + 1
+        memb = np.full(8 * words if small else n, 0xFF, dtype=np.uint8 if small else np.uint16)
+        # per list and block of 64 positions the number of members (the searches skip empty
+        # blocks)
+        cnt = np.zeros((nvals.size, words // 8 + 1) if small else (0, 0), dtype=np.uint8)
+        sk.records(recs, shift, rank, memb, cnt, bits, nup, gidx, spec.lattice, spec.offsets,
+                   deg)  # fmt: skip
+        del rank
+        mw = memb.view(np.uint64) if small else np.empty(0, dtype=np.uint64)
         del nup
         fs, j = spec.sorted_fields, float(spec.spin_coupling)
         jn = j * nvals  # J·n rounded once, here: the kernels add it (no fused multiply-add)
-        # every list's entries with t <= u0 (binary search; t grows along a list)
-        ptr = np.array([np.searchsorted(-(fs + x), u0, side="right") for x in jn.tolist()])
-        cand = np.empty(2 * nvals.size, dtype=np.int64)
-        ctr = np.empty(2 * nvals.size)
-        sk.candidates(fs, jn, sets, lay, stride, levels, ptr.astype(np.int64), cand, ctr)
+        # every list's boundary: its entries with t <= u0 (binary search; t grows along a list)
+        bound = np.array([np.searchsorted(-(fs + x), u0, side="right") for x in jn.tolist()],
+                         dtype=np.int64)  # fmt: skip
+        ng = nvals.size
+        cand = np.empty(2 * ng, dtype=np.int64)
+        ctr = np.empty(2 * ng)
+        sk.candidates(memb, mw, cnt, fs, jn, bound, cand, ctr)
         self._plan = (
-            recf, reci, fs, spec.order, jn, nvals, gidx, spec.lattice, spec.offsets,
-            spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), sets, lay, stride,
-            levels, cand, ctr,
+            recs, shift, memb, mw, cnt, fs, spec.order, jn, nxt, faces, spec.lattice, spec.offsets,
+            spec.adjacency, deg, bits, np.empty(max(n, 1), dtype=np.int32), bound,
+            np.empty(ng, dtype=np.int64), cand, ctr,
         )  # fmt: skip
         self._n_relays = n  # the switch budget scales with the spins
         self._mp = rk.taylor_matrix_coefficients(float(system.damping_ratio), self._omega)
@@ -124,7 +134,7 @@ class SwitchingKernelEngine(RelayKernelEngine):
         st[rk.S_MV] = (2 * n_up - n) / n
         ist = np.zeros(rk.N_IST, dtype=np.int64)
         ist[sk.I_NUP] = n_up
-        sk.refresh(st, jn, ctr)
+        sk.refresh(st, ctr, ng)
         self._st, self._ist = st, ist
         self._start_on_sliding_set(q0, v0)
 
@@ -136,7 +146,10 @@ class SwitchingKernelEngine(RelayKernelEngine):
         """(output, next up, next down trigger) after the event at the current trigger in
         ``direction``, on a copy of the plan (O(N): only where a start sits on a trigger)."""
         st, ist = self._st.copy(), self._ist.copy()
-        plan = tuple(a.copy() if isinstance(a, np.ndarray) else a for a in self._plan)
+        plan = [a.copy() if isinstance(a, np.ndarray) else a for a in self._plan]
+        if plan[3].size:
+            plan[3] = plan[2].view(np.uint64)  # the membership words: a view of the bytes
+        plan = tuple(plan)
         sk.switch(direction, st, ist, plan)
         return float(st[rk.S_MV]), float(st[rk.S_UP]), float(st[rk.S_DN])
 
