@@ -342,7 +342,9 @@ def _second_difference_nnls(
 
     def subspace(idx: np.ndarray) -> np.ndarray:
         sub = mat[idx][:, idx].tocsc()
-        lu = splu(sub, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        lu = splu(
+            sub, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+        )
         z = lu.solve(-q[idx])
         for _refine in range(3):  # M is ill-conditioned (~n⁴); its residual is exact
             z += lu.solve(-q[idx] - sub @ z)
