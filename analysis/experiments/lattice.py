@@ -149,7 +149,9 @@ def avalanche_statistics(sizes: Any, n_spins: int) -> dict:
     }
 
 
-def identify_lattice(op: Any, half_range: float, nodes: int) -> tuple[Any, dict]:
+def identify_lattice(
+    op: Any, half_range: float, nodes: int, saturation: float | None = None
+) -> tuple[Any, dict]:
     """The lattice's Preisach model from its first-order reversal curves on ``nodes`` evenly
     spaced nodes over ``[−half_range, half_range]`` plus one node beyond each saturation (every
     input of ``[−Q, Q]`` sees the relays outside as one lump each), identified on the native
@@ -157,9 +159,15 @@ def identify_lattice(op: Any, half_range: float, nodes: int) -> tuple[Any, dict]
     :meth:`PreisachModel.from_identification`). Returns the model and its diagnostics: the
     grid, the Everett residual (rms and the bound ``√n·rms`` on any node), the scale ``K`` (1
     when the lattice saturates inside the grid) and the count of negative exact cell masses
-    (zero for a Preisach operator)."""
-    sat = float(np.max(np.abs(op.fields))) + 2 * op.max_degree * op.spin_coupling + 1.0
-    sat = max(sat, half_range + 1.0)
+    (zero for a Preisach operator). ``saturation``: the outer nodes' ``|u|`` (default: the
+    lattice's, beyond every spin's threshold; give it for any other operator)."""
+    if saturation is None:
+        sat = float(np.max(np.abs(op.fields))) + 2 * op.max_degree * op.spin_coupling + 1.0
+        sat = max(sat, half_range + 1.0)
+    else:
+        sat = float(saturation)
+        if not (math.isfinite(sat) and sat > half_range):
+            raise ValueError(f"saturation must be finite and > half_range, got {saturation!r}")
     grid = np.concatenate([[-sat], np.linspace(-half_range, half_range, nodes), [sat]])
     curves = measure_reversal_curves(op, grid, convention="mayergoyz")
     ident = identify_from_curves(curves, output_range=(-1.0, 1.0), extend=True)

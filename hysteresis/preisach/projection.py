@@ -17,6 +17,16 @@ exactly like that corner relay, so the model reproduces every node-input history
 masses exactly; between nodes it is the lattice's staircase. Cells touching the diagonal give
 zero-width relays (the reversible part of a measured sample).
 
+Solvers: up to 2500 cells Lawson–Hanson on the explicit matrix (``scipy.optimize.nnls``).
+Above, when the fitted nodes are exactly the nodes of the physical cells (FORCs measured on a
+common grid: the native grid), the Everett map is square and invertible — its inverse is
+Mayergoyz's mixed second difference, a sparse matrix ``D`` — and the NNLS is the dual problem
+``min_{g >= 0} ½ gᵀ D Dᵀ g + (D E)ᵀ g`` with a sparse Hessian, solved by an active-set method
+with sparse LU solves (a few hundred nodes: tens of thousands of cells, seconds); otherwise
+matrix-free block principal pivoting. All stop on the KKT conditions
+(:data:`KKT_TOLERANCE`). For a Preisach operator's own FORCs the second differences are its
+weights and are non-negative: the projection returns them unchanged (exact identification).
+
 The model is normalised: weights ``w = m / K`` with the scale ``K = Σ m`` (half the output
 swing between the saturations), so that ``output ≈ offset + K · M[u]`` with ``M`` the model's
 output in ``[−1, 1]``.
@@ -36,7 +46,7 @@ from hysteresis.preisach.base import PreisachModel
 
 __all__ = ["PreisachProjection", "project_identification"]
 
-_DENSE_LIMIT = 2500  # cells; above, block principal pivoting on the cumulative-sum operator
+_DENSE_LIMIT = 2500  # cells; above, the sparse second-difference solve or block pivoting
 #: Convergence criterion of the large-problem solver: the KKT conditions of the NNLS problem
 #: (x >= 0, g = Aᵀ(Ax − b) >= 0, x·g = 0) hold to this fraction of ‖Aᵀb‖∞ (the gradient's scale
 #: at x = 0). Lawson–Hanson (the dense path) meets them exactly.
@@ -117,8 +127,8 @@ def project_identification(
         When every node with ``β < α`` is fitted and the nodes match the cells one to one (the
         native grid of FORCs on a common grid: a square system), the problem is solved as the
         sparse linear complementarity problem of the cells' second differences
-        (:func:`_second_difference_nnls`, grids of a few hundred nodes in seconds); otherwise
-        matrix-free (:func:`_block_pivoting_nnls`).
+        (``_second_difference_nnls``, grids of a few hundred nodes in seconds); otherwise
+        matrix-free (``_block_pivoting_nnls``).
 
     Returns
     -------
