@@ -34,8 +34,8 @@ from analysis.experiments.lattice import (
     identify_lattice,
     lattice_seeds,
 )
-from analysis.experiments.store import ResultStore
 from analysis.experiments.parameters import DAMPING_RATIO, DEFAULT_Q0, FREQUENCY, V0
+from analysis.experiments.store import ResultStore
 from hysteresis import RandomFieldIsing
 from hysteresis._validation import positive_integer
 from oscillators import ForcedOscillator
