@@ -391,7 +391,8 @@ def _second_difference_nnls(
             # move from the feasible g towards z until the first clamped g reaches zero; that
             # one (and any other reaching zero) leaves the clamped set
             where = np.flatnonzero(low)
-            ratio = g[where] / (g[where] - z[where])
+            gap = g[where] - z[where]  # >= 0; 0 only where g = z = 0 (blocks at once)
+            ratio = np.divide(g[where], gap, out=np.zeros(where.size), where=gap > 0)
             t = float(np.min(ratio))
             g = np.maximum(g + t * (z - g), 0.0)
             drop = low & (g <= 0.0)
