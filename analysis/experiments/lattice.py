@@ -25,9 +25,10 @@ scaled by R, common random numbers along R) at every coupling C:
   operators driven by the lattice trajectory's input: the operator-level error of the model,
   on the raw input (grid staircase + non-Preisach error) and on the input rounded to the grid
   nodes (where a Preisach lattice would be reproduced exactly: the non-Preisach error alone);
-* **the lattice's congruency violation** (:func:`~analysis.identification.congruency.congruency_scan`):
-  minor loops between the same extrema reached from different histories, a grid-independent
-  measure of how far the lattice is from any Preisach model (0 for one).
+* **the lattice's congruency violation**
+  (:func:`~analysis.identification.congruency.congruency_scan`): minor loops between the
+  same extrema reached from different histories, a grid-independent measure of how far the
+  lattice is from any Preisach model (0 for one).
 
 Above ~70 nodes the projection is the sparse second-difference solve of
 :mod:`hysteresis.preisach.projection` (``--identification-nodes 150``: 1–14 s a realization).
