@@ -88,7 +88,7 @@ S_MIN = 2
 #: congruency scan (:func:`~analysis.identification.congruency.congruency_scan`): loops between
 #: every pair of this many nodes over ``[−a, a]``, ``a`` the larger of ``|u|`` where the major
 #: loop's rising branch has flipped the fraction CONGRUENCY_QUANTILE and 1 − it of the spins
-#: (the hysteretic region; capped at the coupled motion's largest |q|), from this many
+#: (the hysteretic region; capped at the coupled motion's largest ``|q|``), from this many
 #: histories, sampled this many times a branch
 CONGRUENCY_NODES, CONGRUENCY_HISTORIES, CONGRUENCY_SAMPLES = 9, 8, 16
 CONGRUENCY_QUANTILE = 0.02

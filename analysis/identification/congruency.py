@@ -14,11 +14,11 @@ congruent.
 :func:`minor_loop_congruency` prepares the operator by each of several histories (turning
 points from negative saturation), then drives it to ``u2`` and back to ``u1`` (so the last
 extremum is ``>= u2`` and the last move a descent: the loop's start), and traces the loop
-``u1 → u2 → u1`` on ``samples`` inputs each way. The *congruency violation* is
+``u1 → u2 → u1`` on ``samples`` inputs each way. The *congruency violation* is::
 
-    max over histories h and loop inputs u of |ΔM_h(u) − ΔM_ref(u)|,
+    max over histories h and loop inputs u of |ΔM_h(u) − ΔM_ref(u)|
 
-the reference the descending major branch (history: positive saturation). It needs no
+with the reference the descending major branch (history: positive saturation). It needs no
 identification grid: it is a property of the operator, in units of its output. The
 *return gap* ``max_h |M_h(end) − M_h(u1)|`` checks return-point memory (0 for both operator
 families). :func:`congruency_scan` takes the loops between every pair of a set of nodes.
