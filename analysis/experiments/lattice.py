@@ -24,7 +24,14 @@ scaled by R, common random numbers along R) at every coupling C:
   to the oscillator from the same initial condition (the same measurements), and both
   operators driven by the lattice trajectory's input: the operator-level error of the model,
   on the raw input (grid staircase + non-Preisach error) and on the input rounded to the grid
-  nodes (where a Preisach lattice would be reproduced exactly: the non-Preisach error alone).
+  nodes (where a Preisach lattice would be reproduced exactly: the non-Preisach error alone);
+* **the lattice's congruency violation**
+  (:func:`~analysis.identification.congruency.congruency_scan`): minor loops between the
+  same extrema reached from different histories, a grid-independent measure of how far the
+  lattice is from any Preisach model (0 for one).
+
+Above ~70 nodes the projection is the sparse second-difference solve of
+:mod:`hysteresis.preisach.projection` (``--identification-nodes 150``: 1–14 s a realization).
 
 :func:`run_study` runs (or resumes: every task is stored as it finishes,
 :func:`~analysis.experiments.execution.run_tasks`) a :class:`LatticeSize` and
@@ -47,6 +54,7 @@ from analysis.experiments.ensemble import one_pass_measurements, section_dimensi
 from analysis.experiments.execution import run_tasks, spawn_seeds
 from analysis.experiments.parameters import DAMPING_RATIO, DEFAULT_Q0, FREQUENCY, V0
 from analysis.experiments.store import ResultStore
+from analysis.identification.congruency import congruency_scan
 from analysis.identification.curves import measure_reversal_curves
 from analysis.identification.density import identify_from_curves
 from hysteresis import RandomFieldIsing
@@ -77,6 +85,13 @@ BOX_MAX_FILL, BOX_MIN_BOXES = 0.1, 8.0
 COMPARE_SAMPLES = 64
 #: smallest avalanche of the size-exponent fit
 S_MIN = 2
+#: congruency scan (:func:`~analysis.identification.congruency.congruency_scan`): loops between
+#: every pair of this many nodes over ``[−a, a]``, ``a`` the larger of ``|u|`` where the major
+#: loop's rising branch has flipped the fraction CONGRUENCY_QUANTILE and 1 − it of the spins
+#: (the hysteretic region; capped at the coupled motion's largest ``|q|``), from this many
+#: histories, sampled this many times a branch
+CONGRUENCY_NODES, CONGRUENCY_HISTORIES, CONGRUENCY_SAMPLES = 9, 8, 16
+CONGRUENCY_QUANTILE = 0.02
 
 
 @dataclass(frozen=True)
@@ -141,7 +156,9 @@ def avalanche_statistics(sizes: Any, n_spins: int) -> dict:
     }
 
 
-def identify_lattice(op: Any, half_range: float, nodes: int) -> tuple[Any, dict]:
+def identify_lattice(
+    op: Any, half_range: float, nodes: int, saturation: float | None = None
+) -> tuple[Any, dict]:
     """The lattice's Preisach model from its first-order reversal curves on ``nodes`` evenly
     spaced nodes over ``[−half_range, half_range]`` plus one node beyond each saturation (every
     input of ``[−Q, Q]`` sees the relays outside as one lump each), identified on the native
@@ -149,9 +166,15 @@ def identify_lattice(op: Any, half_range: float, nodes: int) -> tuple[Any, dict]
     :meth:`PreisachModel.from_identification`). Returns the model and its diagnostics: the
     grid, the Everett residual (rms and the bound ``√n·rms`` on any node), the scale ``K`` (1
     when the lattice saturates inside the grid) and the count of negative exact cell masses
-    (zero for a Preisach operator)."""
-    sat = float(np.max(np.abs(op.fields))) + 2 * op.max_degree * op.spin_coupling + 1.0
-    sat = max(sat, half_range + 1.0)
+    (zero for a Preisach operator). ``saturation``: the outer nodes' ``|u|`` (default: the
+    lattice's, beyond every spin's threshold; give it for any other operator)."""
+    if saturation is None:
+        sat = float(np.max(np.abs(op.fields))) + 2 * op.max_degree * op.spin_coupling + 1.0
+        sat = max(sat, half_range + 1.0)
+    else:
+        sat = float(saturation)
+        if not (math.isfinite(sat) and sat > half_range):
+            raise ValueError(f"saturation must be finite and > half_range, got {saturation!r}")
     grid = np.concatenate([[-sat], np.linspace(-half_range, half_range, nodes), [sat]])
     curves = measure_reversal_curves(op, grid, convention="mayergoyz")
     ident = identify_from_curves(curves, output_range=(-1.0, 1.0), extend=True)
@@ -224,7 +247,12 @@ def lattice_task(
     period = 2 * math.pi / FREQUENCY
     t_end, transient = periods * period, transient_periods * period
     sat = float(np.max(np.abs(op.fields))) + 6.0 + 1.0
-    _, major, _ = op.avalanches(np.array([-sat, sat]))
+    triggers, major, _ = op.avalanches(np.array([-sat, sat]))
+    flipped = np.cumsum(major) / n
+    switching = max(
+        abs(float(triggers[np.searchsorted(flipped, CONGRUENCY_QUANTILE)])),
+        abs(float(triggers[np.searchsorted(flipped, 1.0 - CONGRUENCY_QUANTILE)])),
+    )
     out: dict[str, Any] = {"n_spins": n, "major_loop": avalanche_statistics(major, n)}
     lattice, drives = [], []
     for c in couplings:
@@ -255,7 +283,15 @@ def lattice_task(
         )  # fmt: skip
         drives.append(np.asarray(head.q, dtype=float))
     q_max = max(float(np.max(np.abs(d))) for d in drives)
+    ident_start = time.perf_counter()
     model, info = identify_lattice(op, q_max + margin, identification_nodes)
+    info["seconds"] = time.perf_counter() - ident_start
+    # the lattice's own non-Preisach part, independent of any grid: minor-loop congruency
+    a = min(switching, q_max)
+    cong = congruency_scan(
+        op, np.linspace(-a, a, CONGRUENCY_NODES), info["grid"][-1],
+        CONGRUENCY_HISTORIES, CONGRUENCY_SAMPLES,
+    )  # fmt: skip
     ident_seconds = time.perf_counter() - start
     preisach = []
     for c, drive in zip(couplings, drives, strict=True):
@@ -268,6 +304,7 @@ def lattice_task(
         lattice=lattice,
         preisach=preisach,
         identification=info,
+        congruency=cong,
         seconds=time.perf_counter() - start,
         seconds_to_identification=ident_seconds,
     )
@@ -339,6 +376,9 @@ def summarize(tasks: Sequence[dict], results: Sequence[dict], size: LatticeSize)
     for (r_, side), items in sorted(groups.items()):
         ident = [r["identification"] for _, r in items]
         major = [r["major_loop"] for _, r in items]
+        # results stored before the congruency scan existed have none (nan)
+        none = {"violation": float("nan"), "mean_violation": float("nan")}
+        cong = [r.get("congruency", none) for _, r in items]
         for i, c in enumerate(items[0][0]["couplings"]):
             lat = [r["lattice"][i] for _, r in items]
             pre = [r["preisach"][i] for _, r in items]
@@ -390,6 +430,14 @@ def summarize(tasks: Sequence[dict], results: Sequence[dict], size: LatticeSize)
                     "identification_negative_mass": _mean_sem([x["negative_mass"] for x in ident]),
                     "identification_relays": _mean_sem([x["relays"] for x in ident]),
                     "identification_scale": _mean_sem([x["scale"] for x in ident]),
+                    "same_attractor_values": [bool(x) for x in same],
+                    "operator_error_rms_values": [p["operator_error"]["rms"] for p in pre],
+                    "operator_error_on_nodes_rms_values": [
+                        p["operator_error_on_nodes"]["rms"] for p in pre
+                    ],
+                    "congruency_violation": _mean_sem([c["violation"] for c in cong]),
+                    "congruency_mean_violation": _mean_sem([c["mean_violation"] for c in cong]),
+                    "congruency_violation_values": [c["violation"] for c in cong],
                     "seconds": float(sum(r["seconds"] for _, r in items)),
                 }
             )

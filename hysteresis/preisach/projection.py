@@ -17,6 +17,16 @@ exactly like that corner relay, so the model reproduces every node-input history
 masses exactly; between nodes it is the lattice's staircase. Cells touching the diagonal give
 zero-width relays (the reversible part of a measured sample).
 
+Solvers: up to 2500 cells Lawson–Hanson on the explicit matrix (``scipy.optimize.nnls``).
+Above, when the fitted nodes are exactly the nodes of the physical cells (FORCs measured on a
+common grid: the native grid), the Everett map is square and invertible — its inverse is
+Mayergoyz's mixed second difference, a sparse matrix ``D`` — and the NNLS is the dual problem
+``min_{g >= 0} ½ gᵀ D Dᵀ g + (D E)ᵀ g`` with a sparse Hessian, solved by an active-set method
+with sparse LU solves (a few hundred nodes: tens of thousands of cells, seconds); otherwise
+matrix-free block principal pivoting. All stop on the KKT conditions
+(:data:`KKT_TOLERANCE`). For a Preisach operator's own FORCs the second differences are its
+weights and are non-negative: the projection returns them unchanged (exact identification).
+
 The model is normalised: weights ``w = m / K`` with the scale ``K = Σ m`` (half the output
 swing between the saturations), so that ``output ≈ offset + K · M[u]`` with ``M`` the model's
 output in ``[−1, 1]``.
@@ -36,7 +46,7 @@ from hysteresis.preisach.base import PreisachModel
 
 __all__ = ["PreisachProjection", "project_identification"]
 
-_DENSE_LIMIT = 2500  # cells; above, block principal pivoting on the cumulative-sum operator
+_DENSE_LIMIT = 2500  # cells; above, the sparse second-difference solve or block pivoting
 #: Convergence criterion of the large-problem solver: the KKT conditions of the NNLS problem
 #: (x >= 0, g = Aᵀ(Ax − b) >= 0, x·g = 0) hold to this fraction of ‖Aᵀb‖∞ (the gradient's scale
 #: at x = 0). Lawson–Hanson (the dense path) meets them exactly.
@@ -111,9 +121,14 @@ def project_identification(
         Fit only the nodes of ``measured`` (when present); otherwise every node with
         ``β < α``.
     max_iter:
-        Limit of the exchange steps of the solver used above 2500 cells (block principal
-        pivoting, default 200); it stops when the KKT conditions hold to
-        :data:`KKT_TOLERANCE` relative and raises if that is not reached within the limit.
+        Limit of the exchange steps of the solvers used above 2500 cells (block principal
+        pivoting, default 200); they stop when the KKT conditions hold to
+        :data:`KKT_TOLERANCE` relative and raise if that is not reached within the limit.
+        When every node with ``β < α`` is fitted and the nodes match the cells one to one (the
+        native grid of FORCs on a common grid: a square system), the problem is solved as the
+        sparse linear complementarity problem of the cells' second differences
+        (``_second_difference_nnls``, grids of a few hundred nodes in seconds); otherwise
+        matrix-free (``_block_pivoting_nnls``).
 
     Returns
     -------
@@ -177,7 +192,11 @@ def project_identification(
             unit[c] = 0.0
         x, _ = nnls(mat, target, maxiter=50 * n_cells)
     else:
-        x = _block_pivoting_nnls(forward, adjoint, target, n_cells, max_iter)
+        diff = _second_difference(rows, cells, forward)
+        if diff is not None:
+            x = _second_difference_nnls(diff, forward, adjoint, target, max_iter)
+        else:
+            x = _block_pivoting_nnls(forward, adjoint, target, n_cells, max_iter)
     masses = np.zeros(cells.shape)
     masses[cells] = x
     resid = forward(x) - target
@@ -267,5 +286,124 @@ def _block_pivoting_nnls(
             free[last] = not free[last]
     raise RuntimeError(
         f"the NNLS projection did not converge within max_iter = {limit} exchange steps "
+        f"(KKT tolerance {KKT_TOLERANCE:g}); pass a larger max_iter"
+    )
+
+
+def _second_difference(rows: np.ndarray, cells: np.ndarray, forward: Any) -> Any:
+    """The inverse ``D`` of the Everett map as a sparse matrix, or ``None`` if it has none.
+
+    When the fitted nodes are exactly the nodes ``(i + 1, j)`` of the physical cells ``(i, j)``
+    (and every other node's Everett value is identically zero: the nodes with ``β >= α`` and
+    the first row), the map ``x → E[rows]`` is square and its inverse is Mayergoyz's mixed
+    second difference ``m_ij = E[i+1, j] − E[i, j] − E[i+1, j+1] + E[i, j+1]`` (entries ±1,
+    four per row). The inverse is checked on a random vector (``None`` if it fails).
+    """
+    # scipy.sparse is heavy at import: loaded where used (fast `hyst` start)
+    from scipy.sparse import csr_matrix
+
+    n_cells, n_rows = int(cells.sum()), int(rows.sum())
+    if n_cells != n_rows:
+        return None
+    index = np.full((rows.shape[0] + 1, rows.shape[1] + 1), -1, dtype=np.int64)
+    index[:-1, :-1][rows] = np.arange(n_rows)
+    ci, cj = np.nonzero(cells)  # the row-major order of masses[cells]
+    cols = np.stack([index[ci + 1, cj], index[ci, cj], index[ci + 1, cj + 1], index[ci, cj + 1]])
+    vals = np.array([1.0, -1.0, -1.0, 1.0])[:, None] * np.ones(n_cells)
+    keep = cols >= 0  # a node outside the fit has E = 0 identically (checked below)
+    who = np.broadcast_to(np.arange(n_cells), cols.shape)
+    diff = csr_matrix((vals[keep], (who[keep], cols[keep])), shape=(n_cells, n_rows))
+    z = np.random.default_rng(0).random(n_cells)  # a fixed probe, not a random quantity
+    if not np.allclose(diff @ forward(z), z, rtol=0.0, atol=1e-9 * n_cells):
+        return None
+    return diff
+
+
+def _second_difference_nnls(
+    diff: Any, forward: Any, adjoint: Any, target: np.ndarray, max_iter: int | None
+) -> np.ndarray:
+    """``argmin ‖A x − b‖ subject to x >= 0`` for an invertible ``A`` with sparse ``D = A⁻¹``.
+
+    With the gradient ``g = Aᵀ(Ax − b)``: ``Ax − b = Dᵀg``, so ``x = q + M g`` with the exact
+    cell masses ``q = D b`` and the sparse positive definite ``M = D Dᵀ`` (small integers): the
+    KKT conditions ``x >= 0, g >= 0, x·g = 0`` are those of the dual problem
+    ``min_{g >= 0} ½ gᵀMg + qᵀg`` (gradient ``x``). It is solved by the Lawson–Hanson active
+    set method on ``g`` (every cell with ``x < 0`` enters the set of clamped cells at once,
+    one at a time — the most negative — when that made no progress, which keeps the method
+    finite), each subspace solve ``M_SS g_S = −q_S`` a sparse LU with iterative refinement
+    (exact residuals: ``M`` is integer). A Preisach operator's data (``q >= 0``) need no step
+    and give ``x = q``, Mayergoyz's identification. The KKT conditions are checked with the
+    original operators to :data:`KKT_TOLERANCE` relative to ``‖Aᵀb‖∞``.
+    """
+    # scipy.sparse.linalg is heavy at import: loaded where used (fast `hyst` start)
+    from scipy.sparse.linalg import splu
+
+    limit = 200 if max_iter is None else int(max_iter)
+    if limit < 1:
+        raise ValueError(f"max_iter must be a positive integer, got {max_iter!r}")
+    n = diff.shape[0]
+    q = diff @ target
+    scale = float(np.max(np.abs(adjoint(target))))
+    if scale == 0.0:
+        return np.zeros(n)
+    tol = KKT_TOLERANCE * scale
+    tol_x = KKT_TOLERANCE * max(float(np.max(np.abs(q))), np.finfo(float).tiny)
+    mat = (diff @ diff.T).tocsr()
+
+    def subspace(idx: np.ndarray) -> np.ndarray:
+        sub = mat[idx][:, idx].tocsc()
+        lu = splu(
+            sub, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+        )
+        z = lu.solve(-q[idx])
+        for _refine in range(3):  # M is ill-conditioned (~n⁴); its residual is exact
+            z += lu.solve(-q[idx] - sub @ z)
+        return z
+
+    g = np.zeros(n)
+    clamped = np.zeros(n, dtype=bool)
+    x = q.copy()
+    objective, single = 0.0, False
+    for _ in range(limit):
+        viol = ~clamped & (x < -tol_x)
+        if not viol.any():
+            x[clamped | (x <= tol_x)] = 0.0  # round-off of exactly empty cells, too
+            grad = adjoint(forward(x) - target)
+            worst = max(-float(np.min(grad)), float(np.max(np.abs(grad[x > tol_x]), initial=0.0)))
+            if worst <= tol:
+                return x
+            raise RuntimeError(
+                "the NNLS projection's sparse active-set solve did not reach the KKT tolerance "
+                f"({worst / scale:.2e} of the gradient's scale, criterion {KKT_TOLERANCE:g})"
+            )
+        if single:
+            viol = np.zeros(n, dtype=bool)
+            viol[int(np.argmin(np.where(clamped, np.inf, x)))] = True
+        clamped |= viol
+        for _inner in range(n):
+            idx = np.flatnonzero(clamped)
+            z = np.zeros(n)
+            z[idx] = subspace(idx)
+            low = clamped & (z <= 0.0)
+            if not low.any():
+                g = z
+                break
+            # move from the feasible g towards z until the first clamped g reaches zero; that
+            # one (and any other reaching zero) leaves the clamped set
+            where = np.flatnonzero(low)
+            gap = g[where] - z[where]  # >= 0; 0 only where g = z = 0 (blocks at once)
+            ratio = np.divide(g[where], gap, out=np.zeros(where.size), where=gap > 0)
+            t = float(np.min(ratio))
+            g = np.maximum(g + t * (z - g), 0.0)
+            drop = low & (g <= 0.0)
+            drop[where[np.argmin(ratio)]] = True
+            g[drop] = 0.0
+            clamped &= ~drop
+        x = q + mat @ g
+        new = float(0.5 * g @ (mat @ g) + q @ g)
+        single = not new < objective  # no progress: the next step adds one cell only
+        objective = min(objective, new)
+    raise RuntimeError(
+        f"the NNLS projection did not converge within max_iter = {limit} active-set steps "
         f"(KKT tolerance {KKT_TOLERANCE:g}); pass a larger max_iter"
     )

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import analysis.experiments.lattice as lat
+import analysis.experiments.lattice_control as lattice_control
 from analysis.cli import main
 from analysis.dynamics.lyapunov import lyapunov_spectrum
 from analysis.experiments.models import build_operator, describe_model, model_record
@@ -82,7 +83,8 @@ def test_small_run_json_has_every_field_and_the_flips_add_up(tmp_path, capsys):
         "coupled_histogram", "sweep_histogram", "bin_edges", "major_largest_fraction",
         "major_tau", "major_histogram", "identification_residual_rms",
         "identification_negative_mass", "identification_relays", "identification_scale",
-        "seconds",
+        "seconds", "congruency_violation", "congruency_mean_violation",
+        "congruency_violation_values", "same_attractor_values",
     }  # fmt: skip
     side = {"lambda_max", "kaplan_yorke", "box_counting", "magnetization", "fraction_regular"}
     for p in rec["points"]:
@@ -90,6 +92,8 @@ def test_small_run_json_has_every_field_and_the_flips_add_up(tmp_path, capsys):
         assert side <= set(p["lattice"]) and side <= set(p["preisach"])
         # the avalanche sizes of the coupled motion sum to the flips the engine counted
         assert p["barkhausen_flips_match"] is True
+        # the lattice's minor loops are not congruent (R = 3.5, L = 6: violation >= 2/N)
+        assert p["congruency_violation"][0] >= 2 / 216
     assert rec["answer"] == line[0]
 
 
@@ -137,12 +141,14 @@ def test_coupled_avalanches_replay_through_the_operator():
     assert sizes.sum() == replay.sum()
 
 
-def test_identified_model_reproduces_the_major_loop_at_large_disorder():
+@pytest.mark.parametrize("nodes", [30, 150])
+def test_identified_model_reproduces_the_major_loop_at_large_disorder(nodes):
     """At R = 3.5 (far above R_c) the identified Preisach model's major loop on the grid nodes
     matches the lattice's within the identification's own bound √n·rms on the Everett function
-    (an output is twice an Everett value, so |ΔM| <= 2√n·rms), and its scale is 1."""
+    (an output is twice an Everett value, so |ΔM| <= 2√n·rms), and its scale is 1; on the
+    coarse grid (dense NNLS) and on a fine one (the sparse second-difference solve)."""
     op = RandomFieldIsing.lattice((8, 8, 8), 3.5, seed=1)
-    model, info = lat.identify_lattice(op, 8.0, 30)
+    model, info = lat.identify_lattice(op, 8.0, nodes)
     assert info["scale"] == pytest.approx(1.0, abs=1e-9)
     grid = np.asarray(info["grid"])
     up = np.concatenate([grid, grid[::-1][1:]])
@@ -164,3 +170,16 @@ def test_avalanche_statistics_closed_form():
     st = lat.avalanche_statistics(s.astype(np.int64), 10**9)
     assert abs(st["tau"] - tau) < 4 * st["tau_err"] + 0.05
     assert st["total"] == int(s.sum()) and sum(st["histogram"]) == s.size
+
+
+def test_grid_control_is_exact_on_the_coarse_nodes():
+    """The control's coarse model is a Preisach model identified from a Preisach model (the
+    lattice's fine model): on the coarse grid's nodes it reproduces its parent exactly (no
+    non-Preisach part; the error is the NNLS residual, here round-off), between them the
+    staircase remains."""
+    seed = lat.lattice_seeds(0, 6, 1)[0]
+    out = lattice_control.grid_control_task(2.6, 6, seed, [4.0], 30, 10, 5, 1.0, 60, 16)
+    (rec,) = out["couplings"]
+    assert rec["operator_error_on_nodes"]["max"] <= 1e-12
+    assert rec["operator_error"]["max"] > 0.01
+    assert out["relays"][0] >= out["relays"][1] > 0

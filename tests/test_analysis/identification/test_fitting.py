@@ -240,3 +240,83 @@ def test_record_fit_argument_checks():
         fit_preisach_record(np.r_[u[:-1], np.nan], u, [0.0, 1.0])
     with pytest.raises(ValueError, match="nodes"):
         fit_preisach_record(u, u, [1.0, 0.0])
+
+
+# ----------------------------------------------------------------------------------------------
+# the sparse second-difference solve of square (native-grid) problems
+# ----------------------------------------------------------------------------------------------
+def test_fine_grid_recovers_a_discrete_model_exactly_from_its_own_forcs():
+    """A model whose relays sit on the nodes of a 160-node grid (12 720 cells: beyond the
+    dense limit, so the sparse path) is recovered exactly from its own FORCs on that grid:
+    Mayergoyz's second differences are its weights, to round-off, and no NNLS step is taken."""
+    rng = np.random.default_rng(11)
+    grid = np.linspace(-4.0, 4.0, 160)
+    i, j = np.triu_indices(grid.size, k=1)  # node pairs alpha = grid[j] > beta = grid[i]
+    i, j = i[i > 0], j[i > 0]  # beta = grid[0] never switches down on the grid: left out
+    pick = rng.choice(i.size, 400, replace=False)
+    w = rng.random(400)
+    truth = PreisachModel.from_relays(grid[j[pick]], grid[i[pick]], w / w.sum())
+    curves = measure_reversal_curves(truth, grid)
+    ident = identify_from_curves(curves, output_range=(-1.0, 1.0), extend=True)
+    proj = project_identification(ident)
+    assert int(np.isfinite(ident.cell_mass).sum()) > 2500
+    expected = np.zeros(proj.masses.shape)  # cell (k, l): alpha in (grid[k], grid[k + 1]]
+    np.add.at(expected, (j[pick] - 1, i[pick] - 1), w / w.sum())
+    np.testing.assert_allclose(proj.masses, expected, rtol=0, atol=1e-14)
+    assert proj.scale == pytest.approx(1.0, abs=1e-13) and proj.residual_rms < 1e-15
+    model = proj.model()
+    u = _node_walk(grid, 400, rng)
+    np.testing.assert_allclose(model.apply(u)[0], truth.apply(u)[0], rtol=0, atol=1e-13)
+
+
+def test_sparse_solve_reaches_the_lawson_hanson_optimum_on_noisy_lattice_forcs(monkeypatch):
+    """Noisy FORCs (negative exact cell masses, an active bound) of a 40-node grid: the sparse
+    active-set solve (forced by lowering the dense limit) and scipy's Lawson–Hanson NNLS on the
+    explicit matrix (the default below 2500 cells) find the same optimum (strictly convex: the
+    square Everett map is invertible), to the KKT tolerance."""
+    import hysteresis.preisach.projection as proj_mod
+
+    grid = np.linspace(-3.0, 3.0, 40)
+    curves = measure_reversal_curves(_random_relays(300, seed=8), grid)
+    rng = np.random.default_rng(9)
+    noisy = ReversalCurves(
+        curves.reversal_field,
+        curves.fields,
+        tuple(m + rng.normal(0.0, 0.01, m.size) for m in curves.moments),
+    )
+    ident = identify_from_curves(noisy, output_range=(-1.0, 1.0), extend=True)
+    reference = project_identification(ident)  # dense Lawson–Hanson
+    calls = []
+    real = proj_mod._second_difference_nnls
+    monkeypatch.setattr(proj_mod, "_DENSE_LIMIT", 0)
+    monkeypatch.setattr(proj_mod, "_second_difference_nnls", lambda *a: calls.append(1) or real(*a))
+    sparse = project_identification(ident)
+    assert calls == [1]
+    assert np.count_nonzero(reference.masses) < np.isfinite(ident.cell_mass).sum() / 2
+    assert np.nanmin(ident.cell_mass) < -0.01  # the bound is active
+    np.testing.assert_allclose(sparse.masses, reference.masses, rtol=0, atol=1e-9)
+    assert sparse.residual_rms == pytest.approx(reference.residual_rms, rel=1e-9)
+
+
+def test_square_problem_with_unmeasured_nodes_uses_the_matrix_free_solver(monkeypatch):
+    """A hole in the measured nodes makes the system non-square: no second-difference
+    inverse, the block principal pivoting path instead (same optimum as Lawson–Hanson)."""
+    import hysteresis.preisach.projection as proj_mod
+
+    grid = np.linspace(-3.0, 3.0, 20)
+    ident = identify_from_curves(
+        measure_reversal_curves(_random_relays(100, seed=2), grid),
+        output_range=(-1.0, 1.0),
+        extend=True,
+    )
+
+    class Holed:
+        alpha, beta, everett = ident.alpha, ident.beta, ident.everett
+        measured = np.ones(ident.everett.shape, dtype=bool)
+
+    Holed.measured[10, 3] = False
+    reference = project_identification(Holed())
+    monkeypatch.setattr(proj_mod, "_DENSE_LIMIT", 0)
+    monkeypatch.setattr(proj_mod, "_second_difference_nnls", None)  # must not be called
+    other = project_identification(Holed())
+    np.testing.assert_allclose(other.masses, reference.masses, rtol=0, atol=1e-8)
