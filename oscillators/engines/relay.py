@@ -436,6 +436,20 @@ class RelayKernelEngine(RelayEngine):
         if out is not None and not direct:
             out[:, :3] = buf
 
+    def kernel_arrays(self) -> tuple | None:
+        """``(kind, par, tf, ti, bits, lay, st, ist, y, ntan, mp, sw, cnt, n_relays, omega,
+        period)``: what a compiled loop needs to drive :func:`~._relay_kernels.run_table` itself
+        with the tangent flow on (:mod:`analysis.dynamics._relay_benettin`; then call
+        :meth:`kernel_moved`); ``None`` while the flow is off, sliding or collapsed."""
+        if self._ntan == 0 or self._slide is not None or self._collapsed:
+            return None
+        return (self._kind, self._par, self._tf, self._ti, self._bits, self._lay, self._st,
+                self._ist, self._y, self._ntan, self._mp, self._nosw, self._cnt,
+                self._n_relays, self._omega, self._period)  # fmt: skip
+
+    def kernel_moved(self) -> None:
+        self._state_cache = None
+
     def relay_outputs(self) -> np.ndarray:
         """Relay outputs now (order of the operator's relay table; zero-weight relays: 0)."""
         if self._kind == kern.KIND_NESTED:
