@@ -18,6 +18,8 @@ directory, run size and seed); with a results store a second ``hyst paper`` run 
 from __future__ import annotations
 
 import math
+import threading
+from concurrent.futures import Future
 from typing import Any
 
 import numpy as np
@@ -53,6 +55,7 @@ __all__ = [
     "bifurcation_task",
     "limit_dimension_task",
     "ensemble_data",
+    "start_ensemble_data",
     "ensemble_run_text",
     "series_of",
 ]
@@ -142,12 +145,43 @@ def limit_dimension_task(
     }
 
 
-def ensemble_data(ctx: PaperContext) -> dict[str, Any]:
-    """Ensembles at C = 2.9, 4.0, the limit values and the iid reference (computed once)."""
-    key = "ensemble_data"
-    if key in ctx.cache:
-        return ctx.cache[key]
+_KEY = "ensemble_data"
 
+
+def ensemble_data(ctx: PaperContext) -> dict[str, Any]:
+    """Ensembles at C = 2.9, 4.0, the limit values and the iid reference (computed once; if
+    :func:`start_ensemble_data` started it in the background, its result)."""
+    value = ctx.cache.get(_KEY)
+    if isinstance(value, Future):
+        ctx.cache[_KEY] = value.result()  # raises what the computation raised
+    elif value is None:
+        ctx.cache[_KEY] = _ensemble_data(ctx)
+    return ctx.cache[_KEY]
+
+
+def start_ensemble_data(ctx: PaperContext) -> None:
+    """Start :func:`ensemble_data`'s computation in a background thread of this process (its
+    task sweeps in their own worker pool), so that the figures before it and the evidence run
+    meanwhile: their serial stretches and the tails of their short sweeps leave cores idle that
+    the ensemble's thousands of tasks fill. Every task, and so every result, is the same as in
+    a sequential run. A daemon thread: an interrupted run does not wait for it (the pool's
+    workers end with this process)."""
+    if _KEY in ctx.cache:
+        return
+    future: Future = Future()
+    future.set_running_or_notify_cancel()
+
+    def compute() -> None:
+        try:
+            future.set_result(_ensemble_data(ctx))
+        except BaseException as exc:  # handed to the figure that waits for it
+            future.set_exception(exc)
+
+    ctx.cache[_KEY] = future
+    threading.Thread(target=compute, name="hyst-paper-ensemble", daemon=True).start()
+
+
+def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
     s = ctx.size
     tasks = ensemble_tasks(
         s.ensemble_spins,
@@ -197,9 +231,7 @@ def ensemble_data(ctx: PaperContext) -> dict[str, Any]:
         progress=ctx.progress,
         allow_version_mismatch=ctx.allow_version_mismatch,
     )
-    data = {"points": points, "limits": limits, "iid": iid, "window_periods": window_periods}
-    ctx.cache[key] = data
-    return data
+    return {"points": points, "limits": limits, "iid": iid, "window_periods": window_periods}
 
 
 def ensemble_run_text(ctx: PaperContext) -> str:
