@@ -1,0 +1,168 @@
+"""What the compiled Benettin loop (:mod:`analysis.dynamics._relay_benettin`) and the overlap of
+the ensemble with the other figures save on ``hyst paper --full``, and the wall estimate.
+
+1. The compiled loop, before/after in the same run: every (N, C) of the full run's ensemble,
+   ``--reps`` realizations of its seeds at full size, each run with the Python Benettin loop
+   (before) and with the compiled loop (after), alternating, CPU time of this process
+   (``time.process_time``: the machine's other load changes it less than wall time); the
+   results are checked bit for bit equal. Medians per (N, C) × 500 realizations give fig:dim's
+   ensemble CPU before and after; the iid reference and the limits are timed once (unchanged).
+2. The overlap: the idle core-seconds of the parts that now run beside the ensemble — per
+   figure and the evidence ``2·wall − Σ task wall`` of a ``hyst paper`` run (its report's
+   seconds and its store's per-task wall times, ``--run``), scaled to the full run's
+   seconds of ``--full-report``.
+3. The wall estimate for two workers: ``--base-estimate`` (the --full wall with the current
+   relay kernel before these changes, default 1140 s = 19 min: 24 min 38 s measured at f0b3c77
+   less what the relay kernel's 1.48x per switch saves since), minus the compiled loop's saved
+   share of fig:dim's CPU times fig:dim's wall now (the measured run's fig:dim seconds less
+   that kernel saving, all of which is in fig:dim), minus half the idle core-seconds the
+   overlap fills. The last line is one JSON object.
+
+    python benchmarks/bench_paper_full.py [--reps 3] [--run /tmp/pq_base]
+        [--full-report docs/paper-full/report.json] [--base-estimate 1140] [--base-measured 1478]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sqlite3
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+import analysis.dynamics.lyapunov as lyapunov
+from analysis.experiments import iid
+from analysis.experiments.ensemble import ensemble_task, realization_seeds
+from analysis.experiments.parameters import ENSEMBLE_COUPLINGS, FREQUENCY, SEED
+from analysis.paper.context import SIZES
+from analysis.paper.ensemble_tasks import limit_dimension_task
+
+ENSEMBLE_FIGURES = ("fig:dim", "fig:sap", "fig:mag", "fig:mag_his")
+#: the store experiments of each part of a run (the rest of a figure's time is in-process)
+EXPERIMENTS = {
+    "fig:mboa": ("mboa",),
+    "fig:bif_0": ("paper-bif0",),
+    "fig:bif": ("paper-bif",),
+    "basins": ("basins", "realization-attractors"),
+}
+
+
+def _python_loop(*args, **kwargs):
+    return 0, np.empty((0, 4))
+
+
+def _cpu(func, *args, **kwargs):
+    start = time.process_time()
+    result = func(*args, **kwargs)
+    return time.process_time() - start, result
+
+
+def compiled_loop_profile(reps: int) -> dict:
+    full = SIZES["full"]
+    compiled = lyapunov.qr_intervals
+    before = after = 0.0
+    rows = []
+    for n in full.ensemble_spins:
+        seeds = realization_seeds(SEED, n, reps)
+        for c in ENSEMBLE_COUPLINGS:
+            t_off, t_on = [], []
+            for seed in seeds:
+                kw = dict(seed=seed, t_end=full.ensemble_t_end, transient=full.ensemble_transient)
+                lyapunov.qr_intervals = _python_loop
+                try:
+                    cpu, a = _cpu(ensemble_task, n, c, **kw)
+                finally:
+                    lyapunov.qr_intervals = compiled
+                t_off.append(cpu)
+                cpu, b = _cpu(ensemble_task, n, c, **kw)
+                t_on.append(cpu)
+                for key in a:
+                    if not np.array_equal(np.asarray(a[key]), np.asarray(b[key]), equal_nan=True):
+                        raise AssertionError(f"N={n} C={c} seed={seed}: {key} differs")
+            m_off, m_on = statistics.median(t_off), statistics.median(t_on)
+            before += full.ensemble_realizations * m_off
+            after += full.ensemble_realizations * m_on
+            rows.append((n, c, m_off, m_on))
+            print(f"  N={n:5d} C={c}: {m_off:.3f} -> {m_on:.3f} CPU s/task ({m_off / m_on:.2f}x)")
+    other = 0.0
+    for n in full.iid_spins:
+        tasks = iid.iid_tasks(n, full.iid_steps, 1, iid._seed_for(SEED, n))
+        other += full.iid_realizations * _cpu(iid.iid_task, **tasks[0])[0]
+    period = 2.0 * math.pi / FREQUENCY
+    skip = math.ceil(full.ensemble_transient / period)
+    points = max(math.floor(full.ensemble_t_end / period) - skip, 10)
+    for c in ENSEMBLE_COUPLINGS:
+        other += _cpu(limit_dimension_task, c, full.dky_t_end, full.dky_transient, points, skip)[0]
+    return {
+        "ensemble_cpu_before_s": round(before, 1),
+        "ensemble_cpu_after_s": round(after, 1),
+        "iid_and_limits_cpu_s": round(other, 1),
+        "fig_dim_cpu_saved_fraction": round((before - after) / (before + other), 4),
+        "per_point": [[n, c, round(a, 4), round(b, 4)] for n, c, a, b in rows],
+    }
+
+
+def idle_core_seconds(run: Path) -> dict[str, float]:
+    """``2·wall − Σ task wall`` per non-ensemble part of the run in ``run`` (report + store)."""
+    report = json.loads((run / "report.json").read_text())
+    walls = {f["label"]: float(f["seconds"]) for f in report["figures"]}
+    walls["basins"] = float(report.get("basins", {}).get("seconds") or 0.0)
+    with sqlite3.connect(f"file:{run / 'results.sqlite'}?mode=ro", uri=True) as db:
+        busy = dict(db.execute("select experiment, sum(wall_time) from tasks group by experiment"))
+    idle = {}
+    for label, wall in walls.items():
+        if label in ENSEMBLE_FIGURES:
+            continue
+        work = sum(float(busy.get(e) or 0.0) for e in EXPERIMENTS.get(label, ()))
+        # in-process figures: one core computes, the other idles (work = wall)
+        idle[label] = max(2.0 * wall - (work if work else wall), 0.0)
+    return {"walls": walls, "idle": idle}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--run", default=None, help="output directory of a hyst paper run")
+    ap.add_argument("--full-report", default="docs/paper-full/report.json")
+    ap.add_argument("--base-estimate", type=float, default=1140.0)
+    ap.add_argument("--base-measured", type=float, default=1478.0, help="--full-report's wall")
+    args = ap.parse_args()
+    ensemble_task(100, 4.0, seed=0, t_end=50.0, transient=10.0)  # numba caches, untimed
+    out: dict = {"benchmark": "paper_full", "reps": args.reps}
+    print("compiled Benettin loop, CPU per task (median), Python loop -> compiled loop:")
+    out.update(compiled_loop_profile(args.reps))
+    full = json.loads(Path(args.full_report).read_text())
+    full_walls = {f["label"]: float(f["seconds"]) for f in full["figures"]}
+    full_walls["basins"] = float(full.get("basins", {}).get("seconds") or 0.0)
+    dim_s = sum(full_walls[x] for x in ENSEMBLE_FIGURES)
+    dim_s -= args.base_measured - args.base_estimate  # the kernel's saving since that run
+    saved_loop = out["fig_dim_cpu_saved_fraction"] * dim_s
+    saved_overlap = 0.0
+    if args.run:
+        run = idle_core_seconds(Path(args.run))
+        scaled = {}
+        for label, idle in run["idle"].items():
+            wall = run["walls"][label]
+            scaled[label] = idle / wall * full_walls.get(label, 0.0) if wall > 0 else 0.0
+        saved_overlap = 0.5 * sum(scaled.values())
+        out["overlap_idle_core_s_full"] = {k: round(v, 1) for k, v in scaled.items()}
+    estimate = args.base_estimate - saved_loop - saved_overlap
+    out.update(
+        saved_compiled_loop_s=round(saved_loop, 1),
+        saved_overlap_s=round(saved_overlap, 1),
+        full_estimate_s=round(estimate, 1),
+    )
+    print(
+        f"--full estimate: {args.base_estimate:.0f} s - {saved_loop:.0f} s (compiled loop: "
+        f"{out['fig_dim_cpu_saved_fraction']:.1%} of fig:dim's {dim_s:.0f} s) - "
+        f"{saved_overlap:.0f} s (overlap) = {estimate:.0f} s = {estimate / 60:.1f} min"
+    )
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()
