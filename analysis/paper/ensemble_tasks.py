@@ -17,9 +17,11 @@ directory, run size and seed); with a results store a second ``hyst paper`` run 
 
 from __future__ import annotations
 
+import copy
 import math
-import threading
-from concurrent.futures import Future
+import multiprocessing
+import os
+from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -33,6 +35,7 @@ from analysis.experiments.ensemble import (
     ensemble_task,
     ensemble_tasks,
 )
+from analysis.experiments.execution import end_with_client
 from analysis.experiments.iid import iid_variance_scaling
 from analysis.experiments.models import MODELS, build_operator, canonical_model_name
 from analysis.experiments.parameters import (
@@ -45,6 +48,7 @@ from analysis.experiments.parameters import (
     V0,
     WIDTH,
 )
+from analysis.experiments.store import StoreError
 from analysis.paper.context import (
     PaperContext,
 )
@@ -160,25 +164,37 @@ def ensemble_data(ctx: PaperContext) -> dict[str, Any]:
 
 
 def start_ensemble_data(ctx: PaperContext) -> None:
-    """Start :func:`ensemble_data`'s computation in a background thread of this process (its
-    task sweeps in their own worker pool), so that the figures before it and the evidence run
-    meanwhile: their serial stretches and the tails of their short sweeps leave cores idle that
-    the ensemble's thousands of tasks fill. Every task, and so every result, is the same as in
-    a sequential run. A daemon thread: an interrupted run does not wait for it (the pool's
-    workers end with this process)."""
-    if _KEY in ctx.cache:
-        return
-    future: Future = Future()
-    future.set_running_or_notify_cancel()
+    """Start :func:`ensemble_data`'s computation in a process of its own (with its own worker
+    pools), so that the figures before it and the evidence run meanwhile: their serial
+    stretches and the tails of their short sweeps leave cores idle that the ensemble's
+    thousands of tasks fill. Every task, and so every result, is the same as in a sequential
+    run; both processes write the run's store (SQLite locking).
 
-    def compute() -> None:
-        try:
-            future.set_result(_ensemble_data(ctx))
-        except BaseException as exc:  # handed to the figure that waits for it
-            future.set_exception(exc)
+    A process, not a thread: it is forked now, while this process runs no other thread, so
+    no lock (numba's compiler lock, above all) can be inherited held by a thread the child
+    does not have; a thread forking worker pools beside another that loads kernels could
+    deadlock them. It ends with this process (as pool workers do)."""
+    if _KEY in ctx.cache or "fork" not in multiprocessing.get_all_start_methods():
+        return  # (without fork the data is computed when needed, in sequence)
+    child = copy.copy(ctx)
+    child.cache = {}  # the context goes to the process as it is now, without the future
+    pool = ProcessPoolExecutor(
+        max_workers=1,
+        mp_context=multiprocessing.get_context("fork"),
+        initializer=end_with_client,
+        initargs=(os.getpid(),),
+    )
+    ctx.cache[_KEY] = pool.submit(_ensemble_data_in_child, child)
+    pool.shutdown(wait=False)  # the process exits after its one task
 
-    ctx.cache[_KEY] = future
-    threading.Thread(target=compute, name="hyst-paper-ensemble", daemon=True).start()
+
+def _ensemble_data_in_child(ctx: PaperContext) -> dict[str, Any]:
+    try:
+        return _ensemble_data(ctx)
+    except StoreError:
+        raise
+    except Exception as exc:  # e.g. a TaskError, whose constructor does not survive pickling
+        raise RuntimeError(f"{type(exc).__name__}: {exc}") from None
 
 
 def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:

@@ -1,4 +1,4 @@
-"""The disorder ensemble computed in the background (``start_ensemble_data``, the overlap of
+"""The disorder ensemble computed in a background process (``start_ensemble_data``, the overlap of
 ``hyst paper``) is the one computed in sequence; its errors reach the figure that waits."""
 
 import pytest
