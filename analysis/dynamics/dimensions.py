@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from hysteresis._validation import (
     as_generator,
@@ -132,6 +133,44 @@ def _occupied(cells: np.ndarray) -> int:
     return int(np.unique(cells, axis=0).shape[0])
 
 
+@njit(cache=True)
+def _occupied_grid(shifted: np.ndarray, shift: np.ndarray, e: float) -> int:
+    """:func:`_occupied` of ``floor((shifted + shift) / e)`` (non-negative cells) in one
+    compiled pass, without the temporaries; -1 if the packed key could overflow (the caller
+    then counts with :func:`_occupied`). The same cells, so the same count."""
+    n, d = shifted.shape
+    cells = np.empty((n, d), dtype=np.int64)
+    span = np.zeros(d, dtype=np.int64)
+    for i in range(n):
+        for k in range(d):
+            c = np.int64(math.floor((shifted[i, k] + shift[k]) / e))
+            cells[i, k] = c
+            if c + 1 > span[k]:
+                span[k] = c + 1
+    total = 1.0
+    for k in range(d):
+        total *= float(span[k])
+    if not total < 2.0**62:
+        return -1
+    key = cells[:, 0].copy()
+    for k in range(1, d):
+        key = key * span[k] + cells[:, k]
+    count = 0
+    if total <= 16.0 * n:  # coarse boxes: mark the occupied ones (keys repeat a lot)
+        seen = np.zeros(int(total), dtype=np.bool_)
+        for i in range(n):
+            if not seen[key[i]]:
+                seen[key[i]] = True
+                count += 1
+        return count
+    key.sort()
+    count = 1
+    for i in range(1, n):
+        if key[i] != key[i - 1]:
+            count += 1
+    return count
+
+
 def box_counts(
     points: np.ndarray,
     sizes: Sequence[float] | np.ndarray,
@@ -156,14 +195,17 @@ def box_counts(
     if reduce not in ("min", "mean"):
         raise ValueError(f"reduce must be 'min' or 'mean', got {reduce!r}")
     rng = as_generator(seed)
-    shifted = pts - pts.min(axis=0)
+    shifted = np.ascontiguousarray(pts - pts.min(axis=0), dtype=np.float64)
+    no_shift = np.zeros(pts.shape[1])
     counts = np.empty(eps.size)
     for i, e in enumerate(eps):
         found = np.empty(offsets)
         for k in range(offsets):
-            shift = 0.0 if k == 0 else rng.uniform(0.0, e, size=pts.shape[1])
-            cells = np.floor((shifted + shift) / e).astype(np.int64)
-            found[k] = _occupied(cells)
+            shift = no_shift if k == 0 else rng.uniform(0.0, e, size=pts.shape[1])
+            count = _occupied_grid(shifted, shift, float(e))
+            if count < 0:  # cells too many to pack into one int64 key
+                count = _occupied(np.floor((shifted + shift) / e).astype(np.int64))
+            found[k] = count
         counts[i] = found.min() if reduce == "min" else found.mean()
     return counts
 

@@ -39,8 +39,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numba import njit
 
+from analysis.dynamics._householder import _accumulate_logs, householder_qr
+from analysis.dynamics._relay_benettin import qr_intervals
 from analysis.dynamics.dimensions import kaplan_yorke_dimension
 from hysteresis._progress import progress_bar
 from hysteresis._validation import finite_scalar, positive_integer, time_window
@@ -200,6 +201,14 @@ class TangentStepper:
         self._sample_times = times
         self._out = out
 
+    def moved_to(self, t: float, rows: np.ndarray) -> None:
+        """The engine was advanced to the elapsed time ``t`` outside :meth:`step` (a compiled
+        Benettin loop) through the sample rows ``rows`` ``(t, q, v, M)``: they become
+        :attr:`samples`."""
+        self._t = t
+        self._sample_times = rows[:, 0]
+        self._out = rows[:, 1:]
+
     @property
     def sample(self) -> np.ndarray:
         """``(q, v, M)`` now (after the last :meth:`reinit` or :meth:`step`): cheap, unlike
@@ -251,84 +260,6 @@ class TangentStepper:
     def n_events(self) -> int:
         """Events since the tangent flow was started."""
         return self.engine.n_events - self._events_at_start
-
-
-@njit(cache=True)
-def householder_qr(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Reduced QR of ``y`` (d × k) by Householder reflections: ``Q`` (d × m), ``|R_jj|`` (m),
-    m = min(d, k), and whether ``y`` was finite (else Q and R are not computed).
-
-    The same reflections as LAPACK's ``geqrf`` (``np.linalg.qr``), compiled: for the 2 × 2 to
-    3 × 3 deviation matrices of the relay engines the NumPy call costs more than the integration
-    of a forcing period of a small ensemble. Plain reading::
-
-        R := Y
-        for j < m:  x := R[j:, j];  α := -sign(x_0) |x|;  u := x - α e_0
-                    R[j:, j:] -= 2 u (uᵀ R[j:, j:]) / (uᵀ u);  |R_jj| = |α|
-        Q := H_0 H_1 ... H_(m-1) I[:, :m]     (H_j = I - 2 u_j u_jᵀ / u_jᵀ u_j)
-
-    A zero column gives the identity reflection and R_jj = 0.
-    """
-    d, k = y.shape
-    m = min(d, k)
-    qmat = np.zeros((d, m))
-    diag = np.zeros(m)
-    for i in range(d):
-        for j in range(k):
-            if not math.isfinite(y[i, j]):
-                return qmat, diag, False
-    r = y.copy()
-    u = np.zeros((m, d))
-    unorm2 = np.zeros(m)
-    for j in range(m):
-        norm2 = 0.0
-        for i in range(j, d):
-            norm2 += r[i, j] * r[i, j]
-        if norm2 == 0.0:
-            continue
-        alpha = -math.copysign(math.sqrt(norm2), r[j, j])
-        for i in range(j, d):
-            u[j, i] = r[i, j]
-        u[j, j] -= alpha
-        un2 = 0.0
-        for i in range(j, d):
-            un2 += u[j, i] * u[j, i]
-        unorm2[j] = un2
-        diag[j] = abs(alpha)
-        for c in range(j, k):
-            dot = 0.0
-            for i in range(j, d):
-                dot += u[j, i] * r[i, c]
-            f = 2.0 * dot / un2
-            for i in range(j, d):
-                r[i, c] -= f * u[j, i]
-    for i in range(m):
-        qmat[i, i] = 1.0
-    for j in range(m - 1, -1, -1):
-        if unorm2[j] == 0.0:
-            continue
-        for c in range(m):
-            dot = 0.0
-            for i in range(j, d):
-                dot += u[j, i] * qmat[i, c]
-            f = 2.0 * dot / unorm2[j]
-            for i in range(j, d):
-                qmat[i, c] -= f * u[j, i]
-    return qmat, diag, True
-
-
-@njit(cache=True)
-def _accumulate_logs(diag: np.ndarray, k: int, rank: int, lsum: np.ndarray) -> bool:
-    """lsum[j] += log|R_jj| for j < rank, -inf beyond (structural collapse); returns whether a
-    direction collapsed in this interval."""
-    collapsed = False
-    for j in range(k):
-        if j < rank:
-            lsum[j] += math.log(diag[j]) if diag[j] > 0.0 else -math.inf
-        elif math.isfinite(lsum[j]):
-            lsum[j] = -math.inf
-            collapsed = True
-    return collapsed
 
 
 #: a deviation vector whose residual after projection on the vectors before it is below this
@@ -449,7 +380,10 @@ def lyapunov_spectrum(
         re-orthonormalisation, so that other measurements ride on the same integration (e.g.
         with ``renormalize_dt`` = one forcing period and ``transient``, ``t_end`` on whole
         periods, ``stepper.sample`` is the Poincaré section; ``stepper.engine.output_integral()``
-        gives exact time averages of ``M``). It must not move the stepper.
+        gives exact time averages of ``M``). It must not move the stepper. An observer with
+        the attribute ``batches = True`` may instead be called once per stretch of intervals
+        that a compiled loop ran (relay kernel engines): ``stepper.samples`` then holds the
+        samples of the whole stretch.
     whole_intervals:
         Cut ``[transient, t_end]`` into whole intervals of ``renormalize_dt`` and average over
         them, leaving out a remainder (at least one interval); by default the last interval
@@ -496,7 +430,36 @@ def lyapunov_spectrum(
     bar = None
     if progress:
         bar = progress_bar(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
-    for i in range(n_steps):
+    # the relay kernel runs stretches of QR intervals itself (bit for bit this loop, without
+    # its Python per interval); an interval it cannot (a slide, an error) runs here
+    compiled = (
+        type(stepper) is TangentStepper
+        and hasattr(stepper.engine, "kernel_arrays")
+        and (observer is None or getattr(observer, "batches", False))
+    )
+    if compiled:
+        marked = np.zeros(n_steps, dtype=np.bool_)
+        marked[np.array(sorted(marks), dtype=np.int64)] = True
+        sums = np.zeros((n_steps, k))
+    i = backoff = skip = 0
+    while i < n_steps:
+        if compiled and skip == 0:
+            done, _ = qr_intervals(stepper, i, n_steps, transient, dt, window, lsum, marked, sums)
+            if done and observer is not None:
+                observer(stepper)
+            for j in range(i, i + done):
+                if marked[j]:
+                    hist_t.append(transient + (window if j == n_steps - 1 else (j + 1) * dt))
+                    hist.append(sums[j].copy())
+            if bar is not None:
+                bar.update(done)
+            i += done
+            # an interval the kernel left to this loop: a few here before trying again
+            backoff = 0 if done else min(2 * backoff + 1, 64)
+            skip = backoff + 1
+            if i >= n_steps:
+                break
+        skip = max(skip - 1, 0)
         target = transient + (window if i == n_steps - 1 else (i + 1) * dt)
         stepper.step_to(target)
         y, collapsed = _qr_step(stepper.deviations(), k, stepper.rank_bound(), lsum)
@@ -509,6 +472,7 @@ def lyapunov_spectrum(
             hist.append(lsum.copy())
         if bar is not None:
             bar.update(1)
+        i += 1
     if bar is not None:
         bar.close()
     exponents = -np.sort(-lsum / window)

@@ -208,6 +208,9 @@ def one_pass_measurements(
             if magnetization:
                 integral[1] = stepper.engine.output_integral()
 
+    # it reads only the samples and the integral: it may be called once per stretch of QR
+    # intervals (lyapunov_spectrum's compiled loop), the samples then hold the whole stretch
+    observe.batches = True  # type: ignore[attr-defined]
     stepper = TangentStepper(system, sample_dt=period)
     ly = lyapunov_spectrum(
         system,

@@ -50,7 +50,7 @@ from analysis.experiments.store import ResultStore, StoreError, code_version, ta
 from hysteresis._progress import progress_bar
 from hysteresis._validation import bounded_work, nonnegative_integer
 
-__all__ = ["run_tasks", "spawn_seeds", "TaskError"]
+__all__ = ["run_tasks", "spawn_seeds", "TaskError", "end_with_client"]
 
 
 class TaskError(RuntimeError):
@@ -133,7 +133,7 @@ def _watch_client(client_pid: int, parent_pid: int) -> None:
     os._exit(1)
 
 
-def _end_with_client(client_pid: int) -> None:
+def end_with_client(client_pid: int) -> None:
     """Initializer of the pool's workers: a worker exits when the client process dies."""
     parent_pid = os.getppid()
     if sys.platform.startswith("linux") and parent_pid == client_pid:
@@ -334,7 +334,7 @@ def _run_pending(
         n = workers if workers is not None else (os.cpu_count() or 1)
         ex = ProcessPoolExecutor(
             max_workers=min(n, len(pending)),
-            initializer=_end_with_client,
+            initializer=end_with_client,
             initargs=(os.getpid(),),
         )
         shutdown = ex.shutdown

@@ -17,7 +17,11 @@ directory, run size and seed); with a results store a second ``hyst paper`` run 
 
 from __future__ import annotations
 
+import copy
 import math
+import multiprocessing
+import os
+from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -31,6 +35,7 @@ from analysis.experiments.ensemble import (
     ensemble_task,
     ensemble_tasks,
 )
+from analysis.experiments.execution import end_with_client
 from analysis.experiments.iid import iid_variance_scaling
 from analysis.experiments.models import MODELS, build_operator, canonical_model_name
 from analysis.experiments.parameters import (
@@ -43,6 +48,7 @@ from analysis.experiments.parameters import (
     V0,
     WIDTH,
 )
+from analysis.experiments.store import StoreError
 from analysis.paper.context import (
     PaperContext,
 )
@@ -53,6 +59,7 @@ __all__ = [
     "bifurcation_task",
     "limit_dimension_task",
     "ensemble_data",
+    "start_ensemble_data",
     "ensemble_run_text",
     "series_of",
 ]
@@ -142,12 +149,55 @@ def limit_dimension_task(
     }
 
 
-def ensemble_data(ctx: PaperContext) -> dict[str, Any]:
-    """Ensembles at C = 2.9, 4.0, the limit values and the iid reference (computed once)."""
-    key = "ensemble_data"
-    if key in ctx.cache:
-        return ctx.cache[key]
+_KEY = "ensemble_data"
 
+
+def ensemble_data(ctx: PaperContext) -> dict[str, Any]:
+    """Ensembles at C = 2.9, 4.0, the limit values and the iid reference (computed once; if
+    :func:`start_ensemble_data` started it in the background, its result)."""
+    value = ctx.cache.get(_KEY)
+    if isinstance(value, Future):
+        ctx.cache[_KEY] = value.result()  # raises what the computation raised
+    elif value is None:
+        ctx.cache[_KEY] = _ensemble_data(ctx)
+    return ctx.cache[_KEY]
+
+
+def start_ensemble_data(ctx: PaperContext) -> None:
+    """Start :func:`ensemble_data`'s computation in a process of its own (with its own worker
+    pools), so that the figures before it and the evidence run meanwhile: their serial
+    stretches and the tails of their short sweeps leave cores idle that the ensemble's
+    thousands of tasks fill. Every task, and so every result, is the same as in a sequential
+    run; both processes write the run's store (SQLite locking).
+
+    A process, not a thread: it is forked now, while this process runs no other thread, so
+    no lock (numba's compiler lock, above all) can be inherited held by a thread the child
+    does not have; a thread forking worker pools beside another that loads kernels could
+    deadlock them. It ends with this process (as pool workers do)."""
+    if _KEY in ctx.cache or "fork" not in multiprocessing.get_all_start_methods():
+        return  # (without fork the data is computed when needed, in sequence)
+    child = copy.copy(ctx)
+    child.cache = {}  # the context goes to the process as it is now, without the future
+    pool = ProcessPoolExecutor(
+        max_workers=1,
+        mp_context=multiprocessing.get_context("fork"),
+        initializer=end_with_client,
+        initargs=(os.getpid(),),
+    )
+    ctx.cache[_KEY] = pool.submit(_ensemble_data_in_child, child)
+    pool.shutdown(wait=False)  # the process exits after its one task
+
+
+def _ensemble_data_in_child(ctx: PaperContext) -> dict[str, Any]:
+    try:
+        return _ensemble_data(ctx)
+    except StoreError:
+        raise
+    except Exception as exc:  # e.g. a TaskError, whose constructor does not survive pickling
+        raise RuntimeError(f"{type(exc).__name__}: {exc}") from None
+
+
+def _ensemble_data(ctx: PaperContext) -> dict[str, Any]:
     s = ctx.size
     tasks = ensemble_tasks(
         s.ensemble_spins,
@@ -197,9 +247,7 @@ def ensemble_data(ctx: PaperContext) -> dict[str, Any]:
         progress=ctx.progress,
         allow_version_mismatch=ctx.allow_version_mismatch,
     )
-    data = {"points": points, "limits": limits, "iid": iid, "window_periods": window_periods}
-    ctx.cache[key] = data
-    return data
+    return {"points": points, "limits": limits, "iid": iid, "window_periods": window_periods}
 
 
 def ensemble_run_text(ctx: PaperContext) -> str:

@@ -27,6 +27,7 @@ from analysis.paper.context import (
     FigureSpec,
     PaperContext,
 )
+from analysis.paper.ensemble_tasks import start_ensemble_data
 from analysis.paper.orbit_evidence import orbit_evidence, orbit_lines
 
 __all__ = [
@@ -97,6 +98,11 @@ def _evidence(
         )
 
 
+def _all_evidence(ctx: PaperContext, report: dict, errors: list, lines: bool) -> None:
+    _evidence(report, errors, "orbits", "periodic-orbit", orbit_evidence, lines)
+    _evidence(report, errors, "basins", "basin", lambda: basin_evidence(ctx), lines)
+
+
 def run_paper(
     out: str | Path,
     size: str = "quick",
@@ -144,7 +150,26 @@ def run_paper(
     errors: list[dict] = []
     selected = [spec for spec in _figures() if not only or spec.label in only]
     run_start = time.perf_counter()
+    # the evidence: the periodic orbits behind the disputed windows, and the basins of the
+    # coexisting attractors and the realizations' attractors (the basins' tasks in the run's
+    # store: written as they complete, resumed after a kill), for the Discussion
+    evidence: dict = {}
+    evidence_errors: list[dict] = []
+    pending_evidence = not only and size != "smoke"
+    ensemble_labels = {spec.label for spec in ens.FIGURES}
+    overlap = (
+        ctx.scheduler is None
+        and ctx.task_workers != 1
+        and any(spec.label in ensemble_labels for spec in selected)
+    )
+    if overlap:
+        # the disorder ensemble (most of a full run) starts now in the background, and the
+        # evidence runs before the ensemble figures wait for it: their idle cores fill
+        start_ensemble_data(ctx)
     for k, spec in enumerate(selected, 1):
+        if overlap and pending_evidence and spec.label in ensemble_labels:
+            _all_evidence(ctx, evidence, evidence_errors, lines)
+            pending_evidence = False
         start = time.perf_counter()
         if lines:
             # every task sweep inside a figure shows its own bar (counts, rate, ETA)
@@ -182,12 +207,10 @@ def run_paper(
         "figures": figures,
         "errors": errors,
     }
-    if not only and size != "smoke":
-        # the periodic orbits behind the disputed windows, and the basins of the coexisting
-        # attractors and the realizations' attractors (the basins' tasks in the
-        # run's store: written as they complete, resumed after a kill), for the Discussion
-        _evidence(report, errors, "orbits", "periodic-orbit", orbit_evidence, lines)
-        _evidence(report, errors, "basins", "basin", lambda: basin_evidence(ctx), lines)
+    if pending_evidence:
+        _all_evidence(ctx, evidence, evidence_errors, lines)
+    report.update(evidence)  # after the figures in the report, wherever it was computed
+    errors.extend(evidence_errors)
     write_report(ctx, report)
     return report
 

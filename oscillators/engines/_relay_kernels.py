@@ -173,9 +173,11 @@ def make_params(
     t_base: float,
     taylor: bool = True,
     slide_excursion: float = 1e-3,
+    fast_hop: float = 1e-3,
 ) -> np.ndarray:
     """Pack the parameter vector used by the kernels (``slide_excursion``: see
-    :data:`oscillators.engines.base.SLIDE_EXCURSION`; divided by ρ here)."""
+    :data:`oscillators.engines.base.SLIDE_EXCURSION`; ``fast_hop``: the fast short hop's limit
+    ρh; both divided by ρ here)."""
     par = np.zeros(N_PAR)
     par[P_ZETA] = zeta
     par[P_OMEGA] = omega
@@ -191,13 +193,14 @@ def make_params(
     # polynomial then leaves a remainder <= (ρ h)^(d+1)/(d+1)! · e^(ρh) relative to the state's
     # size, so the limits are h·ρ <= const: with d = 8, ρh <= 0.02 gives (0.02)^9/9! ≈ 1.4e-21
     # (≤ 5e-20 with the factor 1.5^9 at ζ = 1); with d = 6 (fast hop), ρh <= 1e-3 gives
-    # 1e-21/5040 ≈ 2e-25. For ζ <= 1/2 this is the former limit 0.02/max(1, Ω) unchanged.
+    # 1e-21/5040 ≈ 2e-25, ρh <= 3e-3 (the relay engine's FAST_HOP) 2.2e-18/5040 ≈ 4e-22. For
+    # ζ <= 1/2 this is the former limit 0.02/max(1, Ω) unchanged.
     rho = max(1.0, omega, 2.0 * zeta)
     par[P_HT] = (0.02 / rho) if taylor else 0.0
     par[P_DSUB] = 0.1 / max(1.0, omega)
     par[P_TBASE] = t_base
     # short hops (most hops of a dense ensemble) take the fast path (degree-6 polynomials)
-    par[P_HS] = (1e-3 / rho) if taylor else 0.0
+    par[P_HS] = (fast_hop / rho) if taylor else 0.0
     par[P_SL] = slide_excursion / rho
     return par
 

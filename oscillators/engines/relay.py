@@ -72,6 +72,9 @@ __all__ = [
 ]
 
 METHODS = ("auto", "nested", "heap", "generic")
+#: the fast short hop's limit ρh (make_params; 1e-3 before): more of a dense ensemble's hops
+#: take the degree-6 path (remainder ~4e-22: the same hops to round-off; fig:dim 6.5% less CPU)
+FAST_HOP = 3e-3
 
 
 def _grazing_message(t: float | None = None) -> str:
@@ -150,7 +153,7 @@ class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
         amp_a, amp_b = particular_amplitudes(zeta, self._omega)
         self._par = kern.make_params(
             zeta, self._omega, float(system.coupling), self._phi0, amp_a, amp_b, t0, taylor,
-            SLIDE_EXCURSION,
+            SLIDE_EXCURSION, FAST_HOP,
         )  # fmt: skip
         self._t0 = t0
         self._y = np.zeros((3, 3))
@@ -435,6 +438,20 @@ class RelayKernelEngine(RelayEngine):
             sw = np.empty((cap, 4))
         if out is not None and not direct:
             out[:, :3] = buf
+
+    def kernel_arrays(self) -> tuple | None:
+        """``(kind, par, tf, ti, bits, lay, st, ist, y, ntan, mp, sw, cnt, n_relays, omega,
+        period)``: what a compiled loop needs to drive :func:`~._relay_kernels.run_table` itself
+        with the tangent flow on (:mod:`analysis.dynamics._relay_benettin`; then call
+        :meth:`kernel_moved`); ``None`` while the flow is off, sliding or collapsed."""
+        if self._ntan == 0 or self._slide is not None or self._collapsed:
+            return None
+        return (self._kind, self._par, self._tf, self._ti, self._bits, self._lay, self._st,
+                self._ist, self._y, self._ntan, self._mp, self._nosw, self._cnt,
+                self._n_relays, self._omega, self._period)  # fmt: skip
+
+    def kernel_moved(self) -> None:
+        self._state_cache = None
 
     def relay_outputs(self) -> np.ndarray:
         """Relay outputs now (order of the operator's relay table; zero-weight relays: 0)."""
