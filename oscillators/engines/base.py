@@ -103,6 +103,8 @@ __all__ = [
     "TangentFlowOff",
     "split_times",
     "step_budget",
+    "switch_budget",
+    "grazing_message",
     "wrap_phase",
 ]
 
@@ -144,6 +146,26 @@ class GrazingError(ValueError):
 SWITCHES_PER_RELAY_AND_TIME = 1000
 #: Switches every ``advance`` call may make whatever its length (see above).
 SWITCH_BUDGET_FLOOR = 10_000
+
+
+def switch_budget(n_relays: int, omega: float, span: float) -> int:
+    """Switches one ``advance`` call spanning ``span`` time units may make
+    (:data:`SWITCHES_PER_RELAY_AND_TIME` per relay and unit of time, at least
+    :data:`SWITCH_BUDGET_FLOOR`)."""
+    b = SWITCH_BUDGET_FLOOR + SWITCHES_PER_RELAY_AND_TIME * max(1, n_relays) * max(
+        1.0, omega
+    ) * max(span, 0.0)
+    return int(min(b, 2.0**62))
+
+
+def grazing_message(t: float | None = None) -> str:
+    """The one sentence of a :class:`GrazingError` (at time ``t`` when known)."""
+    where = f" at t = {t!r}" if t is not None else ""
+    return (
+        f"grazing switch{where}: a threshold was reached exactly at a turning point (v* = 0), "
+        "so the saltation C·ΔM/v* is infinite and the tangent flow is undefined on this orbit; "
+        "perturb the initial condition or the parameters"
+    )
 
 
 class SwitchBudgetError(RuntimeError):

@@ -46,15 +46,15 @@ from oscillators.engines import _relay_kernels as kern
 from oscillators.engines import _sliding as slide
 from oscillators.engines.base import (
     SLIDE_EXCURSION,
-    SWITCH_BUDGET_FLOOR,
     SWITCH_DTYPE,
-    SWITCHES_PER_RELAY_AND_TIME,
     Engine,
     GrazingError,
     SlidingError,
     SwitchBudgetError,
     TangentFlow,
+    grazing_message,
     split_times,
+    switch_budget,
 )
 from oscillators.linear import exact_step, hom_matrix, particular_amplitudes, phase_column
 from oscillators.parameters import check_closed_form
@@ -75,24 +75,6 @@ METHODS = ("auto", "nested", "heap", "generic")
 #: the fast short hop's limit ρh (make_params; 1e-3 before): more of a dense ensemble's hops
 #: take the degree-6 path (remainder ~4e-22: the same hops to round-off; fig:dim 6.5% less CPU)
 FAST_HOP = 3e-3
-
-
-def _grazing_message(t: float | None = None) -> str:
-    where = f" at t = {t!r}" if t is not None else ""
-    return (
-        f"grazing switch{where}: a threshold was reached exactly at a turning point (v* = 0), "
-        "so the saltation C·ΔM/v* is infinite and the tangent flow is undefined on this orbit; "
-        "perturb the initial condition or the parameters"
-    )
-
-
-def _switch_budget(n_relays: int, omega: float, span: float) -> int:
-    """Switches one ``advance`` call spanning ``span`` time units may make (module constants
-    :data:`~oscillators.engines.base.SWITCHES_PER_RELAY_AND_TIME`, ``SWITCH_BUDGET_FLOOR``)."""
-    b = SWITCH_BUDGET_FLOOR + SWITCHES_PER_RELAY_AND_TIME * max(1, n_relays) * max(
-        1.0, omega
-    ) * max(span, 0.0)
-    return int(min(b, 2.0**62))
 
 
 class RelayEngine(slide.SlidingMixin, TangentFlow, Engine):
@@ -394,7 +376,7 @@ class RelayKernelEngine(RelayEngine):
         tan_on = self._ntan > 0
         n_now, tau_now = self._clock()
         span = (int(tgt_n[-1]) - n_now) * self._period + (float(tgt_tau[-1]) - tau_now)
-        budget = _switch_budget(self._n_relays, self._omega, span)
+        budget = switch_budget(self._n_relays, self._omega, span)
         nsw0 = int(self._ist[kern.I_NSW])
         self._ist[kern.I_MAXSW] = nsw0 + budget
         cap = 1 << 12 if record else 1
@@ -413,7 +395,7 @@ class RelayKernelEngine(RelayEngine):
             if record and cnt[0]:
                 self._chunks.append(sw[: cnt[0]].copy())
             if status == 2:
-                raise GrazingError(_grazing_message(self._t0 + self.elapsed))
+                raise GrazingError(grazing_message(self._t0 + self.elapsed))
             if status == 3:
                 st = self._st
                 raise slide.budget_error(
@@ -562,7 +544,7 @@ class RelayReferenceEngine(RelayEngine):
         tgt_n, tgt_tau = split_times(times, self._period)
         y = self._y if self._ntan else None
         span = (int(tgt_n[-1]) - self._n) * self._period + (float(tgt_tau[-1]) - self._tau)
-        self._budget = _switch_budget(self._n_relays, self._omega, span)
+        self._budget = switch_budget(self._n_relays, self._omega, span)
         self._max_switches = self._n_switches + self._budget
         for i in range(tgt_n.size):
             while self._n < tgt_n[i]:
@@ -653,7 +635,7 @@ class RelayReferenceEngine(RelayEngine):
                 )  # fmt: skip
             if y is not None:
                 if self._v == 0.0 and coupling * jump != 0.0:
-                    raise GrazingError(_grazing_message(float(t)))
+                    raise GrazingError(grazing_message(float(t)))
                 sal = coupling * jump / self._v if coupling * jump != 0.0 else 0.0
                 y[1, :ntan] += sal * y[0, :ntan]
 

@@ -19,7 +19,7 @@ from analysis.dynamics.lyapunov import lyapunov_spectrum
 from hysteresis import PreisachModel, Relay, SpinDimerEnsemble
 from oscillators import ForcedOscillator, OscillatorState, SlidingError, SwitchBudgetError
 from oscillators.engines import base
-from oscillators.engines.relay import _switch_budget
+from oscillators.engines.base import switch_budget
 
 METHODS = ["auto", "heap", "generic"]
 
@@ -295,17 +295,17 @@ def test_sliding_error_is_exported_and_a_value_error():
 
 
 def test_switch_budget_scales_with_time_relays_and_frequency():
-    b = _switch_budget(1, 1.0, 0.0)
+    b = switch_budget(1, 1.0, 0.0)
     assert b == base.SWITCH_BUDGET_FLOOR
-    assert _switch_budget(10, 1.0, 2.0) == b + base.SWITCHES_PER_RELAY_AND_TIME * 20
-    assert _switch_budget(1, 100.0, 1.0) == b + base.SWITCHES_PER_RELAY_AND_TIME * 100
+    assert switch_budget(10, 1.0, 2.0) == b + base.SWITCHES_PER_RELAY_AND_TIME * 20
+    assert switch_budget(1, 100.0, 1.0) == b + base.SWITCHES_PER_RELAY_AND_TIME * 100
 
 
 def test_budget_error_when_not_sliding(monkeypatch):
     # a tiny budget on an ordinary (non-sliding) orbit: SwitchBudgetError naming the cap
     import oscillators.engines.relay as relay
 
-    monkeypatch.setattr(relay, "_switch_budget", lambda n, omega, span: 3)
+    monkeypatch.setattr(relay, "switch_budget", lambda n, omega, span: 3)
     osc = ForcedOscillator(Relay(0.1, -0.1), coupling=0.5)
     for method in ("auto", "generic"):
         with pytest.raises(SwitchBudgetError, match="switch budget exceeded") as info:
@@ -319,7 +319,7 @@ def test_chattering_that_does_not_settle_in_budget_is_a_sliding_error(monkeypatc
     # a budget too small for the chattering to shrink to SLIDE_EXCURSION: SlidingError
     import oscillators.engines.relay as relay
 
-    monkeypatch.setattr(relay, "_switch_budget", lambda n, omega, span: 200)
+    monkeypatch.setattr(relay, "switch_budget", lambda n, omega, span: 200)
     osc = _hang_system()
     eng = osc.engine(osc.initial_state(), method=method)
     with pytest.raises(SlidingError, match="chattering towards a sliding motion") as info:
