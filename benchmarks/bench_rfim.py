@@ -139,7 +139,7 @@ def coupled(
     median of ``repeats`` consecutive windows of ``t_run``."""
     eng = ForcedOscillator(model, c, ZETA, OMEGA).engine()
     eng.advance(np.array([transient]))
-    rates, cpu_rates, av_rates, flips = [], [], [], 0
+    rates, cpu_rates, av_rates, flips, wall, cpu = [], [], [], 0, 0.0, 0.0
     for k in range(repeats):
         n0, a0 = eng.n_events, len(eng.records()["switches"])
         t0, c0 = time.perf_counter(), time.process_time()
@@ -147,6 +147,7 @@ def coupled(
         dt, dc = time.perf_counter() - t0, time.process_time() - c0
         n_av = len(eng.records()["switches"]) - a0
         flips += eng.n_events - n0
+        wall, cpu = wall + dt, cpu + dc
         rates.append((eng.n_events - n0) / dt)
         cpu_rates.append((eng.n_events - n0) / dc)
         av_rates.append(n_av / dt)
@@ -155,6 +156,10 @@ def coupled(
         "coupled_flips": flips,
         "coupled_flips_per_s": statistics.median(rates),
         "coupled_flips_per_cpu_s": statistics.median(cpu_rates),
+        # the windows differ in activity (a quiet stretch of the orbit flips 20-40x fewer spins
+        # than a sweep through the loop): all flips over all the time is the rate a run sees
+        "coupled_flips_per_s_overall": flips / wall,
+        "coupled_flips_per_cpu_s_overall": flips / cpu,
         "coupled_avalanches_per_s": statistics.median(av_rates),
     }
 
@@ -246,12 +251,14 @@ def main() -> None:
     dim = dimer_kernel(n, args.coupling, args.dimer_time, args.repeats)
     ratio = cpl["coupled_flips_per_s"] / dim["dimer_switches_per_s"]
     ratio_cpu = cpl["coupled_flips_per_cpu_s"] / dim["dimer_switches_per_cpu_s"]
+    ratio_overall = cpl["coupled_flips_per_cpu_s_overall"] / dim["dimer_switches_per_cpu_s"]
     print(
         f"relay kernel ({dim['dimer_method']}) on {n} dimer spins: "
         f"{dim['dimer_switches_per_s']:.3e} switches/s; lattice flips/s over kernel "
         f"switches/s = {ratio:.4f} (target >= 1/3); per CPU second "
         f"{cpl['coupled_flips_per_cpu_s']:.3e} / {dim['dimer_switches_per_cpu_s']:.3e} = "
-        f"{ratio_cpu:.4f}"
+        f"{ratio_cpu:.4f}; all the coupled windows' flips over their CPU time "
+        f"{cpl['coupled_flips_per_cpu_s_overall']:.3e}: {ratio_overall:.4f}"
     )
     print(
         json.dumps(
@@ -268,6 +275,7 @@ def main() -> None:
                 **dim,
                 "coupled_over_kernel": ratio,
                 "coupled_over_kernel_cpu": ratio_cpu,
+                "coupled_over_kernel_cpu_overall": ratio_overall,
             }
         )
     )
