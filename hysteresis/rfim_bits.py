@@ -114,7 +114,8 @@ def random_fields(start: int, stop: int, disorder: float = 1.0, seed: int = 0) -
 def pack_spins(spins: Any) -> np.ndarray:
     """Spins ``±1`` (site order) as ``uint64`` words: spin ``i`` is bit ``i & 63`` of word
     ``i >> 6`` (``1`` up; the words' bytes on a little-endian machine are numpy's
-    ``packbits(..., bitorder="little")``, the layout of :class:`~hysteresis.rfim.RandomFieldIsingState`)."""
+    ``packbits(..., bitorder="little")``, the layout of
+    :class:`~hysteresis.rfim.RandomFieldIsingState`)."""
     s = np.asarray(spins)
     if s.ndim != 1 or s.dtype.kind not in "iuf" or not np.all(np.isin(s, (-1, 1))):
         raise ValueError("spins must be a 1-D array of values in {-1, +1}")
