@@ -59,6 +59,7 @@ __all__ = [
     "hash_fields",
     "ppnd16",
     "relax_serial",
+    "up_counts_bitsliced",
 ]
 
 _GAMMA = np.uint64(0x9E3779B97F4A7C15)
@@ -187,8 +188,8 @@ def count_up(words, dims, out):  # pragma: no cover - compiled
 @njit(cache=True, inline="always")
 def _unstable(words, i, c0, c1, c2, p):  # pragma: no cover - compiled
     """Whether spin i (pointing down if rising, up if falling) flips at ``u``; ``p`` is the
-    step's ``(dims, rising, u, mcut, jn, k0, k1, disorder)``."""
-    dims, rising, u, mcut, jn, k0, k1, disorder = p
+    step's ``(dims, rising, u, mcut, jn, k0, k1, disorder, 1/dims)``."""
+    dims, rising, u, mcut, jn, k0, k1, disorder = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]
     k = _count_up(words, c0, c1, c2, dims)
     m = _m52(i, k0, k1)
     if rising:
@@ -233,9 +234,7 @@ def _avalanche(words, i, p, stack):  # pragma: no cover - compiled
     while top > 0:
         top -= 1
         j = np.int64(stack[top])
-        c2 = j % l2
-        c1 = (j // l2) % l1
-        c0 = j // (l1 * l2)
+        c0, c1, c2 = _coords(j, dims, p[8])
         before = top
         if l2 > 1:
             stack, top = _visit(words, c0, c1, _plus(c2, l2), p, stack, top)
@@ -251,17 +250,132 @@ def _avalanche(words, i, p, stack):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
+def _window(words, start):  # pragma: no cover - compiled
+    """Bits ``start … start + 63`` of the spins as one word (bits outside the array: 0)."""
+    nw = words.size
+    if start < 0:
+        if start <= -64:
+            return np.uint64(0)
+        return words[0] << np.uint64(-start)
+    q = start >> 6
+    r = start & 63
+    lo = words[q] if q < nw else np.uint64(0)
+    if r == 0:
+        return lo
+    hi = words[q + 1] if q + 1 < nw else np.uint64(0)
+    return (lo >> np.uint64(r)) | (hi << np.uint64(64 - r))
+
+
+@njit(cache=True, inline="always")
+def _below(b):  # pragma: no cover - compiled
+    """Mask of bits ``0 … b − 1`` (``0 <= b <= 64``)."""
+    return _ALL if b >= 64 else (_ONE << np.uint64(b)) - _ONE
+
+
+@njit(cache=True, inline="always")
+def _neighbour_word(words, base, stride, wrap, at_edge_a, at_edge_b, split):  # pragma: no cover
+    """The neighbour along one direction of the 64 spins of the word at ``base`` as a word: the
+    window ``stride`` away, except the spins of a row at the lattice's edge (``at_edge_a``: the
+    word's first row, bits below ``split``; ``at_edge_b``: its second row), whose neighbour is
+    ``wrap`` away."""
+    edge = np.uint64(0)
+    if at_edge_a:
+        edge |= _below(split)
+    if at_edge_b:
+        edge |= ~_below(split)
+    out = _window(words, base + stride) & ~edge
+    if edge != 0:
+        out |= _window(words, base + wrap) & edge
+    return out
+
+
+@njit(cache=True, inline="always")
+def _add(s0, s1, s2, x):  # pragma: no cover - compiled
+    """Add the one-bit numbers ``x`` to the bit-sliced 3-bit counters ``(s0, s1, s2)``."""
+    c0 = s0 & x
+    s0 ^= x
+    c1 = s1 & c0
+    s1 ^= c0
+    s2 ^= c1
+    return s0, s1, s2
+
+
+@njit(cache=True, inline="always")
+def _up_counts(words, w, dims):  # pragma: no cover - compiled
+    """Bit-sliced up-neighbour counts ``(s0, s1, s2)`` of the 64 spins of word ``w`` (a lattice
+    with ``L2 >= 64``: a word spans at most two rows, its first ``split`` bits in the first)."""
+    l0, l1, l2 = dims[0], dims[1], dims[2]
+    base = w * 64
+    c2 = base % l2
+    c1 = (base // l2) % l1
+    c0 = base // (l1 * l2)
+    split = l2 - c2  # bits of the first row (>= 64: the word lies in one row)
+    d1 = c1 + 1 if c1 < l1 - 1 else 0  # the second row's coordinates
+    d0 = c0 if c1 < l1 - 1 else (c0 + 1 if c0 < l0 - 1 else 0)
+    z = np.uint64(0)
+    s0, s1, s2 = z, z, z
+    # x: the row's last spin (+1) and first spin (−1) wrap
+    e = _ONE << np.uint64(split - 1) if split <= 64 else z
+    x = (_window(words, base + 1) & ~e) | (_window(words, base + 1 - l2) & e)
+    s0, s1, s2 = _add(s0, s1, s2, x)
+    e = _ONE << np.uint64(split) if split < 64 else z
+    if c2 == 0:
+        e |= _ONE
+    x = (_window(words, base - 1) & ~e) | (_window(words, base - 1 + l2) & e)
+    s0, s1, s2 = _add(s0, s1, s2, x)
+    if l1 > 1:
+        x = _neighbour_word(words, base, l2, l2 - l1 * l2, c1 == l1 - 1, d1 == l1 - 1, split)
+        s0, s1, s2 = _add(s0, s1, s2, x)
+        x = _neighbour_word(words, base, -l2, l1 * l2 - l2, c1 == 0, d1 == 0, split)
+        s0, s1, s2 = _add(s0, s1, s2, x)
+    if l0 > 1:
+        s = l1 * l2
+        x = _neighbour_word(words, base, s, s - l0 * s, c0 == l0 - 1, d0 == l0 - 1, split)
+        s0, s1, s2 = _add(s0, s1, s2, x)
+        x = _neighbour_word(words, base, -s, l0 * s - s, c0 == 0, d0 == 0, split)
+        s0, s1, s2 = _add(s0, s1, s2, x)
+    return s0, s1, s2
+
+
+@njit(cache=True)
+def up_counts_bitsliced(words, dims, out):  # pragma: no cover - compiled
+    """``out[i]`` = up neighbours of every spin by the bit-sliced counts (tests; ``L2 >= 64``)."""
+    n = out.size
+    for w in range((n + 63) // 64):
+        s0, s1, s2 = _up_counts(words, w, dims)
+        for b in range(min(64, n - w * 64)):
+            sh = np.uint64(b)
+            out[w * 64 + b] = (
+                ((s0 >> sh) & _ONE) + 2 * ((s1 >> sh) & _ONE) + 4 * ((s2 >> sh) & _ONE)
+            )
+
+
+@njit(cache=True, inline="always")
 def _candidates(words, w, n, p):  # pragma: no cover - compiled
-    """Bit mask of the spins of word ``w`` that point the old way and pass the loosest cut."""
-    rising, mcut, k0, k1 = p[1], p[3], p[5], p[6]
+    """Bit mask of the spins of word ``w`` that point the old way and pass their hash cut:
+    each spin's own ``mcut[k]`` from bit-sliced neighbour counts when ``L2 >= 64``, else the
+    loosest cut (``k = z`` rising, ``k = 0`` falling)."""
+    dims, rising, mcut, k0, k1 = p[0], p[1], p[3], p[5], p[6]
     old = ~words[w] if rising else words[w]
     base = w * 64
     if base + 64 > n:
-        old &= (_ONE << np.uint64(n - base)) - _ONE
+        old &= _below(n - base)
     if old == 0:
         return old
     mask = np.uint64(0)
-    if rising:
+    if dims[2] >= 64:
+        s0, s1, s2 = _up_counts(words, w, dims)
+        for b in range(64):
+            sh = np.uint64(b)
+            k = (
+                ((s0 >> sh) & _ONE)
+                | (((s1 >> sh) & _ONE) << _ONE)
+                | (((s2 >> sh) & _ONE) << np.uint64(2))
+            )
+            m = _m52(base + b, k0, k1)
+            hit = m >= mcut[k] if rising else m <= mcut[k]
+            mask |= np.uint64(hit) << sh
+    elif rising:
         cut = mcut.min()
         for b in range(64):
             mask |= np.uint64(_m52(base + b, k0, k1) >= cut) << np.uint64(b)
@@ -273,8 +387,26 @@ def _candidates(words, w, n, p):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _coords(i, dims):  # pragma: no cover - compiled
-    return i // (dims[1] * dims[2]), (i // dims[2]) % dims[1], i % dims[2]
+def _divmod(j, length, inverse):  # pragma: no cover - compiled
+    """``divmod(j, length)`` for ``0 <= j < 2**31`` without an integer division (a tenth of its
+    time): the float quotient is off by at most one, and the remainder says which way."""
+    q = np.int64(j * inverse)
+    r = j - q * length
+    if r < 0:
+        q -= 1
+        r += length
+    elif r >= length:
+        q += 1
+        r -= length
+    return q, r
+
+
+@njit(cache=True, inline="always")
+def _coords(i, dims, inverses):  # pragma: no cover - compiled
+    """Coordinates of site ``i``; ``inverses = 1/dims`` (floats)."""
+    q, c2 = _divmod(i, dims[2], inverses[2])
+    c0, c1 = _divmod(q, dims[1], inverses[1])
+    return c0, c1, c2
 
 
 @njit(cache=True)
@@ -293,7 +425,7 @@ def relax_serial(words, n, w0, w1, p, stack, stats):  # pragma: no cover - compi
             i = w * 64 + b
             if _up(words, i) != old:
                 continue  # flipped by an avalanche started earlier in this word
-            c0, c1, c2 = _coords(i, p[0])
+            c0, c1, c2 = _coords(i, p[0], p[8])
             if _unstable(words, i, c0, c1, c2, p):
                 size, stack = _avalanche(words, i, p, stack)
                 stats[0] += size
@@ -322,7 +454,7 @@ def collect(words, n, chunk, p, buf, counts, resume):  # pragma: no cover - comp
                 if (mask >> np.uint64(b)) & _ONE == 0:
                     continue
                 i = w * 64 + b
-                c0, c1, c2 = _coords(i, p[0])
+                c0, c1, c2 = _coords(i, p[0], p[8])
                 if _unstable(words, i, c0, c1, c2, p):
                     if got == cap:
                         got = -1

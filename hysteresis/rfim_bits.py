@@ -318,7 +318,7 @@ class BitLattice:
             return 0, 0, 0
         rising = u > self._u
         p = (self._dims, rising, u, self._cuts(u, rising), self._jn, self._k0, self._k1,
-             self._disorder)  # fmt: skip
+             self._disorder, 1.0 / self._dims)  # fmt: skip
         n_words = self._words.size
         if self._threads == 1:
             self._stack = kern.relax_serial(self._words, self._n, 0, n_words, p, self._stack,
