@@ -161,18 +161,28 @@ def _site(c0, c1, c2, dims):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _count_up(words, c0, c1, c2, dims):  # pragma: no cover - compiled
-    """Up neighbours of site (c0, c1, c2)."""
+def _next(i, c, length, stride):  # pragma: no cover - compiled
+    """Index of the neighbour one step up an axis (periodic) of site i at coordinate c."""
+    return i + stride if c < length - 1 else i - (length - 1) * stride
+
+
+@njit(cache=True, inline="always")
+def _prev(i, c, length, stride):  # pragma: no cover - compiled
+    return i - stride if c > 0 else i + (length - 1) * stride
+
+
+@njit(cache=True, inline="always")
+def _count_up(words, i, c0, c1, c2, dims):  # pragma: no cover - compiled
+    """Up neighbours of site i = (c0, c1, c2)."""
+    l0, l1, l2 = dims[0], dims[1], dims[2]
     k = 0
-    if dims[2] > 1:
-        k += _up(words, _site(c0, c1, _plus(c2, dims[2]), dims))
-        k += _up(words, _site(c0, c1, _minus(c2, dims[2]), dims))
-    if dims[1] > 1:
-        k += _up(words, _site(c0, _plus(c1, dims[1]), c2, dims))
-        k += _up(words, _site(c0, _minus(c1, dims[1]), c2, dims))
-    if dims[0] > 1:
-        k += _up(words, _site(_plus(c0, dims[0]), c1, c2, dims))
-        k += _up(words, _site(_minus(c0, dims[0]), c1, c2, dims))
+    if l2 > 1:
+        k += _up(words, _next(i, c2, l2, 1)) + _up(words, _prev(i, c2, l2, 1))
+    if l1 > 1:
+        k += _up(words, _next(i, c1, l1, l2)) + _up(words, _prev(i, c1, l1, l2))
+    if l0 > 1:
+        s = l1 * l2
+        k += _up(words, _next(i, c0, l0, s)) + _up(words, _prev(i, c0, l0, s))
     return k
 
 
@@ -182,7 +192,8 @@ def count_up(words, dims, out):  # pragma: no cover - compiled
     for c0 in range(dims[0]):
         for c1 in range(dims[1]):
             for c2 in range(dims[2]):
-                out[_site(c0, c1, c2, dims)] = _count_up(words, c0, c1, c2, dims)
+                i = _site(c0, c1, c2, dims)
+                out[i] = _count_up(words, i, c0, c1, c2, dims)
 
 
 @njit(cache=True, inline="always")
@@ -190,7 +201,7 @@ def _unstable(words, i, c0, c1, c2, p):  # pragma: no cover - compiled
     """Whether spin i (pointing down if rising, up if falling) flips at ``u``; ``p`` is the
     step's ``(dims, rising, u, mcut, jn, k0, k1, disorder, 1/dims)``."""
     dims, rising, u, mcut, jn, k0, k1, disorder = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]
-    k = _count_up(words, c0, c1, c2, dims)
+    k = _count_up(words, i, c0, c1, c2, dims)
     m = _m52(i, k0, k1)
     if rising:
         if m < mcut[k]:
@@ -212,9 +223,8 @@ def _push(stack, top, i):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _visit(words, c0, c1, c2, p, stack, top):  # pragma: no cover - compiled
-    """Flip and push the site (c0, c1, c2) if it points the old way and is unstable."""
-    i = _site(c0, c1, c2, p[0])
+def _visit(words, i, c0, c1, c2, p, stack, top):  # pragma: no cover - compiled
+    """Flip and push site i = (c0, c1, c2) if it points the old way and is unstable."""
     if _up(words, i) == (0 if p[1] else 1) and _unstable(words, i, c0, c1, c2, p):
         words[i >> 6] ^= _ONE << np.uint64(i & 63)
         stack, top = _push(stack, top, i)
@@ -227,6 +237,7 @@ def _avalanche(words, i, p, stack):  # pragma: no cover - compiled
     returns its size and the stack (grown if it was full)."""
     dims = p[0]
     l0, l1, l2 = dims[0], dims[1], dims[2]
+    s0 = l1 * l2
     words[i >> 6] ^= _ONE << np.uint64(i & 63)
     stack[0] = i
     top = 1
@@ -237,14 +248,20 @@ def _avalanche(words, i, p, stack):  # pragma: no cover - compiled
         c0, c1, c2 = _coords(j, dims, p[8])
         before = top
         if l2 > 1:
-            stack, top = _visit(words, c0, c1, _plus(c2, l2), p, stack, top)
-            stack, top = _visit(words, c0, c1, _minus(c2, l2), p, stack, top)
+            m = _next(j, c2, l2, 1)
+            stack, top = _visit(words, m, c0, c1, _plus(c2, l2), p, stack, top)
+            m = _prev(j, c2, l2, 1)
+            stack, top = _visit(words, m, c0, c1, _minus(c2, l2), p, stack, top)
         if l1 > 1:
-            stack, top = _visit(words, c0, _plus(c1, l1), c2, p, stack, top)
-            stack, top = _visit(words, c0, _minus(c1, l1), c2, p, stack, top)
+            m = _next(j, c1, l1, l2)
+            stack, top = _visit(words, m, c0, _plus(c1, l1), c2, p, stack, top)
+            m = _prev(j, c1, l1, l2)
+            stack, top = _visit(words, m, c0, _minus(c1, l1), c2, p, stack, top)
         if l0 > 1:
-            stack, top = _visit(words, _plus(c0, l0), c1, c2, p, stack, top)
-            stack, top = _visit(words, _minus(c0, l0), c1, c2, p, stack, top)
+            m = _next(j, c0, l0, s0)
+            stack, top = _visit(words, m, _plus(c0, l0), c1, c2, p, stack, top)
+            m = _prev(j, c0, l0, s0)
+            stack, top = _visit(words, m, _minus(c0, l0), c1, c2, p, stack, top)
         size += top - before
     return size, stack
 
