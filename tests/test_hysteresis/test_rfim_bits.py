@@ -43,19 +43,18 @@ def brute_up_counts(spins: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
 
 
 @pytest.mark.parametrize(
-    ("shape", "disorder", "coupling", "seed"),
+    ("shape", "disorder", "coupling", "seed", "threads"),
     [
-        ((200,), 0.8, 1.0, 1),  # 1-D, L2 >= 64: bit-sliced counts
-        ((40,), 1.2, 0.5, 2),  # 1-D, L2 < 64: per-spin counts
-        ((12, 12), 1.5, 1.0, 3),
-        ((5, 70), 1.0, 1.0, 4),  # a word spans two rows
-        ((8, 8, 8), 2.0, 1.0, 5),
-        ((8, 8, 8), 1.2, 1.0, 6),  # below R_c: system-spanning avalanches
-        ((3, 4, 70), 1.6, 1.0, 7),
-        ((4, 3, 130), 2.6, 0.5, 8),
+        ((200,), 0.8, 1.0, 1, 1),  # 1-D, L2 >= 64: bit-sliced counts
+        ((40,), 1.2, 0.5, 2, 2),  # 1-D, L2 < 64: per-spin counts; the parallel scan
+        ((12, 12), 1.5, 1.0, 3, 1),
+        ((5, 70), 1.0, 1.0, 4, 2),  # a word spans two rows
+        ((8, 8, 8), 2.0, 1.0, 5, 1),
+        ((8, 8, 8), 1.2, 1.0, 6, 2),  # below R_c: system-spanning avalanches
+        ((3, 4, 70), 1.6, 1.0, 7, 1),
+        ((4, 3, 130), 2.6, 0.5, 8, 1),
     ],
 )
-@pytest.mark.parametrize("threads", [1, 2])
 def test_magnetization_equals_event_driven_model(shape, disorder, coupling, seed, threads):
     # J = 1 or 0.5: J·n is exact, so both models form the same floats f + J·n
     loop = bit_lattice_loop(shape, disorder, LOOP, coupling, seed, threads)
