@@ -79,7 +79,13 @@ def _splitmix(x: int) -> int:
     return z ^ (z >> 31)
 
 
+#: no default seed: every random lattice names its seed (as RandomFieldIsing.lattice does)
+_REQUIRED: Any = object()
+
+
 def _seed(seed: Any) -> int:
+    if seed is _REQUIRED:
+        raise TypeError("missing required argument seed (an int in [0, 2**64))")
     if isinstance(seed, bool) or not isinstance(seed, Integral):
         raise ParameterTypeError(f"seed must be an int in [0, 2**64), got {seed!r}")
     if not 0 <= int(seed) < 2**64:
@@ -94,7 +100,9 @@ def _keys(seed: int) -> tuple[np.uint64, np.uint64]:
     return np.uint64(k0), np.uint64(k1)
 
 
-def random_fields(start: int, stop: int, disorder: float = 1.0, seed: int = 0) -> np.ndarray:
+def random_fields(
+    start: int, stop: int, disorder: float = 1.0, seed: int = _REQUIRED
+) -> np.ndarray:
     """The random fields ``f_i = disorder·Φ⁻¹(U_i)`` of sites ``start <= i < stop`` (float64),
     bit for bit the values the lattice uses; ``disorder = 1``: standard normal numbers. They are
     a function of ``(i, seed)`` alone: any range can be regenerated in any order."""
@@ -216,7 +224,7 @@ class BitLattice:
         shape: Any,
         disorder: float,
         spin_coupling: float = 1.0,
-        seed: int = 0,
+        seed: int = _REQUIRED,
         threads: int = 1,
     ) -> None:
         self._shape = _shape(shape)
@@ -347,7 +355,7 @@ def bit_lattice_loop(
     disorder: float,
     inputs: Any,
     spin_coupling: float = 1.0,
-    seed: int = 0,
+    seed: int = _REQUIRED,
     threads: int = 1,
 ) -> BitLoop:
     """``M`` of a periodic 1-bit-per-spin random-field Ising lattice (:class:`BitLattice`, all

@@ -180,17 +180,17 @@ def test_zero_disorder_and_zero_coupling():
 @pytest.mark.parametrize(
     ("call", "name"),
     [
-        (lambda: BitLattice((2, 5), 1.0), "shape"),
-        (lambda: BitLattice((5, 5, 5, 5), 1.0), "shape"),
-        (lambda: BitLattice((2000, 2000, 1000), 1.0), "shape"),
-        (lambda: BitLattice(10, -1.0), "disorder"),
-        (lambda: BitLattice(10, 1.0, spin_coupling=-0.5), "spin_coupling"),
+        (lambda: BitLattice((2, 5), 1.0, seed=0), "shape"),
+        (lambda: BitLattice((5, 5, 5, 5), 1.0, seed=0), "shape"),
+        (lambda: BitLattice((2000, 2000, 1000), 1.0, seed=0), "shape"),
+        (lambda: BitLattice(10, -1.0, seed=0), "disorder"),
+        (lambda: BitLattice(10, 1.0, spin_coupling=-0.5, seed=0), "spin_coupling"),
         (lambda: BitLattice(10, 1.0, seed=-1), "seed"),
         (lambda: BitLattice(10, 1.0, seed=2**64), "seed"),
-        (lambda: BitLattice(10, 1.0, threads=0), "threads"),
-        (lambda: BitLattice(10, 1.0).relax(math.nan), "u"),
-        (lambda: bit_lattice_loop(10, 1.0, []), "inputs"),
-        (lambda: random_fields(5, 3), "start"),
+        (lambda: BitLattice(10, 1.0, seed=0, threads=0), "threads"),
+        (lambda: BitLattice(10, 1.0, seed=0).relax(math.nan), "u"),
+        (lambda: bit_lattice_loop(10, 1.0, [], seed=0), "inputs"),
+        (lambda: random_fields(5, 3, seed=0), "start"),
         (lambda: pack_spins([1, 0, -1]), "spins"),
         (lambda: unpack_spins(np.zeros(2, np.uint64), 200), "n_spins"),
     ],
@@ -200,6 +200,16 @@ def test_bad_input_raises_one_line_error_naming_the_parameter(call, name):
         call()
     message = str(info.value)
     assert name in message and "\n" not in message
+
+
+def test_a_random_lattice_names_its_seed():
+    for call in (
+        lambda: BitLattice(10, 1.0),
+        lambda: random_fields(0, 5),
+        lambda: bit_lattice_loop(10, 1.0, [0.0]),
+    ):
+        with pytest.raises(TypeError, match="seed"):
+            call()
 
 
 @pytest.mark.slow
