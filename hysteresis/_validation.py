@@ -23,6 +23,7 @@ import numpy as np
 __all__ = [
     "MAX_MAGNITUDE",
     "ParameterTypeError",
+    "lattice_shape",
     "as_input_sequence",
     "real_array",
     "finite_scalar",
@@ -334,3 +335,21 @@ def _frozen_state(cls: type, values: tuple) -> Any:
         if isinstance(value, np.ndarray):
             value.setflags(write=False)
     return cls(*values)
+
+
+def lattice_shape(shape: Any) -> tuple[int, ...]:
+    """The side lengths of a periodic lattice: 1 to 3 integers ``>= 3`` (an int is one side)."""
+    dims = (shape,) if isinstance(shape, Integral) else shape
+    try:
+        dims = tuple(dims)
+    except TypeError:
+        raise ParameterTypeError(
+            f"shape must be 1 to 3 integers >= 3 (the side lengths), got {shape!r}"
+        ) from None
+    ok = all(isinstance(d, Integral) and not isinstance(d, bool) and d >= 3 for d in dims)
+    if not (1 <= len(dims) <= 3 and ok):
+        raise ValueError(
+            f"shape must be 1 to 3 integers >= 3 (the side lengths; >= 3 so that the 2d "
+            f"neighbours of a site are distinct), got {shape!r}"
+        )
+    return tuple(int(d) for d in dims)

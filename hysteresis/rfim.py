@@ -45,7 +45,6 @@ import hashlib
 import math
 import threading
 from dataclasses import dataclass, field
-from numbers import Integral
 from typing import Any
 
 import numpy as np
@@ -61,6 +60,7 @@ from hysteresis._validation import (
     finite_array,
     finite_scalar,
     frozen_state_reduce,
+    lattice_shape,
     nonnegative_scalar,
     readonly_array,
 )
@@ -160,23 +160,6 @@ def _check_edges(edges: Any, n: int) -> np.ndarray:
     return arr
 
 
-def _lattice_shape(shape: Any) -> tuple[int, ...]:
-    dims = (shape,) if isinstance(shape, Integral) else shape
-    try:
-        dims = tuple(dims)
-    except TypeError:
-        raise ParameterTypeError(
-            f"shape must be 1 to 3 integers >= 3 (the side lengths), got {shape!r}"
-        ) from None
-    ok = all(isinstance(d, Integral) and not isinstance(d, bool) and d >= 3 for d in dims)
-    if not (1 <= len(dims) <= 3 and ok):
-        raise ValueError(
-            f"shape must be 1 to 3 integers >= 3 (the side lengths; >= 3 so that the 2d "
-            f"neighbours of a site are distinct), got {shape!r}"
-        )
-    return tuple(int(d) for d in dims)
-
-
 class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
     """The zero-temperature random-field Ising model as a hysteresis operator (module docstring):
     output ``M = (1/N) Σ s_i``; a periodic hypercubic lattice is :meth:`lattice`.
@@ -220,7 +203,7 @@ class RandomFieldIsing(SwitchingHysteron[RandomFieldIsingState]):
         site ``(x0, x1, x2)`` is spin ``(x0·L1 + x1)·L2 + x2``), each site coupled to its
         ``2d`` nearest neighbours, fields ``f_i ~ N(0, disorder²)`` drawn in site order from
         ``seed`` (required: a non-negative int or a ``numpy.random.Generator``)."""
-        dims = _lattice_shape(shape)
+        dims = lattice_shape(shape)
         n = bounded_work(math.prod(dims), "shape", MAX_SPINS, "spins")
         disorder = nonnegative_scalar(disorder, "disorder", MAX_MAGNITUDE)
         j = _ferromagnetic(spin_coupling)

@@ -49,6 +49,7 @@ from hysteresis._validation import (
     ParameterTypeError,
     as_input_sequence,
     finite_scalar,
+    lattice_shape,
     nonnegative_scalar,
 )
 
@@ -148,17 +149,7 @@ def unpack_spins(words: Any, n_spins: int) -> np.ndarray:
 
 
 def _shape(shape: Any) -> tuple[int, ...]:
-    dims = (shape,) if isinstance(shape, Integral) else shape
-    try:
-        dims = tuple(dims)
-    except TypeError:
-        raise ParameterTypeError(
-            f"shape must be 1 to 3 integers >= 3 (the side lengths), got {shape!r}"
-        ) from None
-    ok = all(isinstance(d, Integral) and not isinstance(d, bool) and d >= 3 for d in dims)
-    if not (1 <= len(dims) <= 3 and ok):
-        raise ValueError(f"shape must be 1 to 3 integers >= 3 (the side lengths), got {shape!r}")
-    dims = tuple(int(d) for d in dims)
+    dims = lattice_shape(shape)
     if math.prod(dims) > MAX_BIT_SPINS:
         raise ValueError(f"shape must hold at most {MAX_BIT_SPINS} spins (2**31 - 1), got "
                          f"{math.prod(dims)} for {dims}")  # fmt: skip

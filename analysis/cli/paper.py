@@ -53,7 +53,9 @@ def register(subparsers: Any) -> None:
         dest="size",
         action="store_const",
         const="full",
-        help="paper scale (about 20 min on two cores: 20.5 min measured; resumable through --store)",
+        help=(
+            "paper scale (about 20 min on two cores: 20.5 min measured; resumable through --store)"
+        ),
     )
     smoke = size.add_argument(
         "--smoke",
