@@ -142,6 +142,11 @@ class SwitchingKernelEngine(RelayKernelEngine):
         """:meth:`RelayKernelEngine._run_targets`'s kernel call, on the spins' plan."""
         return sk.run_spins(par, st, ist, *rest, self._plan)
 
+    def kernel_arrays(self) -> None:
+        """``None``: the compiled Benettin loop (:mod:`analysis.dynamics._relay_benettin`) drives
+        the relay kernel's tables only; the spins' plan steps through the Python loop."""
+        return None
+
     def _switched_copy(self, direction: int) -> tuple[float, float, float]:
         """(output, next up, next down trigger) after the event at the current trigger in
         ``direction``, on a copy of the plan (O(N): only where a start sits on a trigger)."""
