@@ -285,8 +285,13 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
 
 
 def test_distributed_run_survives_a_killed_worker(tmp_path):
-    """2 couplings x 3 realizations of N = 200 dimers; one of two workers SIGKILLed mid-run."""
-    _run_with_worker_killed(tmp_path, _ensemble_args(["2.9", "4.0"], 3, 8000.0), n_tasks=6)
+    """2 couplings x 3 realizations of N = 200 dimers; one of two workers SIGKILLed mid-run.
+
+    Each task must outlast the observer's poll for a busy worker (50 ms plus a scheduler round
+    trip) several times over, or the last tasks finish before the kill: t_end = 3·10⁴ makes a
+    task about half a second (8000 was about 0.1 s once the relay engine's Benettin loop ran
+    compiled, and the kill then fell after the run)."""
+    _run_with_worker_killed(tmp_path, _ensemble_args(["2.9", "4.0"], 3, 30000.0), n_tasks=6)
 
 
 @pytest.mark.slow
