@@ -12,7 +12,9 @@ back into its own state with ``state_from_relay_outputs(outputs, input)``.
 The table also knows its *nested plan* (:meth:`RelayTable.nested_plan`): when the relays can be
 ordered so that the upper and the lower thresholds increase together (every equal-width model,
 the paper's spin dimers), the reachable configurations at any input are prefixes of that order
-and one index ``k`` describes the state — the oscillator then switches in O(1).
+and one index ``k`` describes the state — the oscillator then switches in O(1), and
+:meth:`NestedPlan.drive` maps an input sequence to outputs in O(log G) per input, however many
+relays switch.
 """
 
 from __future__ import annotations
@@ -21,8 +23,15 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from hysteresis._validation import finite_array, finite_scalar, real_array
+from hysteresis._validation import (
+    as_input_sequence,
+    finite_array,
+    finite_scalar,
+    nonnegative_integer,
+    real_array,
+)
 
 __all__ = ["HeapTable", "NestedPlan", "RelayTable"]
 
@@ -64,8 +73,49 @@ class NestedPlan:
         return int(self.up.size)
 
     def index_at(self, q: float) -> int:
-        """Index reached by rising from negative saturation to ``q`` (groups with up <= q)."""
+        """Index reached by rising from negative saturation to ``q`` (groups with up <= q): the
+        prefix form of :meth:`RelayTable.initial_outputs` (a relay is up iff ``alpha <= q``)."""
+        q = finite_scalar(q, "q")
         return int(np.searchsorted(self.up, q, side="right"))
+
+    def drive(self, inputs, k: int) -> tuple[np.ndarray, int]:
+        """Outputs for the input sequence ``inputs`` from index ``k``, and the final index.
+
+        The relay rule (up once ``u >= alpha``, down once ``u < beta``) on prefix states: at an
+        input ``v`` the groups with ``up <= v`` must be up, ``a = #{up <= v}``, and those with
+        ``down > v`` must be down, ``b = #{down <= v}``; ``a <= b`` because ``down <= up``
+        group by group, so the new index is ``min(max(k, a), b)``:
+
+        * rising, ``v >= up[k]``: ``k = a`` (``searchsorted(up, v, 'right')``);
+        * falling, ``k > 0`` and ``v < down[k-1]``: ``k = b`` (``searchsorted(down, v,
+          'right')``);
+        * otherwise ``k`` is unchanged (no relay switches),
+
+        and the output is ``mval[k]``: O(log G) per input however many relays switch (the
+        general Preisach kernel is O(1 + relays switched)). The outputs are the values of
+        :attr:`mval`, not a running sum, so no round-off accumulates along the sequence.
+
+        Parameters
+        ----------
+        inputs:
+            The input sequence (1-D, finite, non-empty).
+        k:
+            Start index, an integer in ``[0, n_groups]`` (first ``k`` groups up); rising from
+            negative saturation to ``u0`` is ``index_at(u0)``.
+
+        Returns
+        -------
+        (outputs, k_final):
+            ``mval`` after each input (float64, length of ``inputs``) and the final index.
+        """
+        u = as_input_sequence(inputs, "inputs")
+        k = nonnegative_integer(k, "k")
+        if k > self.n_groups:
+            raise ValueError(
+                f"k must be an integer in [0, {self.n_groups}] (the number of groups up), got {k}"
+            )
+        outputs, k_final = _drive_nested(u, self.up, self.down, self.mval, k)
+        return outputs, int(k_final)
 
     def index_of(self, outputs: np.ndarray) -> int | None:
         """Index ``k`` of a relay configuration (table order), or ``None`` if it is not a
@@ -84,6 +134,49 @@ class NestedPlan:
         y = np.full(n_relays, -1.0)
         y[self.order[: self.starts[k]]] = 1.0
         return y
+
+
+@njit(cache=True)
+def _drive_nested(inputs, up, down, mval, k):  # pragma: no cover - compiled
+    """The loop of :meth:`NestedPlan.drive`; returns ``(outputs, k_final)``.
+
+    Plain-Python reading::
+
+        for t, v in enumerate(inputs):
+            if k < G and v >= up[k]:            # rising: groups k.. with up <= v switch up
+                k = searchsorted(up, v, "right")     # searched in (k, G]
+            elif k > 0 and v < down[k - 1]:     # falling: groups ..k-1 with down > v go down
+                k = searchsorted(down, v, "right")   # searched in [0, k)
+            outputs[t] = mval[k]
+    """
+    g = up.size
+    outputs = np.empty(inputs.size)
+    for t in range(inputs.size):
+        v = inputs[t]
+        if k < g and v >= up[k]:
+            # first index in (k, g] whose up exceeds v (up[k] <= v is known)
+            lo = k + 1
+            hi = g
+            while lo < hi:
+                mid = (lo + hi) >> 1
+                if up[mid] <= v:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            k = lo
+        elif k > 0 and v < down[k - 1]:
+            # first index in [0, k-1] whose down exceeds v (down[k-1] > v is known)
+            lo = 0
+            hi = k - 1
+            while lo < hi:
+                mid = (lo + hi) >> 1
+                if down[mid] <= v:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            k = lo
+        outputs[t] = mval[k]
+    return outputs, k
 
 
 class RelayTable:
