@@ -2,21 +2,72 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from scipy import stats
 
 from analysis.experiments.execution import spawn_seeds
 from analysis.experiments.iid import iid_inputs, iid_magnetization, iid_task, iid_variance_scaling
+from hysteresis.spin_dimers import SpinDimerEnsemble
 
 
 def test_iid_task_matches_brute_force_spin_flips():
-    from hysteresis.spin_dimers import SpinDimerEnsemble
-
     res = iid_task(spins=200, n_steps=3000, seed=11, input_seed=12)
     ensemble = SpinDimerEnsemble.random(200, 2.0, 1.0, 2.0, 11)
     m, _ = ensemble.simulate(iid_inputs(3000, 2.0, 12))  # all spins down, relaxed at u_0
     assert res["magnetization"] == pytest.approx(float(np.mean(m)), abs=1e-12)
+
+
+def _old_path_bound(ensemble: SpinDimerEnsemble, steps: int) -> float:
+    """Bound on |M_T(nested drive) − M_T(ensemble.apply)| (tests/test_hysteresis/
+    test_nested_drive.py): the general kernel's running sum drifts by at most
+    ``|1 − W| + (2n + 3)(t + 1)·u·W`` after t inputs, the plan's outputs are within
+    ``(n + 3)·u·W`` (equal weights), and each mean of ``steps`` values with |M| <= 1 adds
+    ``(steps + 1)·u``."""
+    w = ensemble.relay_table().weights
+    n, total, u = w.size, math.fsum(w), np.finfo(float).eps / 2
+    drift = abs(1.0 - total) + ((2 * n + 3) * (steps + 1) + n + 3) * u * total
+    return drift + 2 * (steps + 1) * u
+
+
+@pytest.mark.parametrize(
+    "spins, seed, transient", [(2, 0, 0), (200, 3, 0), (2000, 4, 100), (6000, 5, 7)]
+)
+def test_iid_task_matches_the_general_preisach_path(spins, seed, transient):
+    # the nested drive against the general kernel it replaced (ensemble.apply from
+    # initial_state(u_0): all spins down, relaxed at u_0)
+    n_steps = 3000
+    res = iid_task(
+        spins=spins, n_steps=n_steps, seed=seed, input_seed=seed + 1, transient_steps=transient
+    )
+    ensemble = SpinDimerEnsemble.random(spins, 2.0, 1.0, 2.0, seed)
+    u = iid_inputs(n_steps + transient, 2.0, seed + 1)
+    old, _ = ensemble.apply(u, ensemble.initial_state(float(u[0])))
+    diff = abs(res["magnetization"] - float(np.mean(old[transient:])))
+    assert diff <= _old_path_bound(ensemble, u.size)
+
+
+def test_iid_task_falls_back_without_a_nested_plan(monkeypatch):
+    import analysis.experiments.iid as iid_module
+    from hysteresis.relay_table import RelayTable
+
+    class NotNested(RelayTable):
+        __slots__ = ()
+
+        def nested_plan(self):
+            return None
+
+    nested = iid_task(spins=400, n_steps=2000, seed=8, input_seed=9, transient_steps=10)
+    monkeypatch.setattr(iid_module, "RelayTable", NotNested)
+    fallback = iid_task(spins=400, n_steps=2000, seed=8, input_seed=9, transient_steps=10)
+    ensemble = SpinDimerEnsemble.random(400, 2.0, 1.0, 2.0, 8)
+    u = iid_inputs(2010, 2.0, 9)
+    old, _ = ensemble.apply(u, ensemble.initial_state(float(u[0])))
+    assert fallback["magnetization"] == float(np.mean(old[10:]))  # the general path, as is
+    diff = abs(nested["magnetization"] - fallback["magnetization"])
+    assert diff <= _old_path_bound(ensemble, u.size)
 
 
 def _relay_time_average(centres: np.ndarray, u: np.ndarray, half_width: float) -> np.ndarray:
