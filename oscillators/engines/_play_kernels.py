@@ -209,11 +209,14 @@ def _hermite_extrema(ql, vl, qr, vr, h):
     a = 3.0 * c3
     b = 2.0 * c2
     c = h * vl
-    roots = np.empty(2)
+    # the zeros of H' as two scalars (no array: the relay kernel's event loop, which calls
+    # this through _hit_possible, runs without numba's reference counting and cannot allocate)
+    r0 = 0.0
+    r1 = 0.0
     nr = 0
     if abs(a) < 1e-300:
         if abs(b) > 0.0:
-            roots[0] = -c / b
+            r0 = -c / b
             nr = 1
     else:
         disc = b * b - 4.0 * a * c
@@ -221,14 +224,14 @@ def _hermite_extrema(ql, vl, qr, vr, h):
             sq = math.sqrt(disc)
             qq = -0.5 * (b + math.copysign(sq, b))
             if qq != 0.0:
-                roots[0] = qq / a
-                roots[1] = c / qq
+                r0 = qq / a
+                r1 = c / qq
                 nr = 2
             else:
-                roots[0] = 0.0
+                r0 = 0.0
                 nr = 1
     for i in range(nr):
-        s = roots[i]
+        s = r0 if i == 0 else r1
         if 0.0 < s < 1.0:
             val = ql + h * vl * s + c2 * s * s + c3 * s * s * s
             hi = max(hi, val)

@@ -85,6 +85,7 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
+from oscillators.engines._play_kernels import _hit_possible
 from oscillators.linear import exact_step, hom_matrix, phase_column
 
 # fused multiply-add allowed (no other fast-math liberty): shorter dependency chains, and
@@ -347,20 +348,91 @@ def _check_piece(par, force, q0, v0, c0, s0, tau0, t1, q1, v1, t2, q2, v2, up, d
     return _check_point(par, force, q0, v0, c0, s0, tau0, t1, q1, t2, q2, up, down)
 
 
+#: most sub-intervals (of ``par[P_DSUB]``) one proven-free stretch of an exact flight skips
+SKIP_SPAN = 8
+
+
+@njit(cache=True)
+def flight_derivative_bound(par, force, q0, v0, c0, s0):
+    """Bound of ``|q⁗|`` for all ``t >= 0`` of the flight from (q0, v0) (phase cos/sin (c0,
+    s0)), or ``inf`` for ζ >= 1. The motion is ``F + A cos φ + B sin φ + x_h(t)`` with the free
+    motion ``x_h = Re(K e^{λt})``, ``|λ| = 1`` for ζ < 1: every derivative of ``x_h`` is at most
+    ``|K| e^{-ζt} <= |K|``, every derivative of order n of the forcing response at most
+    ``√(A² + B²) Ω^n``."""
+    zeta = par[P_ZETA]
+    if not zeta < 1.0:
+        return np.inf
+    omega = par[P_OMEGA]
+    amp_a = par[P_A]
+    amp_b = par[P_B]
+    wd = math.sqrt(1.0 - zeta * zeta)
+    x = q0 - (amp_a * c0 + amp_b * s0 + force)
+    y = v0 - omega * (amp_b * c0 - amp_a * s0)
+    k2 = (y + zeta * x) / wd
+    o2 = omega * omega
+    return math.sqrt(x * x + k2 * k2) + math.sqrt(amp_a * amp_a + amp_b * amp_b) * o2 * o2
+
+
 @njit(cache=True)
 def scan_crossing(par, force, q0, v0, c0, s0, tau0, horizon, up, down):
     """First time in (0, horizon] with q >= up or q < down on the exact segment solution.
 
     Returns (time, direction) with direction +1 (up), -1 (down) or 0 (none; time = horizon).
-    (c0, s0) must be cos/sin of the phase at tau0.
+    (c0, s0) must be cos/sin of the phase at tau0. :func:`scan_flight` with stretches of up to
+    :data:`SKIP_SPAN` sub-intervals proven free of thresholds skipped in one evaluation.
+    """
+    return scan_flight(par, force, q0, v0, c0, s0, tau0, horizon, up, down, SKIP_SPAN)
+
+
+@njit(cache=True)
+def scan_flight(par, force, q0, v0, c0, s0, tau0, horizon, up, down, span_max):
+    """:func:`scan_crossing` with skips of at most ``span_max`` sub-intervals (0 or 1: none).
+
+    The flight is cut into sub-intervals of ``par[P_DSUB]`` (the last one stretched to the
+    horizon); each is split at the zero of q'' and of v, so q is monotone between checkpoints
+    and the first checkpoint at or past a threshold brackets the crossing. Skips: a stretch of
+    whole sub-intervals on the same grid (the same clock values, summed the same way) is passed
+    in one exact evaluation at its end when the cubic Hermite interpolant of (q, v) at its ends,
+    widened by the bound ``max|q⁗| L⁴/384`` (:func:`flight_derivative_bound`) and a margin
+    1e-9·(1 + |q0|) far above round-off, stays strictly between ``down`` and ``up``: no
+    crossing is there, and the sub-interval that holds one is split exactly as without skips,
+    so the crossing comes out bit for bit the same. The stretch doubles after a skip (up to
+    ``span_max``) and halves after a failed one.
     """
     zeta = par[P_ZETA]
     dsub = par[P_DSUB]
+    m4 = flight_derivative_bound(par, force, q0, v0, c0, s0) if span_max > 1 else np.inf
+    tol = 1e-9 * (1.0 + abs(q0))
+    up_in = up - tol
+    down_in = down + tol
+    span = span_max
     tl = 0.0
     ql = q0
     vl = v0
     al = -2.0 * zeta * v0 - q0 + c0 + force
     while tl < horizon:
+        if m4 < np.inf and span > 1:
+            # the next `span` grid points, while none is the stretched last one
+            te = tl
+            n = 0
+            while n < span:
+                tn = te + dsub
+                if tn > horizon or horizon - tn < 0.25 * dsub:
+                    break
+                te = tn
+                n += 1
+            if n > 1:
+                qe, ve, ae, _ = _eval(par, force, q0, v0, c0, s0, tau0, te)
+                if not _hit_possible(ql, vl, qe, ve, te - tl, up_in, down_in, m4):
+                    tl = te
+                    ql = qe
+                    vl = ve
+                    al = ae
+                    span = min(2 * span, span_max)
+                    continue
+            span = max(1, n // 2)
+            if span > 1:
+                continue
         tr = tl + dsub
         if tr > horizon or horizon - tr < 0.25 * dsub:
             tr = horizon
@@ -380,6 +452,7 @@ def scan_crossing(par, force, q0, v0, c0, s0, tau0, horizon, up, down):
         ql = qr
         vl = vr
         al = ar
+        span = 2 if span_max > 1 else span_max
     return horizon, 0
 
 
