@@ -29,7 +29,8 @@ Plain-Python reading of one hop (``advance_table``)::
     F = C*M; e_n = q^(n)(0)/n! as linear forms in (q, v, F, cos φ, sin φ) (precomputed from the
         equation of motion, taylor_matrix_coefficients)
     theta = next threshold in the direction of v; x = (theta - q)/v (the linear estimate)
-    fast short hop, if |x| < h_s = 1e-3/ρ (most hops of a dense ensemble; e_2..e_6 suffice):
+    fast short hop, if |x| < h_s = relay.FAST_HOP/ρ = 3e-3/ρ (most hops of a dense ensemble;
+        e_2..e_6 suffice):
         h0 = x - k2 x^2 + (2 k2^2 - k3) x^3        (series reversion, k_n = e_n/v)
         dh = (sum_{n>=1} e_n h0^n - (theta - q)) / q'(h0)    (one Newton step; 1/q'(h0) by
              its series in h0), h = h0 - dh
@@ -42,7 +43,9 @@ Plain-Python reading of one hop (``advance_table``)::
         scan [0, H] in sub-intervals with the exact propagator; inside each sub-interval split at
         the zero of q'' and at the zero of v, so q is monotone between checkpoints; the first
         checkpoint at or past a threshold brackets the crossing, found by safeguarded Newton
-        on the exact solution.
+        on the exact solution; stretches of up to SKIP_SPAN sub-intervals that the cubic
+        Hermite interpolant plus max|q''''| L^4/384 keep strictly between the thresholds are
+        passed in one evaluation on the same grid (scan_flight: the same crossing, bit for bit).
     at a switch: q := threshold exactly, the table switches, tangent vectors get the saltation
         δv += C·ΔM/v* · δq  (paper eq. salt_matrix); a switch undoing the previous one at the
         same threshold (a zero-width group) where the flow pushes in from both sides and the
