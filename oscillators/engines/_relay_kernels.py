@@ -399,8 +399,10 @@ def scan_flight(par, force, q0, v0, c0, s0, tau0, horizon, up, down, span_max):
     widened by the bound ``max|q⁗| L⁴/384`` (:func:`flight_derivative_bound`) and a margin
     1e-9·(1 + |q0|) far above round-off, stays strictly between ``down`` and ``up``: no
     crossing is there, and the sub-interval that holds one is split exactly as without skips,
-    so the crossing comes out bit for bit the same. The stretch doubles after a skip (up to
-    ``span_max``) and halves after a failed one.
+    so the crossing comes out bit for bit the same. Single sub-intervals are tested first (their
+    end is evaluated anyway; a free one needs no split); after a free one the next try spans
+    two, doubling after each success up to ``span_max``, and a failed try (one evaluation
+    lost) returns to single sub-intervals.
     """
     zeta = par[P_ZETA]
     dsub = par[P_DSUB]
@@ -408,14 +410,15 @@ def scan_flight(par, force, q0, v0, c0, s0, tau0, horizon, up, down, span_max):
     tol = 1e-9 * (1.0 + abs(q0))
     up_in = up - tol
     down_in = down + tol
-    span = span_max
+    span = 1
     tl = 0.0
     ql = q0
     vl = v0
     al = -2.0 * zeta * v0 - q0 + c0 + force
     while tl < horizon:
-        if m4 < np.inf and span > 1:
-            # the next `span` grid points, while none is the stretched last one
+        if span > 1:
+            # after a skip: the next `span` grid points at once, while none is the stretched
+            # last one (a failed try costs one evaluation and returns to single steps)
             te = tl
             n = 0
             while n < span:
@@ -424,7 +427,7 @@ def scan_flight(par, force, q0, v0, c0, s0, tau0, horizon, up, down, span_max):
                     break
                 te = tn
                 n += 1
-            if n > 1:
+            if n == span:
                 qe, ve, ae, _ = _eval(par, force, q0, v0, c0, s0, tau0, te)
                 if not _hit_possible(ql, vl, qe, ve, te - tl, up_in, down_in, m4):
                     tl = te
@@ -433,29 +436,30 @@ def scan_flight(par, force, q0, v0, c0, s0, tau0, horizon, up, down, span_max):
                     al = ae
                     span = min(2 * span, span_max)
                     continue
-            span = max(1, n // 2)
-            if span > 1:
-                continue
+            span = 1
         tr = tl + dsub
         if tr > horizon or horizon - tr < 0.25 * dsub:
             tr = horizon
         qr, vr, ar, _ = _eval(par, force, q0, v0, c0, s0, tau0, tr)
-        if al * ar < 0.0:
+        if m4 < np.inf and not _hit_possible(ql, vl, qr, vr, tr - tl, up_in, down_in, m4):
+            span = 2  # free: no split needed, and the next try spans two sub-intervals
+        elif al * ar < 0.0:
             ta = _root(par, force, q0, v0, c0, s0, tau0, 2, 0.0, tl, tr, al)
             qa, va, _, _ = _eval(par, force, q0, v0, c0, s0, tau0, ta)
             hc, d = _check_piece(par, force, q0, v0, c0, s0, tau0, tl, ql, vl, ta, qa, va, up, down)
             if d != 0:
                 return hc, d
             hc, d = _check_piece(par, force, q0, v0, c0, s0, tau0, ta, qa, va, tr, qr, vr, up, down)
+            if d != 0:
+                return hc, d
         else:
             hc, d = _check_piece(par, force, q0, v0, c0, s0, tau0, tl, ql, vl, tr, qr, vr, up, down)
-        if d != 0:
-            return hc, d
+            if d != 0:
+                return hc, d
         tl = tr
         ql = qr
         vl = vr
         al = ar
-        span = 2 if span_max > 1 else span_max
     return horizon, 0
 
 
