@@ -39,10 +39,16 @@ __all__ = ["qr_intervals"]
 def _intervals(
     kind, par, tf, ti, bits, lay, st, ist, y, ntan, mp, sw, cnt, n_relays, omega, period,
     bound, floor_, per_relay, t_now, i0, n_steps, transient, dt, window, sd, lsum, marks, hist,
-    rows,
+    rows, first, rec_on, tan_on,
 ):  # fmt: skip
     """Intervals ``i0 ..`` until ``n_steps`` or the first one the Python loop must run; returns
-    (intervals done, t_now after them, rows written)."""
+    (intervals done, t_now after them, rows written).
+
+    ``first, rec_on, tan_on`` are the kernel call's target index 0, no switch records and the
+    tangent flow on, handed in from Python (int, bool, bool): written as constants here, numba
+    would type them as literals and compile a second specialisation of the whole relay event
+    loop (``run_nested``/``run_heap`` down to ``advance_table``, ~15 s on a fresh machine)
+    instead of reusing the one the engine compiled for the same arguments."""
     k = ntan
     max_targets = 2 + (int(dt / sd) if sd > 0.0 else 0) + 1
     times = np.empty(max_targets)
@@ -89,13 +95,13 @@ def _intervals(
         # the two entry points keep the table kind a compile-time constant in the hot loop
         if kind == kern.KIND_NESTED:
             status, _ = kern.run_nested(
-                par, tf, ti, bits, lay, st, ist, tgt_n[:m], tgt_tau[:m], 0, out[:m], False, sw,
-                cnt, True, y, ntan, mp,
+                par, tf, ti, bits, lay, st, ist, tgt_n[:m], tgt_tau[:m], first, out[:m], rec_on,
+                sw, cnt, tan_on, y, ntan, mp,
             )  # fmt: skip
         else:
             status, _ = kern.run_heap(
-                par, tf, ti, bits, lay, st, ist, tgt_n[:m], tgt_tau[:m], 0, out[:m], False, sw,
-                cnt, True, y, ntan, mp,
+                par, tf, ti, bits, lay, st, ist, tgt_n[:m], tgt_tau[:m], first, out[:m], rec_on,
+                sw, cnt, tan_on, y, ntan, mp,
             )  # fmt: skip
         ok = status == 0
         for j in range(m):
@@ -154,7 +160,7 @@ def qr_intervals(
     done, t_now, n_rows = _intervals(
         *arrays, float(eng.system.divergence_bound), SWITCH_BUDGET_FLOOR,
         SWITCHES_PER_RELAY_AND_TIME, float(stepper.elapsed), int(i0), int(n_steps),
-        float(transient), float(dt), float(window), sd, lsum, marks, hist, rows,
+        float(transient), float(dt), float(window), sd, lsum, marks, hist, rows, 0, False, True,
     )  # fmt: skip
     if done:
         eng.kernel_moved()
