@@ -151,7 +151,12 @@ class SwitchingKernelEngine(RelayKernelEngine):
         """(output, next up, next down trigger) after the event at the current trigger in
         ``direction``, on a copy of the plan (O(N): only where a start sits on a trigger)."""
         st, ist = self._st.copy(), self._ist.copy()
-        plan = [a.copy() if isinstance(a, np.ndarray) else a for a in self._plan]
+        # the operator's read-only arrays (fields, order, graph) are shared, not copied: the
+        # kernel cannot write them, and a writable copy would be another numba type, i.e. a
+        # second compilation of ``switch`` (~13 s on a fresh machine) next to _slide_switch's
+        plan = [
+            a.copy() if isinstance(a, np.ndarray) and a.flags.writeable else a for a in self._plan
+        ]
         if plan[3].size:
             plan[3] = plan[2].view(np.uint64)  # the membership words: a view of the bytes
         plan = tuple(plan)
