@@ -136,6 +136,19 @@ class NestedPlan:
         return y
 
 
+@njit(cache=True, inline="always")
+def _first_above(values, v, lo, hi):  # pragma: no cover - compiled
+    """First index in ``[lo, hi]`` whose value exceeds ``v`` (``values`` ascending; ``hi`` is
+    returned when none in ``[lo, hi)`` does): a binary search."""
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if values[mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
 @njit(cache=True)
 def _drive_nested(inputs, up, down, mval, k):  # pragma: no cover - compiled
     """The loop of :meth:`NestedPlan.drive`; returns ``(outputs, k_final)``.
@@ -154,27 +167,9 @@ def _drive_nested(inputs, up, down, mval, k):  # pragma: no cover - compiled
     for t in range(inputs.size):
         v = inputs[t]
         if k < g and v >= up[k]:
-            # first index in (k, g] whose up exceeds v (up[k] <= v is known)
-            lo = k + 1
-            hi = g
-            while lo < hi:
-                mid = (lo + hi) >> 1
-                if up[mid] <= v:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            k = lo
+            k = _first_above(up, v, k + 1, g)  # up[k] <= v is known
         elif k > 0 and v < down[k - 1]:
-            # first index in [0, k-1] whose down exceeds v (down[k-1] > v is known)
-            lo = 0
-            hi = k - 1
-            while lo < hi:
-                mid = (lo + hi) >> 1
-                if down[mid] <= v:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            k = lo
+            k = _first_above(down, v, 0, k - 1)  # down[k-1] > v is known
         outputs[t] = mval[k]
     return outputs, k
 
