@@ -1,10 +1,11 @@
 """Session set-up: on a checkout without a numba cache, a second process compiles the kernels
 that the later test modules need while pytest runs the first ones (``kernel_warmup.py``).
 
-Only for a broad run (the default suite, not a few files or ``-m slow``), only when a kernel
-module has no cache yet, and not with ``HYSTERESIS_TEST_WARMUP=0``. pytest ends the process at
-the end of the session if it is still running. Both processes save numba's cache under one file
-lock (``numba_cache_lock.py``), so a kernel compiled by both at once is cached consistently.
+Only for a broad run (the default suite, not a few files or ``-m slow``) on two or more cores,
+only when a kernel module has no cache yet, and not with ``HYSTERESIS_TEST_WARMUP=0`` (``=1``
+starts it for any run). pytest ends the process at the end of the session if it still runs.
+Both processes save numba's cache under one file lock (``numba_cache_lock.py``), so a kernel
+compiled by both at once is cached consistently. Fresh clone, 2 cores: 774 s -> 534 s.
 """
 
 from __future__ import annotations
@@ -36,6 +37,13 @@ KERNEL_MODULES = (
 _warmup: dict[str, object] = {}
 
 
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
 def _cold() -> bool:
     for name in KERNEL_MODULES:
         importlib.import_module(name)
@@ -46,7 +54,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     setting = os.environ.get("HYSTERESIS_TEST_WARMUP", "")
     if setting == "0" or session.config.option.collectonly or numba.config.DISABLE_JIT:
         return
-    if setting != "1" and (len(session.items) < MIN_ITEMS or not _cold()):
+    if setting != "1" and (len(session.items) < MIN_ITEMS or _cores() < 2 or not _cold()):
         return
     lock = Path(tempfile.mkdtemp(prefix="hysteresis-tests-")) / "numba-cache.lock"
     if not lock_cache_saves(str(lock)):
