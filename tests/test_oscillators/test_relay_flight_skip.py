@@ -34,6 +34,14 @@ def _samples(par, force, q0, v0, tau0, horizon, n=4001):
     return ts, rows
 
 
+def _random_start(rng, par, force_max, q_max, v_max):
+    """(force, q0, v0, tau0) of a random flight, drawn in that order."""
+    force = rng.uniform(-force_max, force_max)
+    q0 = rng.uniform(-q_max, q_max)
+    v0 = rng.uniform(-v_max, v_max)
+    return force, q0, v0, rng.uniform(0.0, par[kern.P_T])
+
+
 def _both(par, force, q0, v0, tau0, horizon, up, down):
     c0, s0 = _phase(par, tau0)
     new = kern.scan_crossing(par, force, q0, v0, c0, s0, tau0, horizon, up, down)
@@ -50,10 +58,7 @@ def test_random_flights_find_the_same_crossing_bit_for_bit(zeta, omega):
     par = _params(zeta, omega)
     hits = 0
     for _ in range(300):
-        force = rng.uniform(-3.0, 3.0)
-        q0 = rng.uniform(-3.0, 3.0)
-        v0 = rng.uniform(-2.0, 2.0)
-        tau0 = rng.uniform(0.0, par[kern.P_T])
+        force, q0, v0, tau0 = _random_start(rng, par, 3.0, 3.0, 2.0)
         horizon = rng.choice([0.03, 0.5, 3.0, 20.0]) * rng.uniform(0.5, 1.0)
         up = q0 + rng.exponential(1.0) * rng.choice([1e-6, 1e-2, 1.0])
         down = q0 - rng.exponential(1.0) * rng.choice([1e-6, 1e-2, 1.0])
@@ -70,10 +75,7 @@ def test_flights_near_an_extremum_find_the_same_crossing(zeta, omega):
     rng = np.random.default_rng(5)
     par = _params(zeta, omega)
     for _ in range(60):
-        force = rng.uniform(-2.0, 2.0)
-        q0 = rng.uniform(-2.0, 2.0)
-        v0 = rng.uniform(-1.5, 1.5)
-        tau0 = rng.uniform(0.0, par[kern.P_T])
+        force, q0, v0, tau0 = _random_start(rng, par, 2.0, 2.0, 1.5)
         horizon = 15.0
         _, rows = _samples(par, force, q0, v0, tau0, horizon)
         top = rows[:, 0].max()
@@ -93,10 +95,7 @@ def test_fourth_derivative_bound_holds_along_the_flight(zeta, omega):
     rng = np.random.default_rng(3)
     par = _params(zeta, omega)
     for _ in range(40):
-        force = rng.uniform(-3.0, 3.0)
-        q0 = rng.uniform(-4.0, 4.0)
-        v0 = rng.uniform(-3.0, 3.0)
-        tau0 = rng.uniform(0.0, par[kern.P_T])
+        force, q0, v0, tau0 = _random_start(rng, par, 3.0, 4.0, 3.0)
         c0, s0 = _phase(par, tau0)
         bound = kern.flight_derivative_bound(par, force, q0, v0, c0, s0)
         ts, rows = _samples(par, force, q0, v0, tau0, 30.0)
