@@ -92,9 +92,11 @@ class Cluster:
 
 
 @contextlib.contextmanager
-def _cluster(tmp_path: Path, n_workers: int) -> Iterator[Cluster]:
-    """A ``dask scheduler`` and ``n_workers`` single-process, single-thread ``dask worker``s."""
+def _cluster(tmp_path: Path, n_workers: int, preload: Path | None = None) -> Iterator[Cluster]:
+    """A ``dask scheduler`` and ``n_workers`` single-process, single-thread ``dask worker``s
+    (each loading ``preload`` at start-up, if given)."""
     dask = _dask_command()
+    extra = ["--preload", str(preload)] if preload is not None else []
     sched_file = tmp_path / "scheduler.json"
     procs: list[subprocess.Popen] = []
     logs = [tmp_path / "scheduler.log"]
@@ -123,7 +125,7 @@ def _cluster(tmp_path: Path, n_workers: int) -> Iterator[Cluster]:
                     [*dask, "worker", "--scheduler-file", str(sched_file), "--nworkers", "1",
                      "--nthreads", "1", "--host", "127.0.0.1", "--no-dashboard",
                      "--dashboard-address", LOOPBACK_HTTP, "--local-directory",
-                     str(tmp_path / f"worker{i}"), "--death-timeout", "60"],
+                     str(tmp_path / f"worker{i}"), "--death-timeout", "60", *extra],
                     logs[-1],
                 )
             )  # fmt: skip
@@ -170,6 +172,70 @@ def _stored_count(path: Path) -> int:
             conn.close()
     except sqlite3.Error:  # not created yet
         return 0
+
+
+#: tasks that run without waiting; every later start waits for the gate's release file
+FREE_TASKS = 2
+
+#: loaded by every worker (``dask worker --preload``): the task wrapper ``_timed_call`` the
+#: client submits by reference is replaced, in the worker only, by one that numbers its starts
+#: across all workers (an O_EXCL file per start) and holds every start after the first
+#: FREE_TASKS until the file ``release`` exists. The test thereby kills a worker while it
+#: certainly holds a task, however fast the tasks are (a kill timed against the tasks' speed
+#: fell after the run once the relay kernel got faster).
+GATE_PRELOAD = """
+import os
+import time
+from pathlib import Path
+
+import analysis.experiments.execution as execution
+
+GATE = Path({gate!r})
+FREE = {free}
+# dask may import a preload file twice: wrap the original once, never the wrapper
+_timed_call = getattr(execution._timed_call, "unwrapped", execution._timed_call)
+
+
+def _claim_start():
+    n = 0
+    while True:
+        try:
+            os.close(os.open(GATE / f"started-{{n}}", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            return n
+        except FileExistsError:
+            n += 1
+
+
+def _gated_call(func, task):
+    if _claim_start() >= FREE:
+        deadline = time.monotonic() + {timeout}
+        while not (GATE / "release").exists():
+            if time.monotonic() > deadline:
+                raise RuntimeError("the test never released the gate")
+            time.sleep(0.02)
+    return _timed_call(func, task)
+
+
+_gated_call.unwrapped = _timed_call
+execution._timed_call = _gated_call
+"""
+
+
+def _write_gate(tmp_path: Path) -> tuple[Path, Path]:
+    """The gate folder and the worker preload file that watches it."""
+    gate = tmp_path / "gate"
+    gate.mkdir()
+    preload = tmp_path / "gate_preload.py"
+    preload.write_text(GATE_PRELOAD.format(gate=str(gate), free=FREE_TASKS, timeout=RUN_TIMEOUT))
+    return gate, preload
+
+
+def _wait_for(condition, what: str, proc: subprocess.Popen, cluster: Cluster) -> None:
+    deadline = time.monotonic() + RUN_TIMEOUT
+    while not condition():
+        if proc.poll() is not None or time.monotonic() > deadline:
+            pytest.fail(f"{what} never happened\n" + cluster.log_tail())
+        time.sleep(0.05)
 
 
 def _ensemble_args(couplings: list[str], realizations: int, t_end: float) -> list[str]:
@@ -229,10 +295,13 @@ def _assert_same_as_reference(tmp_path: Path, store: Path, reference: dict, arra
 
 def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> None:
     """Serial reference, then the same ensemble on a 2-worker cluster with one worker killed
-    while it computes a task; the two stores must be identical."""
+    while it holds a task (the gate: FREE_TASKS results stored, then both workers each hold a
+    started task); the two stores must be identical."""
+    assert n_tasks > FREE_TASKS + 2, "both workers must hold a task at the kill"
     reference, reference_arrays = _serial_reference(tmp_path, args, n_tasks)
     dist_store = tmp_path / "dist.sqlite"
-    with _cluster(tmp_path, n_workers=2) as cluster:
+    gate, preload = _write_gate(tmp_path)
+    with _cluster(tmp_path, n_workers=2, preload=preload) as cluster:
         client_proc = None
         try:
             with distributed.Client(cluster.address, timeout="60s") as observer:
@@ -252,25 +321,23 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
                 ]
                 assert _listening_hosts(everyone) == {"127.0.0.1"}
                 client_proc = _start_client(tmp_path, cluster, args, dist_store, "run")
-                # kill a worker mid-run: once a result is stored and that worker is computing
-                _wait_stored(dist_store, 1, client_proc, cluster)
-                deadline = time.monotonic() + RUN_TIMEOUT
-                victim = None
-                while victim is None:
-                    if client_proc.poll() is not None or time.monotonic() > deadline:
-                        pytest.fail("no worker was busy mid-run\n" + cluster.log_tail())
-                    busy = [a for a, keys in observer.processing().items() if keys]
-                    if busy:
-                        victim = busy[-1]
-                    time.sleep(0.05)
+                # the free tasks are stored; the next two starts wait at the gate, one on each
+                # worker (a single-thread worker holding a waiting task starts no other)
+                _wait_stored(dist_store, FREE_TASKS, client_proc, cluster)
+                held = [gate / f"started-{FREE_TASKS + i}" for i in range(2)]
+                _wait_for(lambda: all(f.exists() for f in held), "two held starts",
+                          client_proc, cluster)  # fmt: skip
+                busy = [a for a, keys in observer.processing().items() if keys]
+                assert sorted(busy) == sorted(proc_of), "both workers hold a task"
+                victim = busy[-1]
                 _kill_group(proc_of[victim], signal.SIGKILL)
-                stored_at_kill = _stored_count(dist_store)
-                assert 1 <= stored_at_kill < n_tasks, "the kill must fall inside the run"
+                assert _stored_count(dist_store) == FREE_TASKS, "nothing passes the gate"
                 # the scheduler notices the dead worker (closed connection)
                 deadline = time.monotonic() + 60
                 while victim in observer.scheduler_info()["workers"]:
                     assert time.monotonic() < deadline, "scheduler kept the killed worker"
                     time.sleep(0.1)
+                (gate / "release").touch()
             try:
                 rc = client_proc.wait(timeout=RUN_TIMEOUT)
             except subprocess.TimeoutExpired:
@@ -281,17 +348,15 @@ def _run_with_worker_killed(tmp_path: Path, args: list[str], n_tasks: int) -> No
             if client_proc is not None:
                 _stop(client_proc)
         assert proc_of[victim].poll() is not None  # it is really gone
+    # the task the victim held started again on the survivor: more starts than tasks
+    assert (gate / f"started-{n_tasks}").exists()
     _assert_same_as_reference(tmp_path, dist_store, reference, reference_arrays)
 
 
 def test_distributed_run_survives_a_killed_worker(tmp_path):
-    """2 couplings x 3 realizations of N = 200 dimers; one of two workers SIGKILLed mid-run.
-
-    Each task must outlast the observer's poll for a busy worker (50 ms plus a scheduler round
-    trip) several times over, or the last tasks finish before the kill: t_end = 3·10⁴ makes a
-    task about half a second (8000 was about 0.1 s once the relay engine's Benettin loop ran
-    compiled, and the kill then fell after the run)."""
-    _run_with_worker_killed(tmp_path, _ensemble_args(["2.9", "4.0"], 3, 30000.0), n_tasks=6)
+    """2 couplings x 3 realizations of N = 200 dimers; one of two workers SIGKILLed while it
+    holds a task (held at the gate, so the kill falls inside the run however fast tasks are)."""
+    _run_with_worker_killed(tmp_path, _ensemble_args(["2.9", "4.0"], 3, 8000.0), n_tasks=6)
 
 
 @pytest.mark.slow
@@ -310,10 +375,14 @@ def test_lost_scheduler_fails_clearly_and_a_rerun_resumes(tmp_path):
     dist_store = tmp_path / "dist.sqlite"
     first = tmp_path / "cluster1"
     first.mkdir()
-    with _cluster(first, n_workers=2) as cluster:
+    gate, preload = _write_gate(first)
+    with _cluster(first, n_workers=2, preload=preload) as cluster:
         client_proc = _start_client(tmp_path, cluster, args, dist_store, "lost")
         try:
-            _wait_stored(dist_store, 1, client_proc, cluster)
+            # killed while the tasks after the free ones wait at the gate (never released)
+            _wait_stored(dist_store, FREE_TASKS, client_proc, cluster)
+            held = gate / f"started-{FREE_TASKS}"
+            _wait_for(held.exists, "a held start", client_proc, cluster)
             _kill_group(cluster.scheduler, signal.SIGKILL)
             try:
                 rc = client_proc.wait(timeout=120)
@@ -324,7 +393,7 @@ def test_lost_scheduler_fails_clearly_and_a_rerun_resumes(tmp_path):
         log = cluster.logs[-1].read_text(errors="replace")
     stored = _stored_count(dist_store)
     assert rc == 2, log[-3000:]
-    assert 1 <= stored < 6
+    assert stored == FREE_TASKS
     error = [ln for ln in log.splitlines() if ln.startswith("hyst ensemble: error:")]
     assert len(error) == 1, log[-3000:]
     assert "ConnectionError" in error[0] and "lost the Dask scheduler" in error[0], error[0]
