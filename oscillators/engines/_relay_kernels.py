@@ -733,6 +733,88 @@ def hop_coefficients(mp):
 
 
 @njit(cache=True, fastmath=_CONTRACT, inline="always")
+def fast_hop(coefs, omega, h_small, q, v, c, s, force, gap, horizon):
+    """The fast short hop (module docstring) from (q, v, cos φ, sin φ) with the output force
+    ``force`` = C·M to the threshold ``gap`` = θ − q away: returns ``(ok, h, v, cos φ, sin φ)``
+    at the crossing, ``ok`` False when the step's error bound (< 1e-17), the monotonicity of q
+    on [0, h], ``h < h_small`` or ``h <= horizon`` fails (the caller then takes another path;
+    the other values are then meaningless). Branch-free: the same code serves one system
+    (:func:`hop`, after its test ``|gap| < h_small |v|``) and many side by side."""
+    (
+        t2q, t2v, t2f, t2c, t2s, t3q, t3v, t3f, t3c, t3s, t4q, t4v, t4f, t4c, t4s, t5q,
+        t5v, t5f, t5c, t5s, t6q, t6v, t6f, t6c, t6s, g0, g1, g2, g3, g4, g5, g6, d0, d1,
+        d2, d3, d4, d5, d6
+    ) = coefs  # fmt: skip
+    # q's Taylor coefficients as linear forms, series reversion of q(h) = theta from the
+    # linear estimate x, one Newton step
+    e2 = t2q * q + t2v * v + t2f * force
+    e2 += t2c * c + t2s * s
+    e3 = t3q * q + t3v * v + t3f * force
+    e3 += t3c * c + t3s * s
+    e4 = t4q * q + t4v * v + t4f * force
+    e4 += t4c * c + t4s * s
+    e5 = t5q * q + t5v * v + t5f * force
+    e5 += t5c * c + t5s * s
+    e6 = t6q * q + t6v * v + t6f * force
+    e6 += t6c * c + t6s * s
+    r = 1.0 / v
+    x = gap * r
+    k2 = e2 * r
+    k3 = e3 * r
+    # series reversion of x = h + k2 h^2 + k3 h^3 + ... to third order
+    xx = x * x
+    h0 = x + xx * (x * (2.0 * k2 * k2 - k3) - k2)
+    # everything the Newton step needs is a polynomial in h0, side by side and in
+    # Estrin form (short dependency chains): the residual, 1/q'(h0) = r/(1 + u) by
+    # its series, v and q'' at h0, and the phase rotation; the step then corrects
+    # them to first order in dh
+    hh2 = h0 * h0
+    res = h0 * (v + e2 * h0 + hh2 * (e3 + e4 * h0 + hh2 * (e5 + e6 * h0))) - gap
+    u = h0 * (2.0 * k2 + 3.0 * k3 * h0 + 4.0 * e4 * r * hh2)
+    uu = u * u
+    inv = r * ((1.0 - u) + uu * (1.0 - u))
+    dp0 = (v + 2.0 * e2 * h0) + hh2 * ((3.0 * e3 + 4.0 * e4 * h0)
+          + hh2 * (5.0 * e5 + 6.0 * e6 * h0))  # fmt: skip
+    pp0 = (2.0 * e2 + 6.0 * e3 * h0) + hh2 * (12.0 * e4 + 20.0 * e5 * h0)
+    xr = omega * h0
+    x2 = xr * xr
+    cx = 1.0 - x2 * (0.5 - x2 * (1.0 / 24.0))
+    sx = xr * (1.0 - x2 * (1.0 / 6.0 - x2 * (1.0 / 120.0)))
+    c0r = c * cx - s * sx
+    s0r = s * cx + c * sx
+    dh = res * inv
+    hf = h0 - dh
+    av = abs(v)
+    # accept when the step's error (derivative series: |dh| u^4; Newton and the
+    # first-order corrections: ~|q''|/|v| dh^2) is far below one ulp of the time and
+    # q is provably monotone on [0, hf] (|v(s) - v| < |v|/2): theta is then the first
+    # crossing
+    ae2 = abs(e2)
+    slope = hf * (2.0 * ae2 + hf * (3.0 * abs(e3) + hf * (4.0 * abs(e4)
+            + hf * (5.0 * abs(e5) + hf * 6.0 * abs(e6)))))  # fmt: skip
+    err = abs(dh) * (u * u * u * u + 1e-13) + dh * dh * (ae2 + 3.0 * abs(e3)) / av
+    # & rather than and: no branches, so a loop over many systems vectorizes
+    ok = (0.0 < hf) & (hf <= horizon) & (hf < h_small) & (err <= 1e-17) & (slope < 0.5 * av)
+    v1 = dp0 - dh * pp0
+    dphi = omega * dh
+    c1 = c0r + dphi * s0r
+    s1 = s0r - dphi * c0r
+    return ok, hf, v1, c1, s1
+
+
+@njit(cache=True, fastmath=_CONTRACT, inline="always")
+def fast_propagator(coefs, h):
+    """g = Φ_01(h) and g' (degree 6 in h) for the tangent flow of a fast hop:
+    Φ(h) = [[g' + 2ζg, g], [-g, g']]."""
+    g0, g1, g2, g3, g4, g5, g6, d0, d1, d2, d3, d4, d5, d6 = coefs[25:]
+    hp2 = h * h
+    hp4 = hp2 * hp2
+    g = (g0 + g1 * h) + hp2 * (g2 + g3 * h) + hp4 * (g4 + g5 * h + hp2 * g6)
+    gd = (d0 + d1 * h) + hp2 * (d2 + d3 * h) + hp4 * (d4 + d5 * h + hp2 * d6)
+    return g, gd
+
+
+@njit(cache=True, fastmath=_CONTRACT, inline="always")
 def hop(
     par, coefs, mp, e, q, v, tau, c, s, up, down, mv, tau_stop, tan_on, ntan,
     a0, a1, a2, b0, b1, b2, f0, f1, f2, integral,
@@ -753,11 +835,6 @@ def hop(
     amp_b = par[P_B]
     h_taylor = par[P_HT]
     h_small = par[P_HS]
-    (
-        t2q, t2v, t2f, t2c, t2s, t3q, t3v, t3f, t3c, t3s, t4q, t4v, t4f, t4c, t4s, t5q,
-        t5v, t5f, t5c, t5s, t6q, t6v, t6f, t6c, t6s, g0, g1, g2, g3, g4, g5, g6, d0, d1,
-        d2, d3, d4, d5, d6
-    ) = coefs  # fmt: skip
     horizon = tau_stop - tau
     force = coupling * mv
     mode = 0  # 1 Taylor hop to a switch, 2 Taylor hop to the stop, 0 exact flight, 3 fast hop
@@ -766,68 +843,14 @@ def hop(
     theta = 0.0
     tdir = 0
     if h_small > 0.0 and v != 0.0:
-        # fast short hop (see the module docstring): q's Taylor coefficients as linear forms,
-        # series reversion of q(h) = theta from the linear estimate x, one Newton step
+        # fast short hop (see the module docstring)
         theta = up if v > 0.0 else down
         gap = theta - q
         if abs(gap) < h_small * abs(v):
-            e2 = t2q * q + t2v * v + t2f * force
-            e2 += t2c * c + t2s * s
-            e3 = t3q * q + t3v * v + t3f * force
-            e3 += t3c * c + t3s * s
-            e4 = t4q * q + t4v * v + t4f * force
-            e4 += t4c * c + t4s * s
-            e5 = t5q * q + t5v * v + t5f * force
-            e5 += t5c * c + t5s * s
-            e6 = t6q * q + t6v * v + t6f * force
-            e6 += t6c * c + t6s * s
-            r = 1.0 / v
-            x = gap * r
-            k2 = e2 * r
-            k3 = e3 * r
-            # series reversion of x = h + k2 h^2 + k3 h^3 + ... to third order
-            xx = x * x
-            h0 = x + xx * (x * (2.0 * k2 * k2 - k3) - k2)
-            # everything the Newton step needs is a polynomial in h0, side by side and in
-            # Estrin form (short dependency chains): the residual, 1/q'(h0) = r/(1 + u) by
-            # its series, v and q'' at h0, and the phase rotation; the step then corrects
-            # them to first order in dh
-            hh2 = h0 * h0
-            res = h0 * (v + e2 * h0 + hh2 * (e3 + e4 * h0 + hh2 * (e5 + e6 * h0))) - gap
-            u = h0 * (2.0 * k2 + 3.0 * k3 * h0 + 4.0 * e4 * r * hh2)
-            uu = u * u
-            inv = r * ((1.0 - u) + uu * (1.0 - u))
-            dp0 = (v + 2.0 * e2 * h0) + hh2 * ((3.0 * e3 + 4.0 * e4 * h0)
-                  + hh2 * (5.0 * e5 + 6.0 * e6 * h0))  # fmt: skip
-            pp0 = (2.0 * e2 + 6.0 * e3 * h0) + hh2 * (12.0 * e4 + 20.0 * e5 * h0)
-            xr = omega * h0
-            x2 = xr * xr
-            cx = 1.0 - x2 * (0.5 - x2 * (1.0 / 24.0))
-            sx = xr * (1.0 - x2 * (1.0 / 6.0 - x2 * (1.0 / 120.0)))
-            c0r = c * cx - s * sx
-            s0r = s * cx + c * sx
-            dh = res * inv
-            hf = h0 - dh
-            av = abs(v)
-            # accept when the step's error (derivative series: |dh| u^4; Newton and the
-            # first-order corrections: ~|q''|/|v| dh^2) is far below one ulp of the time and
-            # q is provably monotone on [0, hf] (|v(s) - v| < |v|/2): theta is then the first
-            # crossing
-            ae2 = abs(e2)
-            slope = hf * (2.0 * ae2 + hf * (3.0 * abs(e3) + hf * (4.0 * abs(e4)
-                    + hf * (5.0 * abs(e5) + hf * 6.0 * abs(e6)))))  # fmt: skip
-            err = abs(dh) * (u * u * u * u + 1e-13) + dh * dh * (ae2 + 3.0 * abs(e3)) / av
-            if 0.0 < hf <= horizon and hf < h_small and err <= 1e-17 and slope < 0.5 * av:
-                v1 = dp0 - dh * pp0
-                dphi = omega * dh
-                c1 = c0r + dphi * s0r
-                s1 = s0r - dphi * c0r
+            ok, hf, v1, c1, s1 = fast_hop(coefs, omega, h_small, q, v, c, s, force, gap, horizon)
+            if ok:
                 if tan_on:
-                    # Φ(h) = [[g' + 2ζg, g], [-g, g']], g = Φ_01 (degree 6 in h)
-                    hp2 = hf * hf
-                    hp4 = hp2 * hp2
-                    g = (g0 + g1 * hf) + hp2 * (g2 + g3 * hf) + hp4 * (g4 + g5 * hf + hp2 * g6)
-                    gd = (d0 + d1 * hf) + hp2 * (d2 + d3 * hf) + hp4 * (d4 + d5 * hf + hp2 * d6)
+                    g, gd = fast_propagator(coefs, hf)
                     m00 = gd + 2.0 * zeta * g
                     a0, a1, a2, b0, b1, b2 = _hop_tangent(
                         m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b, ntan,
