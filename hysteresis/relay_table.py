@@ -289,9 +289,11 @@ class RelayTable:
         """The O(1)-per-switch plan, or ``None`` if the thresholds do not nest.
 
         Eligible when, after grouping relays with identical ``(alpha, beta)``, both the upper
-        and the lower thresholds increase strictly along the order (true for equal widths). The
-        outputs ``mval`` are exact integer counts times the weight when all weights are equal
-        (no summation drift, e.g. dimers ``M_k = 4k/N - 1``), cumulative sums otherwise.
+        and the lower thresholds increase strictly along the order (true for equal widths). With
+        all weights equal, ``mval[k] = (2c_k − n)/n · Σw`` from the exact integer count c_k of
+        up relays (n relays): no summation drift, each value within a few roundings of the
+        exact one (``Σw`` is summed once, then one subtraction, division and product; e.g.
+        dimers ``M_k = 4k/N − 1``); cumulative sums of the group weights otherwise.
         """
         if self._plan_done:
             return self._plan
