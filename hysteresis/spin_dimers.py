@@ -44,6 +44,7 @@ from hysteresis._validation import (
 )
 from hysteresis.base import PiecewiseConstantHysteron, Switching
 from hysteresis.preisach import PreisachModel, PreisachState
+from hysteresis.relay_table import RelayTable
 
 __all__ = ["SpinDimerEnsemble", "DimerThresholds", "MAX_SPINS"]
 
@@ -184,6 +185,7 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron[PreisachState]):
             np.sort(fields, axis=1)[:, ::-1], None
         )  # b1 >= b2 in every row
         self._preisach = None
+        self._relay_table = None
 
     @classmethod
     def random(
@@ -306,8 +308,12 @@ class SpinDimerEnsemble(PiecewiseConstantHysteron[PreisachState]):
     def relay_table(self):
         """The relays of :meth:`relays` as a :class:`~hysteresis.relay_table.RelayTable`: a
         paired dimer is one relay of weight ``2/N``, a non-hysteretic one two zero-width relays
-        of weight ``1/N`` (the order of :meth:`to_preisach`)."""
-        return self.to_preisach().relay_table()
+        of weight ``1/N`` (the order of :meth:`to_preisach`). Built once, straight from
+        :meth:`relays`: the Preisach model's search tables are not needed for it (the iid
+        reference drives the table's nested plan and never builds the model)."""
+        if self._relay_table is None:
+            self._relay_table = RelayTable(*self.relays())
+        return self._relay_table
 
     def relay_outputs(self, state) -> np.ndarray:
         """Outputs of the relays of :meth:`relay_table` in ``state``."""

@@ -43,7 +43,6 @@ from hysteresis._validation import (
     positive_scalar,
     scalar_in_open_interval,
 )
-from hysteresis.relay_table import RelayTable
 from hysteresis.spin_dimers import MAX_SPINS
 
 __all__ = [
@@ -107,9 +106,7 @@ def iid_task(
         "dimers", spins=spins, seed=seed, width=width, spread=spread, spin_coupling=spin_coupling
     )
     u = iid_inputs(n_steps + transient_steps, input_std, input_seed)
-    # the table of ensemble.relay_table() (same relays, same order) without building the
-    # Preisach model behind it: its search tables cost more than the whole nested drive
-    plan = RelayTable(*ensemble.relays()).nested_plan()
+    plan = ensemble.relay_table().nested_plan()
     if plan is None:
         outputs, _ = ensemble.apply(u, ensemble.initial_state(float(u[0])))
     else:

@@ -50,7 +50,6 @@ def test_iid_task_matches_the_general_preisach_path(spins, seed, transient):
 
 
 def test_iid_task_falls_back_without_a_nested_plan(monkeypatch):
-    import analysis.experiments.iid as iid_module
     from hysteresis.relay_table import RelayTable
 
     class NotNested(RelayTable):
@@ -60,7 +59,8 @@ def test_iid_task_falls_back_without_a_nested_plan(monkeypatch):
             return None
 
     nested = iid_task(spins=400, n_steps=2000, seed=8, input_seed=9, transient_steps=10)
-    monkeypatch.setattr(iid_module, "RelayTable", NotNested)
+    # the ensemble's relay table without a nested plan
+    monkeypatch.setattr(SpinDimerEnsemble, "relay_table", lambda self: NotNested(*self.relays()))
     fallback = iid_task(spins=400, n_steps=2000, seed=8, input_seed=9, transient_steps=10)
     ensemble = SpinDimerEnsemble.random(400, 2.0, 1.0, 2.0, 8)
     u = iid_inputs(2010, 2.0, 9)
