@@ -51,7 +51,7 @@ from analysis.dynamics.attractor_dimension import attractor_dimension
 from analysis.dynamics.bifurcation import section_period
 from analysis.dynamics.dimensions import box_counting_dimension
 from analysis.dynamics.lyapunov import lyapunov_spectrum
-from analysis.experiments.ensemble import one_pass_measurements
+from analysis.experiments.one_pass import one_pass_measurements
 
 __all__ = ["register", "run"]
 

@@ -30,9 +30,13 @@ from numba import njit
 
 from analysis.dynamics._householder import _accumulate_logs, householder_qr
 from oscillators.engines import _relay_kernels as kern
+from oscillators.engines import _relay_lanes as lanes_mod
 from oscillators.engines.base import SWITCH_BUDGET_FLOOR, SWITCHES_PER_RELAY_AND_TIME
 
-__all__ = ["qr_intervals"]
+__all__ = ["LANES", "qr_intervals", "qr_intervals_lanes"]
+
+#: systems side by side in :func:`qr_intervals_lanes`
+LANES = lanes_mod.LANES
 
 
 @njit(cache=True)
@@ -166,3 +170,319 @@ def qr_intervals(
         eng.kernel_moved()
         stepper.moved_to(float(t_now), rows[:n_rows])
     return done, rows[:n_rows]
+
+
+# -- the same loop over several systems side by side (oscillators/engines/_relay_lanes.py) ------
+# per-lane bookkeeping: interval index, targets in the interval and the next one, rows written,
+# the lane's state (0 running, 1 all intervals done, 2 handed back to the Python loop)
+_RUN, _DONE, _BACK = 0, 1, 2
+
+
+@njit(cache=True)
+def _lane_start(j, par, period, w, iw, n_relays, omega, floor_, per_relay, t_now, i_at,
+                n_steps, transient, dt, window, sd, times, tgt_n, tgt_tau, n_tgt, jt, n_rows,
+                rows_cap, w0, iw0):  # fmt: skip
+    """Lane ``j`` into interval ``i_at[j]``: its targets, its switch budget and the interval's
+    snapshot (as :func:`_intervals` before its kernel call); False if the Python loop must run
+    it (too many targets or rows)."""
+    lanes = lanes_mod.LANES
+    i = i_at[j]
+    target = transient + (window if i == n_steps - 1 else (i + 1) * dt)
+    t = t_now[j] + (target - t_now[j])
+    max_targets = times.shape[1]
+    m = 0
+    if sd > 0.0:
+        tol = 1e-9 * sd
+        k0 = math.floor((t_now[j] + tol) / sd) + 1
+        k1 = math.ceil((t - tol) / sd) - 1
+        if k1 - k0 + 2 > max_targets:
+            return False
+        for kk in range(k0, k1 + 1):
+            times[j, m] = sd * float(kk)
+            m += 1
+    times[j, m] = t
+    m += 1
+    if n_rows[j] + m > rows_cap:
+        return False
+    for jj in range(m):
+        n = math.floor(times[j, jj] / period)
+        tau = times[j, jj] - n * period
+        if tau >= period:
+            n, tau = n + 1, 0.0
+        elif tau < 0.0:
+            tau = 0.0
+        tgt_n[j, jj] = n
+        tgt_tau[j, jj] = tau
+    n_now = iw[lanes_mod.PERIOD * lanes + j]
+    span = (tgt_n[j, m - 1] - n_now) * period + (tgt_tau[j, m - 1] - w[lanes_mod.TAU * lanes + j])
+    b = floor_ + per_relay * max(1, n_relays[j]) * max(1.0, omega) * max(span, 0.0)
+    iw[lanes_mod.MAXSW * lanes + j] = iw[lanes_mod.NSW * lanes + j] + int(min(b, 2.0**62))
+    n_tgt[j] = m
+    jt[j] = 0
+    for r in range(lanes_mod.N_ROWS):
+        w0[r * lanes + j] = w[r * lanes + j]
+    for r in range(lanes_mod.N_IROWS):
+        iw0[r * lanes + j] = iw[r * lanes + j]
+    _lane_stop(j, period, w, iw, tgt_n, tgt_tau, jt)
+    return True
+
+
+@njit(cache=True)
+def _lane_stop(j, period, w, iw, tgt_n, tgt_tau, jt):
+    """Lane ``j``'s next stop (run_table: the period end until the target's period, then the
+    target's time) and resume it."""
+    lanes = lanes_mod.LANES
+    if iw[lanes_mod.PERIOD * lanes + j] < tgt_n[j, jt[j]]:
+        w[lanes_mod.STOP * lanes + j] = period
+    else:
+        w[lanes_mod.STOP * lanes + j] = tgt_tau[j, jt[j]]
+    w[lanes_mod.ACT * lanes + j] = 1.0
+
+
+@njit(cache=True)
+def _lane_intervals(par, mp, tf, w, iw, n_lanes, n_relays, omega, period, bound, floor_,
+                    per_relay, t_now, i_at, n_steps, transient, dt, window, sd, lsum, marks,
+                    hist, rows, n_rows, state):  # fmt: skip
+    """:func:`_intervals` for ``n_lanes`` systems side by side (``lanes_mod.advance_lanes``):
+    every lane from interval ``i_at[j]`` until ``n_steps`` (state 1) or an interval the Python
+    loop must run (state 2, the lane restored to that interval's start); per lane the same
+    targets, budget, kernel path, divergence test, QR and log sums, so the same bits."""
+    lanes = lanes_mod.LANES
+    k = 2
+    max_targets = 2 + (int(dt / sd) if sd > 0.0 else 0) + 1
+    times = np.empty((lanes, max_targets))
+    tgt_n = np.empty((lanes, max_targets), dtype=np.int64)
+    tgt_tau = np.empty((lanes, max_targets))
+    out = np.empty((lanes, max_targets, 3))
+    n_tgt = np.zeros(lanes, dtype=np.int64)
+    jt = np.zeros(lanes, dtype=np.int64)
+    w0 = w.copy()
+    iw0 = iw.copy()
+    e = np.empty(kern.ORDER + 1)
+    c_wrap = math.cos(par[kern.P_PHI0])
+    s_wrap = math.sin(par[kern.P_PHI0])
+    rows_cap = rows.shape[1]
+    running = 0
+    for j in range(lanes):
+        w[lanes_mod.ACT * lanes + j] = 0.0
+        iw[lanes_mod.EVENT * lanes + j] = 0
+        if j >= n_lanes:
+            continue
+        if i_at[j] >= n_steps:
+            state[j] = _DONE
+        elif _lane_start(j, par, period, w, iw, n_relays, omega, floor_, per_relay, t_now,
+                         i_at, n_steps, transient, dt, window, sd, times, tgt_n, tgt_tau, n_tgt,
+                         jt, n_rows, rows_cap, w0, iw0):  # fmt: skip
+            state[j] = _RUN
+            running += 1
+        else:
+            state[j] = _BACK
+    while running > 0:
+        lanes_mod.advance_lanes(par, mp, tf, w, iw, e)
+        for j in range(n_lanes):
+            event = iw[lanes_mod.EVENT * lanes + j]
+            if event == 0:
+                continue
+            iw[lanes_mod.EVENT * lanes + j] = 0
+            ok = event == lanes_mod.AT_STOP
+            if ok and iw[lanes_mod.PERIOD * lanes + j] < tgt_n[j, jt[j]]:
+                # the period's end (kern._wrap)
+                w[lanes_mod.TAU * lanes + j] = 0.0
+                w[lanes_mod.COS * lanes + j] = c_wrap
+                w[lanes_mod.SIN * lanes + j] = s_wrap
+                iw[lanes_mod.PERIOD * lanes + j] += 1
+                _lane_stop(j, period, w, iw, tgt_n, tgt_tau, jt)
+                continue
+            if ok:
+                # a target: sample it; the interval goes on to its next target
+                out[j, jt[j], 0] = w[lanes_mod.Q * lanes + j]
+                out[j, jt[j], 1] = w[lanes_mod.V * lanes + j]
+                out[j, jt[j], 2] = w[lanes_mod.MV * lanes + j]
+                jt[j] += 1
+                if jt[j] < n_tgt[j]:
+                    _lane_stop(j, period, w, iw, tgt_n, tgt_tau, jt)
+                    continue
+                # the interval's end: divergence test, QR, log sums (as _intervals)
+                m = n_tgt[j]
+                for jj in range(m):
+                    if not (abs(out[j, jj, 0]) <= bound and abs(out[j, jj, 1]) <= bound):
+                        ok = False
+                y = np.empty((k, k))
+                y[0, 0] = w[lanes_mod.A0 * lanes + j]
+                y[0, 1] = w[lanes_mod.A1 * lanes + j]
+                y[1, 0] = w[lanes_mod.B0 * lanes + j]
+                y[1, 1] = w[lanes_mod.B1 * lanes + j]
+                q, diag, finite = householder_qr(y)
+                ok = ok and finite
+            if not ok:  # the Python loop runs this interval (and raises or handles it)
+                for r in range(lanes_mod.N_ROWS):
+                    w[r * lanes + j] = w0[r * lanes + j]
+                for r in range(lanes_mod.N_IROWS):
+                    iw[r * lanes + j] = iw0[r * lanes + j]
+                w[lanes_mod.ACT * lanes + j] = 0.0
+                state[j] = _BACK
+                running -= 1
+                continue
+            _accumulate_logs(diag, k, k, lsum[j])
+            w[lanes_mod.A0 * lanes + j] = q[0, 0]
+            w[lanes_mod.A1 * lanes + j] = q[0, 1]
+            w[lanes_mod.B0 * lanes + j] = q[1, 0]
+            w[lanes_mod.B1 * lanes + j] = q[1, 1]
+            base = n_rows[j]
+            for jj in range(m):
+                rows[j, base + jj, 0] = times[j, jj]
+                rows[j, base + jj, 1] = out[j, jj, 0]
+                rows[j, base + jj, 2] = out[j, jj, 1]
+                rows[j, base + jj, 3] = out[j, jj, 2]
+            n_rows[j] = base + m
+            i = i_at[j]
+            if marks[i]:
+                hist[j, i, :] = lsum[j]
+            t_now[j] = times[j, m - 1]
+            i_at[j] = i + 1
+            if i + 1 >= n_steps:
+                state[j] = _DONE
+                running -= 1
+            elif not _lane_start(j, par, period, w, iw, n_relays, omega, floor_, per_relay,
+                                 t_now, i_at, n_steps, transient, dt, window, sd, times, tgt_n,
+                                 tgt_tau, n_tgt, jt, n_rows, rows_cap, w0, iw0):  # fmt: skip
+                state[j] = _BACK
+                running -= 1
+
+
+#: the engine's float and int state entries each lane row mirrors
+_W_STATE = (
+    (lanes_mod.Q, kern.S_Q), (lanes_mod.V, kern.S_V), (lanes_mod.TAU, kern.S_TAU),
+    (lanes_mod.COS, kern.S_COS), (lanes_mod.SIN, kern.S_SIN), (lanes_mod.UP, kern.S_UP),
+    (lanes_mod.DN, kern.S_DN), (lanes_mod.MV, kern.S_MV), (lanes_mod.IM, kern.S_IM),
+    (lanes_mod.PQ, kern.S_PQ), (lanes_mod.PJ, kern.S_PJ),
+)  # fmt: skip
+_IW_STATE = (
+    (lanes_mod.K, kern.I_K), (lanes_mod.NSW, kern.I_NSW), (lanes_mod.MAXSW, kern.I_MAXSW),
+    (lanes_mod.PERIOD, kern.I_N),
+)  # fmt: skip
+_Y_STATE = ((lanes_mod.A0, 0, 0), (lanes_mod.A1, 0, 1), (lanes_mod.B0, 1, 0), (lanes_mod.B1, 1, 1))
+
+
+def _lane_arrays(stepper: Any) -> tuple | None:
+    """The stepper's kernel arrays if it can run as a lane: a nested table whose next down
+    threshold never lies above its next up one (the lanes' threshold select), two tangent
+    columns."""
+    arrays = stepper.engine.kernel_arrays()
+    if arrays is None or arrays[0] != kern.KIND_NESTED or arrays[9] != 2:
+        return None
+    tf, lay = arrays[2], arrays[5]
+    g = int(lay[0])
+    if g > 1 and not np.all(tf[g : 2 * g - 1] <= tf[1:g]):
+        return None
+    return arrays
+
+
+def qr_intervals_lanes(
+    steppers: list,
+    i0: int,
+    n_steps: int,
+    transient: float,
+    dt: float,
+    window: float,
+    lsums: list[np.ndarray],
+    marks: np.ndarray,
+    hists: list[np.ndarray],
+) -> list[tuple[int, np.ndarray] | None]:
+    """:func:`qr_intervals` for several steppers at once, up to ``LANES`` of them side by side
+    in the vector units (:mod:`oscillators.engines._relay_lanes`), each bit for bit as alone.
+
+    Steppers on nested relay tables with two tangent columns, the same kernel parameters and
+    hop tables (the same ζ, Ω, C) and the same ``sample_dt`` share lanes; any other, and one
+    left alone in its group, gets ``None`` (run it alone). Returns ``(intervals done, rows)``
+    per stepper in lanes, as :func:`qr_intervals`; each then stands after its last interval.
+    """
+    lanes = lanes_mod.LANES
+    results: list[tuple[int, np.ndarray] | None] = [None] * len(steppers)
+    groups: list[list[int]] = []
+    keys: list[tuple] = []
+    for idx, stepper in enumerate(steppers):
+        arrays = _lane_arrays(stepper)
+        if arrays is None:
+            continue
+        sd = 0.0 if stepper.sample_dt is None else float(stepper.sample_dt)
+        key = (arrays[1], arrays[10], sd)
+        for gi, other in enumerate(keys):
+            if (len(groups[gi]) < lanes and other[2] == sd and np.array_equal(other[0], key[0])
+                    and np.array_equal(other[1], key[1])):  # fmt: skip
+                groups[gi].append(idx)
+                break
+        else:
+            keys.append(key)
+            groups.append([idx])
+    for members, (par, mp, sd) in zip(groups, keys, strict=True):
+        if len(members) < 2:
+            continue  # one system alone: the scalar loop (no lane round for seven idle lanes)
+        ran = _run_lanes(
+            [steppers[i] for i in members], par, mp, sd, i0, n_steps, transient, dt, window,
+            [lsums[i] for i in members], marks, [hists[i] for i in members],
+        )  # fmt: skip
+        for idx, res in zip(members, ran, strict=True):
+            results[idx] = res
+    return results
+
+
+def _run_lanes(steppers, par, mp, sd, i0, n_steps, transient, dt, window, lsums, marks, hists):
+    lanes = lanes_mod.LANES
+    n = len(steppers)
+    w = np.zeros(lanes_mod.N_ROWS * lanes)
+    iw = np.zeros(lanes_mod.N_IROWS * lanes, dtype=np.int64)
+    tables, n_relays = [], np.zeros(lanes, dtype=np.int64)
+    off = 0
+    omega = period = bound = 0.0
+    for j, stepper in enumerate(steppers):
+        arrays = stepper.engine.kernel_arrays()
+        st, ist, y, tf, lay = arrays[6], arrays[7], arrays[8], arrays[2], arrays[5]
+        for row, col in _W_STATE:
+            w[row * lanes + j] = st[col]
+        for row, col in _IW_STATE:
+            iw[row * lanes + j] = ist[col]
+        for row, a, b in _Y_STATE:
+            w[row * lanes + j] = y[a, b]
+        iw[lanes_mod.OFF * lanes + j] = off
+        iw[lanes_mod.GROUPS * lanes + j] = int(lay[0])
+        tables.append(tf)
+        off += tf.size
+        n_relays[j] = arrays[13]
+        omega, period = float(arrays[14]), float(arrays[15])
+        bound = float(stepper.engine.system.divergence_bound)
+    per = 2 + (int(dt / sd) if sd > 0.0 else 0) + 1
+    rows = np.empty((lanes, (n_steps - i0) * per, 4))
+    t_now = np.zeros(lanes)
+    t_now[:n] = [float(s.elapsed) for s in steppers]
+    i_at = np.full(lanes, i0, dtype=np.int64)
+    n_rows = np.zeros(lanes, dtype=np.int64)
+    state = np.zeros(lanes, dtype=np.int64)
+    lsum = np.zeros((lanes, 2))
+    lsum[:n] = lsums
+    hist = np.zeros((lanes, n_steps, 2))
+    _lane_intervals(
+        par, mp, np.concatenate(tables), w, iw, n, n_relays, omega, period, bound,
+        SWITCH_BUDGET_FLOOR, SWITCHES_PER_RELAY_AND_TIME, t_now, i_at, int(n_steps),
+        float(transient), float(dt), float(window), sd, lsum, marks, hist, rows, n_rows, state,
+    )  # fmt: skip
+    out = []
+    for j, stepper in enumerate(steppers):
+        done = int(i_at[j] - i0)
+        if done:
+            arrays = stepper.engine.kernel_arrays()
+            st, ist, y = arrays[6], arrays[7], arrays[8]
+            for row, col in _W_STATE:
+                st[col] = w[row * lanes + j]
+            for row, col in _IW_STATE:
+                ist[col] = iw[row * lanes + j]
+            for row, a, b in _Y_STATE:
+                y[a, b] = w[row * lanes + j]
+            lsums[j][:] = lsum[j]
+            hists[j][i0 : i_at[j]] = np.where(
+                marks[i0 : i_at[j], None], hist[j, i0 : i_at[j]], hists[j][i0 : i_at[j]]
+            )
+            stepper.engine.kernel_moved()
+            stepper.moved_to(float(t_now[j]), rows[j, : n_rows[j]].copy())
+        out.append((done, rows[j, : n_rows[j]].copy()))
+    return out

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from analysis.dynamics._householder import _accumulate_logs, householder_qr
-from analysis.dynamics._relay_benettin import qr_intervals
+from analysis.dynamics._relay_benettin import LANES, qr_intervals, qr_intervals_lanes
 from analysis.dynamics.dimensions import kaplan_yorke_dimension
 from hysteresis._progress import progress_bar
 from hysteresis._validation import finite_scalar, positive_integer, time_window
@@ -55,7 +55,13 @@ from oscillators import (
 )
 from oscillators.engines import describe_engine, require_tangent_flow
 
-__all__ = ["LyapunovResult", "TangentStepper", "lyapunov_spectrum"]
+__all__ = [
+    "LANES",
+    "LyapunovResult",
+    "TangentStepper",
+    "lyapunov_spectrum",
+    "lyapunov_spectra",
+]
 
 
 @dataclass(frozen=True)
@@ -389,106 +395,216 @@ def lyapunov_spectrum(
         them, leaving out a remainder (at least one interval); by default the last interval
         ends at ``t_end`` (shorter if need be) and the average runs over the whole window.
     """
-    t_end, transient = time_window(t_end, transient)
-    period = float(system.period)
-    if t_end / period > MAX_PERIODS:
-        raise ValueError(f"t_end spans more than {MAX_PERIODS:.0e} forcing periods")
-    dt = period if renormalize_dt is None else finite_scalar(renormalize_dt, "renormalize_dt")
-    if not dt > 0.0:
-        raise ValueError(f"renormalize_dt must be > 0, got {renormalize_dt}")
-    history_points = positive_integer(history_points, "history_points")
-    if stepper is None:
-        stepper = TangentStepper(system, include_phase, engine_options)
-    elif stepper.system is not system:
-        raise ValueError("stepper belongs to another system")
-    if state is None:
-        state = system.initial_state(q0, v0, operator_state)
-    elif operator_state is not None:
-        raise ValueError("give either state or operator_state, not both")
-    stepper.reinit(state, transient)
-    if observer is not None:
-        observer(stepper)
-    labels = stepper.tangent_space
-    k = len(labels)
-    span = t_end - transient
-    if whole_intervals:
-        n_steps = int(math.floor(span / dt + 1e-9))
-        if n_steps < 1:
-            raise ValueError(
-                f"t_end - transient = {span:g} is shorter than one renormalization interval "
-                f"({dt:g})"
-            )
-        window = n_steps * dt
-    else:
-        n_steps = max(1, int(math.ceil(span / dt - 1e-9)))
-        window = span
-    marks = set(np.unique(np.linspace(0, n_steps - 1, min(history_points, n_steps)).round()))
-    lsum = np.zeros(k)
-    hist_t: list[float] = []
-    hist: list[np.ndarray] = []
-    n_collapses = 0
-    bar = None
-    if progress:
-        bar = progress_bar(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
-    # the relay kernel runs stretches of QR intervals itself (bit for bit this loop, without
-    # its Python per interval); an interval it cannot (a slide, an error) runs here
-    compiled = (
-        type(stepper) is TangentStepper
-        and hasattr(stepper.engine, "kernel_arrays")
-        and (observer is None or getattr(observer, "batches", False))
-    )
-    if compiled:
-        marked = np.zeros(n_steps, dtype=np.bool_)
-        marked[np.array(sorted(marks), dtype=np.int64)] = True
-        sums = np.zeros((n_steps, k))
-    i = backoff = skip = 0
-    while i < n_steps:
-        if compiled and skip == 0:
-            done, _ = qr_intervals(stepper, i, n_steps, transient, dt, window, lsum, marked, sums)
-            if done and observer is not None:
-                observer(stepper)
-            for j in range(i, i + done):
-                if marked[j]:
-                    hist_t.append(transient + (window if j == n_steps - 1 else (j + 1) * dt))
-                    hist.append(sums[j].copy())
-            if bar is not None:
-                bar.update(done)
-            i += done
-            # an interval the kernel left to this loop: a few here before trying again
-            backoff = 0 if done else min(2 * backoff + 1, 64)
-            skip = backoff + 1
-            if i >= n_steps:
-                break
-        skip = max(skip - 1, 0)
-        target = transient + (window if i == n_steps - 1 else (i + 1) * dt)
-        stepper.step_to(target)
-        y, collapsed = _qr_step(stepper.deviations(), k, stepper.rank_bound(), lsum)
-        n_collapses += int(collapsed)
-        stepper.set_deviations(y)
+    run = _BenettinRun(
+        system, t_end, transient, q0, v0, operator_state, include_phase, progress,
+        renormalize_dt, history_points, engine_options, state, stepper, observer,
+        whole_intervals,
+    )  # fmt: skip
+    run.run()
+    return run.result()
+
+
+def lyapunov_spectra(
+    systems: list,
+    t_end: float,
+    transient: float = 0.0,
+    q0: float = DEFAULT_Q0,
+    v0: float = DEFAULT_V0,
+    renormalize_dt: float | None = None,
+    history_points: int = 200,
+    *,
+    steppers: list[TangentStepper] | None = None,
+    observers: list[Callable[[TangentStepper], None] | None] | None = None,
+) -> list[LyapunovResult]:
+    """:func:`lyapunov_spectrum` of several systems over the same window, each result bit for
+    bit that of the system alone.
+
+    Why: systems on nested relay tables that differ only in their tables (the disorder
+    realizations of an ensemble at one N and C) run their compiled Benettin loops side by side
+    in the vector units (:func:`~analysis.dynamics._relay_benettin.qr_intervals_lanes`), about
+    twice as fast per switch at N = 20 000; any other system, and any interval a lane hands
+    back, runs as in :func:`lyapunov_spectrum`. ``steppers`` and ``observers`` (one per system,
+    as there) are optional.
+    """
+    n = len(systems)
+    steppers = [None] * n if steppers is None else list(steppers)
+    observers = [None] * n if observers is None else list(observers)
+    if len(steppers) != n or len(observers) != n:
+        raise ValueError(f"give one stepper and one observer per system ({n} systems)")
+    runs = [
+        _BenettinRun(
+            sys_,
+            t_end,
+            transient,
+            q0,
+            v0,
+            None,
+            False,
+            False,
+            renormalize_dt,
+            history_points,
+            None,
+            None,
+            stp,
+            obs,
+            False,
+        )  # fmt: skip
+        for sys_, stp, obs in zip(systems, steppers, observers, strict=True)
+    ]
+    lane_runs = [r for r in runs if r.compiled]
+    if len(lane_runs) > 1:
+        first = lane_runs[0]
+        same = [r for r in lane_runs if (r.n_steps, r.dt, r.window) == (first.n_steps, first.dt,
+                                                                       first.window)]  # fmt: skip
+        stretches = qr_intervals_lanes(
+            [r.stepper for r in same], 0, first.n_steps, first.transient, first.dt,
+            first.window, [r.lsum for r in same], first.marked, [r.sums for r in same],
+        )  # fmt: skip
+        for r, stretch in zip(same, stretches, strict=True):
+            if stretch is not None:  # else it runs alone, as in lyapunov_spectrum
+                r.compiled_stretch(stretch[0])
+    results = []
+    for r in runs:
+        r.run()
+        results.append(r.result())
+    return results
+
+
+class _BenettinRun:
+    """One run of the Benettin loop of :func:`lyapunov_spectrum` (its arguments), in steps:
+    construction (checks, the transient, the first observation), :meth:`compiled_stretch`
+    (intervals a compiled loop ran), :meth:`run` (the loop to the end), :meth:`result`."""
+
+    def __init__(
+        self, system, t_end, transient, q0, v0, operator_state, include_phase, progress,
+        renormalize_dt, history_points, engine_options, state, stepper, observer,
+        whole_intervals,
+    ):  # fmt: skip
+        t_end, transient = time_window(t_end, transient)
+        period = float(system.period)
+        if t_end / period > MAX_PERIODS:
+            raise ValueError(f"t_end spans more than {MAX_PERIODS:.0e} forcing periods")
+        dt = period if renormalize_dt is None else finite_scalar(renormalize_dt, "renormalize_dt")
+        if not dt > 0.0:
+            raise ValueError(f"renormalize_dt must be > 0, got {renormalize_dt}")
+        history_points = positive_integer(history_points, "history_points")
+        if stepper is None:
+            stepper = TangentStepper(system, include_phase, engine_options)
+        elif stepper.system is not system:
+            raise ValueError("stepper belongs to another system")
+        if state is None:
+            state = system.initial_state(q0, v0, operator_state)
+        elif operator_state is not None:
+            raise ValueError("give either state or operator_state, not both")
+        stepper.reinit(state, transient)
         if observer is not None:
             observer(stepper)
-        if i in marks:  # the running sums; the estimates are formed once, after the loop
-            hist_t.append(target)
-            hist.append(lsum.copy())
-        if bar is not None:
-            bar.update(1)
-        i += 1
-    if bar is not None:
-        bar.close()
-    exponents = -np.sort(-lsum / window)
-    return LyapunovResult(
-        exponents=exponents,
-        tangent_space=tuple(labels),
-        history_t=np.asarray(hist_t),
-        history=_running_estimates(hist, hist_t, transient, k),
-        n_switches=int(stepper.n_events),
-        t_end=transient + window if whole_intervals else t_end,
-        transient=transient,
-        kaplan_yorke=kaplan_yorke_dimension(exponents),
-        final=stepper.state(),
-        extra={
-            "engine": describe_engine(stepper.engine.name, system.operator),
-            "renormalize_dt": dt,
-            "n_collapses": n_collapses,
-        },
-    )
+        self.system, self.stepper, self.observer = system, stepper, observer
+        self.labels = stepper.tangent_space
+        k = self.k = len(self.labels)
+        span = t_end - transient
+        if whole_intervals:
+            n_steps = int(math.floor(span / dt + 1e-9))
+            if n_steps < 1:
+                raise ValueError(
+                    f"t_end - transient = {span:g} is shorter than one renormalization "
+                    f"interval ({dt:g})"
+                )
+            window = n_steps * dt
+        else:
+            n_steps = max(1, int(math.ceil(span / dt - 1e-9)))
+            window = span
+        self.t_end, self.transient, self.dt, self.window = t_end, transient, dt, window
+        self.n_steps, self.whole_intervals = n_steps, whole_intervals
+        self.marks = set(
+            np.unique(np.linspace(0, n_steps - 1, min(history_points, n_steps)).round())
+        )
+        self.lsum = np.zeros(k)
+        self.hist_t: list[float] = []
+        self.hist: list[np.ndarray] = []
+        self.n_collapses = 0
+        self.bar = None
+        if progress:
+            self.bar = progress_bar(total=n_steps, desc="Lyapunov spectrum", unit="QR", leave=False)
+        # the relay kernel runs stretches of QR intervals itself (bit for bit this loop, without
+        # its Python per interval); an interval it cannot (a slide, an error) runs here
+        self.compiled = (
+            type(stepper) is TangentStepper
+            and hasattr(stepper.engine, "kernel_arrays")
+            and (observer is None or getattr(observer, "batches", False))
+        )
+        if self.compiled:
+            self.marked = np.zeros(n_steps, dtype=np.bool_)
+            self.marked[np.array(sorted(self.marks), dtype=np.int64)] = True
+            self.sums = np.zeros((n_steps, k))
+        self.i = self.backoff = self.skip = 0
+
+    def compiled_stretch(self, done: int) -> None:
+        """Book ``done`` intervals from ``i`` that a compiled loop ran (log sums and ``sums``
+        already updated, the stepper after them): the observer, the history, the progress."""
+        i = self.i
+        if done and self.observer is not None:
+            self.observer(self.stepper)
+        for j in range(i, i + done):
+            if self.marked[j]:
+                last = j == self.n_steps - 1
+                self.hist_t.append(self.transient + (self.window if last else (j + 1) * self.dt))
+                self.hist.append(self.sums[j].copy())
+        if self.bar is not None:
+            self.bar.update(done)
+        self.i = i + done
+        # an interval the kernel left to the Python loop: a few there before trying again
+        self.backoff = 0 if done else min(2 * self.backoff + 1, 64)
+        self.skip = self.backoff + 1
+
+    def run(self) -> None:
+        """The loop from interval ``i`` to the end."""
+        stepper, k = self.stepper, self.k
+        while self.i < self.n_steps:
+            if self.compiled and self.skip == 0:
+                done, _ = qr_intervals(
+                    stepper, self.i, self.n_steps, self.transient, self.dt, self.window,
+                    self.lsum, self.marked, self.sums,
+                )  # fmt: skip
+                self.compiled_stretch(done)
+                if self.i >= self.n_steps:
+                    break
+            self.skip = max(self.skip - 1, 0)
+            i = self.i
+            last = i == self.n_steps - 1
+            target = self.transient + (self.window if last else (i + 1) * self.dt)
+            stepper.step_to(target)
+            y, collapsed = _qr_step(stepper.deviations(), k, stepper.rank_bound(), self.lsum)
+            self.n_collapses += int(collapsed)
+            stepper.set_deviations(y)
+            if self.observer is not None:
+                self.observer(stepper)
+            if i in self.marks:  # the running sums; the estimates are formed once, at the end
+                self.hist_t.append(target)
+                self.hist.append(self.lsum.copy())
+            if self.bar is not None:
+                self.bar.update(1)
+            self.i = i + 1
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+    def result(self) -> LyapunovResult:
+        exponents = -np.sort(-self.lsum / self.window)
+        stepper = self.stepper
+        return LyapunovResult(
+            exponents=exponents,
+            tangent_space=tuple(self.labels),
+            history_t=np.asarray(self.hist_t),
+            history=_running_estimates(self.hist, self.hist_t, self.transient, self.k),
+            n_switches=int(stepper.n_events),
+            t_end=self.transient + self.window if self.whole_intervals else self.t_end,
+            transient=self.transient,
+            kaplan_yorke=kaplan_yorke_dimension(exponents),
+            final=stepper.state(),
+            extra={
+                "engine": describe_engine(stepper.engine.name, self.system.operator),
+                "renormalize_dt": self.dt,
+                "n_collapses": self.n_collapses,
+            },
+        )

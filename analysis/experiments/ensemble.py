@@ -24,14 +24,15 @@ import numpy as np
 
 from analysis.dynamics.bifurcation import section_period
 from analysis.dynamics.dimensions import box_counting_dimension, kaplan_yorke_dimension
-from analysis.dynamics.lyapunov import TangentStepper, lyapunov_spectrum
+from analysis.dynamics.lyapunov import LANES
 from analysis.dynamics.statistics import (
     empirical_pdf,
     magnetization_variance,
     self_averaging_parameter,
 )
-from analysis.experiments.execution import run_tasks, spawn_seeds
+from analysis.experiments.execution import Batching, run_tasks, spawn_seeds
 from analysis.experiments.models import build_operator, canonical_model_name
+from analysis.experiments.one_pass import one_pass_measurements, one_pass_measurements_many
 from analysis.experiments.parameters import (
     DAMPING_RATIO,
     DEFAULT_Q0,
@@ -64,15 +65,12 @@ __all__ = [
     "aggregate_ensemble",
     "EnsemblePoint",
     "realization_seeds",
-    "section_and_magnetization",
-    "one_pass_measurements",
+    "ensemble_batch",
     "section_dimension",
     "validate_ensemble",
 ]
 
 EXPERIMENT = "ensemble-dimers"
-#: forcing periods per QR step of an ensemble task (see :func:`one_pass_measurements`)
-QR_PERIODS = 8
 #: paper Table I: loop width p, centre spread R, spin coupling J
 
 
@@ -85,49 +83,6 @@ def realization_seeds(base_seed: int, spins: int, realizations: int) -> list[int
     spins = positive_integer(spins, "spins")
     base = int(np.random.SeedSequence([base_seed, spins]).generate_state(1, np.uint64)[0])
     return spawn_seeds(base >> 1, realizations)
-
-
-def section_and_magnetization(
-    system: Any,
-    t_end: float,
-    transient: float,
-    q0: float = DEFAULT_Q0,
-    v0: float = V0,
-    chunk_periods: int = 50,
-) -> tuple[np.ndarray, np.ndarray, float, float]:
-    """Poincaré section (q, v) at φ = 0 and the exact time average of M over the same window.
-
-    The window runs over whole forcing periods ``[P0·T, P1·T]`` with ``P0 = ceil(transient/T)``
-    and ``P1 = floor(t_end/T)``. ``M`` is piecewise constant, so its average is exact from the
-    switches: over a chunk of length Δ starting with output ``M0``,
-    ``∫M dt = M0·Δ + Σ_j ΔM_j·(Δ − t_j)``. The trajectory is integrated in chunks of
-    ``chunk_periods`` periods so memory stays bounded (N = 20 000 spins switch ~10⁴ times per
-    period). Returns ``(q, v, M_T, window_length)``.
-    """
-    period = float(system.period)
-    p0, p1 = _window_periods(system, t_end, transient)
-    start = system.poincare_section(1, p0, q0, v0)
-    q, v, opstate = start.final.q, start.final.v, start.final.operator_state
-    qs: list[np.ndarray] = []
-    vs: list[np.ndarray] = []
-    integral = 0.0
-    remaining = p1 - p0
-    while remaining > 0:
-        n = min(chunk_periods, remaining)
-        length = n * period
-        traj = system.trajectory(length, q, v, opstate, sample_dt=period)
-        # samples at 0, T, ..., nT: the section points are all but the last (next chunk's first)
-        qs.append(np.asarray(traj.q[:n]))
-        vs.append(np.asarray(traj.v[:n]))
-        sw = traj.switches
-        integral += float(traj.M[0]) * length
-        if sw.size:
-            integral += float(np.sum(sw["jump"] * (length - sw["time"])))
-        f = traj.final
-        q, v, opstate = f.q, f.v, f.operator_state
-        remaining -= n
-    window = (p1 - p0) * period
-    return np.concatenate(qs), np.concatenate(vs), integral / window, window
 
 
 def section_dimension(
@@ -145,92 +100,6 @@ def section_dimension(
     except ValueError:
         return float("nan"), float("nan"), 0
     return float(res.dimension), float(res.stderr), 0
-
-
-def _window_periods(system: Any, t_end: float, transient: float) -> tuple[int, int]:
-    """Whole forcing periods ``[P0, P1]`` inside ``[transient, t_end]``."""
-    period = float(system.period)
-    p0 = int(math.ceil(transient / period - 1e-12))
-    p1 = int(math.floor(t_end / period + 1e-12))
-    if p1 - p0 < 1:
-        raise ValueError(
-            f"t_end={t_end} - transient={transient} must cover at least one forcing period"
-        )
-    return p0, p1
-
-
-def one_pass_measurements(
-    system: Any,
-    t_end: float,
-    transient: float,
-    q0: float = DEFAULT_Q0,
-    v0: float = V0,
-    operator_state: Any = None,
-    magnetization: bool = True,
-    progress: bool = False,
-    qr_periods: int = QR_PERIODS,
-) -> tuple[Any, np.ndarray, np.ndarray, float, float]:
-    """Lyapunov spectrum, Poincaré section and ``M_T`` from one integration with tangent flow.
-
-    The window is the whole forcing periods ``[P0·T, P1·T]`` in ``[transient, t_end]`` (as
-    :func:`section_and_magnetization`). The Benettin loop of
-    :func:`~analysis.dynamics.lyapunov.lyapunov_spectrum` re-orthonormalises every ``qr_periods``
-    periods; its stepper samples ``(q, v)`` at every period boundary in the same engine calls
-    (``TangentStepper(sample_dt=T)``), and the observer collects them and reads the exact
-    ``∫M dt`` from the engine (``Engine.output_integral``) at both ends of the window, so
-    nothing is integrated twice. Returns ``(lyapunov_result, q, v, M_T, window_length)``;
-    ``M_T`` is nan with ``magnetization=False`` (for engines without an exact output integral,
-    e.g. continuous operators). ``operator_state`` is the initial memory (default: rising from
-    negative saturation to ``q0``); ``progress`` shows the Lyapunov loop's progress bar.
-
-    Why several periods per QR step: at small N the Python work of one QR step costs more than
-    the integration of one period; the deviation vectors separate like
-    ``exp((λ1 − λ2)·Δt)``, ``e^(0.2·8·2π) ≈ 2·10⁴`` for the paper's ensembles, far from losing
-    the second direction in double precision (the exponents are the same in exact arithmetic
-    for any QR interval; a test compares with one QR step per period).
-    """
-
-    qr_periods = positive_integer(qr_periods, "qr_periods")
-    period = float(system.period)
-    p0, p1 = _window_periods(system, t_end, transient)
-    n = p1 - p0
-    points: list[np.ndarray] = []
-    integral = [np.nan, np.nan]
-
-    def observe(stepper: Any) -> None:
-        if not points:  # after the transient: the first section point, start of the window
-            q, v, _ = stepper.sample
-            points.append(np.array([[0.0, q, v, 0.0]]))
-            if magnetization:
-                integral[0] = stepper.engine.output_integral()
-        else:
-            points.append(stepper.samples)
-            if magnetization:
-                integral[1] = stepper.engine.output_integral()
-
-    # it reads only the samples and the integral: it may be called once per stretch of QR
-    # intervals (lyapunov_spectrum's compiled loop), the samples then hold the whole stretch
-    observe.batches = True  # type: ignore[attr-defined]
-    stepper = TangentStepper(system, sample_dt=period)
-    ly = lyapunov_spectrum(
-        system,
-        p1 * period,
-        p0 * period,
-        q0,
-        v0,
-        operator_state,
-        progress=progress,
-        renormalize_dt=qr_periods * period,
-        stepper=stepper,
-        observer=observe,
-    )
-    rows = np.concatenate(points)
-    if rows.shape[0] != n + 1:  # one sample per period boundary; anything else is a bug here
-        raise RuntimeError(f"expected {n + 1} section points, got {rows.shape[0]}")
-    window = n * period
-    # samples at P0..P1: the section points are P0..P1-1, as section_and_magnetization
-    m_t = float((integral[1] - integral[0]) / window)
-    return ly, rows[:n, 1].copy(), rows[:n, 2].copy(), m_t, window
 
 
 def disorder_system(
@@ -301,7 +170,14 @@ def ensemble_task(
         model, spins, seed, coupling, width, spread, spin_coupling, width_spread,
         damping_ratio, frequency,
     )  # fmt: skip
-    ly, q, v, m_t, window = one_pass_measurements(system, t_end, transient, q0, v0)
+    measured = one_pass_measurements(system, t_end, transient, q0, v0)
+    return _task_result(measured, box_max_fill, box_min_boxes, keep_section)
+
+
+def _task_result(measured: tuple, box_max_fill: float, box_min_boxes: float,
+                 keep_section: bool) -> dict:  # fmt: skip
+    """:func:`ensemble_task`'s result dict from :func:`one_pass_measurements`' values."""
+    ly, q, v, m_t, window = measured
     exponents = np.asarray(ly.exponents, dtype=float)
     d_bc, d_bc_err, period = section_dimension(q, v, box_max_fill, box_min_boxes)
     out: dict[str, Any] = {
@@ -320,6 +196,69 @@ def ensemble_task(
         out["section_q"] = q
         out["section_v"] = v
     return out
+
+
+#: the smallest ensembles whose realizations share vector lanes (:func:`ensemble_batch`): at
+#: N = 1000 the lanes gain nothing (few fast hops per period), from N = 2000 on they do
+#: (benchmarks/bench_lanes.py)
+LANE_MIN_SPINS = 2000
+
+
+def _full_task(task: Mapping[str, Any]) -> dict:
+    bound = inspect.signature(ensemble_task).bind(**task)
+    bound.apply_defaults()
+    return dict(bound.arguments)
+
+
+def _lane_key(task: Mapping[str, Any]) -> tuple | None:
+    """What realizations must share to run side by side (everything but the seed); None for
+    a task that runs alone (fewer than :data:`LANE_MIN_SPINS` spins)."""
+    full = _full_task(task)
+    if full["spins"] < LANE_MIN_SPINS:
+        return None
+    return tuple(sorted((k, v) for k, v in full.items() if k != "seed"))
+
+
+def ensemble_batch(tasks: Sequence[Mapping[str, Any]]) -> list[dict]:
+    """:func:`ensemble_task` of several tasks in one call, each result bit for bit
+    ``ensemble_task(**task)``: realizations that differ only in their seed (N ≥
+    :data:`LANE_MIN_SPINS`) run side by side in the vector units
+    (:func:`one_pass_measurements_many`), the others one after the other. How
+    :func:`~analysis.experiments.execution.run_tasks` runs a batch of ensemble tasks
+    (``ensemble_task.batching``)."""
+    results: list[dict | None] = [None] * len(tasks)
+    groups: dict[tuple | None, list[int]] = {}
+    for i, task in enumerate(tasks):
+        groups.setdefault(_lane_key(task), []).append(i)
+    for key, members in groups.items():
+        if key is None or len(members) == 1:
+            for i in members:
+                results[i] = ensemble_task(**tasks[i])
+            continue
+        full = [_full_task(tasks[i]) for i in members]
+        systems = [
+            disorder_system(
+                f["model"],
+                f["spins"],
+                f["seed"],
+                f["coupling"],
+                f["width"],
+                f["spread"],
+                f["spin_coupling"],
+                f["width_spread"],
+                f["damping_ratio"],
+                f["frequency"],
+            )  # fmt: skip
+            for f in full
+        ]
+        f = full[0]
+        measured = one_pass_measurements_many(systems, f["t_end"], f["transient"], f["q0"], f["v0"])
+        for i, m in zip(members, measured, strict=True):
+            results[i] = _task_result(m, f["box_max_fill"], f["box_min_boxes"], f["keep_section"])
+    return results  # type: ignore[return-value]
+
+
+ensemble_task.batching = Batching(run=ensemble_batch, size=LANES, key=_lane_key)  # type: ignore[attr-defined]
 
 
 #: most tasks one ensemble may ask for (N values × couplings × realizations)

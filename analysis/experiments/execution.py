@@ -39,8 +39,9 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from numbers import Integral
 from typing import Any
 
@@ -50,7 +51,7 @@ from analysis.experiments.store import ResultStore, StoreError, code_version, ta
 from hysteresis._progress import progress_bar
 from hysteresis._validation import bounded_work, nonnegative_integer
 
-__all__ = ["run_tasks", "spawn_seeds", "TaskError", "end_with_client"]
+__all__ = ["run_tasks", "spawn_seeds", "Batching", "TaskError", "end_with_client"]
 
 
 class TaskError(RuntimeError):
@@ -90,6 +91,71 @@ def spawn_seeds(base_seed: int, n: int) -> list[int]:
     base_seed = nonnegative_integer(base_seed, "base_seed")
     children = np.random.SeedSequence(int(base_seed)).spawn(n)
     return [int(c.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1)) for c in children]
+
+
+@dataclass(frozen=True)
+class Batching:
+    """How a task function runs several of its tasks in one call, set as its attribute
+    ``func.batching`` (e.g. :func:`analysis.experiments.ensemble.ensemble_task`: disorder
+    realizations side by side in the vector units).
+
+    ``run(tasks)`` returns the results of ``func(**task)`` for every task, in order, **bit for
+    bit** the same (so a result does not depend on how tasks were batched, resumed or spread
+    over workers); :func:`run_tasks` hands it up to ``size`` consecutive pending tasks with the
+    same ``key(task)``; a task whose key is None runs alone, as ``func(**task)``.
+    """
+
+    run: Callable[[list[dict]], list[Mapping[str, Any]]]
+    size: int
+    key: Callable[[Mapping[str, Any]], Hashable | None]
+
+
+class _BatchTaskFailed(Exception):
+    """Task ``index`` of a batch raised ``error`` (found by running the batch's tasks alone)."""
+
+    def __init__(self, index: int, error: BaseException) -> None:
+        super().__init__(index, error)
+        self.index = index
+        self.error = error
+
+
+def _timed_batch(func: Callable[..., Mapping[str, Any]], tasks: list[dict]) -> list[tuple]:
+    """Run a batch of tasks in the worker (``func.batching.run``); each task's wall time is the
+    batch's share. If the batch raises, its tasks run alone, so that the error names its task
+    (the results are the same either way)."""
+    start = time.perf_counter()
+    try:
+        results = list(func.batching.run(tasks))  # type: ignore[attr-defined]
+    except Exception:  # noqa: BLE001  (whatever it was, the task alone raises it again)
+        out = []
+        for i, task in enumerate(tasks):
+            try:
+                out.append(_timed_call(func, task))
+            except Exception as exc:
+                raise _BatchTaskFailed(i, exc) from None
+        return out
+    wall = (time.perf_counter() - start) / max(len(tasks), 1)
+    if len(results) != len(tasks) or not all(isinstance(r, Mapping) for r in results):
+        raise TypeError("a batch function must return one dict per task")
+    return [(dict(r), wall) for r in results]
+
+
+def _units(pending: dict[str, dict], func: Callable[..., Any]) -> list[list[str]]:
+    """The pending task keys in submission units: runs of up to ``batching.size`` consecutive
+    tasks with the same non-None batching key, else one task each."""
+    batching = getattr(func, "batching", None)
+    if batching is None or batching.size < 2:
+        return [[k] for k in pending]
+    units: list[list[str]] = []
+    last = None
+    for key, task in pending.items():
+        group = batching.key(task)
+        if group is not None and group == last and len(units[-1]) < batching.size:
+            units[-1].append(key)
+        else:
+            units.append([key])
+        last = group
+    return units
 
 
 def _timed_call(func: Callable[..., Mapping[str, Any]], task: dict) -> tuple[dict, float]:
@@ -312,14 +378,34 @@ def _run_pending(
 
     if not pending:
         return
-    serial = executor is None and scheduler is None and (workers == 1 or len(pending) == 1)
-    if serial:
-        for key, task in pending.items():
-            try:
-                result, wall = _timed_call(func, task)
-            except Exception as exc:
-                raise TaskError(experiment, task, exc) from exc
+    units = _units(pending, func)
+
+    def submit(ex: Executor, keys: list[str]) -> Future:
+        if len(keys) == 1:
+            return ex.submit(_timed_call, func, pending[keys[0]])
+        return ex.submit(_timed_batch, func, [pending[k] for k in keys])
+
+    def record_unit(keys: list[str], value: Any) -> None:
+        for key, (result, wall) in zip(keys, [value] if len(keys) == 1 else value, strict=True):
             record(key, result, wall)
+
+    def task_error(keys: list[str], exc: BaseException) -> TaskError:
+        if isinstance(exc, _BatchTaskFailed):
+            return TaskError(experiment, pending[keys[exc.index]], exc.error)
+        return TaskError(experiment, pending[keys[0]], exc)
+
+    serial = executor is None and scheduler is None and (workers == 1 or len(units) == 1)
+    if serial:
+        for keys in units:
+            try:
+                if len(keys) == 1:
+                    value: Any = _timed_call(func, pending[keys[0]])
+                else:
+                    value = _timed_batch(func, [pending[k] for k in keys])
+            except Exception as exc:
+                error = task_error(keys, exc)
+                raise error from error.error
+            record_unit(keys, value)
         return
 
     shutdown: Callable[[], None] | None = None
@@ -333,40 +419,41 @@ def _run_pending(
     else:
         n = workers if workers is not None else (os.cpu_count() or 1)
         ex = ProcessPoolExecutor(
-            max_workers=min(n, len(pending)),
+            max_workers=min(n, len(units)),
             initializer=end_with_client,
             initargs=(os.getpid(),),
         )
         shutdown = ex.shutdown
-    futures: dict[Future, str] = {}
+    futures: dict[Future, list[str]] = {}
     try:
-        for key, task in pending.items():
-            futures[ex.submit(_timed_call, func, task)] = key
+        for keys in units:
+            futures[submit(ex, keys)] = keys
         for fut in as_completed(futures):
-            key = futures[fut]
+            keys = futures[fut]
             try:
                 if fut.cancelled():
                     # nobody here cancels a pending task: the executor dropped it (a Dask
                     # client that lost its scheduler cancels every future)
                     raise ConnectionError("the executor cancelled the task")
-                result, wall = fut.result()
+                value = fut.result()
             except Exception as exc:
                 for other in futures:
                     other.cancel()
                 lost = fut.cancelled() or (client is not None and client.status != "running")
                 if lost:
                     # keep what had already arrived: a rerun then computes only the rest
-                    for other, other_key in futures.items():
+                    for other, other_keys in futures.items():
                         if (
-                            other_key not in results
+                            other_keys[0] not in results
                             and other.done()
                             and not other.cancelled()
                             and other.exception() is None
                         ):
-                            record(other_key, *other.result())
+                            record_unit(other_keys, other.result())
                     raise _cluster_lost(experiment, scheduler, store, results, pending) from exc
-                raise TaskError(experiment, pending[key], exc) from exc
-            record(key, result, wall)
+                error = task_error(keys, exc)
+                raise error from error.error
+            record_unit(keys, value)
     finally:
         if shutdown is not None:
             if isinstance(ex, ProcessPoolExecutor):

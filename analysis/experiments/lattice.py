@@ -9,7 +9,7 @@ scaled by R, common random numbers along R) at every coupling C:
 
 * **coupled lattice**: the Lyapunov spectrum in ``(q, v)``, ``D_KY``, the section's ``D_BC``
   (0 for a periodic section) and ``M_T``, in one pass
-  (:func:`~analysis.experiments.ensemble.one_pass_measurements`), then a trajectory of
+  (:func:`~analysis.experiments.one_pass.one_pass_measurements`), then a trajectory of
   ``barkhausen_periods`` forcing periods whose switches are the avalanches of the coupled
   motion (size ``|ΔM|·N/2``; their sum is the number of spin flips);
 * **plain field sweeps** of the same lattice: the major loop's rising branch (every spin flips
@@ -50,8 +50,9 @@ from typing import Any
 import numpy as np
 
 from analysis.dynamics.dimensions import kaplan_yorke_dimension
-from analysis.experiments.ensemble import one_pass_measurements, section_dimension
+from analysis.experiments.ensemble import section_dimension
 from analysis.experiments.execution import run_tasks, spawn_seeds
+from analysis.experiments.one_pass import one_pass_measurements
 from analysis.experiments.parameters import DAMPING_RATIO, DEFAULT_Q0, FREQUENCY, V0
 from analysis.experiments.store import ResultStore
 from analysis.identification.congruency import congruency_scan

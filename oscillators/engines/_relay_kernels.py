@@ -732,86 +732,148 @@ def hop_coefficients(mp):
     )  # fmt: skip
 
 
-@njit(cache=True, fastmath=_CONTRACT, inline="always")
+@intrinsic
+def fma(typingctx, a, b, c):
+    """``fl(a·b + c)``, rounded once (LLVM's ``llvm.fma``): the same bits in scalar and vector
+    code and whatever products the compiler would fuse around it."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        d = ir.DoubleType()
+        fn = builder.module.declare_intrinsic("llvm.fma", [d], ir.FunctionType(d, [d, d, d]))
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
+# The fast hop and its tangent update are written so that no product meets a sum outside an
+# explicit fma: every multiply-add is fused in the source, and no addition or subtraction has a
+# plain product as an operand. Compiled with or without ``contract``, in scalar or vector code,
+# they then round alike, so the same hop gives the same bits in the event loop and in the lanes
+# of oscillators/engines/_relay_lanes.py (tests/test_oscillators/test_fast_hop.py compiles them
+# both ways and compares).
+@njit(cache=True, inline="always", error_model="numpy")
 def fast_hop(coefs, omega, h_small, q, v, c, s, force, gap, horizon):
     """The fast short hop (module docstring) from (q, v, cos φ, sin φ) with the output force
     ``force`` = C·M to the threshold ``gap`` = θ − q away: returns ``(ok, h, v, cos φ, sin φ)``
     at the crossing, ``ok`` False when the step's error bound (< 1e-17), the monotonicity of q
     on [0, h], ``h < h_small`` or ``h <= horizon`` fails (the caller then takes another path;
     the other values are then meaningless). Branch-free: the same code serves one system
-    (:func:`hop`, after its test ``|gap| < h_small |v|``) and many side by side."""
+    (:func:`hop`, after its test ``|gap| < h_small |v|``) and many side by side
+    (:mod:`oscillators.engines._relay_lanes`).
+
+    Plain reading (every ``a·b + c`` below is one :func:`fma`)::
+
+        e_n = linear form of (q, v, F, cos φ, sin φ)            n = 2..6, q's Taylor coefficients
+        x = gap / v;  h0 = x − k2 x² + (2 k2² − k3) x³          series reversion, k_n = e_n / v
+        res = q(h0) − θ;  1/q'(h0) ≈ (1 − u)(1 + u²)/v          one Newton step h = h0 − res/q'
+        v(h), cos φ(h), sin φ(h) corrected to first order in the Newton step
+        ok = 0 < h <= horizon, h < h_small, error bound <= 1e-17, |v(s) − v| < |v|/2 on [0, h]
+    """
     (
         t2q, t2v, t2f, t2c, t2s, t3q, t3v, t3f, t3c, t3s, t4q, t4v, t4f, t4c, t4s, t5q,
         t5v, t5f, t5c, t5s, t6q, t6v, t6f, t6c, t6s, g0, g1, g2, g3, g4, g5, g6, d0, d1,
         d2, d3, d4, d5, d6
     ) = coefs  # fmt: skip
-    # q's Taylor coefficients as linear forms, series reversion of q(h) = theta from the
-    # linear estimate x, one Newton step
-    e2 = t2q * q + t2v * v + t2f * force
-    e2 += t2c * c + t2s * s
-    e3 = t3q * q + t3v * v + t3f * force
-    e3 += t3c * c + t3s * s
-    e4 = t4q * q + t4v * v + t4f * force
-    e4 += t4c * c + t4s * s
-    e5 = t5q * q + t5v * v + t5f * force
-    e5 += t5c * c + t5s * s
-    e6 = t6q * q + t6v * v + t6f * force
-    e6 += t6c * c + t6s * s
+    e2 = fma(t2q, q, fma(t2v, v, fma(t2f, force, fma(t2c, c, t2s * s))))
+    e3 = fma(t3q, q, fma(t3v, v, fma(t3f, force, fma(t3c, c, t3s * s))))
+    e4 = fma(t4q, q, fma(t4v, v, fma(t4f, force, fma(t4c, c, t4s * s))))
+    e5 = fma(t5q, q, fma(t5v, v, fma(t5f, force, fma(t5c, c, t5s * s))))
+    e6 = fma(t6q, q, fma(t6v, v, fma(t6f, force, fma(t6c, c, t6s * s))))
     r = 1.0 / v
     x = gap * r
     k2 = e2 * r
     k3 = e3 * r
     # series reversion of x = h + k2 h^2 + k3 h^3 + ... to third order
-    xx = x * x
-    h0 = x + xx * (x * (2.0 * k2 * k2 - k3) - k2)
-    # everything the Newton step needs is a polynomial in h0, side by side and in
-    # Estrin form (short dependency chains): the residual, 1/q'(h0) = r/(1 + u) by
-    # its series, v and q'' at h0, and the phase rotation; the step then corrects
-    # them to first order in dh
+    h0 = fma(x * x, fma(x, fma(2.0 * k2, k2, -k3), -k2), x)
+    # everything the Newton step needs is a polynomial in h0, side by side and in Estrin form
+    # (short dependency chains): the residual, 1/q'(h0) = r/(1 + u) by its series, v and q''
+    # at h0, and the phase rotation; the step then corrects them to first order in dh
     hh2 = h0 * h0
-    res = h0 * (v + e2 * h0 + hh2 * (e3 + e4 * h0 + hh2 * (e5 + e6 * h0))) - gap
-    u = h0 * (2.0 * k2 + 3.0 * k3 * h0 + 4.0 * e4 * r * hh2)
-    uu = u * u
-    inv = r * ((1.0 - u) + uu * (1.0 - u))
-    dp0 = (v + 2.0 * e2 * h0) + hh2 * ((3.0 * e3 + 4.0 * e4 * h0)
-          + hh2 * (5.0 * e5 + 6.0 * e6 * h0))  # fmt: skip
-    pp0 = (2.0 * e2 + 6.0 * e3 * h0) + hh2 * (12.0 * e4 + 20.0 * e5 * h0)
+    res = fma(h0, fma(hh2, fma(hh2, fma(e6, h0, e5), fma(e4, h0, e3)), fma(e2, h0, v)), -gap)
+    poly_u = fma(4.0 * e4 * r, hh2, fma(3.0 * k3, h0, 2.0 * k2))
+    u = h0 * poly_u
+    one_minus_u = fma(-h0, poly_u, 1.0)
+    inv = r * fma(u * u, one_minus_u, one_minus_u)
+    dp0 = fma(
+        hh2, fma(hh2, fma(6.0 * e6, h0, 5.0 * e5), fma(4.0 * e4, h0, 3.0 * e3)),
+        fma(2.0 * e2, h0, v),
+    )  # fmt: skip
+    pp0 = fma(hh2, fma(20.0 * e5, h0, 12.0 * e4), fma(6.0 * e3, h0, 2.0 * e2))
     xr = omega * h0
     x2 = xr * xr
-    cx = 1.0 - x2 * (0.5 - x2 * (1.0 / 24.0))
-    sx = xr * (1.0 - x2 * (1.0 / 6.0 - x2 * (1.0 / 120.0)))
-    c0r = c * cx - s * sx
-    s0r = s * cx + c * sx
+    cx = fma(-x2, fma(-x2, 1.0 / 24.0, 0.5), 1.0)
+    sx = xr * fma(-x2, fma(-x2, 1.0 / 120.0, 1.0 / 6.0), 1.0)
+    c0r = fma(c, cx, -(s * sx))
+    s0r = fma(s, cx, c * sx)
     dh = res * inv
-    hf = h0 - dh
+    hf = fma(-res, inv, h0)
     av = abs(v)
-    # accept when the step's error (derivative series: |dh| u^4; Newton and the
-    # first-order corrections: ~|q''|/|v| dh^2) is far below one ulp of the time and
-    # q is provably monotone on [0, hf] (|v(s) - v| < |v|/2): theta is then the first
-    # crossing
+    # accept when the step's error (derivative series: |dh| u^4; Newton and the first-order
+    # corrections: ~|q''|/|v| dh^2) is far below one ulp of the time and q is provably
+    # monotone on [0, hf] (|v(s) - v| < |v|/2): theta is then the first crossing
     ae2 = abs(e2)
-    slope = hf * (2.0 * ae2 + hf * (3.0 * abs(e3) + hf * (4.0 * abs(e4)
-            + hf * (5.0 * abs(e5) + hf * 6.0 * abs(e6)))))  # fmt: skip
-    err = abs(dh) * (u * u * u * u + 1e-13) + dh * dh * (ae2 + 3.0 * abs(e3)) / av
+    slope = hf * fma(
+        hf, fma(hf, fma(hf, fma(hf, 6.0 * abs(e6), 5.0 * abs(e5)), 4.0 * abs(e4)),
+                3.0 * abs(e3)), 2.0 * ae2,
+    )  # fmt: skip
+    uu = u * u
+    err = fma(abs(dh), fma(uu, uu, 1e-13), dh * dh * fma(3.0, abs(e3), ae2) / av)
     # & rather than and: no branches, so a loop over many systems vectorizes
     ok = (0.0 < hf) & (hf <= horizon) & (hf < h_small) & (err <= 1e-17) & (slope < 0.5 * av)
-    v1 = dp0 - dh * pp0
     dphi = omega * dh
-    c1 = c0r + dphi * s0r
-    s1 = s0r - dphi * c0r
-    return ok, hf, v1, c1, s1
+    return ok, hf, fma(-dh, pp0, dp0), fma(dphi, s0r, c0r), fma(-dphi, c0r, s0r)
 
 
-@njit(cache=True, fastmath=_CONTRACT, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def fast_propagator(coefs, h):
     """g = Φ_01(h) and g' (degree 6 in h) for the tangent flow of a fast hop:
     Φ(h) = [[g' + 2ζg, g], [-g, g']]."""
     g0, g1, g2, g3, g4, g5, g6, d0, d1, d2, d3, d4, d5, d6 = coefs[25:]
     hp2 = h * h
     hp4 = hp2 * hp2
-    g = (g0 + g1 * h) + hp2 * (g2 + g3 * h) + hp4 * (g4 + g5 * h + hp2 * g6)
-    gd = (d0 + d1 * h) + hp2 * (d2 + d3 * h) + hp4 * (d4 + d5 * h + hp2 * d6)
+    g = fma(hp4, fma(hp2, g6, fma(g5, h, g4)), fma(hp2, fma(g3, h, g2), fma(g1, h, g0)))
+    gd = fma(hp4, fma(hp2, d6, fma(d5, h, d4)), fma(hp2, fma(d3, h, d2), fma(d1, h, d0)))
     return g, gd
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def fast_tangent(coefs, zeta, h, a0, a1, b0, b1):
+    """The two (δq, δv) columns after a fast hop of length ``h``: [δq, δv] := Φ(h) [δq, δv]
+    (:func:`fast_propagator`), every multiply-add fused in the source."""
+    g, gd = fast_propagator(coefs, h)
+    m00 = fma(2.0 * zeta, g, gd)
+    return (
+        fma(m00, a0, g * b0),
+        fma(m00, a1, g * b1),
+        fma(-g, a0, gd * b0),
+        fma(-g, a1, gd * b1),
+    )
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def saltation(coupling, jump, v, a0, a1, b0, b1):
+    """δv after a switch of ``jump`` at velocity ``v`` (the two tangent columns): δv += C ΔM /
+    v* · δq (paper eq. salt_matrix), fused in the source."""
+    sal = coupling * jump / v
+    return fma(sal, a0, b0), fma(sal, a1, b1)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def slides(zeta, coupling, slide, q, v, c, mv, jump, direction, prev_q, prev_jump):
+    """Whether a switch of ``jump`` in ``direction`` at ``q`` (output ``mv`` after it) enters a
+    Filippov sliding motion: it undoes the previous switch at the same threshold, the flow pushes
+    into the threshold from both sides and the excursion just begun lasts ``2|v|/|q''| <=
+    slide`` (:func:`settle_switch`). Fused in the source, so every event loop decides alike."""
+    if not (jump == -prev_jump and q == prev_q and jump != 0.0):
+        return False
+    a_now = fma(coupling, mv, fma(-2.0 * zeta, v, c - q))
+    a_before = fma(-coupling, jump, a_now)
+    return (
+        direction * a_before > 0.0
+        and direction * a_now < 0.0
+        and 2.0 * abs(v) <= slide * abs(a_now)
+    )
 
 
 @njit(cache=True, fastmath=_CONTRACT, inline="always")
@@ -849,18 +911,20 @@ def hop(
         if abs(gap) < h_small * abs(v):
             ok, hf, v1, c1, s1 = fast_hop(coefs, omega, h_small, q, v, c, s, force, gap, horizon)
             if ok:
-                if tan_on:
+                if tan_on and ntan == 3:
                     g, gd = fast_propagator(coefs, hf)
                     m00 = gd + 2.0 * zeta * g
                     a0, a1, a2, b0, b1, b2 = _hop_tangent(
                         m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b, ntan,
                         a0, a1, a2, b0, b1, b2, f0, f1, f2,
                     )  # fmt: skip
+                elif tan_on:
+                    a0, a1, b0, b1 = fast_tangent(coefs, zeta, hf, a0, a1, b0, b1)
                 direction = 1 if v > 0.0 else -1
                 c = c1
                 s = s1
                 v = v1
-                integral += mv * hf
+                integral = fma(mv, hf, integral)
                 q = theta
                 tau += hf
                 mode = 3
@@ -983,17 +1047,10 @@ def settle_switch(
     ``st[S_DIR]``)."""
     zeta = par[P_ZETA]
     coupling = par[P_C]
-    if jump == -prev_jump and q == prev_q and jump != 0.0:
-        a_now = c - q - 2.0 * zeta * v + coupling * mv
-        a_before = a_now - coupling * jump
-        if (
-            direction * a_before > 0.0
-            and direction * a_now < 0.0
-            and 2.0 * abs(v) <= par[P_SL] * abs(a_now)
-        ):
-            st[S_JMP] = jump
-            st[S_DIR] = direction
-            return 4, b0, b1, b2, prev_q, prev_jump  # sliding: the caller integrates it
+    if slides(zeta, coupling, par[P_SL], q, v, c, mv, jump, direction, prev_q, prev_jump):
+        st[S_JMP] = jump
+        st[S_DIR] = direction
+        return 4, b0, b1, b2, prev_q, prev_jump  # sliding: the caller integrates it
     prev_q = q
     prev_jump = jump
     if nsw >= nsw_max:
@@ -1006,11 +1063,9 @@ def settle_switch(
         if v == 0.0:
             return 2, b0, b1, b2, prev_q, prev_jump  # grazing: infinite saltation
         # saltation X = [[1,0,0],[C ΔM / v*, 1, 0],[0,0,1]]
-        sal = coupling * jump / v
-        b0 += sal * a0
-        b1 += sal * a1
+        b0, b1 = saltation(coupling, jump, v, a0, a1, b0, b1)
         if ntan == 3:
-            b2 += sal * a2
+            b2 += coupling * jump / v * a2
     if rec_on:
         i = sw_count[0]
         sw[i, 0] = par[P_TBASE] + ist[I_N] * par[P_T] + tau

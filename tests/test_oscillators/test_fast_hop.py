@@ -90,3 +90,36 @@ def test_refusals():
     v_small = 1e-4
     assert not _fast(coefs, omega, h_small, q, v_small, c, s, force, 0.9 * h_small * v_small,
                      1.0)[0]  # fmt: skip
+
+
+def _fast_step(coefs, zeta, omega, h_small, q, v, c, s, force, gap, horizon, a0, a1, b0, b1):
+    ok, h, v1, c1, s1 = kern.fast_hop(coefs, omega, h_small, q, v, c, s, force, gap, horizon)
+    na0, na1, nb0, nb1 = kern.fast_tangent(coefs, zeta, h, a0, a1, b0, b1)
+    sb0, sb1 = kern.saltation(2.9, 0.37, v1, na0, na1, nb0, nb1)
+    slide = kern.slides(zeta, 2.9, 0.5, q, v, c, force, 0.37, 1, q, -0.37)
+    return ok, h, v1, c1, s1, na0, na1, nb0, nb1, sb0, sb1, slide
+
+
+# the same source compiled with fused multiply-adds allowed (as the event loop is) and without:
+# inlined, the callee's arithmetic takes the caller's flags
+_fast_contract = njit(fastmath={"contract"})(_fast_step)
+_fast_plain = njit(_fast_step)
+
+
+@pytest.mark.parametrize("zeta, omega", [(0.05, 1.0), (0.5, 0.3)])
+def test_fast_path_rounds_alike_with_and_without_contraction(zeta, omega):
+    """Every multiply-add of the fast path is an explicit fma and no sum has a plain product
+    as an operand, so the compiler has nothing left to fuse: the event loop (compiled with
+    ``contract``) and the lanes of the vectorized loop round alike. Independent truth: the same
+    source compiled without ``contract``, which LLVM may not fuse at all."""
+    rng = np.random.default_rng(11)
+    coefs = _coefs(zeta, omega)
+    h_small = 3e-3
+    for _ in range(2000):
+        q, v, force = rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-4, 4)
+        phi = rng.uniform(0, 2 * math.pi)
+        gap = math.copysign(rng.uniform(0, 0.9) * h_small * abs(v), v)
+        args = (coefs, zeta, omega, h_small, q, v, math.cos(phi), math.sin(phi), force, gap,
+                1.0, *rng.normal(size=4))  # fmt: skip
+        got, want = _fast_contract(*args), _fast_plain(*args)
+        assert got == want  # tuples of floats and bools, compared bit for bit (no nan here)

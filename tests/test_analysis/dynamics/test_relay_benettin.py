@@ -9,7 +9,8 @@ import pytest
 
 import analysis.dynamics.lyapunov as lyapunov
 from analysis.dynamics.lyapunov import lyapunov_spectrum
-from analysis.experiments.ensemble import ensemble_task, one_pass_measurements
+from analysis.experiments.ensemble import ensemble_task
+from analysis.experiments.one_pass import one_pass_measurements
 from hysteresis import Relay, SpinDimerEnsemble
 from oscillators import ForcedOscillator
 

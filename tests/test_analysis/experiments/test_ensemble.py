@@ -12,11 +12,10 @@ from analysis.experiments.ensemble import (
     aggregate_ensemble,
     ensemble_task,
     ensemble_tasks,
-    one_pass_measurements,
     realization_seeds,
     run_ensemble,
-    section_and_magnetization,
 )
+from analysis.experiments.one_pass import one_pass_measurements, section_and_magnetization
 from analysis.experiments.store import ResultStore
 
 ZETA = 0.05

@@ -48,6 +48,36 @@ HELPERS = textwrap.dedent(
         if x == 3:
             raise RuntimeError("boom")
         return task(x, seed)
+
+    # the same tasks, runnable in batches: tasks of equal x // 4 share a batch (at most 3),
+    # x = 7 runs alone; BATCHES records each batch's xs
+    from analysis.experiments.execution import Batching
+
+    BATCHES = []
+
+    def run_batch(tasks):
+        BATCHES.append([t["x"] for t in tasks])
+        return [task(**t) for t in tasks]
+
+    def batch_key(t):
+        return None if t["x"] == 7 else t["x"] // 4
+
+    def batched(x, seed, sleep=0.0):
+        return task(x, seed, sleep)
+
+    batched.batching = Batching(run=run_batch, size=3, key=batch_key)
+
+    def failing_batch(tasks):
+        if any(t["x"] == 5 for t in tasks):
+            raise RuntimeError("the batch failed")
+        return [task(**t) for t in tasks]
+
+    def batched_failing(x, seed, sleep=0.0):
+        if x == 5:
+            raise ValueError("x = 5 fails alone too")
+        return task(x, seed, sleep)
+
+    batched_failing.batching = Batching(run=failing_batch, size=3, key=batch_key)
     """
 )
 
@@ -328,3 +358,39 @@ def test_scheduler_must_be_an_address_no_local_cluster_is_started():
     with pytest.raises(ValueError, match="scheduler 'local' is not a Dask scheduler address") as e:
         run_tasks("x", [{"seed": 1}], dict, scheduler="local", progress=False)
     assert "\n" not in str(e.value) and "--workers" in str(e.value)
+
+
+def test_batched_tasks_give_the_unbatched_results_one_row_each(tmp_path, helpers):
+    """A task function with ``batching`` runs runs of consecutive same-key tasks in one call
+    (at most ``size``; key None alone), and the results and the store are those of the tasks
+    run one by one."""
+    tasks = _tasks(10)
+    plain = run_tasks("sweep", tasks, helpers.task, workers=1, progress=False,
+                      store=tmp_path / "plain.sqlite")  # fmt: skip
+    helpers.BATCHES.clear()
+    serial = run_tasks("sweep", tasks, helpers.batched, workers=1, progress=False,
+                       store=tmp_path / "serial.sqlite")  # fmt: skip
+    # keys 0,0,0,0 | 1,1,1,None | 2,2: runs of at most 3; x = 3 (the run's rest) and x = 7
+    # (key None) run alone, as func(**task), not through the batch function
+    assert helpers.BATCHES == [[0, 1, 2], [4, 5, 6], [8, 9]]
+    pool = run_tasks("sweep", tasks, helpers.batched, workers=2, progress=False,
+                     store=tmp_path / "pool.sqlite")  # fmt: skip
+    assert all(map(_equal, plain, serial)) and all(map(_equal, plain, pool))
+    reference = _dump(tmp_path / "plain.sqlite")
+    for name in ("serial", "pool"):
+        stored = _dump(tmp_path / f"{name}.sqlite")
+        assert stored.keys() == reference.keys()
+        assert all(_equal(list(stored[k]), list(reference[k])) for k in reference)
+    # resume: only the missing tasks are batched
+    helpers.BATCHES.clear()
+    run_tasks("sweep", _tasks(12), helpers.batched, workers=1, progress=False,
+              store=tmp_path / "serial.sqlite")  # fmt: skip
+    assert helpers.BATCHES == [[10, 11]]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_failing_batch_names_its_failing_task(tmp_path, helpers, workers):
+    """The batch raises; its tasks then run alone, and the error names the one that fails."""
+    with pytest.raises(TaskError, match="'x': 5") as info:
+        run_tasks("sweep", _tasks(8), helpers.batched_failing, workers=workers, progress=False)
+    assert isinstance(info.value.error, ValueError) and "fails alone" in str(info.value)
