@@ -39,6 +39,47 @@ __all__ = ["LANES", "qr_intervals", "qr_intervals_lanes"]
 LANES = lanes_mod.LANES
 
 
+@njit(cache=True, inline="always")
+def _targets(t_now, target, sd, period, times, tgt_n, tgt_tau):
+    """The interval's targets (the step ``t = t_now + (target − t_now)`` of
+    :meth:`TangentStepper.step_to`, the sample times ``sd·k`` strictly inside ``(t_now, t)``,
+    then ``t``) into ``times[:m]`` and their clock readings
+    (:func:`oscillators.engines.base.split_times`); returns m, 0 if they do not fit."""
+    t = t_now + (target - t_now)
+    m = 0
+    if sd > 0.0:
+        tol = 1e-9 * sd
+        k0 = math.floor((t_now + tol) / sd) + 1
+        k1 = math.ceil((t - tol) / sd) - 1
+        if k1 - k0 + 2 > times.shape[0]:
+            return 0
+        for kk in range(k0, k1 + 1):
+            times[m] = sd * float(kk)
+            m += 1
+    times[m] = t
+    m += 1
+    for j in range(m):
+        n = math.floor(times[j] / period)
+        tau = times[j] - n * period
+        if tau >= period:
+            n, tau = n + 1, 0.0
+        elif tau < 0.0:
+            tau = 0.0
+        tgt_n[j] = n
+        tgt_tau[j] = tau
+    return m
+
+
+@njit(cache=True, inline="always")
+def _budget(nsw, n_now, tau_now, n_end, tau_end, period, n_relays, omega, floor_, per_relay):
+    """The switch count at which the kernel stops on the way to the clock reading ``(n_end,
+    tau_end)`` (:meth:`RelayKernelEngine._run_targets
+    <oscillators.engines.relay.RelayKernelEngine>`'s budget)."""
+    span = (n_end - n_now) * period + (tau_end - tau_now)
+    b = floor_ + per_relay * max(1, n_relays) * max(1.0, omega) * max(span, 0.0)
+    return nsw + int(min(b, 2.0**62))
+
+
 @njit(cache=True)
 def _intervals(
     kind, par, tf, ti, bits, lay, st, ist, y, ntan, mp, sw, cnt, n_relays, omega, period,
@@ -64,33 +105,14 @@ def _intervals(
     i = i0
     while i < n_steps:
         target = transient + (window if i == n_steps - 1 else (i + 1) * dt)
-        t = t_now + (target - t_now)
-        m = 0
-        if sd > 0.0:
-            tol = 1e-9 * sd
-            k0 = math.floor((t_now + tol) / sd) + 1
-            k1 = math.ceil((t - tol) / sd) - 1
-            if k1 - k0 + 2 > max_targets:
-                break
-            for kk in range(k0, k1 + 1):
-                times[m] = sd * float(kk)
-                m += 1
-        times[m] = t
-        m += 1
-        if n_rows + m > rows.shape[0]:
+        m = _targets(t_now, target, sd, period, times, tgt_n, tgt_tau)
+        if m == 0 or n_rows + m > rows.shape[0]:
             break
-        for j in range(m):
-            n = math.floor(times[j] / period)
-            tau = times[j] - n * period
-            if tau >= period:
-                n, tau = n + 1, 0.0
-            elif tau < 0.0:
-                tau = 0.0
-            tgt_n[j] = n
-            tgt_tau[j] = tau
-        span = (tgt_n[m - 1] - ist[kern.I_N]) * period + (tgt_tau[m - 1] - st[kern.S_TAU])
-        b = floor_ + per_relay * max(1, n_relays) * max(1.0, omega) * max(span, 0.0)
-        ist[kern.I_MAXSW] = ist[kern.I_NSW] + int(min(b, 2.0**62))
+        t = times[m - 1]
+        ist[kern.I_MAXSW] = _budget(
+            ist[kern.I_NSW], ist[kern.I_N], st[kern.S_TAU], tgt_n[m - 1], tgt_tau[m - 1], period,
+            n_relays, omega, floor_, per_relay,
+        )  # fmt: skip
         st0[:] = st
         ist0[:] = ist
         bits0[:] = bits
@@ -188,35 +210,14 @@ def _lane_start(j, par, period, w, iw, n_relays, omega, floor_, per_relay, t_now
     lanes = lanes_mod.LANES
     i = i_at[j]
     target = transient + (window if i == n_steps - 1 else (i + 1) * dt)
-    t = t_now[j] + (target - t_now[j])
-    max_targets = times.shape[1]
-    m = 0
-    if sd > 0.0:
-        tol = 1e-9 * sd
-        k0 = math.floor((t_now[j] + tol) / sd) + 1
-        k1 = math.ceil((t - tol) / sd) - 1
-        if k1 - k0 + 2 > max_targets:
-            return False
-        for kk in range(k0, k1 + 1):
-            times[j, m] = sd * float(kk)
-            m += 1
-    times[j, m] = t
-    m += 1
-    if n_rows[j] + m > rows_cap:
+    m = _targets(t_now[j], target, sd, period, times[j], tgt_n[j], tgt_tau[j])
+    if m == 0 or n_rows[j] + m > rows_cap:
         return False
-    for jj in range(m):
-        n = math.floor(times[j, jj] / period)
-        tau = times[j, jj] - n * period
-        if tau >= period:
-            n, tau = n + 1, 0.0
-        elif tau < 0.0:
-            tau = 0.0
-        tgt_n[j, jj] = n
-        tgt_tau[j, jj] = tau
-    n_now = iw[lanes_mod.PERIOD * lanes + j]
-    span = (tgt_n[j, m - 1] - n_now) * period + (tgt_tau[j, m - 1] - w[lanes_mod.TAU * lanes + j])
-    b = floor_ + per_relay * max(1, n_relays[j]) * max(1.0, omega) * max(span, 0.0)
-    iw[lanes_mod.MAXSW * lanes + j] = iw[lanes_mod.NSW * lanes + j] + int(min(b, 2.0**62))
+    iw[lanes_mod.MAXSW * lanes + j] = _budget(
+        iw[lanes_mod.NSW * lanes + j], iw[lanes_mod.PERIOD * lanes + j],
+        w[lanes_mod.TAU * lanes + j], tgt_n[j, m - 1], tgt_tau[j, m - 1], period, n_relays[j],
+        omega, floor_, per_relay,
+    )  # fmt: skip
     n_tgt[j] = m
     jt[j] = 0
     for r in range(lanes_mod.N_ROWS):

@@ -9,7 +9,12 @@
 * the rest run on a ``concurrent.futures.Executor``: the one given, a Dask distributed cluster
   (``scheduler`` address), a local process pool (``workers``), or serially in-process;
 * each result is written to the store from the parent process as soon as it arrives, in one
-  transaction, with the task's wall time measured in the worker.
+  transaction, with the task's wall time measured in the worker;
+* a task function may say how it runs several of its tasks in one call (``func.batching``, a
+  :class:`Batching`; the ensemble's realizations side by side in the vector units): up to
+  ``size`` consecutive pending tasks of one batching key then go to a worker together, and
+  each still gets its own result and its own row in the store (a batch must give the bits of
+  its tasks run alone, so resuming or spreading a run never changes a result).
 
 Who writes the store: only the calling (client) process, as results arrive. Workers compute and
 return their result over the executor's channel (a pipe, or Dask's TCP connection); they never
