@@ -195,11 +195,6 @@ def qr_intervals(
 
 
 # -- the same loop over several systems side by side (oscillators/engines/_relay_lanes.py) ------
-# per-lane bookkeeping: interval index, targets in the interval and the next one, rows written,
-# the lane's state (0 running, 1 all intervals done, 2 handed back to the Python loop)
-_RUN, _DONE, _BACK = 0, 1, 2
-
-
 @njit(cache=True)
 def _lane_start(j, par, period, w, iw, n_relays, omega, floor_, per_relay, t_now, i_at,
                 n_steps, transient, dt, window, sd, times, tgt_n, tgt_tau, n_tgt, jt, n_rows,
@@ -243,11 +238,12 @@ def _lane_stop(j, period, w, iw, tgt_n, tgt_tau, jt):
 @njit(cache=True)
 def _lane_intervals(par, mp, tf, w, iw, n_lanes, n_relays, omega, period, bound, floor_,
                     per_relay, t_now, i_at, n_steps, transient, dt, window, sd, lsum, marks,
-                    hist, rows, n_rows, state):  # fmt: skip
+                    hist, rows, n_rows):  # fmt: skip
     """:func:`_intervals` for ``n_lanes`` systems side by side (``lanes_mod.advance_lanes``):
-    every lane from interval ``i_at[j]`` until ``n_steps`` (state 1) or an interval the Python
-    loop must run (state 2, the lane restored to that interval's start); per lane the same
-    targets, budget, kernel path, divergence test, QR and log sums, so the same bits."""
+    every lane from interval ``i_at[j]`` until ``n_steps`` or an interval the Python loop must
+    run (the lane restored to that interval's start); per lane the same targets, budget, kernel
+    path, divergence test, QR and log sums, so the same bits. ``i_at``, ``t_now``, ``n_rows``:
+    per lane, where it stands (updated)."""
     lanes = lanes_mod.LANES
     k = 2
     max_targets = 2 + (int(dt / sd) if sd > 0.0 else 0) + 1
@@ -267,17 +263,12 @@ def _lane_intervals(par, mp, tf, w, iw, n_lanes, n_relays, omega, period, bound,
     for j in range(lanes):
         w[lanes_mod.ACT * lanes + j] = 0.0
         iw[lanes_mod.EVENT * lanes + j] = 0
-        if j >= n_lanes:
-            continue
-        if i_at[j] >= n_steps:
-            state[j] = _DONE
-        elif _lane_start(j, par, period, w, iw, n_relays, omega, floor_, per_relay, t_now,
-                         i_at, n_steps, transient, dt, window, sd, times, tgt_n, tgt_tau, n_tgt,
-                         jt, n_rows, rows_cap, w0, iw0):  # fmt: skip
-            state[j] = _RUN
+        if j < n_lanes and i_at[j] < n_steps and _lane_start(
+            j, par, period, w, iw, n_relays, omega, floor_, per_relay, t_now, i_at, n_steps,
+            transient, dt, window, sd, times, tgt_n, tgt_tau, n_tgt, jt, n_rows, rows_cap, w0,
+            iw0,
+        ):  # fmt: skip
             running += 1
-        else:
-            state[j] = _BACK
     while running > 0:
         lanes_mod.advance_lanes(par, mp, tf, w, iw, e)
         for j in range(n_lanes):
@@ -321,7 +312,6 @@ def _lane_intervals(par, mp, tf, w, iw, n_lanes, n_relays, omega, period, bound,
                 for r in range(lanes_mod.N_IROWS):
                     iw[r * lanes + j] = iw0[r * lanes + j]
                 w[lanes_mod.ACT * lanes + j] = 0.0
-                state[j] = _BACK
                 running -= 1
                 continue
             _accumulate_logs(diag, k, k, lsum[j])
@@ -341,13 +331,11 @@ def _lane_intervals(par, mp, tf, w, iw, n_lanes, n_relays, omega, period, bound,
                 hist[j, i, :] = lsum[j]
             t_now[j] = times[j, m - 1]
             i_at[j] = i + 1
-            if i + 1 >= n_steps:
-                state[j] = _DONE
-                running -= 1
-            elif not _lane_start(j, par, period, w, iw, n_relays, omega, floor_, per_relay,
-                                 t_now, i_at, n_steps, transient, dt, window, sd, times, tgt_n,
-                                 tgt_tau, n_tgt, jt, n_rows, rows_cap, w0, iw0):  # fmt: skip
-                state[j] = _BACK
+            if i + 1 >= n_steps or not _lane_start(
+                j, par, period, w, iw, n_relays, omega, floor_, per_relay, t_now, i_at, n_steps,
+                transient, dt, window, sd, times, tgt_n, tgt_tau, n_tgt, jt, n_rows, rows_cap,
+                w0, iw0,
+            ):  # fmt: skip
                 running -= 1
 
 
@@ -458,14 +446,13 @@ def _run_lanes(steppers, par, mp, sd, i0, n_steps, transient, dt, window, lsums,
     t_now[:n] = [float(s.elapsed) for s in steppers]
     i_at = np.full(lanes, i0, dtype=np.int64)
     n_rows = np.zeros(lanes, dtype=np.int64)
-    state = np.zeros(lanes, dtype=np.int64)
     lsum = np.zeros((lanes, 2))
     lsum[:n] = lsums
     hist = np.zeros((lanes, n_steps, 2))
     _lane_intervals(
         par, mp, np.concatenate(tables), w, iw, n, n_relays, omega, period, bound,
         SWITCH_BUDGET_FLOOR, SWITCHES_PER_RELAY_AND_TIME, t_now, i_at, int(n_steps),
-        float(transient), float(dt), float(window), sd, lsum, marks, hist, rows, n_rows, state,
+        float(transient), float(dt), float(window), sd, lsum, marks, hist, rows, n_rows,
     )  # fmt: skip
     out = []
     for j, stepper in enumerate(steppers):
