@@ -54,7 +54,7 @@ def register(subparsers: Any) -> None:
         action="store_const",
         const="full",
         help=(
-            "paper scale (about 20 min on two cores: 20.5 min measured; resumable through --store)"
+            "paper scale (about 12 min on two cores: 12.2 min measured; resumable through --store)"
         ),
     )
     smoke = size.add_argument(

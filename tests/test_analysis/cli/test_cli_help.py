@@ -24,7 +24,7 @@ def test_paper_help_states_the_sizes_without_a_default_under_each(capsys):
     full = text[text.index("--full ") : text.index("--smoke ")]
     smoke = text[text.index("--smoke ") : text.index("run:")]
     assert "default" not in full and "default" not in smoke
-    assert "20.5 min measured" in full
+    assert "12.2 min measured" in full
     assert "(the default size)" in text[text.index("--quick ") : text.index("--full ")]
 
 
