@@ -25,7 +25,7 @@ import numpy as np
 from numba_cache_lock import LOCK_ENV, lock_cache_saves
 
 from analysis.dynamics.dimensions import box_counting_dimension
-from analysis.dynamics.lyapunov import lyapunov_spectrum
+from analysis.dynamics.lyapunov import lyapunov_spectra, lyapunov_spectrum
 from analysis.identification import identify_from_curves
 from analysis.identification.datasets import forc_sample
 from analysis.identification.forc_io import read_forc_file
@@ -43,9 +43,14 @@ from oscillators import ForcedOscillator
 
 
 def _relay_and_benettin() -> None:
-    """The relay kernel's two tables and the compiled Benettin loop around them."""
+    """The relay kernel's two tables and the compiled Benettin loop around them, alone and as
+    lanes (systems side by side)."""
     dimers = ForcedOscillator(SpinDimerEnsemble.random(40, 2.0, 1.0, 2.0, seed=3), 3.2)
     lyapunov_spectrum(dimers, 20 * dimers.period, 0.0)  # nested table
+    pair = [
+        ForcedOscillator(SpinDimerEnsemble.random(40, 2.0, 1.0, 2.0, seed=s), 3.2) for s in (4, 5)
+    ]
+    lyapunov_spectra(pair, 20 * dimers.period, 0.0)
     rng = np.random.default_rng(0)
     c, h = rng.normal(0.0, 1.0, 50), rng.uniform(0.5, 1.5, 50)
     heap = ForcedOscillator(PreisachModel.from_relays(c + h, c - h), 4.0)
