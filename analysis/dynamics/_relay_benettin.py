@@ -388,44 +388,44 @@ def qr_intervals_lanes(
     """
     lanes = lanes_mod.LANES
     results: list[tuple[int, np.ndarray] | None] = [None] * len(steppers)
-    groups: list[list[int]] = []
-    keys: list[tuple] = []
+    groups: list[list[tuple[int, tuple]]] = []  # (stepper index, its kernel arrays)
     for idx, stepper in enumerate(steppers):
         arrays = _lane_arrays(stepper)
         if arrays is None:
             continue
-        sd = 0.0 if stepper.sample_dt is None else float(stepper.sample_dt)
-        key = (arrays[1], arrays[10], sd)
-        for gi, other in enumerate(keys):
-            if (len(groups[gi]) < lanes and other[2] == sd and np.array_equal(other[0], key[0])
-                    and np.array_equal(other[1], key[1])):  # fmt: skip
-                groups[gi].append(idx)
+        for group in groups:
+            other = group[0][1]
+            if (len(group) < lanes and steppers[group[0][0]].sample_dt == stepper.sample_dt
+                    and np.array_equal(other[1], arrays[1])
+                    and np.array_equal(other[10], arrays[10])):  # fmt: skip
+                group.append((idx, arrays))
                 break
         else:
-            keys.append(key)
-            groups.append([idx])
-    for members, (par, mp, sd) in zip(groups, keys, strict=True):
-        if len(members) < 2:
+            groups.append([(idx, arrays)])
+    for group in groups:
+        if len(group) < 2:
             continue  # one system alone: the scalar loop (no lane round for seven idle lanes)
+        members = [idx for idx, _ in group]
         ran = _run_lanes(
-            [steppers[i] for i in members], par, mp, sd, i0, n_steps, transient, dt, window,
-            [lsums[i] for i in members], marks, [hists[i] for i in members],
+            [steppers[i] for i in members], [arrays for _, arrays in group], i0, n_steps,
+            transient, dt, window, [lsums[i] for i in members], marks,
+            [hists[i] for i in members],
         )  # fmt: skip
         for idx, res in zip(members, ran, strict=True):
             results[idx] = res
     return results
 
 
-def _run_lanes(steppers, par, mp, sd, i0, n_steps, transient, dt, window, lsums, marks, hists):
+def _run_lanes(steppers, arrays_list, i0, n_steps, transient, dt, window, lsums, marks, hists):
+    """The lanes of one group (same parameters and hop tables, ``arrays_list`` their kernel
+    arrays): copied into the lane arrays, run, copied back (as :func:`qr_intervals`)."""
     lanes = lanes_mod.LANES
     n = len(steppers)
     w = np.zeros(lanes_mod.N_ROWS * lanes)
     iw = np.zeros(lanes_mod.N_IROWS * lanes, dtype=np.int64)
-    tables, n_relays = [], np.zeros(lanes, dtype=np.int64)
+    n_relays = np.zeros(lanes, dtype=np.int64)
     off = 0
-    omega = period = bound = 0.0
-    for j, stepper in enumerate(steppers):
-        arrays = stepper.engine.kernel_arrays()
+    for j, arrays in enumerate(arrays_list):
         st, ist, y, tf, lay = arrays[6], arrays[7], arrays[8], arrays[2], arrays[5]
         for row, col in _W_STATE:
             w[row * lanes + j] = st[col]
@@ -435,11 +435,12 @@ def _run_lanes(steppers, par, mp, sd, i0, n_steps, transient, dt, window, lsums,
             w[row * lanes + j] = y[a, b]
         iw[lanes_mod.OFF * lanes + j] = off
         iw[lanes_mod.GROUPS * lanes + j] = int(lay[0])
-        tables.append(tf)
         off += tf.size
         n_relays[j] = arrays[13]
-        omega, period = float(arrays[14]), float(arrays[15])
-        bound = float(stepper.engine.system.divergence_bound)
+    first = arrays_list[0]
+    par, mp, omega, period = first[1], first[10], float(first[14]), float(first[15])
+    bound = float(steppers[0].engine.system.divergence_bound)
+    sd = 0.0 if steppers[0].sample_dt is None else float(steppers[0].sample_dt)
     per = 2 + (int(dt / sd) if sd > 0.0 else 0) + 1
     rows = np.empty((lanes, (n_steps - i0) * per, 4))
     t_now = np.zeros(lanes)
@@ -450,15 +451,14 @@ def _run_lanes(steppers, par, mp, sd, i0, n_steps, transient, dt, window, lsums,
     lsum[:n] = lsums
     hist = np.zeros((lanes, n_steps, 2))
     _lane_intervals(
-        par, mp, np.concatenate(tables), w, iw, n, n_relays, omega, period, bound,
-        SWITCH_BUDGET_FLOOR, SWITCHES_PER_RELAY_AND_TIME, t_now, i_at, int(n_steps),
+        par, mp, np.concatenate([a[2] for a in arrays_list]), w, iw, n, n_relays, omega, period,
+        bound, SWITCH_BUDGET_FLOOR, SWITCHES_PER_RELAY_AND_TIME, t_now, i_at, int(n_steps),
         float(transient), float(dt), float(window), sd, lsum, marks, hist, rows, n_rows,
     )  # fmt: skip
     out = []
-    for j, stepper in enumerate(steppers):
+    for j, (stepper, arrays) in enumerate(zip(steppers, arrays_list, strict=True)):
         done = int(i_at[j] - i0)
         if done:
-            arrays = stepper.engine.kernel_arrays()
             st, ist, y = arrays[6], arrays[7], arrays[8]
             for row, col in _W_STATE:
                 st[col] = w[row * lanes + j]
@@ -467,9 +467,8 @@ def _run_lanes(steppers, par, mp, sd, i0, n_steps, transient, dt, window, lsums,
             for row, a, b in _Y_STATE:
                 y[a, b] = w[row * lanes + j]
             lsums[j][:] = lsum[j]
-            hists[j][i0 : i_at[j]] = np.where(
-                marks[i0 : i_at[j], None], hist[j, i0 : i_at[j]], hists[j][i0 : i_at[j]]
-            )
+            marked = i0 + np.flatnonzero(marks[i0 : i_at[j]])
+            hists[j][marked] = hist[j, marked]
             stepper.engine.kernel_moved()
             stepper.moved_to(float(t_now[j]), rows[j, : n_rows[j]].copy())
         out.append((done, rows[j, : n_rows[j]].copy()))

@@ -56,7 +56,10 @@ Plain-Python reading of one hop (``advance_table``)::
 
 The kernel is compiled with fused multiply-add allowed (``fastmath={"contract"}``, nothing
 else): the hop is a chain of dependent polynomial evaluations, and a fused step is both shorter
-and rounded once.
+and rounded once. The fast short hop and what follows it on every path (:func:`fast_hop`,
+:func:`fast_tangent`, :func:`saltation`, :func:`slides`) fuse in the source instead
+(:func:`fma`), leaving the compiler nothing to choose, so they round alike in this loop and in
+the vector lanes of :mod:`oscillators.engines._relay_lanes`.
 
 The event loop (:func:`advance_table`) is compiled without numba's reference counting
 (``_nrt=False``, an option outside numba's public API: probed at import, the plain loop where
@@ -611,6 +614,17 @@ def _neumaier_add(st, x):
 
 
 @njit(cache=True, inline="always")
+def nested_switch(tf, off, g, k_old, direction):
+    """The nested table at ``tf[off:]`` (``g`` groups, k_old up) switched one group in
+    ``direction``: ``(k, next up threshold, next down threshold, output, jump ΔM)``."""
+    k = k_old + direction
+    up = tf[off + k] if k < g else np.inf
+    down = tf[off + g + k - 1] if k > 0 else -np.inf
+    mv = tf[off + 2 * g + k]
+    return k, up, down, mv, mv - tf[off + 2 * g + k_old]
+
+
+@njit(cache=True, inline="always")
 def _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction):
     """Switch every relay at the current threshold in ``direction``; returns the jump ΔM and
     leaves the next thresholds and the output in st[S_UP], st[S_DN], st[S_MV].
@@ -620,14 +634,12 @@ def _table_switch(par, kind, tf, ti, bits, lay, st, ist, direction):
     (a rank comparison), so a switch costs O(1) word operations unless a word runs empty.
     """
     if kind == KIND_NESTED:
-        g = lay[0]
-        k_old = ist[I_K]
-        k = k_old + direction
+        k, up, down, mv, jump = nested_switch(tf, 0, lay[0], ist[I_K], direction)
         ist[I_K] = k
-        st[S_UP] = tf[k] if k < g else np.inf
-        st[S_DN] = tf[g + k - 1] if k > 0 else -np.inf
-        st[S_MV] = tf[2 * g + k]
-        return tf[2 * g + k] - tf[2 * g + k_old]
+        st[S_UP] = up
+        st[S_DN] = down
+        st[S_MV] = mv
+        return jump
     levels = lay[0]
     n = lay[1]
     unit = par[P_UNIT]
@@ -838,11 +850,17 @@ def fast_propagator(coefs, h):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def fast_matrix(coefs, zeta, h):
+    """Φ(h) = [[m00, g], [-g, g']] of a fast hop as ``(m00, g, g')``, m00 = g' + 2ζg."""
+    g, gd = fast_propagator(coefs, h)
+    return fma(2.0 * zeta, g, gd), g, gd
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def fast_tangent(coefs, zeta, h, a0, a1, b0, b1):
     """The two (δq, δv) columns after a fast hop of length ``h``: [δq, δv] := Φ(h) [δq, δv]
-    (:func:`fast_propagator`), every multiply-add fused in the source."""
-    g, gd = fast_propagator(coefs, h)
-    m00 = fma(2.0 * zeta, g, gd)
+    (:func:`fast_matrix`), every multiply-add fused in the source."""
+    m00, g, gd = fast_matrix(coefs, zeta, h)
     return (
         fma(m00, a0, g * b0),
         fma(m00, a1, g * b1),
@@ -912,8 +930,7 @@ def hop(
             ok, hf, v1, c1, s1 = fast_hop(coefs, omega, h_small, q, v, c, s, force, gap, horizon)
             if ok:
                 if tan_on and ntan == 3:
-                    g, gd = fast_propagator(coefs, hf)
-                    m00 = gd + 2.0 * zeta * g
+                    m00, g, gd = fast_matrix(coefs, zeta, hf)
                     a0, a1, a2, b0, b1, b2 = _hop_tangent(
                         m00, g, -g, gd, c, s, c1, s1, omega, amp_a, amp_b, ntan,
                         a0, a1, a2, b0, b1, b2, f0, f1, f2,

@@ -40,7 +40,6 @@ take and return numbers only.
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from oscillators.engines import _relay_kernels as kern
@@ -164,16 +163,11 @@ def advance_lanes(par, mp, tf, w, iw, e):
                 w[ACT * LANES + j] = 0.0
                 reports += 1
                 continue
-            # the nested table switch (kern._table_switch, kind 0)
-            off = iw[OFF * LANES + j]
-            g = iw[GROUPS * LANES + j]
-            k_old = iw[K * LANES + j]
-            k = k_old + d
+            # the nested table switch (as kern._table_switch, kind 0)
+            k, w[UP * LANES + j], w[DN * LANES + j], mv_new, jump = kern.nested_switch(
+                tf, iw[OFF * LANES + j], iw[GROUPS * LANES + j], iw[K * LANES + j], d
+            )
             iw[K * LANES + j] = k
-            w[UP * LANES + j] = tf[off + k] if k < g else np.inf
-            w[DN * LANES + j] = tf[off + g + k - 1] if k > 0 else -np.inf
-            mv_new = tf[off + 2 * g + k]
-            jump = mv_new - tf[off + 2 * g + k_old]
             w[MV * LANES + j] = mv_new
             nsw = iw[NSW * LANES + j] + 1
             iw[NSW * LANES + j] = nsw
